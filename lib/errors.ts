@@ -1,0 +1,113 @@
+/**
+ * One error family for every driver. Each error has a stable `code` users can
+ * switch on, the tag/address it concerns (when there is one) and the original
+ * `cause`. Errors are raised once, where they happen, and carried upwards.
+ */
+
+export type PlcErrorCode =
+  // input validation (nothing was sent)
+  | 'INVALID_ADDRESS'
+  | 'INVALID_VALUE'
+  | 'INVALID_URL'
+  | 'WRITE_NOT_ALLOWED'
+  // link state
+  | 'NOT_CONNECTED'
+  | 'CONNECTION_LOST'
+  | 'CONNECT_FAILED'
+  | 'CLOSED'
+  | 'TIMEOUT'
+  | 'ABORTED'
+  | 'QUEUE_FULL'
+  // the peer misbehaved (malformed, truncated or hostile frames)
+  | 'PROTOCOL_ERROR'
+  // the PLC answered with an error
+  | 'PLC_ERROR'
+  | 'ACCESS_DENIED'
+  | 'ADDRESS_OUT_OF_RANGE'
+  | 'OBJECT_DOES_NOT_EXIST'
+  | 'PDU_TOO_LARGE'
+  | 'TYPE_NOT_SUPPORTED'
+  // one or more tags of a multi-tag request failed
+  | 'TAG_ERRORS';
+
+export interface PlcErrorOptions {
+  /** The tag name or address as the user gave it. */
+  tag?: string;
+  /** A return code from the PLC, when there is one. */
+  plcCode?: number;
+  cause?: unknown;
+}
+
+export class PlcError extends Error {
+  readonly code: PlcErrorCode;
+  readonly tag?: string;
+  readonly plcCode?: number;
+
+  constructor(code: PlcErrorCode, message: string, options: PlcErrorOptions = {}) {
+    super(message, options.cause === undefined ? undefined : { cause: options.cause });
+    this.name = new.target.name;
+    this.code = code;
+    if (options.tag !== undefined) this.tag = options.tag;
+    if (options.plcCode !== undefined) this.plcCode = options.plcCode;
+  }
+}
+
+/** A malformed address. Thrown by the parsers before anything is sent. */
+export class AddressError extends PlcError {
+  constructor(address: string, problem: string) {
+    super('INVALID_ADDRESS', `invalid address "${address}": ${problem}`, { tag: address });
+  }
+}
+
+/** A value that does not fit its tag's type. Thrown before anything is sent. */
+export class ValueError extends PlcError {
+  constructor(tag: string, problem: string) {
+    super('INVALID_VALUE', `invalid value for "${tag}": ${problem}`, { tag });
+  }
+}
+
+/** The peer sent something that does not follow the protocol. The link is dropped. */
+export class ProtocolError extends PlcError {
+  constructor(message: string, options: PlcErrorOptions = {}) {
+    super('PROTOCOL_ERROR', message, options);
+  }
+}
+
+/** A request did not complete within its deadline. */
+export class TimeoutError extends PlcError {
+  constructor(message: string, options: PlcErrorOptions = {}) {
+    super('TIMEOUT', message, options);
+  }
+}
+
+/** The link is down, was lost, or could not be established. */
+export class ConnectionError extends PlcError {}
+
+/**
+ * Some tags of a multi-tag read or write failed. The others succeeded:
+ * `results` has every tag's outcome, keyed as given.
+ */
+export class TagErrors<T = unknown> extends PlcError {
+  readonly results: Record<string, TagResult<T>>;
+  readonly errors: Record<string, PlcError>;
+
+  constructor(results: Record<string, TagResult<T>>) {
+    const errors: Record<string, PlcError> = {};
+    for (const [key, r] of Object.entries(results)) if (!r.ok) errors[key] = r.error;
+    const keys = Object.keys(errors);
+    const first = errors[keys[0]!];
+    const more = keys.length > 1 ? ` (and ${keys.length - 1} more failed tag${keys.length > 2 ? 's' : ''})` : '';
+    super('TAG_ERRORS', `${first ? first.message : 'tags failed'}${more}`, { tag: keys[0], cause: first });
+    this.results = results;
+    this.errors = errors;
+  }
+}
+
+export type TagResult<T = unknown> = { ok: true; value: T } | { ok: false; error: PlcError };
+
+/** Wraps anything thrown into a PlcError, keeping PlcErrors as they are. */
+export function toPlcError(err: unknown, fallback: PlcErrorCode = 'CONNECTION_LOST'): PlcError {
+  if (err instanceof PlcError) return err;
+  const message = err instanceof Error ? err.message : String(err);
+  return new PlcError(fallback, message, { cause: err });
+}

@@ -1,0 +1,110 @@
+/**
+ * The shared model every driver speaks: data types, parsed tags, values,
+ * per-tag results and the client interface returned by `connect(url)`.
+ */
+import type { EventEmitter } from 'node:events';
+import type { PlcError, TagResult } from './errors';
+
+export type DataTypeName =
+  | 'BOOL'
+  | 'BYTE'
+  | 'WORD'
+  | 'DWORD'
+  | 'LWORD'
+  | 'SINT'
+  | 'USINT'
+  | 'INT'
+  | 'UINT'
+  | 'DINT'
+  | 'UDINT'
+  | 'LINT'
+  | 'ULINT'
+  | 'REAL'
+  | 'LREAL'
+  | 'CHAR'
+  | 'WCHAR'
+  | 'STRING'
+  | 'WSTRING'
+  | 'S5TIME'
+  | 'TIME'
+  | 'LTIME'
+  | 'DATE'
+  | 'TIME_OF_DAY'
+  | 'DATE_AND_TIME'
+  | 'DTL'
+  | 'COUNTER'
+  | 'TIMER';
+
+/**
+ * Memory areas. `V` (S7-200) is parsed to `DB` number 1. `PE`/`PA` are the
+ * peripheral inputs/outputs. `C`/`T` are counters/timers: their offset is the
+ * counter/timer number.
+ */
+export type AreaName = 'I' | 'Q' | 'M' | 'DB' | 'PE' | 'PA' | 'C' | 'T';
+
+/** A parsed address: where a value lives in the PLC and how to read it. */
+export interface Tag {
+  /** The address exactly as the user wrote it (also the key of results). */
+  readonly address: string;
+  readonly area: AreaName;
+  /** Data block number; 0 when the area is not DB. */
+  readonly dbNumber: number;
+  /** Byte offset in the area; for C and T the counter/timer number. */
+  readonly byteOffset: number;
+  /** Bit number 0–7; 0 unless type is BOOL. */
+  readonly bitOffset: number;
+  readonly type: DataTypeName;
+  /** Number of elements; 1 for a scalar. */
+  readonly count: number;
+  /** True when the address names an array (the value is a JS array, even of length 1). */
+  readonly isArray: boolean;
+  /** Declared maximum characters of STRING/WSTRING (0 for other types). */
+  readonly stringLength: number;
+  /** Bytes the tag covers in the PLC, from byteOffset (for BOOL: bytes touched). */
+  readonly byteLength: number;
+}
+
+/**
+ * JavaScript values of PLC data types (see README, "Data types"):
+ * BOOL → boolean; integers up to 32 bits, REAL, LREAL → number;
+ * LWORD, LINT, ULINT, LTIME → bigint; CHAR/WCHAR/STRING/WSTRING → string;
+ * S5TIME, TIME, TIME_OF_DAY → number (milliseconds); DATE, DATE_AND_TIME, DTL → Date (UTC fields);
+ * COUNTER → number (0–999); TIMER → number (milliseconds); arrays → arrays of those.
+ */
+export type PlcScalar = boolean | number | bigint | string | Date;
+export type PlcValue = PlcScalar | PlcScalar[];
+
+export type LinkState = 'idle' | 'connecting' | 'connected' | 'reconnecting' | 'closed';
+
+export type Protocol = 's7' | 'fetchwrite' | 'freeport';
+
+export interface RequestOptions {
+  /** Abort the request (it rejects with code ABORTED). */
+  signal?: AbortSignal;
+}
+
+/**
+ * What `connect(url)` returns, whatever the protocol.
+ *
+ * Events (state changes only): `connecting`, `connected`, `disconnected` (err),
+ * `reconnecting` ({ delay, attempt }), `error` (err), `state` (LinkState).
+ */
+export interface PlcClient extends EventEmitter {
+  readonly protocol: Protocol;
+  readonly state: LinkState;
+  /** Reads tags; resolves `{ address: value }`, or rejects with TagErrors (whose `results` has the good ones). */
+  read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>>;
+  /** Reads tags; always resolves with a result per tag (rejects only when nothing could be attempted). */
+  readDetailed(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, TagResult<PlcValue>>>;
+  /** Writes `{ address: value }`; resolves when the PLC acknowledged every tag, else rejects with TagErrors. */
+  write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void>;
+  /** Writes; always resolves with a result per tag. */
+  writeDetailed(
+    values: Readonly<Record<string, unknown>>,
+    options?: RequestOptions,
+  ): Promise<Record<string, TagResult<void>>>;
+  /** Stops reconnecting, fails what is pending with CLOSED, closes the socket. Always resolves. */
+  close(): Promise<void>;
+}
+
+export type { PlcError, TagResult };
