@@ -1,0 +1,7 @@
+export * from './backoff';
+export * from './client-base';
+export * from './framer';
+export * from './jobs';
+export * from './pending';
+export * from './supervisor';
+export * from './tcp';
