@@ -1,0 +1,99 @@
+import { expect } from 'chai';
+import { PlcError } from '../lib/errors';
+import { endpointKey, formatUrl, isLoopback, parseUrl } from '../lib/url';
+
+function urlError(text: string): PlcError {
+  try {
+    parseUrl(text);
+  } catch (err) {
+    expect(err).to.be.instanceOf(PlcError);
+    expect((err as PlcError).code).to.equal('INVALID_URL');
+    return err as PlcError;
+  }
+  throw new Error(`${text} was accepted`);
+}
+
+describe('url: parseUrl', () => {
+  it('reads an S7 URL with defaults (port 102, rack 0, slot 1, PG, PDU 960)', () => {
+    expect(parseUrl('s7://192.168.0.2?rack=0&slot=1')).to.deep.equal({
+      protocol: 's7', host: '192.168.0.2', port: 102, rack: 0, slot: 1,
+      connectionType: 'pg', pduSize: 960, timeout: 5000,
+    });
+  });
+
+  it('reads TSAPs in hex, the connection type, PDU, timeout and an IPv6 host', () => {
+    const e = parseUrl('s7://[::1]:1102?localTsap=1000&remoteTsap=4D57&type=OP&pdu=240&timeout=250');
+    expect(e).to.include({ host: '::1', port: 1102, localTsap: 0x1000, remoteTsap: 0x4d57, connectionType: 'op', pduSize: 240, timeout: 250 });
+  });
+
+  it('reads FETCH/WRITE with two ports, one port, and the DB unit', () => {
+    expect(parseUrl('fetchwrite://10.0.0.5')).to.include({ fetchPort: 2000, writePort: 2001, dbUnit: 'word' });
+    expect(parseUrl('fetchwrite://10.0.0.5?fetchPort=3000&writePort=3001&dbUnit=byte')).to.include({ fetchPort: 3000, writePort: 3001, dbUnit: 'byte' });
+    expect(parseUrl('fetchwrite://10.0.0.5?port=2000')).to.include({ fetchPort: 2000, writePort: 2000 });
+  });
+
+  it('reads freeport over a serial port (Unix and Windows names) and over TCP', () => {
+    const serial = parseUrl('freeport:///dev/ttyUSB0?baud=19200&parity=even&databits=7&stopbits=1&retries=0&gap=5');
+    expect(serial).to.deep.include({
+      transport: { kind: 'serial', path: '/dev/ttyUSB0', baudRate: 19200, parity: 'even', dataBits: 7, stopBits: 1 },
+      retries: 0, interFrameGapMs: 5, timeout: 1000,
+    });
+    expect(parseUrl('freeport://COM3?baud=9600')).to.deep.include({
+      transport: { kind: 'serial', path: 'COM3', baudRate: 9600, parity: 'none', dataBits: 8, stopBits: 1 },
+    });
+    expect(parseUrl('freeport+tcp://gw.local:4001?timeout=500')).to.deep.include({
+      transport: { kind: 'tcp', host: 'gw.local', port: 4001 }, timeout: 500,
+    });
+  });
+
+  it('reads the safety options on every protocol', () => {
+    expect(parseUrl('s7://h?readOnly=true')).to.include({ readOnly: true });
+    expect(parseUrl('fetchwrite://h?allow=DB10,M&allow=DB1.DBW2')).to.deep.include({ allow: ['DB10', 'M', 'DB1.DBW2'] });
+  });
+
+  it('refuses what is wrong, naming the part', () => {
+    expect(urlError('').message).to.include('empty');
+    expect(urlError('modbus://h').message).to.include('unknown protocol "modbus:"');
+    expect(urlError('s7://h?slott=1').message).to.include('unknown parameter "slott"');
+    expect(urlError('s7://h?rack=9').message).to.include('rack=9 is out of range (0–7)');
+    expect(urlError('s7://h?slot=x').message).to.include('slot=x is not a whole number');
+    expect(urlError('s7://h?localTsap=1000').message).to.include('go together');
+    expect(urlError('s7://h?localTsap=zz&remoteTsap=1').message).to.include('not a hex TSAP');
+    expect(urlError('s7://?rack=0').message).to.include('no host');
+    expect(urlError('freeport:///dev/ttyS0?baud=14400').message).to.include('baud=14400 is not a rate');
+    expect(urlError('freeport:///dev/ttyS0?parity=mark').message).to.include('parity=mark must be one of none, even, odd');
+    expect(urlError('freeport+tcp://gw').message).to.include('needs a port');
+    expect(urlError('fetchwrite://h:2000').message).to.include('fetchPort');
+    expect(urlError('fetchwrite://h?port=1&fetchPort=2').message).to.include('either port');
+  });
+});
+
+describe('url: formatUrl and endpointKey', () => {
+  const urls = [
+    's7://192.168.0.2?rack=0&slot=1',
+    's7://plc:1102?localTsap=1000&remoteTsap=2000&type=basic&pdu=240&timeout=100',
+    'fetchwrite://10.0.0.5?fetchPort=2000&writePort=2001',
+    'fetchwrite://10.0.0.5?port=2000&dbUnit=byte&readOnly=true',
+    'freeport:///dev/ttyUSB0?baud=9600',
+    'freeport://COM3?baud=19200&parity=even&retries=5&allow=ST5,ST6',
+    'freeport+tcp://gw:4001?timeout=500',
+  ];
+  for (const u of urls) {
+    it(`round-trips ${u}`, () => {
+      expect(formatUrl(parseUrl(u))).to.equal(u);
+      expect(parseUrl(formatUrl(parseUrl(u)))).to.deep.equal(parseUrl(u));
+    });
+  }
+
+  it('gives the same key to URLs that reach the same connection', () => {
+    expect(endpointKey(parseUrl('s7://PLC?rack=0&slot=1&timeout=100'))).to.equal(endpointKey(parseUrl('s7://plc:102')));
+    expect(endpointKey(parseUrl('s7://plc?slot=2'))).to.not.equal(endpointKey(parseUrl('s7://plc?slot=1')));
+  });
+
+  it('knows loopback hosts', () => {
+    expect(isLoopback(parseUrl('s7://127.0.0.1'))).to.equal(true);
+    expect(isLoopback(parseUrl('s7://[::1]'))).to.equal(true);
+    expect(isLoopback(parseUrl('s7://192.168.0.1'))).to.equal(false);
+    expect(isLoopback(parseUrl('freeport:///dev/ttyUSB0'))).to.equal(false);
+  });
+});
