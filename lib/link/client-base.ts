@@ -1,6 +1,6 @@
 import { EventEmitter } from 'node:events';
 import { ConnectionError, PlcError, TagErrors, toPlcError, type TagResult } from '../errors';
-import type { LinkState, PlcClient, PlcValue, Protocol, RequestOptions } from '../types';
+import type { LinkState, PlcClient, PlcValue, Protocol, RequestOptions, Tag } from '../types';
 import type { BackoffOptions } from './backoff';
 import { LinkSupervisor, type DriverSession } from './supervisor';
 
@@ -16,6 +16,10 @@ export interface ClientOptions {
   maxQueued?: number;
   /** Injected for tests (backoff jitter). */
   random?: () => number;
+  /** Refuse every write before anything is sent (code WRITE_NOT_ALLOWED). */
+  readOnly?: boolean;
+  /** Only writes inside these areas ("DB10", "M", "ST5") or addresses ("DB1.DBW2") are allowed. */
+  allow?: readonly string[];
 }
 
 export const DEFAULT_TIMEOUT = 5000;
@@ -39,12 +43,17 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
   protected readonly maxQueued: number | undefined;
   private readonly supervisor: LinkSupervisor<S>;
   private readonly tags = new Map<string, T | PlcError>();
+  private readonly readOnly: boolean;
+  private readonly allow: readonly string[] | undefined;
+  private allowed: { areas: Set<string>; tags: T[] } | undefined;
 
   constructor(options: ClientOptions) {
     super();
     this.name = options.name;
     this.timeout = options.timeout ?? DEFAULT_TIMEOUT;
     this.maxQueued = options.maxQueued;
+    this.readOnly = options.readOnly ?? false;
+    this.allow = options.allow && options.allow.length > 0 ? options.allow : undefined;
     this.supervisor = new LinkSupervisor<S>({
       name: options.name,
       connectTimeout: this.timeout,
@@ -68,6 +77,25 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     signal?: AbortSignal,
   ): Promise<TagResult<void>[]>;
 
+  /**
+   * The area a tag lies in, as written in an allow-list ("DB10", "M", "ST5").
+   * The default suits the S7 Tag model; drivers with other tags override it.
+   */
+  protected areaOf(tag: T): string {
+    const t = tag as unknown as Partial<Tag>;
+    return t.area === 'DB' ? `DB${t.dbNumber}` : String(t.area);
+  }
+
+  /** True when `inner` lies wholly inside `outer` (for allow-list addresses). */
+  protected contains(outer: T, inner: T): boolean {
+    const o = outer as unknown as Tag;
+    const i = inner as unknown as Tag;
+    if (this.areaOf(outer) !== this.areaOf(inner)) return false;
+    const bit = (t: Tag) => t.byteOffset * 8 + (t.type === 'BOOL' ? t.bitOffset : 0);
+    const bits = (t: Tag) => (t.type === 'BOOL' ? t.count : t.byteLength * 8);
+    return bit(i) >= bit(o) && bit(i) + bits(i) <= bit(o) + bits(o);
+  }
+
   get state(): LinkState {
     return this.supervisor.state;
   }
@@ -84,12 +112,14 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
 
   /** Starts and waits for the first connection; rejects with the first attempt's error and stops. */
   async connect(): Promise<this> {
+    this.checkAllowList();
     await this.supervisor.connectOnce();
     return this;
   }
 
   /** Starts and keeps (re)connecting in the background until close(); never rejects. */
   start(): void {
+    this.checkAllowList();
     this.supervisor.start();
   }
 
@@ -151,14 +181,46 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     const items: { tag: T; value: unknown }[] = [];
     for (const address of Object.keys(values)) {
       const tag = this.parseCached(address);
-      if (tag instanceof PlcError) results[address] = { ok: false, error: tag };
-      else items.push({ tag, value: values[address] });
+      const refusal = tag instanceof PlcError ? tag : this.writeRefusal(tag);
+      if (refusal) results[address] = { ok: false, error: refusal };
+      else items.push({ tag: tag as T, value: values[address] });
     }
     if (items.length > 0) {
       const written = await this.writeTags(session, items, options.signal);
       for (let i = 0; i < items.length; i++) results[items[i]!.tag.address] = written[i]!;
     }
     return results;
+  }
+
+  private writeRefusal(tag: T): PlcError | undefined {
+    if (this.readOnly) {
+      return new PlcError('WRITE_NOT_ALLOWED', `write to "${tag.address}" refused: the connection is read-only`, { tag: tag.address });
+    }
+    if (!this.allow) return undefined;
+    this.allowed ??= this.compileAllowList(this.allow);
+    const { areas, tags } = this.allowed;
+    if (areas.has(this.areaOf(tag)) || tags.some((outer) => this.contains(outer, tag))) return undefined;
+    return new PlcError(
+      'WRITE_NOT_ALLOWED',
+      `write to "${tag.address}" refused: not in the connection's write allow-list (${this.allow.join(', ')})`,
+      { tag: tag.address },
+    );
+  }
+
+  /** A bad allow-list entry is a configuration error: say so at start, not at the first write. */
+  private checkAllowList(): void {
+    if (this.allow) this.allowed ??= this.compileAllowList(this.allow);
+  }
+
+  private compileAllowList(entries: readonly string[]): { areas: Set<string>; tags: T[] } {
+    const areas = new Set<string>();
+    const tags: T[] = [];
+    for (const entry of entries) {
+      const area = entry.trim().toUpperCase().replace(/^%/, '');
+      if (/^(DB\d+|[IQMCT]|PE|PA|ST\d+)$/.test(area)) areas.add(area.replace(/^(DB|ST)0+(?=\d)/, '$1'));
+      else tags.push(this.tag(entry));
+    }
+    return { areas, tags };
   }
 
   private liveSession(): S {
