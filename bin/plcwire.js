@@ -1,0 +1,25 @@
+#!/usr/bin/env node
+'use strict';
+// The installed CLI: compiled code lives in dist/ (built on install by `prepare`).
+const { main } = require('../dist/lib/cli/main.js');
+
+const controller = new AbortController();
+let signals = 0;
+for (const name of ['SIGINT', 'SIGTERM']) {
+  process.on(name, () => {
+    // First Ctrl-C stops cleanly (closes PLC connections); a second one forces.
+    if (++signals > 1) process.exit(130);
+    controller.abort();
+  });
+}
+
+main(process.argv.slice(2), {
+  stdout: process.stdout,
+  stderr: process.stderr,
+  stdin: process.stdin,
+  signal: controller.signal,
+}).then((code) => {
+  process.exitCode = code;
+  // Everything is closed by now; do not let a stray handle keep a script waiting.
+  setTimeout(() => process.exit(code), 2000).unref();
+});

@@ -1,0 +1,290 @@
+/**
+ * The `plcwire` command line: read, write and watch any PLC by URL, and run
+ * the simulators. Every failure is one readable line on stderr and an exit
+ * code a script can switch on (see EXIT and the README's CLI reference).
+ */
+import { createInterface } from 'node:readline';
+import { createClient, type AnyClient } from '../connect';
+import { PlcError, TagErrors } from '../errors';
+import type { PlcValue } from '../types';
+import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
+import { parseArgs, UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
+import { serve, SERVE_FLAGS } from './serve';
+import { toJson, valueFromText, valueToText, type TypedTag } from './values';
+
+export const EXIT = Object.freeze({
+  OK: 0,
+  /** The PLC refused or could not serve one or more tags. */
+  TAG_ERROR: 1,
+  /** Bad command line, URL, address or value: nothing was sent. */
+  USAGE: 2,
+  /** Could not connect, or the connection was lost. */
+  CONNECTION: 3,
+  /** A write was refused for safety (read-only, allow-list, or a remote PLC without --yes). */
+  REFUSED: 4,
+  /** Stopped by Ctrl-C before it finished. */
+  INTERRUPTED: 130,
+});
+
+export interface CliIo {
+  stdout: NodeJS.WritableStream;
+  stderr: NodeJS.WritableStream;
+  stdin: NodeJS.ReadableStream & { isTTY?: boolean };
+  /** Aborted on SIGINT/SIGTERM. */
+  signal: AbortSignal;
+}
+
+const USAGE = `usage:
+  plcwire read  <url> <address>... [--json] [--timeout ms]
+  plcwire write <url> <address>=<value>... [--yes] [--json] [--timeout ms]
+  plcwire watch <url> <address>... [--interval ms] [--json]
+  plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1200] [--layout file.json]
+  plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1]
+  plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
+  plcwire demo
+options: --debug prints stack traces; --help prints this text.
+urls: s7://host?rack=0&slot=1  fetchwrite://host?fetchPort=2000&writePort=2001
+      freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
+exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write refused, 130 interrupted`;
+
+const VALUE_FLAGS = ['timeout', 'interval', ...SERVE_FLAGS];
+const BOOL_FLAGS = ['json', 'yes', 'debug', 'help'];
+
+export async function main(argv: readonly string[], io: CliIo): Promise<number> {
+  let args: ParsedArgs;
+  try {
+    args = parseArgs(argv, VALUE_FLAGS, BOOL_FLAGS);
+  } catch (err) {
+    return fail(io, err, false);
+  }
+  const debug = args.flags.has('debug');
+  const [command, ...rest] = args.positionals;
+  if (args.flags.has('help') || command === undefined || command === 'help') {
+    io.stdout.write(`${USAGE}\n`);
+    return command === undefined && !args.flags.has('help') ? EXIT.USAGE : EXIT.OK;
+  }
+  try {
+    switch (command) {
+      case 'read':
+        return await read(rest, args, io);
+      case 'write':
+        return await write(rest, args, io);
+      case 'watch':
+        return await watch(rest, args, io);
+      case 'serve':
+        return await serve(rest, args, io);
+      case 'demo':
+        return await (await import('../demo/run')).runDemo(io);
+      default:
+        throw new UsageError(`unknown command "${command}" (read, write, watch, serve, demo)`);
+    }
+  } catch (err) {
+    return fail(io, err, debug);
+  }
+}
+
+/** One line on stderr, and the exit code for the kind of failure. */
+export function fail(io: CliIo, err: unknown, debug: boolean): number {
+  const code = exitCode(err);
+  const message = err instanceof Error ? err.message : String(err);
+  io.stderr.write(`plcwire: ${message}${code === EXIT.USAGE && err instanceof UsageError ? ' (plcwire --help)' : ''}\n`);
+  if (debug && err instanceof Error && err.stack) io.stderr.write(`${err.stack}\n`);
+  return code;
+}
+
+export function exitCode(err: unknown): number {
+  if (err instanceof UsageError) return EXIT.USAGE;
+  if (err instanceof TagErrors) {
+    const codes = err.errors.map((e) => exitCode(e));
+    return codes.includes(EXIT.USAGE) ? EXIT.USAGE : codes.includes(EXIT.REFUSED) ? EXIT.REFUSED : codes.includes(EXIT.CONNECTION) ? EXIT.CONNECTION : EXIT.TAG_ERROR;
+  }
+  if (!(err instanceof PlcError)) return EXIT.TAG_ERROR;
+  switch (err.code) {
+    case 'INVALID_ADDRESS':
+    case 'INVALID_VALUE':
+    case 'INVALID_URL':
+      return EXIT.USAGE;
+    case 'WRITE_NOT_ALLOWED':
+      return EXIT.REFUSED;
+    case 'ABORTED':
+      return EXIT.INTERRUPTED;
+    case 'NOT_CONNECTED':
+    case 'CONNECTION_LOST':
+    case 'CONNECT_FAILED':
+    case 'CLOSED':
+    case 'TIMEOUT':
+    case 'PROTOCOL_ERROR':
+      return EXIT.CONNECTION;
+    default:
+      return EXIT.TAG_ERROR;
+  }
+}
+
+function endpointArg(rest: string[], what: string): { endpoint: Endpoint; addresses: string[] } {
+  const [url, ...addresses] = rest;
+  if (url === undefined) throw new UsageError(`${what} needs a PLC url`);
+  if (addresses.length === 0) throw new UsageError(`${what} needs at least one address`);
+  return { endpoint: parseUrl(url), addresses };
+}
+
+function withTimeout(endpoint: Endpoint, args: ParsedArgs): Endpoint {
+  if (!args.flags.has('timeout')) return endpoint;
+  return { ...endpoint, timeout: intFlag(args, 'timeout', endpoint.timeout, 1, 600_000) };
+}
+
+/** Connects, runs `work`, always closes; Ctrl-C aborts the connect or the request. */
+async function withClient<R>(endpoint: Endpoint, io: CliIo, work: (client: AnyClient) => Promise<R>): Promise<R> {
+  const client = createClient(endpoint);
+  const onAbort = () => void client.close();
+  io.signal.addEventListener('abort', onAbort, { once: true });
+  try {
+    await client.connect();
+    return await work(client);
+  } catch (err) {
+    if (io.signal.aborted) throw new PlcError('ABORTED', 'interrupted');
+    throw err;
+  } finally {
+    io.signal.removeEventListener('abort', onAbort);
+    await client.close();
+  }
+}
+
+async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
+  const { endpoint, addresses } = endpointArg(rest, 'read');
+  const json = args.flags.has('json');
+  const results = await withClient(withTimeout(endpoint, args), io, (c) => c.readDetailed(addresses, { signal: io.signal }));
+  const values: Record<string, PlcValue | null> = {};
+  const errors: PlcError[] = [];
+  for (const address of addresses) {
+    const r = results[address]!;
+    if (r.ok) values[address] = r.value;
+    else {
+      values[address] = null;
+      errors.push(r.error);
+    }
+  }
+  if (json) io.stdout.write(`${toJson(values)}\n`);
+  else for (const a of addresses) if (values[a] !== null) io.stdout.write(`${a} = ${valueToText(values[a])}\n`);
+  for (const e of errors) io.stderr.write(`plcwire: ${e.message}\n`);
+  return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(Object.values(results)));
+}
+
+async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
+  const { endpoint, addresses: assignments } = endpointArg(rest, 'write');
+  const pairs = assignments.map((a) => {
+    const eq = a.indexOf('=');
+    if (eq <= 0) throw new UsageError(`"${a}" is not <address>=<value>`);
+    return { address: a.slice(0, eq), text: a.slice(eq + 1) };
+  });
+  // Parse addresses and values before connecting: bad input never reaches the PLC.
+  const client = createClient(withTimeout(endpoint, args));
+  const values: Record<string, unknown> = {};
+  try {
+    for (const { address, text } of pairs) {
+      const tag = client.tag(address) as unknown as TypedTag;
+      values[address] = valueFromText(tag, text);
+    }
+  } finally {
+    await client.close();
+  }
+  if (!isLoopback(endpoint) && !args.flags.has('yes')) {
+    if (!io.stdin.isTTY) {
+      throw new PlcError(
+        'WRITE_NOT_ALLOWED',
+        `refusing to write to ${endpointName(endpoint)} (not this machine) without --yes when standard input is not a terminal`,
+      );
+    }
+    const ok = await confirm(io, `write ${pairs.length} value(s) to ${endpointName(endpoint)}? [y/N] `);
+    if (!ok) throw new PlcError('WRITE_NOT_ALLOWED', 'write cancelled');
+  }
+  const results = await withClient(withTimeout(endpoint, args), io, (c) => c.writeDetailed(values, { signal: io.signal }));
+  const errors = Object.values(results).filter((r) => !r.ok);
+  if (args.flags.has('json')) {
+    const out: Record<string, string> = {};
+    for (const [a, r] of Object.entries(results)) out[a] = r.ok ? 'ok' : r.error.message;
+    io.stdout.write(`${toJson(out)}\n`);
+  } else {
+    for (const [a, r] of Object.entries(results)) if (r.ok) io.stdout.write(`${a} = ${valueToText(values[a])} ok\n`);
+  }
+  for (const r of Object.values(results)) if (!r.ok) io.stderr.write(`plcwire: ${r.error.message}\n`);
+  return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(Object.values(results)));
+}
+
+function confirm(io: CliIo, question: string): Promise<boolean> {
+  const rl = createInterface({ input: io.stdin, output: io.stderr });
+  return new Promise((resolve) => {
+    const onAbort = () => rl.close();
+    io.signal.addEventListener('abort', onAbort, { once: true });
+    rl.on('close', () => resolve(false));
+    rl.question(question, (answer) => {
+      io.signal.removeEventListener('abort', onAbort);
+      resolve(/^y(es)?$/i.test(answer.trim()));
+      rl.close();
+    });
+  });
+}
+
+/**
+ * Polls until Ctrl-C; prints a line per changed value (all values first).
+ * Link loss is reported on stderr and the client reconnects by itself.
+ */
+async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
+  const { endpoint, addresses } = endpointArg(rest, 'watch');
+  const interval = intFlag(args, 'interval', 1000, 10, 3_600_000);
+  const json = args.flags.has('json');
+  const client = createClient(withTimeout(endpoint, args));
+  for (const a of addresses) client.tag(a); // bad addresses fail here, before connecting
+  const last = new Map<string, string>();
+  const report = (line: string) => io.stderr.write(`plcwire: ${line}\n`);
+  client.on('connected', () => report(`connected to ${endpointName(endpoint)}`));
+  client.on('disconnected', (err: Error) => report(`disconnected: ${err.message}`));
+  client.on('reconnecting', (e: { delay: number; error?: Error }) =>
+    report(`reconnecting in ${(e.delay / 1000).toFixed(1)} s${e.error ? ` (${e.error.message})` : ''}`),
+  );
+  client.on('error', () => {}); // reported through 'disconnected'/'reconnecting'
+  client.start();
+  try {
+    while (!io.signal.aborted) {
+      const started = Date.now();
+      if (client.state === 'connected') {
+        try {
+          const results = await client.readDetailed(addresses, { signal: io.signal });
+          const changed: Record<string, PlcValue> = {};
+          for (const a of addresses) {
+            const r = results[a]!;
+            const text = r.ok ? valueToText(r.value) : `error: ${r.error.message}`;
+            if (last.get(a) === text) continue;
+            last.set(a, text);
+            if (r.ok) changed[a] = r.value;
+            else report(`${a}: ${r.error.message}`);
+          }
+          if (Object.keys(changed).length > 0) {
+            if (json) io.stdout.write(`${toJson({ time: new Date().toISOString(), values: changed })}\n`);
+            else for (const [a, v] of Object.entries(changed)) io.stdout.write(`${new Date().toISOString()} ${a} = ${valueToText(v)}\n`);
+          }
+        } catch (err) {
+          if (!io.signal.aborted) report((err as Error).message);
+        }
+      }
+      await delay(Math.max(0, interval - (Date.now() - started)), io.signal);
+    }
+  } finally {
+    await client.close();
+  }
+  return EXIT.OK;
+}
+
+export function delay(ms: number, signal: AbortSignal): Promise<void> {
+  return new Promise((resolve) => {
+    if (signal.aborted) return resolve();
+    const done = () => {
+      clearTimeout(timer);
+      signal.removeEventListener('abort', done);
+      resolve();
+    };
+    const timer = setTimeout(done, ms);
+    signal.addEventListener('abort', done, { once: true });
+  });
+}
+
+export { stringFlag };

@@ -1,0 +1,110 @@
+/** `plcwire serve <protocol>`: run a simulator until Ctrl-C. */
+import { readFileSync } from 'node:fs';
+import { FetchWriteServer } from '../fetchwrite/server';
+import { FreeportBus } from '../freeport/bus';
+import { S7Server, type S7Profile } from '../s7/server';
+import { PlcMemory, type MemoryLayout } from '../sim/memory';
+import { FREEPORT_BAUD_RATES } from '../url';
+import { UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
+import type { CliIo } from './main';
+
+export const SERVE_FLAGS = ['port', 'host', 'profile', 'layout', 'fetch-port', 'write-port', 'path', 'baud', 'tcp', 'stations'];
+
+const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500'];
+
+export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
+  const [protocol, ...extra] = rest;
+  if (extra.length > 0) throw new UsageError(`unexpected argument "${extra[0]}"`);
+  const host = stringFlag(args, 'host') ?? '127.0.0.1';
+  const say = (line: string) => io.stdout.write(`${line}\n`);
+  let close: () => Promise<void>;
+  switch (protocol) {
+    case 's7': {
+      const profile = (stringFlag(args, 'profile') ?? 's7-1500').toLowerCase() as S7Profile;
+      if (!PROFILES.includes(profile)) throw new UsageError(`--profile must be one of ${PROFILES.join(', ')}`);
+      const memory = new PlcMemory(loadLayout(stringFlag(args, 'layout')));
+      const server = new S7Server({ host, port: intFlag(args, 'port', 102, 0, 65535), profile, memory });
+      const port = await listen(() => server.listen(), 'port');
+      say(`S7 simulator (${profile}) listening on ${host}:${port}`);
+      say(`try: plcwire read "s7://${urlHost(host)}:${port}?rack=0&slot=1" DB1,INT0 MW10 M0.1`);
+      close = () => server.close();
+      break;
+    }
+    case 'fetchwrite': {
+      const single = args.flags.has('port') ? intFlag(args, 'port', 0, 0, 65535) : undefined;
+      const server = new FetchWriteServer(
+        single !== undefined
+          ? { host, port: single }
+          : { host, fetchPort: intFlag(args, 'fetch-port', 2000, 0, 65535), writePort: intFlag(args, 'write-port', 2001, 0, 65535) },
+      );
+      const ports = await listen(() => server.listen(), 'port');
+      const query = ports.fetchPort === ports.writePort ? `port=${ports.fetchPort}` : `fetchPort=${ports.fetchPort}&writePort=${ports.writePort}`;
+      say(`FETCH/WRITE simulator listening on ${host}: fetch ${ports.fetchPort}, write ${ports.writePort}`);
+      say(`try: plcwire read "fetchwrite://${urlHost(host)}?${query}" DB1,INT0 MB0`);
+      close = () => server.close();
+      break;
+    }
+    case 'freeport': {
+      const stations = parseStations(stringFlag(args, 'stations') ?? '5');
+      const bus = new FreeportBus({ stations });
+      const path = stringFlag(args, 'path');
+      if (path !== undefined && args.flags.has('tcp')) throw new UsageError('give --path or --tcp, not both');
+      if (path !== undefined) {
+        const baudRate = intFlag(args, 'baud', 9600, 1, 1_000_000);
+        if (!FREEPORT_BAUD_RATES.includes(baudRate)) throw new UsageError(`--baud must be one of ${FREEPORT_BAUD_RATES.join(', ')}`);
+        await bus.attachSerial(path, { baudRate });
+        say(`freeport stations ${stations.join(', ')} answering on ${path} at ${baudRate} baud`);
+      } else if (args.flags.has('tcp')) {
+        const port = await listen(() => bus.listenTcp({ host, port: intFlag(args, 'tcp', 4001, 0, 65535) }), 'tcp');
+        say(`freeport stations ${stations.join(', ')} answering on tcp ${host}:${port}`);
+        say(`try: plcwire read "freeport+tcp://${urlHost(host)}:${port}" ST${stations[0]},DWORD0`);
+      } else {
+        throw new UsageError('serve freeport needs --path <serial device> or --tcp <port>');
+      }
+      close = () => bus.close();
+      break;
+    }
+    default:
+      throw new UsageError(`serve needs a protocol: s7, fetchwrite or freeport`);
+  }
+  say('Ctrl-C stops.');
+  await new Promise<void>((resolve) => {
+    if (io.signal.aborted) resolve();
+    else io.signal.addEventListener('abort', () => resolve(), { once: true });
+  });
+  await close();
+  return 0;
+}
+
+/** A bind error in words: port 102 needs privileges on Linux. */
+async function listen<R>(start: () => Promise<R>, flag: string): Promise<R> {
+  try {
+    return await start();
+  } catch (err) {
+    const e = err as NodeJS.ErrnoException;
+    if (e.code === 'EACCES') throw new UsageError(`no permission to listen on that port (ports below 1024 need root): try --${flag} 10102`);
+    if (e.code === 'EADDRINUSE') throw new UsageError(`that port is already in use: choose another with --${flag}`);
+    throw err;
+  }
+}
+
+function loadLayout(file: string | undefined): MemoryLayout | undefined {
+  if (file === undefined) return undefined;
+  try {
+    return JSON.parse(readFileSync(file, 'utf8')) as MemoryLayout;
+  } catch (err) {
+    throw new UsageError(`cannot read layout ${file}: ${(err as Error).message}`);
+  }
+}
+
+function parseStations(text: string): number[] {
+  const stations = text.split(',').map((s) => s.trim());
+  return stations.map((s) => {
+    if (!/^\d+$/.test(s) || Number(s) > 255) throw new UsageError(`--stations: "${s}" is not a station address 0..255`);
+    return Number(s);
+  });
+}
+
+function urlHost(host: string): string {
+  return host.includes(':') ? `[${host}]` : host;
+}

@@ -1,0 +1,77 @@
+import { ValueError } from '../errors';
+import type { DataTypeName, PlcScalar, PlcValue } from '../types';
+
+/** The part of a tag the CLI needs to turn text into a value. */
+export interface TypedTag {
+  readonly address: string;
+  readonly type: DataTypeName;
+  readonly isArray: boolean;
+}
+
+const BIGINT_TYPES = new Set<DataTypeName>(['LWORD', 'LINT', 'ULINT', 'LTIME']);
+const TEXT_TYPES = new Set<DataTypeName>(['CHAR', 'WCHAR', 'STRING', 'WSTRING']);
+const DATE_TYPES = new Set<DataTypeName>(['DATE', 'DATE_AND_TIME', 'DTL']);
+
+/**
+ * Turns command-line text into a value of the tag's type: `true`/`false`/`1`/`0`
+ * for BOOL, decimal or 0x-hex integers, ISO dates, text as is; arrays as a JSON
+ * array or comma-separated. Range checks are the value codec's job.
+ */
+export function valueFromText(tag: TypedTag, text: string): PlcValue {
+  if (!tag.isArray) return scalarFromText(tag, text);
+  // CHAR[10]=hello: a character array is written as text.
+  if ((tag.type === 'CHAR' || tag.type === 'WCHAR') && !text.startsWith('[')) return [...text];
+  let parts: unknown[];
+  if (text.trim().startsWith('[')) {
+    try {
+      parts = JSON.parse(text) as unknown[];
+    } catch {
+      throw new ValueError(tag.address, `"${text}" is not a JSON array`);
+    }
+    if (!Array.isArray(parts)) throw new ValueError(tag.address, 'expected an array');
+  } else {
+    parts = text.split(',');
+  }
+  return parts.map((p) => scalarFromText(tag, String(p)));
+}
+
+function scalarFromText(tag: TypedTag, raw: string): PlcScalar {
+  const text = TEXT_TYPES.has(tag.type) ? raw : raw.trim();
+  if (tag.type === 'BOOL') {
+    const t = text.toLowerCase();
+    if (t === 'true' || t === '1' || t === 'on') return true;
+    if (t === 'false' || t === '0' || t === 'off') return false;
+    throw new ValueError(tag.address, `"${text}" is not a BOOL (true/false/1/0)`);
+  }
+  if (TEXT_TYPES.has(tag.type)) return text;
+  if (DATE_TYPES.has(tag.type)) {
+    const d = new Date(text);
+    if (Number.isNaN(d.getTime())) throw new ValueError(tag.address, `"${text}" is not a date (use ISO 8601, e.g. 2024-05-01T12:00:00Z)`);
+    return d;
+  }
+  if (BIGINT_TYPES.has(tag.type)) {
+    try {
+      return BigInt(text);
+    } catch {
+      throw new ValueError(tag.address, `"${text}" is not an integer`);
+    }
+  }
+  const n = /^[-+]?0x[0-9a-f]+$/i.test(text) ? Number.parseInt(text, 16) : Number(text);
+  if (text === '' || Number.isNaN(n)) throw new ValueError(tag.address, `"${text}" is not a number`);
+  return n;
+}
+
+/** Text for humans: dates in ISO, bigints as digits, arrays bracketed. */
+export function valueToText(value: unknown): string {
+  if (Array.isArray(value)) return `[${value.map(valueToText).join(', ')}]`;
+  if (value instanceof Date) return value.toISOString();
+  if (typeof value === 'string') return JSON.stringify(value);
+  return String(value);
+}
+
+/** JSON where a bigint stays exact (written as its digits) and a Date as ISO text. */
+export function toJson(value: unknown): string {
+  const marker = '\u0000bigint:';
+  const text = JSON.stringify(value, (_k, v: unknown) => (typeof v === 'bigint' ? `${marker}${v}` : v));
+  return text.replace(new RegExp(`"${marker}(-?\\d+)"`, 'g'), '$1');
+}

@@ -1,0 +1,80 @@
+/**
+ * The demo plant: all three simulators on fixed loopback ports, sharing one
+ * simulated process. Used by `plcwire demo`, by `npm start` (which adds
+ * Node-RED and a dashboard) and by tests (ports 0 = ephemeral).
+ */
+import { FetchWriteServer } from '../fetchwrite/server';
+import { FreeportBus } from '../freeport/bus';
+import { S7Server } from '../s7/server';
+import { PlcMemory } from '../sim/memory';
+import { DemoProcess } from './process';
+
+export interface PlantPorts {
+  s7: number;
+  fetch: number;
+  write: number;
+  freeport: number;
+}
+
+export const DEMO_PORTS: PlantPorts = Object.freeze({ s7: 10102, fetch: 12000, write: 12001, freeport: 14001 });
+
+/** Freeport stations of the demo: 5 holds the tank level (REAL), 6 the parts counter (DINT). */
+export const DEMO_STATIONS = Object.freeze({ level: 5, parts: 6 });
+
+export interface Plant {
+  memory: PlcMemory;
+  process: DemoProcess;
+  s7: S7Server;
+  fetchwrite: FetchWriteServer;
+  freeport: FreeportBus;
+  ports: PlantPorts;
+  urls: { s7: string; fetchwrite: string; freeport: string };
+  close(): Promise<void>;
+}
+
+export async function startPlant(options: { host?: string; ports?: Partial<PlantPorts>; periodMs?: number } = {}): Promise<Plant> {
+  const host = options.host ?? '127.0.0.1';
+  const want = { ...DEMO_PORTS, ...options.ports };
+  const memory = new PlcMemory();
+  const process = new DemoProcess(memory, options.periodMs ?? 100);
+  const s7 = new S7Server({ host, port: want.s7, profile: 's7-1200', memory });
+  const fetchwrite = new FetchWriteServer({ host, fetchPort: want.fetch, writePort: want.write, memory });
+  const freeport = new FreeportBus({ stations: [DEMO_STATIONS.level, DEMO_STATIONS.parts] });
+  const closeAll = async () => {
+    process.stop();
+    clearInterval(mirror);
+    await Promise.allSettled([s7.close(), fetchwrite.close(), freeport.close()]);
+  };
+  // Freeport stations hold 4 bytes each: mirror the process into them every cycle.
+  const mirror = setInterval(() => {
+    const db = memory.area('DB', 1)!;
+    db.copy(freeport.station(DEMO_STATIONS.level).data, 0, 0, 4);
+    db.copy(freeport.station(DEMO_STATIONS.parts).data, 0, 8, 12);
+  }, options.periodMs ?? 100);
+  mirror.unref();
+  try {
+    const s7Port = await s7.listen();
+    const fw = await fetchwrite.listen();
+    const fpPort = await freeport.listenTcp({ host, port: want.freeport });
+    process.start();
+    const ports = { s7: s7Port, fetch: fw.fetchPort, write: fw.writePort, freeport: fpPort };
+    const h = host.includes(':') ? `[${host}]` : host;
+    return {
+      memory,
+      process,
+      s7,
+      fetchwrite,
+      freeport,
+      ports,
+      urls: {
+        s7: `s7://${h}:${ports.s7}?rack=0&slot=1`,
+        fetchwrite: `fetchwrite://${h}?fetchPort=${ports.fetch}&writePort=${ports.write}`,
+        freeport: `freeport+tcp://${h}:${ports.freeport}`,
+      },
+      close: closeAll,
+    };
+  } catch (err) {
+    await closeAll();
+    throw err;
+  }
+}

@@ -1,0 +1,109 @@
+/**
+ * A small simulated process for the demo and for users' flow tests: a tank
+ * whose level rises and falls, a motor with run/stop, a parts counter, a
+ * temperature and the PLC's heartbeat. It runs on PlcMemory (S7 and
+ * FETCH/WRITE simulators) with the memory map below; the same values are
+ * mirrored into freeport stations by the demo.
+ *
+ *   DB1.DBD0:REAL   tank level, %            (process)
+ *   DB1.DBX4.0      motor run command        (written by the operator)
+ *   DB1.DBX4.1      motor running            (process)
+ *   DB1.DBW6:INT    motor speed, rpm         (process, ramps)
+ *   DB1.DBD8:DINT   parts counter            (process, while running)
+ *   DB1.DBW12:INT   PLC heartbeat counter    (process, every 500 ms)
+ *   DB1.DBW14:INT   PC heartbeat             (written by the heartbeat node)
+ *   DB1.DBD16:REAL  temperature, °C          (process)
+ */
+import type { PlcMemory } from '../sim/memory';
+
+export const DEMO_TAGS = Object.freeze({
+  level: 'DB1.DBD0:REAL',
+  run: 'DB1.DBX4.0',
+  running: 'DB1.DBX4.1',
+  speed: 'DB1.DBW6:INT',
+  parts: 'DB1.DBD8:DINT',
+  plcHeartbeat: 'DB1.DBW12:INT',
+  pcHeartbeat: 'DB1.DBW14:INT',
+  temperature: 'DB1.DBD16:REAL',
+});
+
+export interface ProcessSnapshot {
+  level: number;
+  running: boolean;
+  speed: number;
+  parts: number;
+  heartbeat: number;
+  temperature: number;
+}
+
+export class DemoProcess {
+  private timer: NodeJS.Timeout | undefined;
+  private ticks = 0;
+  private filling = true;
+
+  constructor(
+    private readonly memory: PlcMemory,
+    private readonly periodMs = 100,
+  ) {}
+
+  start(): this {
+    if (!this.timer) {
+      const db = this.db();
+      if (db.readFloatBE(0) === 0) db.writeFloatBE(20, 0);
+      this.timer = setInterval(() => this.step(), this.periodMs);
+      this.timer.unref();
+    }
+    return this;
+  }
+
+  stop(): void {
+    clearInterval(this.timer);
+    this.timer = undefined;
+  }
+
+  /** One cycle of the process; public so tests can step it deterministically. */
+  step(): ProcessSnapshot {
+    const db = this.db();
+    const dt = this.periodMs / 1000;
+    this.ticks++;
+    let level = db.readFloatBE(0);
+    level += (this.filling ? 4 : -3) * dt;
+    if (level >= 90) this.filling = false;
+    if (level <= 10) this.filling = true;
+    level = Math.min(100, Math.max(0, level));
+    db.writeFloatBE(level, 0);
+
+    const run = (db[4]! & 0x01) !== 0;
+    let speed = db.readInt16BE(6);
+    speed = run ? Math.min(1450, speed + Math.round(600 * dt)) : Math.max(0, speed - Math.round(900 * dt));
+    db.writeInt16BE(speed, 6);
+    const running = speed > 0;
+    db[4] = (db[4]! & ~0x02) | (running ? 0x02 : 0);
+    if (running && this.ticks % Math.max(1, Math.round(0.5 / dt)) === 0) db.writeInt32BE((db.readInt32BE(8) + 1) | 0, 8);
+
+    if (this.ticks % Math.max(1, Math.round(0.5 / dt)) === 0) db.writeInt16BE((db.readInt16BE(12) + 1) & 0x7fff, 12);
+
+    const target = 20 + speed / 50;
+    const temperature = db.readFloatBE(16);
+    db.writeFloatBE(temperature + (target - temperature) * 0.05, 16);
+    return this.snapshot();
+  }
+
+  snapshot(): ProcessSnapshot {
+    const db = this.db();
+    return {
+      level: db.readFloatBE(0),
+      running: (db[4]! & 0x02) !== 0,
+      speed: db.readInt16BE(6),
+      parts: db.readInt32BE(8),
+      heartbeat: db.readInt16BE(12),
+      temperature: db.readFloatBE(16),
+    };
+  }
+
+  private db(): Buffer {
+    const db = this.memory.area('DB', 1);
+    if (!db || db.length < 20) throw new Error('the demo process needs DB1 of at least 20 bytes');
+    return db;
+  }
+}
