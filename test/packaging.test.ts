@@ -1,0 +1,184 @@
+/**
+ * An offline mirror of the Flow Library scorecard (node-red-dev validate:
+ * P01, P03–P07, N01, N02, D01 and the examples rules of NODE-RED.md), run
+ * against the tarball `npm pack` produces — what users actually install.
+ */
+import { expect } from 'chai';
+import { execFileSync } from 'node:child_process';
+import * as fs from 'node:fs';
+import * as os from 'node:os';
+import * as path from 'node:path';
+
+const ROOT = path.resolve(__dirname, '../..');
+
+interface PackageJson {
+  name: string;
+  license?: string;
+  repository?: { url?: string } | string;
+  bugs?: unknown;
+  keywords?: string[];
+  engines?: { node?: string };
+  dependencies?: Record<string, string>;
+  files?: string[];
+  main?: string;
+  'node-red'?: { version?: string; nodes?: Record<string, string> };
+}
+
+/** Packs the package (already built by pretest) and unpacks it into a temp dir. */
+export function packTarball(into: string): string {
+  const out = execFileSync('npm', ['pack', '--ignore-scripts', '--json', '--pack-destination', into], {
+    cwd: ROOT,
+    encoding: 'utf8',
+    stdio: ['ignore', 'pipe', 'pipe'],
+  });
+  const [info] = JSON.parse(out) as { filename: string }[];
+  return path.join(into, info!.filename);
+}
+
+/** Minimal semver range check for the forms package.json uses here: ">=a.b.c", "^a.b.c", "a.x", space-separated ANDs. */
+export function admits(range: string, version: string): boolean {
+  const v = version.split('.').map(Number);
+  const cmp = (a: number[], b: number[]) => {
+    for (let i = 0; i < 3; i++) if ((a[i] ?? 0) !== (b[i] ?? 0)) return (a[i] ?? 0) - (b[i] ?? 0);
+    return 0;
+  };
+  return range
+    .trim()
+    .split(/\s+/)
+    .every((part) => {
+      const m = /^(>=|>|<=|<|\^|~)?(\d+)(?:\.(\d+|x))?(?:\.(\d+|x))?$/.exec(part);
+      if (!m) throw new Error(`unsupported range "${part}"`);
+      const b = [Number(m[2]), Number(m[3] === 'x' ? 0 : m[3] ?? 0), Number(m[4] === 'x' ? 0 : m[4] ?? 0)];
+      const c = cmp(v, b);
+      switch (m[1]) {
+        case '>=': return c >= 0;
+        case '>': return c > 0;
+        case '<=': return c <= 0;
+        case '<': return c < 0;
+        case '^': return c >= 0 && v[0] === b[0];
+        case '~': return c >= 0 && v[0] === b[0] && v[1] === b[1];
+        default: return m[3] === undefined || m[3] === 'x' ? v[0] === b[0] : c === 0;
+      }
+    });
+}
+
+describe('packaging: Flow Library scorecard, offline, on the packed tarball', function () {
+  this.timeout(60000);
+  let dir: string;
+  let pkgDir: string;
+  let pkg: PackageJson;
+  let files: string[];
+
+  before(() => {
+    dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-pack-'));
+    const tarball = packTarball(dir);
+    execFileSync('tar', ['-xzf', tarball, '-C', dir]);
+    pkgDir = path.join(dir, 'package');
+    pkg = JSON.parse(fs.readFileSync(path.join(pkgDir, 'package.json'), 'utf8')) as PackageJson;
+    files = listFiles(pkgDir).map((f) => path.relative(pkgDir, f).split(path.sep).join('/'));
+  });
+
+  after(() => fs.rmSync(dir, { recursive: true, force: true }));
+
+  it('P01: has a license and the LICENSE file', () => {
+    expect(pkg.license).to.equal('Apache-2.0');
+    expect(files).to.include('LICENSE');
+    expect(fs.readFileSync(path.join(pkgDir, 'LICENSE'), 'utf8')).to.match(/Apache License\s+Version 2\.0/);
+  });
+
+  it('P03: names a repository and where to report bugs', () => {
+    const url = typeof pkg.repository === 'string' ? pkg.repository : pkg.repository?.url;
+    expect(url).to.match(/^git\+https:\/\/github\.com\//);
+    expect(pkg.bugs).to.be.ok;
+  });
+
+  it('P04: is a scoped name', () => {
+    expect(pkg.name).to.equal('@plcwire/node-red-siemens');
+  });
+
+  it('P05: has the node-red keyword', () => {
+    expect(pkg.keywords).to.include('node-red');
+  });
+
+  it('P06: node-red.version admits Node-RED 4 and the latest 5.x', () => {
+    const range = pkg['node-red']?.version ?? '';
+    for (const v of ['4.0.0', '4.1.15', '5.0.7', '5.9.0']) expect(admits(range, v), `${range} admits ${v}`).to.equal(true);
+  });
+
+  it('P07: engines admits Node 20 and 22.9', () => {
+    const range = pkg.engines?.node ?? '';
+    for (const v of ['20.0.0', '22.9.0', '24.0.0']) expect(admits(range, v), `${range} admits ${v}`).to.equal(true);
+  });
+
+  it('D01: at most 6 runtime dependencies, none of them Node-RED, the test helper or a dashboard', () => {
+    const deps = Object.keys(pkg.dependencies ?? {});
+    expect(deps.length).to.be.at.most(6);
+    for (const d of deps) expect(d).not.to.match(/^node-red$|node-red-node-test-helper|dashboard|^@node-red\//);
+  });
+
+  it('N01: every node type has the plcwire- prefix and none is taken by another package', () => {
+    const types = Object.keys(pkg['node-red']?.nodes ?? {});
+    expect(types).to.include.members(['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat']);
+    const taken = ['s7 endpoint', 's7 in', 's7 out', 's7 control', 's7-config', 's7-read', 's7-write', 's7-trigger', 's7-browse', 's7-control'];
+    for (const t of types) {
+      expect(t).to.match(/^plcwire-/);
+      expect(taken).not.to.include(t);
+    }
+  });
+
+  it('N02: each node is a .js file in the tarball with its .html beside it, icons and en-US/zh-CN/de locales', () => {
+    const nodes = pkg['node-red']?.nodes ?? {};
+    for (const [type, file] of Object.entries(nodes)) {
+      expect(file, type).to.match(/\.js$/);
+      expect(files, type).to.include(file.replace(/^\.\//, ''));
+      const html = file.replace(/^\.\//, '').replace(/\.js$/, '.html');
+      expect(files, type).to.include(html);
+      const text = fs.readFileSync(path.join(pkgDir, html), 'utf8');
+      expect(text).to.include(`RED.nodes.registerType('${type}'`);
+      expect(text).to.match(/<script type="text\/javascript">/);
+      const base = path.posix.dirname(file.replace(/^\.\//, ''));
+      const name = path.posix.basename(file, '.js');
+      for (const lang of ['en-US', 'zh-CN', 'de']) {
+        expect(files, `${type} ${lang} messages`).to.include(`${base}/locales/${lang}/${name}.json`);
+      }
+      expect(files.some((f) => f.startsWith(`${base}/icons/`) && f.endsWith('.svg')), `${type} icon`).to.equal(true);
+    }
+  });
+
+  it('node entry files load as CommonJS and export a plain function', () => {
+    for (const file of Object.values(pkg['node-red']?.nodes ?? {})) {
+      const text = fs.readFileSync(path.join(pkgDir, file), 'utf8');
+      expect(text, file).to.match(/module\.exports\s*=\s*(function|\(RED\)|RED\s*=>)|module\.exports\s*=\s*\w+;?\s*$/m);
+    }
+  });
+
+  it('examples: each file is a JSON array, and every non-config node appears in at least one', () => {
+    const examples = files.filter((f) => f.startsWith('examples/') && f.endsWith('.json'));
+    expect(examples.length).to.be.at.least(4);
+    const used = new Set<string>();
+    for (const f of examples) {
+      const flow = JSON.parse(fs.readFileSync(path.join(pkgDir, f), 'utf8')) as { type: string }[];
+      expect(flow, f).to.be.an('array');
+      flow.forEach((n) => used.add(n.type));
+      if (!f.startsWith('examples/Dashboard 2/')) {
+        expect(flow.filter((n) => n.type.startsWith('ui-')), `${f} uses no third-party nodes`).to.deep.equal([]);
+      }
+    }
+    for (const type of Object.keys(pkg['node-red']?.nodes ?? {})) {
+      if (type === 'plcwire-connection') continue;
+      expect(used.has(type), `${type} appears in an example`).to.equal(true);
+    }
+  });
+
+  it('ships the compiled library, the CLI and the docs, and no tests or sources', () => {
+    expect(files).to.include.members(['dist/lib/index.js', 'dist/lib/index.d.ts', 'bin/plcwire.js', 'README.md']);
+    expect(files.filter((f) => f.startsWith('dist/test/') || f.startsWith('test/') || f.endsWith('.ts') && !f.endsWith('.d.ts'))).to.deep.equal([]);
+  });
+});
+
+function listFiles(dir: string): string[] {
+  return fs.readdirSync(dir, { withFileTypes: true }).flatMap((e) => {
+    const p = path.join(dir, e.name);
+    return e.isDirectory() ? listFiles(p) : [p];
+  });
+}
