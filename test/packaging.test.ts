@@ -5,11 +5,11 @@
  */
 import { expect } from 'chai';
 import { execFileSync } from 'node:child_process';
+import { packTarball } from './support/pack';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
 
-const ROOT = path.resolve(__dirname, '../..');
 
 interface PackageJson {
   name: string;
@@ -22,17 +22,6 @@ interface PackageJson {
   files?: string[];
   main?: string;
   'node-red'?: { version?: string; nodes?: Record<string, string> };
-}
-
-/** Packs the package (already built by pretest) and unpacks it into a temp dir. */
-export function packTarball(into: string): string {
-  const out = execFileSync('npm', ['pack', '--ignore-scripts', '--json', '--pack-destination', into], {
-    cwd: ROOT,
-    encoding: 'utf8',
-    stdio: ['ignore', 'pipe', 'pipe'],
-  });
-  const [info] = JSON.parse(out) as { filename: string }[];
-  return path.join(into, info!.filename);
 }
 
 /** Minimal semver range check for the forms package.json uses here: ">=a.b.c", "^a.b.c", "a.x", space-separated ANDs. */

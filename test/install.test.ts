@@ -1,0 +1,123 @@
+/**
+ * The packed tarball installed the way users install it (npm into a Node-RED
+ * user directory), then a real Node-RED 4 on Node 20 and Node-RED 5 on Node 22
+ * started on it: our node types load with no error, their locales and the
+ * examples are served.
+ */
+import { expect } from 'chai';
+import { execFileSync, spawn, type ChildProcess } from 'node:child_process';
+import * as fs from 'node:fs';
+import * as http from 'node:http';
+import * as net from 'node:net';
+import * as os from 'node:os';
+import * as path from 'node:path';
+import { packTarball, ROOT } from './support/pack';
+
+const TYPES = ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat'];
+const MODULE = '@plcwire/node-red-siemens';
+
+const RUNTIMES = [
+  { name: 'Node-RED 4 on Node 20', node: process.execPath, red: path.join(ROOT, 'node_modules/node-red/red.js'), major: '4.' },
+  { name: 'Node-RED 5 on Node 22', node: path.join(ROOT, 'test/nr5/node_modules/node/bin/node'), red: path.join(ROOT, 'test/nr5/node_modules/node-red/red.js'), major: '5.' },
+];
+
+function get(url: string): Promise<{ status: number; body: string }> {
+  return new Promise((resolve, reject) => {
+    http
+      .get(url, { headers: { Accept: 'application/json' } }, (res) => {
+        let body = '';
+        res.setEncoding('utf8');
+        res.on('data', (d: string) => (body += d));
+        res.on('end', () => resolve({ status: res.statusCode ?? 0, body }));
+      })
+      .on('error', reject);
+  });
+}
+
+async function freePort(): Promise<number> {
+  const s = net.createServer().listen(0, '127.0.0.1');
+  await new Promise((r) => s.once('listening', r));
+  const port = (s.address() as net.AddressInfo).port;
+  await new Promise((r) => s.close(r));
+  return port;
+}
+
+describe('install: the tarball in a fresh Node-RED user directory', function () {
+  this.timeout(180_000);
+  let work: string;
+  let tarball: string;
+
+  before(() => {
+    work = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-install-'));
+    tarball = packTarball(work);
+  });
+  after(() => fs.rmSync(work, { recursive: true, force: true }));
+
+  for (const runtime of RUNTIMES) {
+    describe(runtime.name, () => {
+      let child: ChildProcess | undefined;
+      let base: string;
+      let log = '';
+
+      before(async () => {
+        if (!fs.existsSync(runtime.node) || !fs.existsSync(runtime.red)) throw new Error(`${runtime.name} is not installed (.ci/run installs it)`);
+        const userDir = fs.mkdtempSync(path.join(work, 'user-'));
+        fs.writeFileSync(path.join(userDir, 'package.json'), JSON.stringify({ name: 'node-red-project', private: true }));
+        // What the palette manager does: npm install the package into the user directory.
+        execFileSync('npm', ['install', '--no-audit', '--no-fund', '--prefer-offline', '--omit=dev', tarball], { cwd: userDir, stdio: 'pipe' });
+        const port = await freePort();
+        fs.writeFileSync(path.join(userDir, 'settings.js'), `module.exports = { uiHost: '127.0.0.1', uiPort: ${port}, flowFile: 'flows.json', credentialSecret: false, diagnostics: { enabled: false }, telemetry: { enabled: false }, logging: { console: { level: 'info' } } };\n`);
+        child = spawn(runtime.node, [runtime.red, '--userDir', userDir, '--settings', path.join(userDir, 'settings.js')], { cwd: userDir, stdio: ['ignore', 'pipe', 'pipe'] });
+        child.stdout!.on('data', (d: Buffer) => (log += d.toString()));
+        child.stderr!.on('data', (d: Buffer) => (log += d.toString()));
+        base = `http://127.0.0.1:${port}`;
+        const deadline = Date.now() + 90_000;
+        while (!/Started flows/.test(log)) {
+          if (child.exitCode !== null) throw new Error(`Node-RED exited:\n${log}`);
+          if (Date.now() > deadline) throw new Error(`Node-RED did not start:\n${log}`);
+          await new Promise((r) => child!.stdout!.once('data', r));
+        }
+      });
+
+      after(async () => {
+        if (child && child.exitCode === null) {
+          const exited = new Promise((r) => child!.once('exit', r));
+          child.kill('SIGINT');
+          await exited;
+        }
+      });
+
+      it('runs the Node-RED major it claims', async () => {
+        const settings = JSON.parse((await get(`${base}/settings`)).body) as { version: string };
+        expect(settings.version.startsWith(runtime.major), settings.version).to.equal(true);
+      });
+
+      it('lists our four node types, enabled and without error', async () => {
+        const res = await get(`${base}/nodes`);
+        expect(res.status).to.equal(200);
+        const sets = (JSON.parse(res.body) as { module: string; types: string[]; enabled: boolean; err?: string }[]).filter((s) => s.module === MODULE);
+        expect(sets.map((s) => s.err).filter(Boolean), log).to.deep.equal([]);
+        expect(sets.every((s) => s.enabled)).to.equal(true);
+        expect(sets.flatMap((s) => s.types)).to.include.members(TYPES);
+        expect(log).not.to.match(/\[error\].*plcwire/i);
+      });
+
+      it('serves our locales in en-US, zh-CN and de', async () => {
+        for (const lng of ['en-US', 'zh-CN', 'de']) {
+          const res = await get(`${base}/locales/nodes?lng=${lng}`);
+          expect(res.status).to.equal(200);
+          const catalogs = JSON.parse(res.body) as Record<string, unknown>;
+          const ours = Object.keys(catalogs).filter((ns) => ns.startsWith(MODULE));
+          expect(ours.length, `${lng} catalogs`).to.be.greaterThan(0);
+        }
+      });
+
+      it('serves the examples', async () => {
+        const res = await get(`${base}/library/examples/flows/${MODULE}`);
+        expect(res.status).to.equal(200);
+        const listing = JSON.parse(res.body) as unknown[];
+        expect(listing.length).to.be.greaterThan(0);
+      });
+    });
+  }
+});
