@@ -1,0 +1,80 @@
+'use strict';
+// One client in its own process, so process.cpuUsage() and RSS are that
+// client's alone. Driven over IPC by bench/run.js with
+//   { client, table, pdu, port, proxyPort?, durationMs?, countPolls?, latencyPolls? }
+// and answers one result object.
+const { CLIENTS } = require('./lib/clients');
+const { table, firstMismatch } = require('./lib/tables');
+
+const gc = global.gc || (() => undefined);
+
+function settle() {
+  gc();
+  return process.memoryUsage().rss;
+}
+
+async function run(job) {
+  const open = CLIENTS[job.client];
+  const tags = table(job.table);
+  const addresses = tags.map((t) => t.address);
+  const result = { client: job.client, table: job.table, tags: tags.length };
+
+  if (job.durationMs) {
+    const rss0 = settle();
+    const c = await open({ port: job.port, pdu: job.pdu, addresses });
+    const wrong = firstMismatch(tags, await c.read());
+    if (wrong) throw new Error(`wrong value from ${job.client}: ${wrong}`);
+    const warmUntil = Date.now() + Math.min(300, job.durationMs / 4);
+    while (Date.now() < warmUntil) await c.read();
+    const cpu0 = process.cpuUsage();
+    const t0 = process.hrtime.bigint();
+    const until = Date.now() + job.durationMs;
+    let polls = 0;
+    while (Date.now() < until) {
+      await c.read();
+      polls++;
+    }
+    const elapsedMs = Number(process.hrtime.bigint() - t0) / 1e6;
+    const cpu = process.cpuUsage(cpu0);
+    const rss1 = settle();
+    await c.close();
+    Object.assign(result, {
+      polls,
+      pollsPerSecond: (polls * 1000) / elapsedMs,
+      cpuMsPer1000Tags: ((cpu.user + cpu.system) / 1000 / (polls * tags.length)) * 1000,
+      rssBytesPerTag: Math.max(0, rss1 - rss0) / tags.length,
+    });
+  }
+
+  if (job.countPolls) {
+    const c = await open({ port: job.proxyPort, pdu: job.pdu, addresses });
+    process.send({ counting: true });
+    await new Promise((resolve) => process.once('message', resolve)); // the proxy was reset
+    for (let i = 0; i < job.countPolls; i++) {
+      const wrong = firstMismatch(tags, await c.read());
+      if (wrong) throw new Error(`wrong value from ${job.client} through the proxy: ${wrong}`);
+    }
+    await c.close();
+  }
+
+  if (job.latencyPolls) {
+    const c = await open({ port: job.port, pdu: job.pdu, addresses });
+    await c.read();
+    const t0 = process.hrtime.bigint();
+    for (let i = 0; i < job.latencyPolls; i++) await c.read();
+    result.pollMs = Number(process.hrtime.bigint() - t0) / 1e6 / job.latencyPolls;
+    await c.close();
+  }
+  return result;
+}
+
+process.once('message', (job) => {
+  run(job).then(
+    (result) => {
+      process.send({ ok: true, result }, () => process.exit(0));
+    },
+    (err) => {
+      process.send({ ok: false, error: String((err && err.message) || err) }, () => process.exit(0));
+    },
+  );
+});

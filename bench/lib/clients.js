@@ -1,0 +1,48 @@
+'use strict';
+// The three clients behind one shape, each through its documented API:
+//   open({ port, pdu, addresses }) → { read(): Promise<Record<address, value>>, close() }
+const { once } = require('node:events');
+const { peer, plcwire } = require('./peers');
+
+const CLIENTS = {
+  async ours({ port, pdu, addresses }) {
+    const { connect } = plcwire();
+    const plc = await connect(`s7://127.0.0.1:${port}?rack=0&slot=1&pdu=${pdu}&timeout=10000`);
+    plc.on('error', () => undefined);
+    return { read: () => plc.read(addresses), close: () => plc.close() };
+  },
+
+  async nodes7({ port, pdu, addresses }) {
+    const NodeS7 = peer('nodes7');
+    const conn = new NodeS7({ silent: true });
+    conn.requestMaxPDU = pdu; // nodes7 asks for 960 unless told; the field is read at connect
+    await new Promise((resolve, reject) =>
+      conn.initiateConnection({ host: '127.0.0.1', port, rack: 0, slot: 1, timeout: 10000 }, (err) =>
+        err ? reject(new Error(`nodes7 connect: ${JSON.stringify(err)}`)) : resolve(),
+      ),
+    );
+    conn.setTranslationCB((tag) => tag);
+    conn.addItems(addresses.slice());
+    return {
+      read: () =>
+        new Promise((resolve, reject) =>
+          conn.readAllItems((bad, values) => (bad ? reject(new Error('nodes7: bad quality')) : resolve(values))),
+        ),
+      close: () => new Promise((resolve) => conn.dropConnection(() => resolve())),
+    };
+  },
+
+  async 'st-one'({ port, pdu, addresses }) {
+    const { S7Endpoint, S7ItemGroup } = peer('@st-one-io/nodes7');
+    const plc = new S7Endpoint({ host: '127.0.0.1', port, rack: 0, slot: 1, autoReconnect: 0, s7ConnOpts: { maxPDUSize: pdu, timeout: 10000 } });
+    plc.on('error', () => undefined);
+    const connected = once(plc, 'connect');
+    await plc.connect();
+    await connected;
+    const group = new S7ItemGroup(plc);
+    group.addItems(addresses.slice());
+    return { read: () => group.readAllItems(), close: () => plc.disconnect() };
+  },
+};
+
+module.exports = { CLIENTS, CLIENT_NAMES: Object.keys(CLIENTS) };

@@ -1,0 +1,276 @@
+#!/usr/bin/env node
+'use strict';
+// `npm run bench`: our S7 client beside nodes7 and @st-one-io/nodes7 on the
+// same servers (our simulator, snap7's server), then the latency model, the
+// planner's lower bound and the simulator's own requests per second.
+// Each server and each client runs in its own process; see bench/README.md.
+//
+//   node bench/run.js [--quick] [--clients ours,nodes7,st-one] [--tables 10,100] [--duration ms]
+const { fork } = require('node:child_process');
+const path = require('node:path');
+const { CountingProxy } = require('./lib/proxy');
+const { TABLES, table, image } = require('./lib/tables');
+const { CLIENT_NAMES } = require('./lib/clients');
+const { plcwire } = require('./lib/peers');
+
+const args = process.argv.slice(2);
+const opt = (name, dflt) => {
+  const i = args.indexOf(`--${name}`);
+  return i >= 0 ? args[i + 1] : dflt;
+};
+const QUICK = args.includes('--quick');
+const DURATION_MS = Number(opt('duration', QUICK ? 300 : 1000));
+const COUNT_POLLS = 3;
+const LATENCY_MS = 10;
+const LATENCY_POLLS = QUICK ? 2 : 4;
+const LOAD_MS = QUICK ? 300 : 1000;
+const clients = opt('clients', CLIENT_NAMES.join(',')).split(',');
+const tableNames = TABLES.map((t) => t.name).filter((n) => {
+  const only = opt('tables');
+  return !only || only.split(',').some((x) => n.startsWith(`${x} `));
+});
+const SERVERS = [
+  // snap7 caps a request at 20 items: every client asks for PDU 240 there (at most 19 items a request).
+  { kind: 'ours', label: 'plcwire simulator', pdu: 960 },
+  { kind: 'snap7', label: 'snap7 server', pdu: 240 },
+];
+
+function ask(child, msg) {
+  return new Promise((resolve, reject) => {
+    child.once('message', (m) => (m.ok === false ? reject(new Error(m.error)) : resolve(m)));
+    child.send(msg);
+  });
+}
+
+async function startServer(kind, extra = {}) {
+  const child = fork(path.join(__dirname, 'server-worker.js'), [], { serialization: 'advanced', stdio: 'inherit' });
+  const { port } = await ask(child, { op: 'start', kind, ...extra });
+  return {
+    port,
+    fill: (db1) => ask(child, { op: 'fill', db1 }),
+    stop: () =>
+      new Promise((resolve) => {
+        child.once('exit', resolve);
+        child.send({ op: 'stop' });
+      }),
+  };
+}
+
+/** Runs one client job in a fresh process; a proxy counts its PDUs and bytes when asked. */
+async function runClient(job, proxy) {
+  const child = fork(path.join(__dirname, 'client-worker.js'), [], {
+    serialization: 'advanced',
+    execArgv: ['--expose-gc'],
+    stdio: 'inherit',
+  });
+  return new Promise((resolve) => {
+    const timer = setTimeout(() => {
+      child.kill();
+      resolve({ error: 'timed out' });
+    }, 60_000);
+    child.on('message', (m) => {
+      if (m.counting) {
+        proxy.reset();
+        child.send({ go: true });
+      } else {
+        clearTimeout(timer);
+        if (!m.ok) return resolve({ error: m.error });
+        const r = m.result;
+        if (job.countPolls) {
+          r.pdusPerPoll = proxy.jobs / job.countPolls;
+          r.bytesPerPoll = (proxy.bytesToServer + proxy.bytesToClient) / job.countPolls;
+          r.maxItems = proxy.maxItemsPerJob;
+        }
+        resolve(r);
+      }
+    });
+    child.on('exit', (code) => {
+      clearTimeout(timer);
+      resolve({ error: `exited with ${code}` });
+    });
+    child.send(job);
+  });
+}
+
+function lowerBound(tags, pdu) {
+  try {
+    const lib = plcwire();
+    const planner = lib.s7planner ?? require(path.join(__dirname, '../dist/lib/s7/planner.js'));
+    if (typeof planner.lowerBoundPdus !== 'function') return undefined;
+    return planner.lowerBoundPdus(tags.map((t) => t.address), pdu);
+  } catch {
+    return undefined;
+  }
+}
+
+// --- printing ---------------------------------------------------------------
+const fmt = (v, digits = 0) =>
+  v === undefined || Number.isNaN(v) ? '–' : v >= 1e5 ? v.toExponential(2) : v.toFixed(digits);
+function printTable(title, header, rows) {
+  const widths = header.map((h, i) => Math.max(h.length, ...rows.map((r) => String(r[i]).length)));
+  const line = (cells) => cells.map((c, i) => (i < 2 ? String(c).padEnd(widths[i]) : String(c).padStart(widths[i]))).join('  ');
+  console.log(`\n${title}`);
+  console.log(line(header));
+  console.log(widths.map((w) => '-'.repeat(w)).join('  '));
+  for (const r of rows) console.log(line(r));
+}
+
+async function comparison() {
+  const rows = [];
+  for (const s of SERVERS) {
+    let server;
+    try {
+      server = await startServer(s.kind);
+    } catch (err) {
+      console.log(`(${s.label}: not available — ${err.message.split('\n')[0]})`);
+      continue;
+    }
+    const proxy = new CountingProxy(server.port);
+    const proxyPort = await proxy.listen();
+    for (const name of tableNames) {
+      const tags = table(name);
+      await server.fill(image(tags));
+      const results = [];
+      for (const client of clients) {
+        const r = await runClient(
+          { client, table: name, pdu: s.pdu, port: server.port, proxyPort, durationMs: DURATION_MS, countPolls: COUNT_POLLS },
+          proxy,
+        );
+        results.push(r);
+      }
+      const anchors = results.filter((r) => r.client !== 'ours' && !r.error);
+      const best = (key, higher) =>
+        anchors.length ? anchors.map((r) => r[key]).reduce((a, b) => (higher ? Math.max(a, b) : Math.min(a, b))) : undefined;
+      const ours = results.find((r) => r.client === 'ours');
+      const bound = lowerBound(tags, s.pdu);
+      for (const r of results) {
+        if (r.error) {
+          rows.push([s.label, name, r.client ?? '', `error: ${r.error}`.slice(0, 60), '', '', '', '', '', '']);
+          continue;
+        }
+        rows.push([
+          s.label,
+          name,
+          r.client,
+          fmt(r.pollsPerSecond),
+          fmt(r.pdusPerPoll, 1),
+          r.client === 'ours' ? fmt(bound) : '',
+          fmt(r.maxItems),
+          fmt(r.bytesPerPoll),
+          fmt(r.cpuMsPer1000Tags, 2),
+          fmt(r.rssBytesPerTag),
+        ]);
+      }
+      if (ours && !ours.error && anchors.length) {
+        rows.push([
+          s.label,
+          name,
+          'ours/best anchor',
+          `${fmt(ours.pollsPerSecond / best('pollsPerSecond', true), 2)}×`,
+          `${fmt(ours.pdusPerPoll / best('pdusPerPoll', false), 2)}×`,
+          '',
+          '',
+          `${fmt(ours.bytesPerPoll / best('bytesPerPoll', false), 2)}×`,
+          `${fmt(ours.cpuMsPer1000Tags / best('cpuMsPer1000Tags', false), 2)}×`,
+          `${fmt(ours.rssBytesPerTag / best('rssBytesPerTag', false), 2)}×`,
+        ]);
+      }
+    }
+    await proxy.close();
+    await server.stop();
+  }
+  printTable(
+    `Polls against the same server (loopback; ${DURATION_MS} ms per client; PDUs and bytes counted by a proxy over ${COUNT_POLLS} polls)`,
+    ['server', 'table', 'client', 'polls/s', 'PDUs/poll', 'lower bound', 'max items', 'bytes/poll', 'CPU ms/1000 tags', 'RSS B/tag'],
+    rows.map((r) => [`${r[0]}`, `${r[1]} ${r[2]}`, ...r.slice(3)]),
+  );
+}
+
+async function latencyModel() {
+  const rows = [];
+  for (const p of [
+    { profile: 's7-1200', pdu: 240, amq: 3 },
+    { profile: 's7-1500', pdu: 960, amq: 8 },
+  ]) {
+    let server;
+    try {
+      server = await startServer('ours', { profile: p.profile, latencyMs: LATENCY_MS });
+    } catch (err) {
+      console.log(`(latency model: simulator not available — ${err.message.split('\n')[0]})`);
+      return;
+    }
+    const proxy = new CountingProxy(server.port);
+    const proxyPort = await proxy.listen();
+    for (const name of tableNames) {
+      const tags = table(name);
+      await server.fill(image(tags));
+      for (const client of clients) {
+        const r = await runClient(
+          { client, table: name, pdu: p.pdu, port: server.port, proxyPort, countPolls: 1, latencyPolls: LATENCY_POLLS },
+          proxy,
+        );
+        if (r.error) {
+          rows.push([`PDU ${p.pdu} / AmQ ${p.amq}`, `${name} ${client}`, `error: ${r.error}`.slice(0, 60), '', '', '']);
+          continue;
+        }
+        const floor = Math.ceil(r.pdusPerPoll / p.amq) * LATENCY_MS;
+        rows.push([
+          `PDU ${p.pdu} / AmQ ${p.amq}`,
+          `${name} ${client}`,
+          fmt(r.pdusPerPoll),
+          fmt(r.pollMs, 1),
+          fmt(floor),
+          `${fmt((r.pollMs / floor - 1) * 100, 0)} %`,
+        ]);
+      }
+    }
+    await proxy.close();
+    await server.stop();
+  }
+  printTable(
+    `Latency model: the simulator delays each request ${LATENCY_MS} ms and serves up to AmQ at once; floor = ceil(PDUs / AmQ) × ${LATENCY_MS} ms`,
+    ['model', 'table client', 'PDUs/poll', 'poll ms', 'floor ms', 'over floor'],
+    rows,
+  );
+}
+
+async function serverLoad() {
+  const rows = [];
+  const request = { items: 10, bytes: 4 };
+  for (const kind of ['ours', 'snap7']) {
+    let server;
+    try {
+      server = await startServer(kind);
+    } catch (err) {
+      rows.push([kind === 'ours' ? 'plcwire simulator' : 'snap7 server', `not available: ${err.message.split('\n')[0]}`]);
+      continue;
+    }
+    const row = [kind === 'ours' ? 'plcwire simulator' : 'snap7 server'];
+    for (const connections of [1, 4, 16]) {
+      const child = fork(path.join(__dirname, 'load-worker.js'), [], { serialization: 'advanced', stdio: 'inherit' });
+      const r = await ask(child, { port: server.port, connections, durationMs: LOAD_MS, ...request });
+      row.push(r.errors ? `${fmt(r.requestsPerSecond)} (${r.errors} errors)` : fmt(r.requestsPerSecond));
+    }
+    rows.push(row);
+    await server.stop();
+  }
+  printTable(
+    'Server: Read Var requests per second (10 items of 4 bytes in DB1, one request in flight per connection)',
+    ['server', '', '1 client', '4 clients', '16 clients'],
+    rows.map((r) => [r[0], '', ...r.slice(1)]),
+  );
+}
+
+async function main() {
+  const t0 = Date.now();
+  console.log(`plcwire benchmark — Node ${process.version}, ${require('node:os').cpus()[0].model}, ${require('node:os').cpus().length} CPUs`);
+  await comparison();
+  await latencyModel();
+  await serverLoad();
+  console.log(`\n(${((Date.now() - t0) / 1000).toFixed(0)} s)`);
+}
+
+main().catch((err) => {
+  console.error(err);
+  process.exit(1);
+});
