@@ -1,0 +1,153 @@
+'use strict';
+// Our S7 client against snap7's server (an independent implementation).
+// snap7's server answers at most 20 items per request; asking for PDU 240
+// keeps every request we send at 19 items or fewer, which the proxy checks.
+const { expect } = require('chai');
+const support = require('./support');
+const { startSnap7Server } = support;
+const { CountingProxy } = require('../../bench/lib/proxy');
+
+function memory() {
+  const db1 = Buffer.alloc(1024);
+  db1.writeInt16BE(1234, 2);
+  db1.writeFloatBE(3.5, 4);
+  db1.writeInt32BE(-100000, 8);
+  db1[12] = 0b0000_0100; // DB1.DBX12.2
+  db1[20] = 10; // STRING[10] at 20: max length, current length, chars
+  db1[21] = 5;
+  db1.write('hello', 22, 'latin1');
+  for (let i = 0; i < 5; i++) db1.writeFloatBE(i + 0.25, 40 + 4 * i);
+  db1.writeBigInt64BE(-(2n ** 40n), 64);
+  db1.writeDoubleBE(Math.PI, 72);
+  for (let i = 0; i < 300; i++) db1[100 + i] = i & 0xff;
+  const db2 = Buffer.alloc(256);
+  db2.writeUInt16BE(0xbeef, 0);
+  const MK = Buffer.alloc(256);
+  MK.writeInt16BE(-7, 10);
+  MK[3] = 0b0000_0010; // M3.1
+  const PE = Buffer.alloc(64);
+  PE[0] = 0x5a;
+  const PA = Buffer.alloc(64);
+  PA.writeUInt16BE(0x1234, 2);
+  return { db: { 1: db1, 2: db2 }, MK, PE, PA };
+}
+
+describe('interop: our S7Client against snap7 server', function () {
+  let peer;
+  let plc;
+
+  beforeEach(async () => {
+    peer = await startSnap7Server(memory());
+    plc = await support.plcwire.connect(`s7://127.0.0.1:${peer.port}?rack=0&slot=1&pdu=240&timeout=5000`);
+  });
+  afterEach(async () => {
+    if (plc) await plc.close();
+    plc = undefined;
+    peer.stop();
+  });
+
+  it('reads scalars, bits, strings and arrays from DB, M, I and Q in one call', async () => {
+    const v = await plc.read([
+      'DB1,INT2',
+      'DB1.DBD4:REAL',
+      'DB1,DINT8',
+      'DB1,X12.2',
+      'DB1,X12.3',
+      'DB1,S20.10',
+      'DB1,REAL40.5',
+      'DB1.DBX64:LINT',
+      'DB1,LREAL72',
+      'DB2,WORD0',
+      'MW10',
+      'M3.1',
+      'IB0',
+      'QW2',
+    ]);
+    expect(v).to.deep.equal({
+      'DB1,INT2': 1234,
+      'DB1.DBD4:REAL': 3.5,
+      'DB1,DINT8': -100000,
+      'DB1,X12.2': true,
+      'DB1,X12.3': false,
+      'DB1,S20.10': 'hello',
+      'DB1,REAL40.5': [0.25, 1.25, 2.25, 3.25, 4.25],
+      'DB1.DBX64:LINT': -(2n ** 40n),
+      'DB1,LREAL72': Math.PI,
+      'DB2,WORD0': 0xbeef,
+      MW10: -7,
+      'M3.1': true,
+      IB0: 0x5a,
+      QW2: 0x1234,
+    });
+  });
+
+  it('writes every type it reads, and snap7 holds the bytes', async () => {
+    await plc.write({
+      'DB1,INT200': -2,
+      'DB1,REAL204': 1.5,
+      'DB1,S220.10': 'abc',
+      'DB1,DINT240.2': [7, -8],
+      MW20: 99,
+    });
+    const db1 = peer.db(1);
+    expect(db1.readInt16BE(200)).to.equal(-2);
+    expect(db1.readFloatBE(204)).to.equal(1.5);
+    // STRING keeps the declared max length (10) and sets the current length.
+    expect(db1.subarray(220, 225).toString('hex')).to.equal('0a03616263');
+    expect(db1.readInt32BE(240)).to.equal(7);
+    expect(db1.readInt32BE(244)).to.equal(-8);
+    expect(peer.area('MK').readInt16BE(20)).to.equal(99);
+  });
+
+  it('writes single bits without touching the neighbouring bits', async () => {
+    await plc.write({ 'DB1,X12.0': true, 'DB1,X12.2': false, 'M3.7': true });
+    expect(peer.db(1)[12]).to.equal(0b0000_0001);
+    expect(peer.area('MK')[3]).to.equal(0b1000_0010);
+  });
+
+  it('reports a missing DB and an out-of-range address per tag, and still returns the good tags', async () => {
+    const r = await plc.readDetailed(['DB1,INT2', 'DB99,INT0', 'DB2,INT1000', 'MW10']);
+    expect(r['DB1,INT2']).to.deep.equal({ ok: true, value: 1234 });
+    expect(r.MW10).to.deep.equal({ ok: true, value: -7 });
+    expect(r['DB99,INT0'].ok).to.equal(false);
+    expect(r['DB99,INT0'].error.code).to.equal('OBJECT_DOES_NOT_EXIST');
+    expect(r['DB99,INT0'].error.message).to.contain('DB99,INT0');
+    expect(r['DB2,INT1000'].ok).to.equal(false);
+    expect(r['DB2,INT1000'].error.code).to.equal('ADDRESS_OUT_OF_RANGE');
+  });
+
+  it('packs 100 scattered tags into requests of at most 19 items, and every value is right', async () => {
+    const proxy = new CountingProxy(peer.port);
+    const port = await proxy.listen();
+    const viaProxy = await support.plcwire.connect(`s7://127.0.0.1:${port}?rack=0&slot=1&pdu=240&timeout=5000`);
+    try {
+      const addresses = Array.from({ length: 100 }, (_, i) => `DB1,BYTE${100 + 3 * i}`);
+      proxy.reset();
+      const v = await viaProxy.read(addresses);
+      addresses.forEach((a, i) => expect(v[a], a).to.equal((3 * i) & 0xff));
+      expect(proxy.maxItemsPerJob).to.be.within(1, 19);
+      // 100 items of 1 byte: at 19 items a request, at least ceil(100 / 19) = 6 requests.
+      expect(proxy.readJobs).to.be.within(6, 100);
+    } finally {
+      await viaProxy.close();
+      await proxy.close();
+    }
+  });
+
+  it('splits an array larger than one PDU into several jobs', async () => {
+    const v = await plc.read(['DB1,BYTE100.300']);
+    expect(v['DB1,BYTE100.300']).to.deep.equal(Array.from({ length: 300 }, (_, i) => i & 0xff));
+    const bytes = Array.from({ length: 600 }, (_, i) => (i * 7) & 0xff);
+    await plc.write({ 'DB1,BYTE400.600': bytes });
+    expect([...peer.db(1).subarray(400, 1000)]).to.deep.equal(bytes);
+  });
+
+  it('reads and writes a STRING[254] across several jobs at PDU 240', async () => {
+    const text = 'x'.repeat(200) + 'y'.repeat(54);
+    await plc.write({ 'DB2,S0.254': text });
+    const db2 = peer.db(2);
+    expect(db2[0]).to.equal(254);
+    expect(db2[1]).to.equal(254);
+    expect((await plc.read(['DB2,S0.254']))['DB2,S0.254']).to.equal(text);
+  });
+});
