@@ -95,7 +95,7 @@ export function fail(io: CliIo, err: unknown, debug: boolean): number {
 export function exitCode(err: unknown): number {
   if (err instanceof UsageError) return EXIT.USAGE;
   if (err instanceof TagErrors) {
-    const codes = err.errors.map((e) => exitCode(e));
+    const codes = Object.values(err.errors).map((e) => exitCode(e));
     return codes.includes(EXIT.USAGE) ? EXIT.USAGE : codes.includes(EXIT.REFUSED) ? EXIT.REFUSED : codes.includes(EXIT.CONNECTION) ? EXIT.CONNECTION : EXIT.TAG_ERROR;
   }
   if (!(err instanceof PlcError)) return EXIT.TAG_ERROR;
@@ -166,7 +166,7 @@ async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number
   if (json) io.stdout.write(`${toJson(values)}\n`);
   else for (const a of addresses) if (values[a] !== null) io.stdout.write(`${a} = ${valueToText(values[a])}\n`);
   for (const e of errors) io.stderr.write(`plcwire: ${e.message}\n`);
-  return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(Object.values(results)));
+  return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
 }
 
 async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
@@ -207,7 +207,7 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     for (const [a, r] of Object.entries(results)) if (r.ok) io.stdout.write(`${a} = ${valueToText(values[a])} ok\n`);
   }
   for (const r of Object.values(results)) if (!r.ok) io.stderr.write(`plcwire: ${r.error.message}\n`);
-  return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(Object.values(results)));
+  return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
 }
 
 function confirm(io: CliIo, question: string): Promise<boolean> {

@@ -1,0 +1,179 @@
+/**
+ * S7comm protocol constants. Sources: RFC 1006 (TPKT), ISO 8073 (COTP), the
+ * S7 communication source document (../shared/seeds/000, PROTOCOLS.md §1) and
+ * the publicly documented S7comm dissector field tables.
+ */
+import { PlcError, type PlcErrorCode } from '../errors';
+import type { AreaName } from '../types';
+
+export const S7_PORT = 102;
+export const TPKT_VERSION = 3;
+export const TPKT_HEADER = 4;
+export const COTP_DT_HEADER = 3;
+export const S7_PROTOCOL_ID = 0x32;
+export const S7_JOB_HEADER = 10;
+export const S7_ACK_HEADER = 12;
+export const READ_ITEM = 12;
+export const READ_RESPONSE_ITEM_HEADER = 4;
+export const WRITE_DATA_HEADER = 4;
+/** TPKT + COTP DT in front of every S7 PDU. */
+export const FRAME_OVERHEAD = TPKT_HEADER + COTP_DT_HEADER;
+
+export const enum CotpType {
+  CR = 0xe0,
+  CC = 0xd0,
+  DR = 0x80,
+  DC = 0xc0,
+  DT = 0xf0,
+  ER = 0x70,
+}
+
+export const enum CotpParam {
+  TpduSize = 0xc0,
+  CallingTsap = 0xc1,
+  CalledTsap = 0xc2,
+}
+
+export const enum Rosctr {
+  Job = 1,
+  Ack = 2,
+  AckData = 3,
+  UserData = 7,
+}
+
+export const enum S7Function {
+  Setup = 0xf0,
+  ReadVar = 0x04,
+  WriteVar = 0x05,
+}
+
+/** Area codes of a request item. */
+export const enum S7Area {
+  PE_PA = 0x80,
+  I = 0x81,
+  Q = 0x82,
+  M = 0x83,
+  DB = 0x84,
+  C = 0x1c,
+  T = 0x1d,
+}
+
+export const AREA_CODES: Readonly<Record<AreaName, S7Area>> = Object.freeze({
+  I: S7Area.I,
+  Q: S7Area.Q,
+  M: S7Area.M,
+  DB: S7Area.DB,
+  PE: S7Area.PE_PA,
+  PA: S7Area.PE_PA,
+  C: S7Area.C,
+  T: S7Area.T,
+});
+
+/** Transport size of a request item (how `count` is counted). */
+export const enum TransportSize {
+  BIT = 0x01,
+  BYTE = 0x02,
+  CHAR = 0x03,
+  WORD = 0x04,
+  INT = 0x05,
+  DWORD = 0x06,
+  DINT = 0x07,
+  REAL = 0x08,
+  COUNTER = 0x1c,
+  TIMER = 0x1d,
+}
+
+/** Transport size of a data item (how its length is counted). */
+export const enum DataTransportSize {
+  NULL = 0x00,
+  /** length in bits (one bit) */
+  BIT = 0x03,
+  /** length in bits */
+  BYTE = 0x04,
+  /** length in bits */
+  INTEGER = 0x05,
+  /** length in bytes */
+  REAL = 0x07,
+  /** length in bytes */
+  OCTET_STRING = 0x09,
+}
+
+/** Whether a data transport size counts its length in bits. */
+export function lengthInBits(size: number): boolean {
+  return size === DataTransportSize.BIT || size === DataTransportSize.BYTE || size === DataTransportSize.INTEGER;
+}
+
+/** Return codes of a read/write item. */
+export const enum ReturnCode {
+  Reserved = 0x00,
+  HardwareFault = 0x01,
+  AccessDenied = 0x03,
+  AddressOutOfRange = 0x05,
+  DataTypeNotSupported = 0x06,
+  DataTypeInconsistent = 0x07,
+  ObjectDoesNotExist = 0x0a,
+  Success = 0xff,
+}
+
+const RETURN_CODES: Readonly<Record<number, [PlcErrorCode, string]>> = Object.freeze({
+  0x00: ['PLC_ERROR', 'reserved return code 0x00'],
+  0x01: ['PLC_ERROR', 'hardware fault'],
+  0x03: ['ACCESS_DENIED', 'access denied (object access not allowed)'],
+  0x05: ['ADDRESS_OUT_OF_RANGE', 'address out of range (beyond the end of the area or data block)'],
+  0x06: ['TYPE_NOT_SUPPORTED', 'data type not supported'],
+  0x07: ['TYPE_NOT_SUPPORTED', 'data type inconsistent (size mismatch)'],
+  0x0a: ['OBJECT_DOES_NOT_EXIST', 'object does not exist (is the data block there?)'],
+});
+
+/** The words and error code of an item return code. */
+export function describeReturnCode(code: number): { code: PlcErrorCode; text: string } {
+  const known = RETURN_CODES[code];
+  if (known) return { code: known[0], text: known[1] };
+  return { code: 'PLC_ERROR', text: `unknown return code 0x${code.toString(16).padStart(2, '0')}` };
+}
+
+/** Header error class (ack and ack-data PDUs). */
+const ERROR_CLASSES: Readonly<Record<number, string>> = Object.freeze({
+  0x00: 'no error',
+  0x81: 'application relationship error',
+  0x82: 'object definition error',
+  0x83: 'no resources available',
+  0x84: 'error on service processing',
+  0x85: 'error on supplies',
+  0x87: 'access error',
+});
+
+/** Well-known header errors (class << 8 | code). */
+const HEADER_ERRORS: Readonly<Record<number, [PlcErrorCode, string]>> = Object.freeze({
+  0x8104: ['ACCESS_DENIED', 'function not supported or access denied: PUT/GET access is not enabled on this S7-1200/1500 (or the block is optimized)'],
+  0x8304: ['ACCESS_DENIED', 'no resources / access denied: PUT/GET access is not enabled on this S7-1200/1500'],
+  0x8404: ['PROTOCOL_ERROR', 'fatal error in the protocol'],
+  0x8500: ['PDU_TOO_LARGE', 'PDU too large for the negotiated size'],
+  0x8702: ['PLC_ERROR', 'the PLC is not in a state to serve the request'],
+  0xd209: ['OBJECT_DOES_NOT_EXIST', 'block not found'],
+  0xd401: ['PLC_ERROR', 'invalid parameter'],
+});
+
+/** A header error (class, code) as a typed PlcError with words. */
+export function headerError(errorClass: number, errorCode: number, context: string): PlcError {
+  const key = (errorClass << 8) | errorCode;
+  const hex = `0x${key.toString(16).padStart(4, '0')}`;
+  const known = HEADER_ERRORS[key];
+  if (known) return new PlcError(known[0], `${context}: the PLC answered ${hex}: ${known[1]}`, { plcCode: key });
+  const cls = ERROR_CLASSES[errorClass] ?? 'unknown error class';
+  return new PlcError('PLC_ERROR', `${context}: the PLC answered ${hex} (${cls})`, { plcCode: key });
+}
+
+/** COTP TPDU size code → bytes (0x07 = 128 … 0x0D = 8192). */
+export function tpduBytes(code: number): number {
+  return code >= 0x07 && code <= 0x0d ? 1 << code : 0;
+}
+
+/** Remote TSAP for a rack/slot: (connection type << 8) | (rack << 5 | slot). PG 1, OP 2, basic 3. */
+export function remoteTsapFor(type: 'pg' | 'op' | 'basic', rack: number, slot: number): number {
+  const t = type === 'pg' ? 1 : type === 'op' ? 2 : 3;
+  return (t << 8) | ((rack & 0x07) << 5) | (slot & 0x1f);
+}
+
+/** Local TSAP used with rack/slot addressing: the document's 0x1000 (any value is accepted by S7 CPUs). */
+export const LOCAL_TSAP = 0x1000;
