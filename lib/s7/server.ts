@@ -110,6 +110,8 @@ const AREA_BY_CODE: Readonly<Record<number, AreaName>> = {
   [S7Area.PE_PA]: 'PE',
 };
 
+type S7Job = ReturnType<typeof decodeS7>;
+
 interface Connection {
   socket: net.Socket;
   reader: FrameReader;
@@ -117,7 +119,7 @@ interface Connection {
   pduSize: number;
   maxJobs: number;
   running: number;
-  queue: Buffer[];
+  queue: { frame: Buffer; message: S7Job }[];
   counted: boolean;
 }
 
@@ -241,7 +243,10 @@ export class S7Server extends EventEmitter {
         conn.socket.write(encodeSetupAck(message.pduRef, { maxAmqCalling: conn.maxJobs, maxAmqCalled: conn.maxJobs, pduSize: conn.pduSize }));
         return;
       }
-      conn.queue.push(frame);
+      if (message.kind === 'read-request' || message.kind === 'write-request') {
+        this.emit('request', { kind: message.kind === 'read-request' ? 'read' : 'write', pduRef: message.pduRef, items: message.items.length, bytes: frame.length } satisfies S7RequestEvent);
+      }
+      conn.queue.push({ frame, message });
       this.pump(conn);
     } catch {
       // A frame that is not S7: a real CPU drops the connection.
@@ -275,13 +280,13 @@ export class S7Server extends EventEmitter {
   /** Serves queued jobs, at most maxJobs at once, each after the injected latency. */
   private pump(conn: Connection): void {
     while (conn.running < conn.maxJobs && conn.queue.length > 0) {
-      const frame = conn.queue.shift()!;
+      const { frame, message } = conn.queue.shift()!;
       conn.running++;
       const serve = () => {
         conn.running--;
         if (!conn.socket.destroyed && !this.faults.silent) {
           try {
-            const reply = this.serve(conn, frame);
+            const reply = this.serve(conn, frame, message);
             if (reply) conn.socket.write(reply);
           } catch {
             conn.socket.destroy();
@@ -295,13 +300,11 @@ export class S7Server extends EventEmitter {
     }
   }
 
-  private serve(conn: Connection, frame: Buffer): Buffer | undefined {
-    const message = decodeS7(frame);
+  private serve(conn: Connection, frame: Buffer, message: S7Job): Buffer | undefined {
     if (message.kind !== 'read-request' && message.kind !== 'write-request') {
       // Unknown or unsupported job: a CPU answers "function not supported".
       return encodeErrorAck(message.pduRef, 0x81, 0x04);
     }
-    this.emit('request', { kind: message.kind === 'read-request' ? 'read' : 'write', pduRef: message.pduRef, items: message.items.length, bytes: frame.length } satisfies S7RequestEvent);
     if (this.faults.accessDenied) return encodeErrorAck(message.pduRef, 0x81, 0x04);
     if (frame.length - FRAME_OVERHEAD > conn.pduSize) return encodeErrorAck(message.pduRef, 0x85, 0x00);
     if (message.kind === 'read-request') {
