@@ -1,0 +1,151 @@
+'use strict';
+const { acquire, release, plc } = require('./shared/links');
+const { settleWithin } = require('./shared/user');
+
+/**
+ * plcwire-connection (config): property `url`. Opens the shared link on its
+ * first user, gives it back after the last; forwards link errors to the users'
+ * Catch nodes through `this.users` (the runtime's convention for config nodes).
+ */
+module.exports = function (RED) {
+  function PlcwireConnection(config) {
+    RED.nodes.createNode(this, config);
+    const node = this;
+    node.name = config.name;
+    node.url = String(config.url || '').trim();
+    node.users = {};
+    node.linkStatus = { state: 'connecting' };
+    node.problem = undefined;
+    let link;
+    let lastError = '';
+
+    Object.defineProperty(node, 'client', { get: () => link && link.client });
+
+    function broadcast(status) {
+      node.linkStatus = status;
+      if (status.state === 'connected') lastError = '';
+      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
+    }
+
+    /** Reported once per distinct error between two connections, so a PLC that is off does not flood the log. */
+    function reportError(err) {
+      const text = err && err.message ? err.message : String(err);
+      if (text === lastError) return;
+      lastError = text;
+      node.error(err, { topic: link ? link.name : node.url, payload: { url: node.url, state: node.linkStatus.state, code: err && err.code } });
+    }
+
+    const onStatus = (status) => broadcast(status);
+
+    function open() {
+      try {
+        link = acquire(node.url, node);
+      } catch (err) {
+        node.problem = err;
+        broadcast({ state: 'invalid', error: err });
+        reportError(err);
+        return;
+      }
+      node.problem = undefined;
+      link.on('status', onStatus);
+      link.on('link-error', reportError);
+      broadcast(link.status);
+    }
+
+    function shut() {
+      const held = link;
+      link = undefined;
+      if (!held) return Promise.resolve();
+      held.off('status', onStatus);
+      held.off('link-error', reportError);
+      return release(held, node);
+    }
+
+    node.register = function (user) {
+      node.users[user.id] = user;
+      if (!link && !node.problem) open();
+      else if (typeof user.onLinkStatus === 'function') user.onLinkStatus(node.linkStatus);
+    };
+
+    /** Resolves once the link is closed if `user` was the last one. */
+    node.deregister = function (user) {
+      delete node.users[user.id];
+      if (Object.keys(node.users).length > 0) return Promise.resolve();
+      node.problem = undefined;
+      return shut();
+    };
+
+    node.on('close', function (removed, done) {
+      node.users = {};
+      settleWithin(shut()).then(() => done());
+    });
+  }
+
+  RED.nodes.registerType('plcwire-connection', PlcwireConnection);
+
+  const canRead = RED.auth.needsPermission('plcwire.read');
+
+  /**
+   * Address validation for the editor with the library's own parser (the
+   * driver of the URL's protocol): POST { url?, addresses: [...] } →
+   * { results: { address: { ok, type, count } | { ok: false, code, message } } }.
+   */
+  RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
+    const body = req.body || {};
+    const addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 1000).map(String) : [];
+    let parse = plc.parseAddress;
+    let client;
+    if (body.url) {
+      try {
+        client = plc.createClient(String(body.url));
+        parse = (a) => client.tag(a);
+      } catch (err) {
+        res.json({ url: { ok: false, code: err.code, message: err.message }, results: {} });
+        return;
+      }
+    }
+    const results = {};
+    for (const address of addresses) {
+      try {
+        const tag = parse(address);
+        results[address] = { ok: true, type: tag.type, count: tag.count };
+      } catch (err) {
+        results[address] = { ok: false, code: err.code || 'INVALID_ADDRESS', message: err.message };
+      }
+    }
+    if (client) client.close().catch(() => undefined);
+    res.json({ url: { ok: true }, results });
+  });
+
+  /** URL ⇄ fields for the edit dialog, with the library's own parser and formatter. */
+  RED.httpAdmin.post('/plcwire/url', canRead, function (req, res) {
+    const body = req.body || {};
+    try {
+      if (body.endpoint) {
+        const url = plc.formatUrl(body.endpoint);
+        const endpoint = plc.parseUrl(url);
+        res.json({ ok: true, url: plc.formatUrl(endpoint), endpoint, key: plc.endpointKey(endpoint) });
+      } else {
+        const endpoint = plc.parseUrl(String(body.url || ''));
+        res.json({ ok: true, url: plc.formatUrl(endpoint), endpoint, key: plc.endpointKey(endpoint) });
+      }
+    } catch (err) {
+      res.json({ ok: false, code: err.code, message: err.message });
+    }
+  });
+
+  /** Serial ports for the freeport dialog. */
+  RED.httpAdmin.get('/plcwire/serialports', canRead, function (req, res) {
+    let SerialPort;
+    try {
+      ({ SerialPort } = require('serialport'));
+    } catch {
+      res.json([]);
+      return;
+    }
+    SerialPort.list().then(
+      (ports) => res.json(ports.map((p) => ({ path: p.path, manufacturer: p.manufacturer || '' }))),
+      () => res.json([]),
+    );
+  });
+};

@@ -1,0 +1,84 @@
+'use strict';
+/**
+ * One PLC client per endpoint (endpointKey of the URL), shared by every
+ * connection config node that names it. Config nodes own links; user nodes
+ * (read, write, heartbeat) reach them through their config node.
+ */
+const { EventEmitter } = require('node:events');
+const plc = require('../../dist/lib/index.js');
+
+/** @type {Map<string, Link>} */
+const links = new Map();
+
+/** Parameters that change what a write may do: two config nodes must agree on them to share a client. */
+const SAFETY = ['readOnly', 'allow'];
+
+class Link extends EventEmitter {
+  constructor(key, url, endpoint) {
+    super();
+    this.key = key;
+    this.url = url;
+    this.endpoint = endpoint;
+    this.name = plc.endpointName(endpoint);
+    this.owners = new Set();
+    this.status = { state: 'connecting' };
+    this.client = plc.createClient(endpoint);
+    this.client.on('state', (state) => {
+      if (state !== 'reconnecting' && state !== 'idle') this.update({ state });
+    });
+    this.client.on('reconnecting', ({ delay, error }) => this.update({ state: 'reconnecting', delay, error }));
+    // A listener on 'error' keeps an error event from ever throwing; errors reach users via 'status'.
+    this.client.on('error', (error) => this.emit('link-error', error));
+    this.client.start();
+  }
+
+  update(status) {
+    this.status = status;
+    this.emit('status', status);
+  }
+
+  close() {
+    if (links.get(this.key) === this) links.delete(this.key);
+    return this.client.close().catch(() => undefined);
+  }
+}
+
+function safetyOf(endpoint) {
+  return JSON.stringify(SAFETY.map((k) => endpoint[k] ?? null));
+}
+
+/**
+ * Takes (or opens) the link for `url` on behalf of `owner`. Throws PlcError
+ * INVALID_URL for a bad URL, or when another config node shares the endpoint
+ * with different write-safety settings (read-only, allow-list).
+ */
+function acquire(url, owner) {
+  const endpoint = plc.parseUrl(url);
+  const key = plc.endpointKey(endpoint);
+  let link = links.get(key);
+  if (link && safetyOf(link.endpoint) !== safetyOf(endpoint)) {
+    throw new plc.PlcError(
+      'INVALID_URL',
+      `${url} reaches the same PLC as ${link.url} but with other readOnly/allow settings; give both connections the same ones`,
+    );
+  }
+  if (!link) {
+    link = new Link(key, url, endpoint);
+    links.set(key, link);
+  }
+  link.owners.add(owner);
+  return link;
+}
+
+/** Gives the link back; the last owner closes it. Always resolves. */
+function release(link, owner) {
+  link.owners.delete(owner);
+  return link.owners.size === 0 ? link.close() : Promise.resolve();
+}
+
+/** For tests and diagnostics: how many links are open. */
+function openLinks() {
+  return links.size;
+}
+
+module.exports = { acquire, release, openLinks, plc };

@@ -1,0 +1,54 @@
+'use strict';
+/** What the read, write and heartbeat nodes share: attaching to a connection and settling close in time. */
+const { linkStatus } = require('./status');
+
+/** Close handlers must call done within a few seconds whatever happens (the runtime gives up at 15 s). */
+const CLOSE_DEADLINE_MS = 2000;
+
+/** Resolves when `promise` settles or after `ms`, whichever is first; leaves no timer behind. */
+function settleWithin(promise, ms = CLOSE_DEADLINE_MS) {
+  let timer;
+  const deadline = new Promise((resolve) => (timer = setTimeout(resolve, ms)));
+  return Promise.race([Promise.resolve(promise).catch(() => undefined), deadline]).finally(() => clearTimeout(timer));
+}
+
+/**
+ * Registers `node` as a user of its connection config node. `onStatus` hears
+ * every link status (also the current one, at once). Returns the attachment,
+ * or undefined when no connection is configured (the node's status says so).
+ */
+function attach(RED, node, connectionId, onStatus) {
+  const config = connectionId ? RED.nodes.getNode(connectionId) : null;
+  const show = (status) => node.status(linkStatus(RED._, status));
+  if (!config || typeof config.register !== 'function') {
+    show({ state: 'unconfigured' });
+    return undefined;
+  }
+  node.onLinkStatus = (status) => {
+    node.linkState = status.state;
+    if (!onStatus || onStatus(status) !== false) show(status);
+  };
+  config.register(node);
+  return {
+    config,
+    /** The shared client, or undefined when the connection could not be opened. */
+    get client() {
+      return config.client;
+    },
+    /** Why requests cannot be made (bad URL, no link), as an Error with a code, or undefined. */
+    get problem() {
+      return config.problem;
+    },
+    showLink: () => show(config.linkStatus),
+    detach: () => config.deregister(node),
+  };
+}
+
+/** The error a node reports when no connection node is configured. */
+function noConnectionError(RED) {
+  const err = new Error(RED._('plcwire.errors.noConnection'));
+  err.code = 'NOT_CONNECTED';
+  return err;
+}
+
+module.exports = { attach, settleWithin, noConnectionError, CLOSE_DEADLINE_MS };

@@ -1,0 +1,72 @@
+'use strict';
+const { attach, settleWithin, noConnectionError } = require('./shared/user');
+const { tagTable, writeRequest, errorInfo } = require('./shared/tags');
+
+/**
+ * plcwire-write: writes `msg.payload = { nameOrAddress: value }` (or
+ * `msg.topic` + value) and sends the message on once the PLC acknowledged,
+ * with `msg.results` per tag. Failures go to done(err) naming the tag.
+ */
+module.exports = function (RED) {
+  function PlcwriteWrite(config) {
+    RED.nodes.createNode(this, config);
+    const node = this;
+    const table = tagTable(config.tags);
+    let closing = false;
+
+    const connection = attach(RED, node, config.connection);
+
+    node.on('input', function (msg, send, done) {
+      let request;
+      try {
+        if (!connection) throw noConnectionError(RED);
+        if (connection.problem) throw connection.problem;
+        request = writeRequest(table, msg);
+      } catch (err) {
+        done(err);
+        return;
+      }
+      const client = connection.client;
+      if (!client) {
+        done(noConnectionError(RED));
+        return;
+      }
+      client
+        .writeDetailed(request.values)
+        .then((results) => {
+          if (closing) return done();
+          msg.results = {};
+          const failed = [];
+          for (const [address, name] of Object.entries(request.names)) {
+            const r = results[address];
+            if (r && r.ok) msg.results[name] = { ok: true, address };
+            else {
+              const info = errorInfo(r ? r.error : undefined, address);
+              msg.results[name] = { ok: false, ...info };
+              failed.push({ name, info });
+            }
+          }
+          if (failed.length < Object.keys(request.names).length) send(msg);
+          done(failed.length > 0 ? failure(failed) : undefined);
+        })
+        .catch((err) => done(err));
+    });
+
+    function failure(failed) {
+      const { name, info } = failed[0];
+      const label = name === info.address ? `"${name}"` : `"${name}" (${info.address})`;
+      const more = failed.length > 1 ? ` (+${failed.length - 1})` : '';
+      const err = new Error(`write ${label}: ${info.message}${more}`);
+      err.code = info.code;
+      err.tag = name;
+      return err;
+    }
+
+    node.on('close', function (removed, done) {
+      closing = true;
+      settleWithin(connection ? connection.detach() : undefined).then(() => done());
+    });
+  }
+
+  RED.nodes.registerType('plcwire-write', PlcwriteWrite);
+};

@@ -1,0 +1,4 @@
+import { describeProtocol } from './flows';
+import { fetchWriteSim } from './sims';
+
+describeProtocol('FETCH/WRITE', fetchWriteSim);

@@ -1,0 +1,4 @@
+import { describeProtocol } from './flows';
+import { freeportSim } from './sims';
+
+describeProtocol('S7-200 freeport (serial device server)', freeportSim);
