@@ -64,19 +64,19 @@ describe('browser: the npm start demo in headless Chromium', function () {
       if (type === 'plcwire-connection') continue; // config nodes are not in the palette
       await page.waitForSelector(`.red-ui-palette-node[data-palette-type="${type}"]`, { timeout: 30_000 });
     }
-    const registered = await page.evaluate(() => (window as any).RED.nodes.getType('plcwire-connection') !== undefined);
+    const registered = await page.evaluate(() => (globalThis as any).RED.nodes.getType('plcwire-connection') !== undefined);
     expect(registered).to.equal(true);
   });
 
   it('the dashboard shows the tank level changing live', async () => {
     await page.goto(demo.dashboard, { waitUntil: 'domcontentloaded' });
     const selector = '.plcwire-ui-fw-level';
-    await page.waitForFunction((sel) => /\d/.test(document.querySelector(sel)?.textContent ?? ''), selector, { timeout: 30_000 });
+    await page.waitForFunction((sel) => /\d/.test((globalThis as any).document.querySelector(sel)?.textContent ?? ''), selector, { timeout: 30_000 });
     const first = await page.locator(selector).innerText();
     // The simulated tank fills at 4 %/s: the shown level must change within seconds.
     await page.waitForFunction(
       ([sel, before]) => {
-        const now = document.querySelector(sel!)?.textContent ?? '';
+        const now = (globalThis as any).document.querySelector(sel!)?.textContent ?? '';
         return /\d/.test(now) && now.replace(/\s+/g, ' ') !== before!.replace(/\s+/g, ' ');
       },
       [selector, first],
@@ -91,7 +91,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     await until(() => (db1[4]! & 0x01) === 1, 10_000, 'DB1.DBX4.0 set by the dashboard');
     // The process reacts: the motor ramps up and the dashboard shows its speed.
     await until(() => db1.readInt16BE(6) > 0, 10_000, 'motor speed rising');
-    await page.waitForFunction(() => /[1-9]/.test(document.querySelector('.plcwire-ui-speed')?.textContent ?? ''), undefined, { timeout: 15_000 });
+    await page.waitForFunction(() => /[1-9]/.test((globalThis as any).document.querySelector('.plcwire-ui-speed')?.textContent ?? ''), undefined, { timeout: 15_000 });
     if (process.env.PLCWIRE_SCREENSHOT) await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, fullPage: true });
   });
 });
