@@ -1,0 +1,102 @@
+/**
+ * The editor's admin endpoints (address validation and URL parsing with the
+ * library's own parser, guarded by Node-RED permissions) and the examples,
+ * which must load as flows.
+ */
+import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+import { ALL_NODES, helper, ROOT } from './support';
+
+describe('nodes: editor endpoints', function () {
+  this.timeout(10000);
+  beforeEach(() => helper.startServer());
+  afterEach(async () => {
+    await helper.unload();
+    await helper.stopServer();
+  });
+
+  it('validates addresses with the parser of the connection URL protocol', async () => {
+    await helper.load(ALL_NODES, []);
+    const res = await helper
+      .request()
+      .post('/plcwire/validate')
+      .send({ url: 's7://10.0.0.1?rack=0&slot=1', addresses: ['DB1.DBW0:INT', 'DB1,REAL4', 'MW2:INT[3]', 'DBX'] })
+      .expect(200);
+    expect(res.body.results['DB1.DBW0:INT']).to.deep.equal({ ok: true, type: 'INT', count: 1 });
+    expect(res.body.results['DB1,REAL4']).to.deep.equal({ ok: true, type: 'REAL', count: 1 });
+    expect(res.body.results['MW2:INT[3]']).to.deep.equal({ ok: true, type: 'INT', count: 3 });
+    expect(res.body.results.DBX.ok).to.equal(false);
+    expect(res.body.results.DBX.code).to.equal('INVALID_ADDRESS');
+    expect(res.body.results.DBX.message).to.include('DBX');
+  });
+
+  it('validates without a URL with the S7 parser, and reports a bad URL', async () => {
+    await helper.load(ALL_NODES, []);
+    const plain = await helper.request().post('/plcwire/validate').send({ addresses: ['M0.1'] }).expect(200);
+    expect(plain.body.results['M0.1']).to.deep.equal({ ok: true, type: 'BOOL', count: 1 });
+    const bad = await helper.request().post('/plcwire/validate').send({ url: 's7://host?rakc=0', addresses: ['M0.1'] }).expect(200);
+    expect(bad.body.url.ok).to.equal(false);
+    expect(bad.body.url.message).to.include('rakc');
+  });
+
+  it('parses a URL into the fields of the dialog and formats fields back', async () => {
+    await helper.load(ALL_NODES, []);
+    const parsed = await helper.request().post('/plcwire/url').send({ url: 'fetchwrite://10.0.0.2?fetchPort=2000&writePort=2001' }).expect(200);
+    expect(parsed.body.ok).to.equal(true);
+    expect(parsed.body.endpoint).to.include({ protocol: 'fetchwrite', host: '10.0.0.2', fetchPort: 2000, writePort: 2001 });
+    const formatted = await helper.request().post('/plcwire/url').send({ endpoint: { ...parsed.body.endpoint, writePort: 2000 } }).expect(200);
+    expect(formatted.body.url).to.equal('fetchwrite://10.0.0.2?port=2000');
+    const wrong = await helper.request().post('/plcwire/url').send({ url: 'modbus://x' }).expect(200);
+    expect(wrong.body).to.include({ ok: false, code: 'INVALID_URL' });
+  });
+
+  it('asks for the plcwire.read permission', () => {
+    const source = fs.readFileSync(path.join(ROOT, 'nodes/connection.js'), 'utf8');
+    const routes = source.match(/RED\.httpAdmin\.(get|post)\([^)]*\)/g) ?? [];
+    expect(routes.length).to.equal(3);
+    for (const r of routes) expect(r).to.include('canRead');
+    expect(source).to.include("RED.auth.needsPermission('plcwire.read')");
+  });
+});
+
+describe('nodes: examples', function () {
+  this.timeout(10000);
+  const dir = path.join(ROOT, 'examples');
+  const files = fs.readdirSync(dir).filter((f) => f.endsWith('.json'));
+
+  beforeEach(() => helper.startServer());
+  afterEach(async () => {
+    await helper.unload();
+    await helper.stopServer();
+  });
+
+  it('has a flow per protocol and an error-handling flow, each starting with a Comment that says how to start the simulator', () => {
+    expect(files.length).to.be.at.least(4);
+    const urls = new Set<string>();
+    for (const f of files) {
+      const flow = JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8'));
+      expect(flow[0].type, f).to.equal('comment');
+      expect(flow[0].name, f).to.match(/npx plcwire serve (s7|fetchwrite|freeport)/);
+      for (const n of flow) if (n.type === 'plcwire-connection') urls.add(n.url.split(':')[0]);
+    }
+    expect([...urls].sort()).to.deep.equal(['fetchwrite', 'freeport+tcp', 's7']);
+  });
+
+  for (const f of files) {
+    it(`loads "${f}" and every address in it parses`, async () => {
+      const flow = JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8'));
+      const tab = { id: 'ex.tab', type: 'tab', label: f };
+      const wired = flow
+        .filter((n: any) => ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'comment'].includes(n.type) || n.type === 'catch' || n.type === 'status')
+        .map((n: any) => (n.type === 'plcwire-connection' ? n : { ...n, z: 'ex.tab', wires: (n.wires ?? []).map(() => []) }));
+      await helper.load(ALL_NODES.concat(require(path.join(path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red'))] })), 'core/common/90-comment.js'))), [tab, ...wired]);
+      for (const n of wired.filter((x: any) => x.type.startsWith('plcwire-'))) expect(helper.getNode(n.id), n.id).to.be.ok;
+      const conn = flow.find((n: any) => n.type === 'plcwire-connection');
+      const addresses = flow.flatMap((n: any) => [...(n.tags ?? []).map((t: any) => t.address), n.writeAddress, n.watchAddress]).filter(Boolean);
+      const res = await helper.request().post('/plcwire/validate').send({ url: conn.url, addresses }).expect(200);
+      expect(res.body.url.ok, res.body.url.message).to.equal(true);
+      for (const a of addresses) expect(res.body.results[a].ok, `${a}: ${res.body.results[a].message}`).to.equal(true);
+    });
+  }
+});
