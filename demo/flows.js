@@ -21,6 +21,14 @@ function demoFlow(urls) {
     info: 'Run `npx plcwire demo` to start the same simulated plant without Node-RED.',
     ...at(330),
   });
+  nodes.push({
+    id: 'demo.comment.dashboard',
+    type: 'comment',
+    name: 'Needs @flowfuse/node-red-dashboard (Dashboard 2.0); page at /dashboard/plant',
+    info: 'Install Dashboard 2.0 from the palette manager: @flowfuse/node-red-dashboard.',
+    ...at(330),
+    y: 100,
+  });
 
   // Dashboard 2.0 skeleton.
   nodes.push({ id: 'ui.base', type: 'ui-base', name: 'plcwire', path: '/dashboard', includeClientData: true, acceptsClientConfig: ['ui-notification', 'ui-control'], showPathInSidebar: false, navigationStyle: 'default', titleBarStyle: 'default' });
@@ -124,4 +132,20 @@ function demoFlow(urls) {
   return nodes;
 }
 
-module.exports = { demoFlow };
+/** The demo plant's default URLs (`npx plcwire demo`). */
+const DEMO_URLS = Object.freeze({
+  s7: 's7://127.0.0.1:10102?rack=0&slot=1',
+  fetchwrite: 'fetchwrite://127.0.0.1?fetchPort=12000&writePort=12001',
+  freeport: 'freeport+tcp://127.0.0.1:14001',
+});
+
+module.exports = { demoFlow, DEMO_URLS };
+
+// `node demo/flows.js` regenerates the Dashboard 2 example from this flow.
+if (require.main === module) {
+  const fs = require('node:fs');
+  const path = require('node:path');
+  const dir = path.join(__dirname, '..', 'examples', 'Dashboard 2');
+  fs.mkdirSync(dir, { recursive: true });
+  fs.writeFileSync(path.join(dir, 'Plant dashboard for all three protocols.json'), `${JSON.stringify(demoFlow(DEMO_URLS), null, 2)}\n`);
+}

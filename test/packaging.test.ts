@@ -171,3 +171,15 @@ function listFiles(dir: string): string[] {
     return e.isDirectory() ? listFiles(p) : [p];
   });
 }
+
+describe('packaging: the Dashboard 2 example', () => {
+  it('is exactly the npm start demo flow on the demo plant\'s ports (regenerate with node demo/flows.js)', () => {
+    // eslint-disable-next-line @typescript-eslint/no-require-imports
+    const { demoFlow, DEMO_URLS } = require(path.join(__dirname, '../../demo/flows.js')) as { demoFlow(u: unknown): unknown[]; DEMO_URLS: unknown };
+    const file = path.join(__dirname, '../../examples/Dashboard 2/Plant dashboard for all three protocols.json');
+    const flow = JSON.parse(fs.readFileSync(file, 'utf8')) as { type: string; path?: string }[];
+    expect(flow).to.deep.equal(demoFlow(DEMO_URLS));
+    for (const type of ['ui-base', 'ui-theme', 'ui-page', 'ui-group']) expect(flow.some((n) => n.type === type), type).to.equal(true);
+    expect(flow.some((n) => n.type === 'comment' && /node-red-dashboard/.test((n as { name?: string }).name ?? ''))).to.equal(true);
+  });
+});
