@@ -1,0 +1,383 @@
+/**
+ * FetchWriteClient: FETCH/WRITE to a CP's two passive connections ("Fetch
+ * passive" and "Write passive", one port each, or one port for both) on the
+ * shared link layer. The protocol has no request ids, so each connection has
+ * one job at a time and the client runs jobs one after another; that also
+ * serialises the read-modify-write of bits and odd DB bytes.
+ *
+ * Read-modify-write (bit writes, and byte writes at odd offsets of a DB
+ * addressed in words) fetches the enclosing byte or word, changes the bits
+ * or bytes, and writes it back. It is not atomic against the PLC program: a
+ * change the program makes to the same byte/word in between is overwritten.
+ */
+import type * as net from 'node:net';
+import { parseAddress } from '../address';
+import { AddressError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, type ClientOptions } from '../link/client-base';
+import { FrameReader, type FrameCheck } from '../link/framer';
+import { JobQueue } from '../link/jobs';
+import { PendingRequests } from '../link/pending';
+import { openTcp } from '../link/tcp';
+import type { PlcValue, Protocol, Tag } from '../types';
+import { endpointName, type FetchWriteEndpoint } from '../url';
+import { decodeTag, encodeInto, validateValue, writeSpan } from '../values';
+import { HEADER, MAX_DATA, OpCode, ORG_BY_AREA, ORG_RANGES, Org, byteLength, decodeResponse, encodeRequest, errorFor, type FwResponse } from './codec';
+
+/** Merging two ranges costs less than a second round trip while the gap is under this many bytes. */
+const MERGE_GAP = 128;
+
+interface Expectation {
+  op: OpCode;
+  dataBytes: number;
+}
+
+class Channel {
+  readonly pending = new PendingRequests<FwResponse>();
+  readonly reader: FrameReader;
+  expect: Expectation | undefined;
+
+  constructor(readonly socket: net.Socket) {
+    this.reader = new FrameReader((buf) => this.check(buf), MAX_DATA + HEADER + 1);
+  }
+
+  /** Cuts the one response we wait for: 16 bytes, plus the fetched data when the error byte is 0. */
+  private check(buf: Buffer): FrameCheck {
+    if (!this.expect) return { kind: 'bad', error: new ProtocolError('data from the CP while no job was pending') };
+    if (buf.length < HEADER) return { kind: 'need' };
+    const op = buf[5];
+    if (op !== (this.expect.op === OpCode.FetchRequest ? OpCode.FetchResponse : OpCode.WriteAck)) {
+      return { kind: 'bad', error: new ProtocolError(`answer op code 0x${(op ?? 0).toString(16)} does not match the job`) };
+    }
+    const length = op === OpCode.FetchResponse && buf[8] === 0 ? HEADER + this.expect.dataBytes : HEADER;
+    return buf.length >= length ? { kind: 'frame', length } : { kind: 'need' };
+  }
+}
+
+class FwSession {
+  readonly jobs: JobQueue;
+  constructor(
+    readonly fetch: Channel,
+    readonly write: Channel,
+    maxQueued: number | undefined,
+  ) {
+    this.jobs = new JobQueue({ concurrency: 1, ...(maxQueued === undefined ? {} : { maxQueued }) });
+  }
+  destroy(): void {
+    this.fetch.socket.destroy();
+    this.write.socket.destroy();
+  }
+}
+
+/** A byte range of one ORG area, fetched as one or more jobs. */
+interface Range {
+  org: Org;
+  dbNumber: number;
+  /** Bytes from the area's start (C/T: 2 per number). */
+  start: number;
+  length: number;
+  tags: number[];
+}
+
+export class FetchWriteClient extends BaseClient<FwSession, Tag> {
+  readonly protocol: Protocol = 'fetchwrite';
+  readonly endpoint: FetchWriteEndpoint;
+  /** Jobs sent, for diagnostics and tests. */
+  readonly stats = { fetches: 0, writes: 0 };
+
+  constructor(endpoint: FetchWriteEndpoint, options: Partial<ClientOptions> = {}) {
+    super({
+      name: endpointName(endpoint),
+      timeout: endpoint.timeout,
+      ...(endpoint.readOnly ? { readOnly: true } : {}),
+      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
+      ...options,
+    });
+    this.endpoint = endpoint;
+  }
+
+  /** S7 address syntax, limited to what FETCH/WRITE can reach (the document's ORG table). */
+  protected parseTag(address: string): Tag {
+    const tag = parseAddress(address);
+    const org = ORG_BY_AREA[tag.area];
+    const range = ORG_RANGES[org]!;
+    if (org === Org.DB && (tag.dbNumber < 1 || tag.dbNumber > 255)) {
+      throw new AddressError(address, `DB${tag.dbNumber} cannot be reached by FETCH/WRITE (ORG 1 takes DB 1..255)`);
+    }
+    const [start, end] = this.byteSpan(tag);
+    const limit = this.areaBytes(org);
+    if (end > limit) {
+      const unit = org === Org.C || org === Org.T ? ` (${range.name} 0..${range.maxStart})` : ` (${range.name} bytes 0..${limit - 1})`;
+      throw new AddressError(address, `${start >= limit ? 'starts' : 'ends'} beyond what FETCH/WRITE reaches${unit}`);
+    }
+    return tag;
+  }
+
+  /** Bytes of an area reachable by FETCH/WRITE. */
+  private areaBytes(org: Org): number {
+    const r = ORG_RANGES[org]!;
+    if (org === Org.DB) return this.endpoint.dbUnit === 'word' ? 2 * (r.maxStart + 1) : 0x10000;
+    if (org === Org.C || org === Org.T) return 2 * (r.maxStart + 1);
+    return r.maxStart + 1;
+  }
+
+  /** Where a tag lies, in bytes from the area start (C/T: 2 bytes per number). */
+  private byteSpan(tag: Tag): [number, number] {
+    if (tag.area === 'C' || tag.area === 'T') return [2 * tag.byteOffset, 2 * (tag.byteOffset + tag.count)];
+    return [tag.byteOffset, tag.byteOffset + tag.byteLength];
+  }
+
+  /** Bytes must start/end on this boundary for the area's unit. */
+  private granule(org: Org): number {
+    return (org === Org.DB && this.endpoint.dbUnit === 'word') || org === Org.C || org === Org.T ? 2 : 1;
+  }
+
+  /** The most bytes one job may carry: the document's length range and the 64 KiB frame limit. */
+  private maxJobBytes(org: Org): number {
+    const r = ORG_RANGES[org]!;
+    const bytes = org === Org.DB ? (this.endpoint.dbUnit === 'word' ? 2 * r.maxLength : MAX_DATA) : byteLength(org, r.maxLength, this.endpoint.dbUnit);
+    return Math.min(bytes, MAX_DATA - (MAX_DATA % 2));
+  }
+
+  protected async openSession(signal: AbortSignal): Promise<FwSession> {
+    const e = this.endpoint;
+    const open = (port: number) => openTcp({ host: e.host, port, timeout: this.timeout, signal });
+    const fetchSocket = await open(e.fetchPort);
+    let writeSocket: net.Socket;
+    try {
+      writeSocket = e.writePort === e.fetchPort ? fetchSocket : await open(e.writePort);
+    } catch (err) {
+      fetchSocket.destroy();
+      throw err;
+    }
+    const fetch = new Channel(fetchSocket);
+    const write = writeSocket === fetchSocket ? fetch : new Channel(writeSocket);
+    const session = new FwSession(fetch, write, this.maxQueued);
+    for (const channel of new Set([fetch, write])) this.attach(session, channel);
+    return session;
+  }
+
+  private attach(session: FwSession, channel: Channel): void {
+    const fail = (cause: PlcError) => {
+      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+      session.fetch.pending.rejectAll(err);
+      session.write.pending.rejectAll(err);
+      session.jobs.rejectAll(err);
+      session.destroy();
+      this.sessionLost(session, err);
+    };
+    channel.socket.on('data', (chunk: Buffer) => {
+      let frames: Buffer[];
+      try {
+        frames = channel.reader.push(chunk);
+      } catch (err) {
+        return fail(toPlcError(err, 'PROTOCOL_ERROR'));
+      }
+      for (const frame of frames) {
+        let response: FwResponse;
+        try {
+          response = decodeResponse(frame);
+        } catch (err) {
+          return fail(toPlcError(err, 'PROTOCOL_ERROR'));
+        }
+        channel.expect = undefined;
+        channel.pending.resolve(1, response);
+      }
+    });
+    channel.socket.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
+    channel.socket.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
+  }
+
+  /** One job on one channel (the caller holds the session's job queue). */
+  private async job(session: FwSession, op: OpCode.FetchRequest | OpCode.WriteRequest, org: Org, dbNumber: number, startByte: number, bytes: number, data: Buffer | undefined, signal?: AbortSignal): Promise<Buffer> {
+    const channel = op === OpCode.FetchRequest ? session.fetch : session.write;
+    const wordUnits = this.granule(org) === 2;
+    const start = org === Org.C || org === Org.T ? startByte / 2 : wordUnits ? startByte / 2 : startByte;
+    const length = wordUnits ? bytes / 2 : bytes;
+    const frame = encodeRequest({ op, org, dbNumber: org === Org.DB ? dbNumber : 0, start, length, ...(data ? { data } : {}) });
+    channel.expect = { op, dataBytes: op === OpCode.FetchRequest ? bytes : 0 };
+    const what = `${op === OpCode.FetchRequest ? 'fetch' : 'write'} of ${ORG_RANGES[org]!.name}${org === Org.DB ? dbNumber : ''} ${startByte}+${bytes}`;
+    const answer = channel.pending.add(1, this.timeout, `${this.name} ${what}`, signal);
+    if (op === OpCode.FetchRequest) this.stats.fetches++;
+    else this.stats.writes++;
+    channel.socket.write(frame);
+    let response: FwResponse;
+    try {
+      response = await answer;
+    } catch (err) {
+      if (err instanceof TimeoutError || (err instanceof PlcError && err.code === 'ABORTED')) {
+        // Without request ids a late answer would be taken for the next job's: drop the link.
+        session.destroy();
+        this.sessionLost(session, new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`));
+      }
+      throw err;
+    }
+    if (response.error !== 0) throw errorFor(response.error, `${this.name} ${what}`);
+    return response.data;
+  }
+
+  protected async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+    const ranges = this.mergeRanges(tags);
+    const results: TagResult<PlcValue>[] = new Array(tags.length);
+    await session.jobs.run(async () => {
+      for (const range of ranges) {
+        let data: Buffer | undefined;
+        let error: PlcError | undefined;
+        try {
+          data = await this.fetchRange(session, range.org, range.dbNumber, range.start, range.length, signal);
+        } catch (err) {
+          const e = toPlcError(err);
+          if (e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'CLOSED' || e.code === 'ABORTED') throw e;
+          error = e;
+        }
+        if (error && range.tags.length > 1) {
+          // One bad tag must not fail its merged neighbours: fetch each alone.
+          for (const i of range.tags) results[i] = await this.readOne(session, tags[i]!, signal);
+          continue;
+        }
+        for (const i of range.tags) {
+          const tag = tags[i]!;
+          if (error) results[i] = { ok: false, error: tagError(tag, error) };
+          else results[i] = this.decode(tag, data!, range.start);
+        }
+      }
+    }, signal);
+    return results;
+  }
+
+  private async readOne(session: FwSession, tag: Tag, signal?: AbortSignal): Promise<TagResult<PlcValue>> {
+    const [range] = this.mergeRanges([tag]);
+    try {
+      const data = await this.fetchRange(session, range!.org, range!.dbNumber, range!.start, range!.length, signal);
+      return this.decode(tag, data, range!.start);
+    } catch (err) {
+      const e = toPlcError(err);
+      if (e.code === 'CONNECTION_LOST' || e.code === 'CLOSED' || e.code === 'ABORTED') throw e;
+      return { ok: false, error: tagError(tag, e) };
+    }
+  }
+
+  private decode(tag: Tag, data: Buffer, rangeStart: number): TagResult<PlcValue> {
+    try {
+      return { ok: true, value: decodeTag(tag, data, this.byteSpan(tag)[0] - rangeStart) };
+    } catch (err) {
+      return { ok: false, error: tagError(tag, toPlcError(err, 'PROTOCOL_ERROR')) };
+    }
+  }
+
+  /** Fetches a byte range, split into jobs the ORG's length range and the frame allow. */
+  private async fetchRange(session: FwSession, org: Org, dbNumber: number, start: number, length: number, signal?: AbortSignal): Promise<Buffer> {
+    const max = this.maxJobBytes(org);
+    if (length <= max) return this.job(session, OpCode.FetchRequest, org, dbNumber, start, length, undefined, signal);
+    const parts: Buffer[] = [];
+    for (let o = 0; o < length; o += max) parts.push(await this.job(session, OpCode.FetchRequest, org, dbNumber, start + o, Math.min(max, length - o), undefined, signal));
+    return Buffer.concat(parts);
+  }
+
+  /** Sorts tags by area and offset, aligns to the area's unit, and merges ranges closer than a round trip is worth. */
+  private mergeRanges(tags: readonly Tag[]): Range[] {
+    const order = tags.map((_, i) => i);
+    const key = (t: Tag) => ORG_BY_AREA[t.area] * 0x10000 + t.dbNumber;
+    order.sort((a, b) => key(tags[a]!) - key(tags[b]!) || this.byteSpan(tags[a]!)[0] - this.byteSpan(tags[b]!)[0]);
+    const ranges: Range[] = [];
+    let current: Range | undefined;
+    for (const i of order) {
+      const t = tags[i]!;
+      const org = ORG_BY_AREA[t.area];
+      const g = this.granule(org);
+      const [s, e] = this.byteSpan(t);
+      const start = s - (s % g);
+      const end = e + ((g - (e % g)) % g);
+      if (current && current.org === org && current.dbNumber === t.dbNumber) {
+        const curEnd = current.start + current.length;
+        const newEnd = Math.max(curEnd, end);
+        if (start - curEnd <= MERGE_GAP && newEnd - current.start <= Math.max(this.maxJobBytes(org), current.length)) {
+          current.length = newEnd - current.start;
+          current.tags.push(i);
+          continue;
+        }
+      }
+      current = { org, dbNumber: t.dbNumber, start, length: end - start, tags: [i] };
+      ranges.push(current);
+    }
+    return ranges;
+  }
+
+  protected async writeTags(session: FwSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
+    const results: TagResult<void>[] = new Array(items.length);
+    const valid: number[] = [];
+    items.forEach((it, i) => {
+      try {
+        validateValue(it.tag, it.value);
+        valid.push(i);
+      } catch (err) {
+        results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
+      }
+    });
+    await session.jobs.run(async () => {
+      for (const i of valid) {
+        const { tag, value } = items[i]!;
+        try {
+          await this.writeOne(session, tag, value, signal);
+          results[i] = { ok: true, value: undefined };
+        } catch (err) {
+          const e = toPlcError(err);
+          results[i] = { ok: false, error: tagError(tag, e) };
+          // The link is gone: the remaining writes fail with the same error, never silently.
+          if (e.code === 'CONNECTION_LOST' || e.code === 'CLOSED' || e.code === 'ABORTED') {
+            for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
+            return;
+          }
+        }
+      }
+    }, signal).catch((err: unknown) => {
+      const e = toPlcError(err);
+      for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
+    });
+    return results;
+  }
+
+  private async writeOne(session: FwSession, tag: Tag, value: unknown, signal?: AbortSignal): Promise<void> {
+    const org = ORG_BY_AREA[tag.area];
+    const g = this.granule(org);
+    let start: number;
+    let data: Buffer;
+    if (tag.type === 'BOOL') {
+      start = tag.byteOffset;
+      data = Buffer.alloc(tag.byteLength);
+      // Read-modify-write: fetched below with the enclosing unit.
+      return this.readModifyWrite(session, org, tag, start, start + data.length, (buf, offset) => encodeInto(tag, value, buf, offset), signal);
+    }
+    if (tag.area === 'C' || tag.area === 'T') {
+      const span = writeSpan(tag, value);
+      return this.writeRange(session, org, tag.dbNumber, 2 * tag.byteOffset, span.data, signal);
+    }
+    const span = writeSpan(tag, value);
+    start = tag.byteOffset + span.start;
+    data = span.data;
+    if (start % g === 0 && data.length % g === 0) return this.writeRange(session, org, tag.dbNumber, start, data, signal);
+    return this.readModifyWrite(session, org, tag, start, start + data.length, (buf, offset) => data.copy(buf, offset), signal);
+  }
+
+  /** Fetch the enclosing units, change them, write them back (serialised by the job queue; not atomic against the PLC program). */
+  private async readModifyWrite(session: FwSession, org: Org, tag: Tag, from: number, to: number, change: (buf: Buffer, offset: number) => void, signal?: AbortSignal): Promise<void> {
+    const g = this.granule(org);
+    const start = from - (from % g);
+    const end = to + ((g - (to % g)) % g);
+    const current = Buffer.from(await this.fetchRange(session, org, tag.dbNumber, start, end - start, signal));
+    change(current, from - start);
+    await this.writeRange(session, org, tag.dbNumber, start, current, signal);
+  }
+
+  private async writeRange(session: FwSession, org: Org, dbNumber: number, start: number, data: Buffer, signal?: AbortSignal): Promise<void> {
+    const max = this.maxJobBytes(org);
+    for (let o = 0; o < data.length; o += max) {
+      const part = data.subarray(o, o + max);
+      await this.job(session, OpCode.WriteRequest, org, dbNumber, start + o, part.length, part, signal);
+    }
+  }
+}
+
+function tagError(tag: Tag, err: PlcError): PlcError {
+  if (err.tag === tag.address) return err;
+  return new PlcError(err.code, `${tag.address}: ${err.message}`, { tag: tag.address, ...(err.plcCode === undefined ? {} : { plcCode: err.plcCode }), cause: err });
+}

@@ -1,0 +1,178 @@
+/**
+ * FETCH/WRITE codec (CP 343/443 and S5 CPs): the 16-byte request header,
+ * the fetch response and write acknowledgement headers, exactly as the
+ * document's tables (../shared/seeds/002, PROTOCOLS.md §2). Pure functions;
+ * decoders throw only ProtocolError.
+ */
+import { PlcError, ProtocolError, type PlcErrorCode } from '../errors';
+import type { AreaName } from '../types';
+
+export const HEADER = 16;
+/** A frame carries at most 64 KiB of data. */
+export const MAX_DATA = 0xffff;
+
+export const enum OpCode {
+  WriteRequest = 0x03,
+  WriteAck = 0x04,
+  FetchRequest = 0x05,
+  FetchResponse = 0x06,
+}
+
+export const enum Org {
+  DB = 0x01,
+  M = 0x02,
+  I = 0x03,
+  Q = 0x04,
+  PEPA = 0x05,
+  C = 0x06,
+  T = 0x07,
+}
+
+export const ORG_BY_AREA: Readonly<Record<AreaName, Org>> = Object.freeze({
+  DB: Org.DB,
+  M: Org.M,
+  I: Org.I,
+  Q: Org.Q,
+  PE: Org.PEPA,
+  PA: Org.PEPA,
+  C: Org.C,
+  T: Org.T,
+});
+
+/**
+ * The document's table: how each ORG area counts its start and length, and
+ * the largest start and length a job may name (DB: in words).
+ */
+export const ORG_RANGES: Readonly<Record<number, { name: string; unit: 'word' | 'byte'; maxStart: number; maxLength: number }>> = Object.freeze({
+  [Org.DB]: { name: 'DB', unit: 'word', maxStart: 2047, maxLength: 2048 },
+  [Org.M]: { name: 'M', unit: 'byte', maxStart: 255, maxLength: 256 },
+  [Org.I]: { name: 'I', unit: 'byte', maxStart: 127, maxLength: 128 },
+  [Org.Q]: { name: 'Q', unit: 'byte', maxStart: 127, maxLength: 128 },
+  [Org.PEPA]: { name: 'PE/PA', unit: 'byte', maxStart: 255, maxLength: 256 },
+  [Org.C]: { name: 'C', unit: 'word', maxStart: 255, maxLength: 256 },
+  [Org.T]: { name: 'T', unit: 'word', maxStart: 255, maxLength: 256 },
+});
+
+export interface FwRequest {
+  op: OpCode.FetchRequest | OpCode.WriteRequest;
+  org: number;
+  dbNumber: number;
+  /** In the area's unit (DB: words by default, bytes with dbUnit=byte). */
+  start: number;
+  /** In the area's unit. */
+  length: number;
+  /** Write only. */
+  data?: Buffer;
+}
+
+export interface FwResponse {
+  op: OpCode.FetchResponse | OpCode.WriteAck;
+  error: number;
+  data: Buffer;
+}
+
+/** A request header (and the data of a write) in one Buffer. */
+export function encodeRequest(r: FwRequest): Buffer {
+  const data = r.op === OpCode.WriteRequest ? (r.data ?? Buffer.alloc(0)) : Buffer.alloc(0);
+  const frame = Buffer.allocUnsafe(HEADER + data.length);
+  frame[0] = 0x53; // 'S'
+  frame[1] = 0x35; // '5'
+  frame[2] = HEADER;
+  frame[3] = 0x01;
+  frame[4] = 0x03;
+  frame[5] = r.op;
+  frame[6] = 0x03;
+  frame[7] = 0x08;
+  frame[8] = r.org;
+  frame[9] = r.dbNumber;
+  frame.writeUInt16BE(r.start, 10);
+  frame.writeUInt16BE(r.length, 12);
+  frame[14] = 0xff;
+  frame[15] = 0x02;
+  data.copy(frame, HEADER);
+  return frame;
+}
+
+/** A fetch response or write acknowledgement (what the CP sends). */
+export function encodeResponse(op: OpCode.FetchResponse | OpCode.WriteAck, error: number, data: Buffer = Buffer.alloc(0)): Buffer {
+  const body = op === OpCode.FetchResponse && error === 0 ? data : Buffer.alloc(0);
+  const frame = Buffer.alloc(HEADER + body.length);
+  frame[0] = 0x53;
+  frame[1] = 0x35;
+  frame[2] = HEADER;
+  frame[3] = 0x01;
+  frame[4] = 0x03;
+  frame[5] = op;
+  frame[6] = 0x0f;
+  frame[7] = 0x03;
+  frame[8] = error;
+  frame[9] = 0xff;
+  frame[10] = 0x07;
+  body.copy(frame, HEADER);
+  return frame;
+}
+
+function checkCommon(buf: Buffer, what: string): void {
+  if (buf[0] !== 0x53 || buf[1] !== 0x35) throw new ProtocolError(`${what}: system id ${buf.subarray(0, 2).toString('hex')}, expected "S5"`);
+  if (buf[2] !== HEADER) throw new ProtocolError(`${what}: header length ${buf[2]}, expected 16`);
+  if (buf[3] !== 0x01 || buf[4] !== 0x03) throw new ProtocolError(`${what}: bad op code field`);
+}
+
+/**
+ * Decodes a response header; `expectedData` is the byte count of the fetch
+ * it answers. The frame must be exactly header + data (when error is 0).
+ */
+export function decodeResponse(frame: Buffer): FwResponse {
+  if (frame.length < HEADER) throw new ProtocolError(`FETCH/WRITE response of ${frame.length} bytes is shorter than its header`);
+  checkCommon(frame, 'response');
+  const op = frame[5]!;
+  if (op !== OpCode.FetchResponse && op !== OpCode.WriteAck) throw new ProtocolError(`response op code 0x${op.toString(16).padStart(2, '0')}, expected 06 or 04`);
+  if (frame[6] !== 0x0f || frame[7] !== 0x03) throw new ProtocolError('response: bad ack field');
+  if (frame[9] !== 0xff || frame[10] !== 0x07) throw new ProtocolError('response: bad empty field');
+  return { op, error: frame[8]!, data: frame.subarray(HEADER) };
+}
+
+/** Decodes a request (for the simulator); `data` is what follows the header in the frame. */
+export function decodeRequest(frame: Buffer): FwRequest {
+  if (frame.length < HEADER) throw new ProtocolError(`FETCH/WRITE request of ${frame.length} bytes is shorter than its header`);
+  checkCommon(frame, 'request');
+  const op = frame[5]!;
+  if (op !== OpCode.FetchRequest && op !== OpCode.WriteRequest) throw new ProtocolError(`request op code 0x${op.toString(16).padStart(2, '0')}, expected 05 or 03`);
+  if (frame[6] !== 0x03 || frame[7] !== 0x08) throw new ProtocolError('request: bad ORG field');
+  if (frame[14] !== 0xff || frame[15] !== 0x02) throw new ProtocolError('request: bad empty field');
+  return {
+    op,
+    org: frame[8]!,
+    dbNumber: frame[9]!,
+    start: frame.readUInt16BE(10),
+    length: frame.readUInt16BE(12),
+    ...(op === OpCode.WriteRequest ? { data: frame.subarray(HEADER) } : {}),
+  };
+}
+
+/** Bytes a request's length stands for (DB in word units and C/T: 2 per unit). */
+export function byteLength(org: number, length: number, dbUnit: 'word' | 'byte'): number {
+  if (org === Org.DB) return dbUnit === 'word' ? 2 * length : length;
+  if (org === Org.C || org === Org.T) return 2 * length;
+  return length;
+}
+
+/** The CP's error byte in words (S5 CP status codes). Unknown codes keep their number. */
+const ERRORS: Readonly<Record<number, [PlcErrorCode, string]>> = Object.freeze({
+  0x01: ['PLC_ERROR', 'wrong type in the handling block (error 01)'],
+  0x02: ['OBJECT_DOES_NOT_EXIST', 'area does not exist (error 02: e.g. the data block is not loaded)'],
+  0x03: ['ADDRESS_OUT_OF_RANGE', 'area too small (error 03: start or length beyond its end)'],
+  0x04: ['TIMEOUT', 'timeout in the PLC (error 04: QVZ, I/O not present)'],
+  0x05: ['PLC_ERROR', 'error in the status word (error 05)'],
+  0x06: ['TYPE_NOT_SUPPORTED', 'invalid ORG format (error 06: ORG id, DB number or length not allowed)'],
+  0x07: ['PLC_ERROR', 'no free data buffer in the CP (error 07)'],
+  0x09: ['CONNECTION_LOST', 'transport connection error in the CP (error 09)'],
+  0x0a: ['PLC_ERROR', 'error on the remote side (error 0A)'],
+});
+
+export function errorFor(code: number, context: string): PlcError {
+  const known = ERRORS[code];
+  const hex = code.toString(16).padStart(2, '0').toUpperCase();
+  if (known) return new PlcError(known[0], `${context}: the CP answered ${known[1]}`, { plcCode: code });
+  return new PlcError('PLC_ERROR', `${context}: the CP answered error ${hex} (unknown code)`, { plcCode: code });
+}
