@@ -134,7 +134,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   /** The most bytes one job may carry: the document's length range and the 64 KiB frame limit. */
   private maxJobBytes(org: Org): number {
     const r = ORG_RANGES[org]!;
-    const bytes = org === Org.DB ? (this.endpoint.dbUnit === 'word' ? 2 * r.maxLength : MAX_DATA) : byteLength(org, r.maxLength, this.endpoint.dbUnit);
+    const bytes = byteLength(org, r.maxLength, this.endpoint.dbUnit);
     return Math.min(bytes, MAX_DATA - (MAX_DATA % 2));
   }
 
@@ -226,7 +226,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
           data = await this.fetchRange(session, range.org, range.dbNumber, range.start, range.length, signal);
         } catch (err) {
           const e = toPlcError(err);
-          if (e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'CLOSED' || e.code === 'ABORTED') throw e;
+          if (isLinkError(e)) throw e;
           error = e;
         }
         if (error && range.tags.length > 1) {
@@ -251,7 +251,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
       return this.decode(tag, data, range!.start);
     } catch (err) {
       const e = toPlcError(err);
-      if (e.code === 'CONNECTION_LOST' || e.code === 'CLOSED' || e.code === 'ABORTED') throw e;
+      if (isLinkError(e)) throw e;
       return { ok: false, error: tagError(tag, e) };
     }
   }
@@ -323,7 +323,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
           const e = toPlcError(err);
           results[i] = { ok: false, error: tagError(tag, e) };
           // The link is gone: the remaining writes fail with the same error, never silently.
-          if (e.code === 'CONNECTION_LOST' || e.code === 'CLOSED' || e.code === 'ABORTED') {
+          if (isLinkError(e)) {
             for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
             return;
           }
@@ -375,6 +375,11 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
       await this.job(session, OpCode.WriteRequest, org, dbNumber, start + o, part.length, part, signal);
     }
   }
+}
+
+/** Errors of the link rather than of a tag: the whole request failed. */
+function isLinkError(e: PlcError): boolean {
+  return e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'CLOSED' || e.code === 'ABORTED' || e.code === 'PROTOCOL_ERROR' || e.code === 'QUEUE_FULL';
 }
 
 function tagError(tag: Tag, err: PlcError): PlcError {

@@ -162,11 +162,11 @@ const ERRORS: Readonly<Record<number, [PlcErrorCode, string]>> = Object.freeze({
   0x01: ['PLC_ERROR', 'wrong type in the handling block (error 01)'],
   0x02: ['OBJECT_DOES_NOT_EXIST', 'area does not exist (error 02: e.g. the data block is not loaded)'],
   0x03: ['ADDRESS_OUT_OF_RANGE', 'area too small (error 03: start or length beyond its end)'],
-  0x04: ['TIMEOUT', 'timeout in the PLC (error 04: QVZ, I/O not present)'],
+  0x04: ['PLC_ERROR', 'timeout in the PLC (error 04: QVZ, I/O not present)'],
   0x05: ['PLC_ERROR', 'error in the status word (error 05)'],
   0x06: ['TYPE_NOT_SUPPORTED', 'invalid ORG format (error 06: ORG id, DB number or length not allowed)'],
   0x07: ['PLC_ERROR', 'no free data buffer in the CP (error 07)'],
-  0x09: ['CONNECTION_LOST', 'transport connection error in the CP (error 09)'],
+  0x09: ['PLC_ERROR', 'transport connection error in the CP (error 09)'],
   0x0a: ['PLC_ERROR', 'error on the remote side (error 0A)'],
 });
 
