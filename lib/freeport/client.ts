@@ -1,0 +1,249 @@
+/**
+ * The freeport master: reads and writes the 4-byte data areas of S7-200
+ * stations on an RS-485 bus, over a serial port or a serial device server.
+ *
+ * - Several tags of one station in one read cost one request.
+ * - A write that starts at byte 0 and is not a bit is sent as it is (LE = its
+ *   length). Any other write — a bit, or bytes not starting at byte 0 — is a
+ *   read-modify-write of the whole area (LE = 4), done with the bus held, so
+ *   nothing else reaches the station in between. Several writes to one
+ *   station in one call are merged into one read-modify-write.
+ * - The station answers a write with the data it now holds; unless the
+ *   profile says `verifyWrites: false`, the written bytes must be there.
+ */
+import type { BindingInterface } from '@serialport/bindings-interface';
+import * as net from 'node:net';
+import { SerialPortStream } from '@serialport/stream';
+import { SerialPort } from 'serialport';
+import { ConnectionError, PlcError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, type ClientOptions } from '../link/client-base';
+import { openTcp } from '../link/tcp';
+import type { PlcValue } from '../types';
+import { endpointName, type FreeportEndpoint } from '../url';
+import { decodeTag, encodeInto, encodeTag } from '../values';
+import { parseFreeportAddress, type FreeportTag } from './address';
+import { readRequest, writeRequest, type FreeportReply } from './codec';
+import { defineProfile, maxStation, type FreeportProfile } from './profile';
+import { FreeportSession, type FreeportTransport } from './session';
+
+export interface FreeportClientOptions extends Partial<ClientOptions> {
+  /** A serialport binding other than the platform's (tests: `@serialport/binding-mock`). */
+  binding?: BindingInterface;
+  /** The frame profile of the stations' PLC program (default: the document's). */
+  profile?: Partial<FreeportProfile>;
+}
+
+export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
+  readonly protocol = 'freeport' as const;
+  readonly endpoint: FreeportEndpoint;
+  readonly profile: FreeportProfile;
+  private readonly binding: BindingInterface | undefined;
+
+  constructor(endpoint: FreeportEndpoint, options: FreeportClientOptions = {}) {
+    const { binding, profile, ...common } = options;
+    super({
+      name: endpointName(endpoint),
+      timeout: endpoint.timeout,
+      ...(endpoint.readOnly !== undefined ? { readOnly: endpoint.readOnly } : {}),
+      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
+      ...common,
+    });
+    this.endpoint = endpoint;
+    this.profile = defineProfile(profile);
+    this.binding = binding;
+  }
+
+  /** Closes the line and resolves once the serial port or socket is released. */
+  override async close(): Promise<void> {
+    const session = this.session;
+    await super.close();
+    await session?.closed();
+  }
+
+  protected override areaOf(tag: FreeportTag): string {
+    return `ST${tag.station}`;
+  }
+
+  protected parseTag(address: string): FreeportTag {
+    return parseFreeportAddress(address, { maxStation: maxStation(this.profile), dataBytes: this.profile.dataBytes });
+  }
+
+  protected async openSession(signal: AbortSignal): Promise<FreeportSession> {
+    const t = this.endpoint.transport;
+    const discipline = {
+      name: this.name,
+      timeout: this.timeout,
+      retries: this.endpoint.retries,
+      interFrameGapMs: this.endpoint.interFrameGapMs,
+      ...(this.maxQueued ? { maxQueued: this.maxQueued } : {}),
+    };
+    if (t.kind === 'tcp') {
+      const socket = await openTcp({ host: t.host, port: t.port, timeout: this.timeout, signal });
+      const session = new FreeportSession(socketTransport(socket), this.profile, discipline);
+      socket.on('data', (chunk) => session.receive(chunk));
+      socket.on('error', () => {}); // 'close' follows and reports it
+      socket.once('close', () => this.lose(session, new ConnectionError('CONNECTION_LOST', `${this.name}: the serial device server closed the connection`)));
+      return session;
+    }
+    const port = await this.openSerial(signal);
+    const session = new FreeportSession(serialTransport(port), this.profile, discipline);
+    port.on('data', (chunk: Buffer) => session.receive(chunk));
+    port.once('close', (err: Error | null) =>
+      this.lose(
+        session,
+        new ConnectionError('CONNECTION_LOST', `${this.name}: the serial port closed${err ? ` (${err.message})` : ''}`, { cause: err ?? undefined }),
+      ),
+    );
+    return session;
+  }
+
+  /** Pending requests fail with the real reason, then the supervisor reconnects. */
+  private lose(session: FreeportSession, err: PlcError): void {
+    session.destroy(err);
+    this.sessionLost(session, err);
+  }
+
+  protected async readTags(session: FreeportSession, tags: readonly FreeportTag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+    const results: TagResult<PlcValue>[] = new Array(tags.length);
+    await Promise.all(
+      [...groupByStation(tags.map((tag, i) => ({ tag, i })))].map(async ([station, group]) => {
+        let reply: FreeportReply;
+        try {
+          reply = await session.exchange(readRequest(station, this.profile), signal);
+        } catch (err) {
+          const error = stationFailure(err);
+          for (const { i } of group) results[i] = { ok: false, error };
+          return;
+        }
+        for (const { tag, i } of group) {
+          try {
+            results[i] = { ok: true, value: decodeTag(tag, reply.data, tag.byteOffset) };
+          } catch (err) {
+            results[i] = { ok: false, error: toPlcError(err, 'PROTOCOL_ERROR') };
+          }
+        }
+      }),
+    );
+    return results;
+  }
+
+  protected async writeTags(
+    session: FreeportSession,
+    items: readonly { tag: FreeportTag; value: unknown }[],
+    signal?: AbortSignal,
+  ): Promise<TagResult<void>[]> {
+    const results: TagResult<void>[] = new Array(items.length);
+    const valid: { tag: FreeportTag; value: unknown; i: number; bytes: Buffer }[] = [];
+    items.forEach(({ tag, value }, i) => {
+      try {
+        valid.push({ tag, value, i, bytes: encodeTag(tag, value) });
+      } catch (err) {
+        results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
+      }
+    });
+    await Promise.all(
+      [...groupByStation(valid)].map(async ([station, group]) => {
+        try {
+          await this.writeStation(session, station, group, signal);
+          for (const { i } of group) results[i] = { ok: true, value: undefined };
+        } catch (err) {
+          const error = stationFailure(err);
+          for (const { i } of group) results[i] = { ok: false, error };
+        }
+      }),
+    );
+    return results;
+  }
+
+  private writeStation(
+    session: FreeportSession,
+    station: number,
+    group: readonly { tag: FreeportTag; value: unknown; bytes: Buffer }[],
+    signal?: AbortSignal,
+  ): Promise<void> {
+    const only = group.length === 1 ? group[0]! : undefined;
+    if (only && only.tag.byteOffset === 0 && only.tag.type !== 'BOOL') {
+      return session.exchange(writeRequest(station, only.bytes, this.profile), signal).then((reply) => this.verify(station, only.bytes, reply));
+    }
+    return session.transaction(async (exchange) => {
+      const before = await exchange(readRequest(station, this.profile));
+      const area = Buffer.from(before.data);
+      for (const { tag, value } of group) encodeInto(tag, value, area, tag.byteOffset);
+      this.verify(station, area, await exchange(writeRequest(station, area, this.profile)));
+    }, signal);
+  }
+
+  private verify(station: number, written: Buffer, reply: FreeportReply): void {
+    if (!this.profile.verifyWrites) return;
+    const held = reply.data.subarray(0, written.length);
+    if (!held.equals(written)) {
+      throw new PlcError(
+        'PLC_ERROR',
+        `station ${station} on ${this.name} did not take the write: sent ${hex(written)}, it holds ${hex(held)}`,
+      );
+    }
+  }
+
+  private openSerial(signal: AbortSignal): Promise<SerialPortStream> {
+    const t = this.endpoint.transport;
+    if (t.kind !== 'serial') throw new Error('not a serial endpoint');
+    const settings = { path: t.path, baudRate: t.baudRate, parity: t.parity, dataBits: t.dataBits, stopBits: t.stopBits, autoOpen: false } as const;
+    const port: SerialPortStream = this.binding ? new SerialPortStream({ ...settings, binding: this.binding }) : new SerialPort(settings);
+    port.on('error', () => {}); // a write to a vanished device: 'close' follows and reports it
+    return new Promise((resolve, reject) => {
+      const onAbort = () => reject(toPlcError(signal.reason, 'ABORTED'));
+      if (signal.aborted) return onAbort();
+      signal.addEventListener('abort', onAbort, { once: true });
+      port.open((err) => {
+        signal.removeEventListener('abort', onAbort);
+        if (err) return reject(new ConnectionError('CONNECT_FAILED', `cannot open serial port ${t.path}: ${err.message}`, { cause: err }));
+        if (signal.aborted) return void port.close(() => {});
+        resolve(port);
+      });
+    });
+  }
+}
+
+/** A silent or garbling station fails its own tags; only a lost line fails the whole request. */
+function stationFailure(err: unknown): PlcError {
+  const error = toPlcError(err);
+  if (error.code === 'CONNECTION_LOST' || error.code === 'CLOSED') throw error;
+  return error;
+}
+
+function groupByStation<I extends { tag: FreeportTag }>(items: readonly I[]): Map<number, I[]> {
+  const groups = new Map<number, I[]>();
+  for (const item of items) {
+    const group = groups.get(item.tag.station);
+    if (group) group.push(item);
+    else groups.set(item.tag.station, [item]);
+  }
+  return groups;
+}
+
+function socketTransport(socket: net.Socket): FreeportTransport {
+  return {
+    write: (bytes) => void socket.write(bytes),
+    destroy: () =>
+      new Promise<void>((resolve) => {
+        if (socket.destroyed) return resolve();
+        socket.once('close', () => resolve());
+        socket.destroy();
+      }),
+  };
+}
+
+function serialTransport(port: SerialPortStream): FreeportTransport {
+  return {
+    write: (bytes) => void port.write(bytes),
+    destroy: () =>
+      new Promise<void>((resolve) => {
+        if (!port.isOpen) return resolve();
+        port.close(() => resolve());
+      }),
+  };
+}
+
+function hex(bytes: Buffer): string {
+  return bytes.toString('hex').toUpperCase().replace(/(..)(?!$)/g, '$1 ');
+}
