@@ -71,6 +71,9 @@ export class FreeportBus extends EventEmitter {
   private readonly timers = new Set<NodeJS.Timeout>();
   private readonly random: () => number;
   private server: net.Server | undefined;
+  private replying = 0;
+  /** Requests that arrived while a station was still answering: on a real RS-485 bus, collisions. */
+  collisions = 0;
   private closed = false;
 
   constructor(options: FreeportBusOptions) {
@@ -192,6 +195,7 @@ export class FreeportBus extends EventEmitter {
     this.closed = true;
     for (const t of this.timers) clearTimeout(t);
     this.timers.clear();
+    this.replying = 0;
     for (const socket of this.sockets) socket.destroy();
     this.sockets.clear();
     const ports = [...this.serialPorts];
@@ -262,6 +266,7 @@ export class FreeportBus extends EventEmitter {
   }
 
   private answer(link: Link, request: FreeportRequest): void {
+    if (this.replying > 0) this.collisions++;
     const station = this.stationsByAddress.get(request.station);
     const reply = station?.handle(request, this.profile.replyEchoesAddress);
     this.emit('request', request, reply !== undefined);
@@ -271,8 +276,10 @@ export class FreeportBus extends EventEmitter {
       if (!this.closed && this.links.has(link)) link.write(bytes);
     };
     if (this.faults.replyDelayMs <= 0) return send();
+    this.replying++;
     const timer = setTimeout(() => {
       this.timers.delete(timer);
+      this.replying--;
       send();
     }, this.faults.replyDelayMs);
     this.timers.add(timer);

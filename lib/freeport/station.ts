@@ -10,6 +10,8 @@ export class FreeportStation {
   readonly data: Buffer;
   /** Silence injection: the station hears but never answers (a powered-off or misaddressed PLC). */
   silent = false;
+  /** Fault: answers writes without storing them (the master must report the write as not taken). */
+  ignoreWrites = false;
   /** Requests this station answered. */
   answered = 0;
 
@@ -25,7 +27,7 @@ export class FreeportStation {
   /** The reply to a request addressed to this station, or undefined when it stays silent. */
   handle(request: FreeportRequest, echoAddress: boolean): FreeportReply | undefined {
     if (request.station !== this.address || this.silent) return undefined;
-    if (request.command === 'write') request.data.copy(this.data, 0, 0, request.length);
+    if (request.command === 'write' && !this.ignoreWrites) request.data.copy(this.data, 0, 0, request.length);
     this.answered++;
     const data = Buffer.from(this.data);
     return echoAddress ? { station: this.address, data } : { data };
