@@ -1,0 +1,156 @@
+/**
+ * End to end over a real pseudo-terminal pair (socat) with the real
+ * serialport bindings: the master on one end, the simulated stations on the other.
+ */
+import { expect } from 'chai';
+import { spawn, spawnSync, type ChildProcess } from 'node:child_process';
+import * as fs from 'node:fs';
+import * as os from 'node:os';
+import * as path from 'node:path';
+import type { PlcError } from '../lib/errors';
+import { FreeportBus } from '../lib/freeport/bus';
+import { FreeportClient } from '../lib/freeport/client';
+import type { FreeportEndpoint } from '../lib/url';
+import { activeHandles, settle, until, waitFor } from './support/wait';
+
+const HAS_SOCAT = spawnSync('socat', ['-V'], { stdio: 'ignore' }).status === 0;
+
+/** Starts socat with two linked ptys; resolves once it is relaying. */
+async function startPtyPair(dir: string): Promise<{ socat: ChildProcess; master: string; station: string; stop(): Promise<void> }> {
+  const master = path.join(dir, 'master');
+  const station = path.join(dir, 'station');
+  const socat = spawn('socat', ['-d', '-d', `pty,raw,echo=0,link=${master}`, `pty,raw,echo=0,link=${station}`], { stdio: ['ignore', 'ignore', 'pipe'] });
+  let log = '';
+  await new Promise<void>((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`socat did not start within 5 s: ${log}`)), 5000);
+    socat.stderr!.on('data', (chunk: Buffer) => {
+      log += chunk.toString();
+      if (log.includes('starting data transfer loop')) {
+        clearTimeout(timer);
+        resolve();
+      }
+    });
+    socat.once('exit', (code) => {
+      clearTimeout(timer);
+      reject(new Error(`socat exited with ${code}: ${log}`));
+    });
+  });
+  socat.stderr!.resume();
+  const stop = () =>
+    new Promise<void>((resolve) => {
+      if (socat.exitCode !== null || socat.signalCode !== null) return resolve();
+      socat.once('exit', () => resolve());
+      socat.kill('SIGTERM');
+    });
+  return { socat, master, station, stop };
+}
+
+describe('freeport end to end over a real pseudo-terminal pair (socat, real serialport bindings)', function () {
+  this.timeout(20000);
+  let dir: string;
+  let pty: Awaited<ReturnType<typeof startPtyPair>>;
+  let bus: FreeportBus;
+  let handles0: number;
+
+  before(function () {
+    if (!HAS_SOCAT) {
+      console.log('    skipped: socat is not installed (apt-get install socat); CI installs it');
+      this.skip();
+    }
+  });
+
+  beforeEach(async () => {
+    await settle();
+    handles0 = activeHandles();
+    dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-pty-'));
+    pty = await startPtyPair(dir);
+    bus = new FreeportBus({ stations: { 5: Buffer.from([0x41, 0x20, 0, 0]), 6: Buffer.from([1, 2, 3, 4]), 7: Buffer.alloc(4) } });
+    await bus.attachSerial(pty.station, { baudRate: 19200 });
+  });
+
+  afterEach(async () => {
+    await bus?.close();
+    await pty?.stop();
+    fs.rmSync(dir, { recursive: true, force: true });
+  });
+
+  const endpoint = (over: Partial<FreeportEndpoint> = {}): FreeportEndpoint => ({
+    protocol: 'freeport',
+    transport: { kind: 'serial', path: pty.master, baudRate: 19200, parity: 'none', dataBits: 8, stopBits: 1 },
+    timeout: 300,
+    retries: 1,
+    interFrameGapMs: 2,
+    ...over,
+  });
+
+  it('reads and writes stations, a silent one times out while the others answer, and close() leaves no handles', async () => {
+    const client = new FreeportClient(endpoint());
+    try {
+      await client.connect();
+      expect(await client.read(['ST5,REAL0', 'ST6,DWORD0', 'ST6,B0.4'])).to.deep.equal({
+        'ST5,REAL0': 10,
+        'ST6,DWORD0': 0x01020304,
+        'ST6,B0.4': [1, 2, 3, 4],
+      });
+      const requests: string[] = [];
+      bus.on('request', (r) => requests.push(`${r.command}${r.station}:${r.length}:${r.data.toString('hex')}`));
+      await client.write({ 'ST5,DWORD0': 0xe627a1c3 });
+      expect(requests).to.deep.equal(['write5:4:e627a1c3']);
+      expect(bus.station(5).data).to.deep.equal(Buffer.from([0xe6, 0x27, 0xa1, 0xc3]));
+      await client.write({ 'ST7,X1.2': true, 'ST7,INT2': -1 });
+      expect(bus.station(7).data).to.deep.equal(Buffer.from([0, 4, 0xff, 0xff]));
+
+      bus.station(6).silent = true;
+      const results = await client.readDetailed(['ST6,DWORD0', 'ST7,INT2', 'ST5,BYTE0']);
+      expect(results['ST7,INT2']).to.deep.equal({ ok: true, value: -1 });
+      expect(results['ST5,BYTE0']).to.deep.equal({ ok: true, value: 0xe6 });
+      const silent = results['ST6,DWORD0']!;
+      expect(silent.ok).to.equal(false);
+      if (!silent.ok) expect(silent.error.message).to.include('station 6').and.include('did not answer');
+      expect(client.state).to.equal('connected');
+    } finally {
+      await client.close();
+    }
+    await bus.close();
+    await pty.stop();
+    await settle();
+    expect(activeHandles()).to.equal(handles0);
+  });
+
+  it('rejects corrupted replies by their checksum and retries', async () => {
+    const client = new FreeportClient(endpoint({ retries: 2 }));
+    try {
+      await client.connect();
+      let corrupt = 0;
+      bus.faults.corruptNext = 2;
+      bus.on('request', () => corrupt++);
+      expect(await client.read(['ST6,DWORD0'])).to.deep.equal({ 'ST6,DWORD0': 0x01020304 });
+      expect(corrupt).to.equal(3); // two corrupted answers, then a good one
+      bus.sendRaw(Buffer.from('garbage\x00\xffqQ', 'latin1'));
+      expect(await client.read(['ST5,WORD0'])).to.deep.equal({ 'ST5,WORD0': 0x4120 });
+    } finally {
+      await client.close();
+    }
+  });
+
+  it('when the device disappears, pending requests fail and the master reconnects once it is back', async () => {
+    const client = new FreeportClient(endpoint(), { backoff: { initialDelay: 50, maxDelay: 200, jitter: 0 } });
+    try {
+      await client.connect();
+      const disconnected = waitFor<PlcError>(client, 'disconnected', 5000);
+      await bus.close();
+      await pty.stop(); // both ptys vanish, as when a USB adapter is pulled
+      const err = await disconnected;
+      expect(err.code).to.equal('CONNECTION_LOST');
+      expect(client.state).to.equal('reconnecting');
+
+      pty = await startPtyPair(dir);
+      bus = new FreeportBus({ stations: { 5: Buffer.from([0, 0, 0, 9]) } });
+      await bus.attachSerial(pty.station, { baudRate: 19200 });
+      await until(() => client.state === 'connected', 5000, 'reconnected');
+      expect(await client.read(['ST5,DINT0'])).to.deep.equal({ 'ST5,DINT0': 9 });
+    } finally {
+      await client.close();
+    }
+  });
+});
