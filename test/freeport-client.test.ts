@@ -261,6 +261,38 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
     expect(await client.read(['ST6,DWORD0'])).to.deep.equal({ 'ST6,DWORD0': 0x12345678 });
   });
 
+  it('an aborted request settles at once with ABORTED and the bus goes on', async () => {
+    bus.station(6).silent = true;
+    const controller = new AbortController();
+    const started = Date.now();
+    const pending = client.readDetailed(['ST6,DWORD0'], { signal: controller.signal });
+    await waitFor(bus, 'request');
+    controller.abort();
+    const r = (await pending)['ST6,DWORD0']!;
+    expect(r.ok).to.equal(false);
+    if (!r.ok) expect(r.error.code).to.equal('ABORTED');
+    expect(Date.now() - started).to.be.below(90); // before the 100 ms timeout
+    expect(await client.read(['ST5,REAL0'])).to.deep.equal({ 'ST5,REAL0': 10 });
+  });
+
+  it('with a profile whose replies echo DA, ignores a reply from the wrong station', async () => {
+    await client.close();
+    const profile = { replyEchoesAddress: true };
+    const echoBus = new FreeportBus({ stations: { 5: Buffer.from([0, 0, 0, 5]), 6: Buffer.from([0, 0, 0, 6]) }, profile });
+    const c = new FreeportClient(serialEndpoint({ retries: 0 }), { binding: echoBus.mockBinding(MockBinding), profile });
+    await c.connect();
+    try {
+      expect(await c.read(['ST5,DINT0', 'ST6,DINT0'])).to.deep.equal({ 'ST5,DINT0': 5, 'ST6,DINT0': 6 });
+      echoBus.station(6).answerAs = 5;
+      const r = (await c.readDetailed(['ST6,DINT0']))['ST6,DINT0']!;
+      expect(r.ok).to.equal(false);
+      if (!r.ok) expect(r.error.code).to.equal('TIMEOUT');
+    } finally {
+      await c.close();
+      await echoBus.close();
+    }
+  });
+
   it('connect() rejects with CONNECT_FAILED naming a serial port that does not exist', async () => {
     const c = new FreeportClient(serialEndpoint({ transport: { kind: 'serial', path: '/dev/ttyNOPE', baudRate: 9600, parity: 'none', dataBits: 8, stopBits: 1 } }), { binding: MockBinding });
     const err = (await c.connect().then(() => undefined, (e: unknown) => e)) as PlcError;

@@ -126,7 +126,7 @@ export class FreeportSession implements DriverSession {
       this.transport.write(encodeRequest(request, this.profile));
       return await reply;
     } finally {
-      this.pending.reject(id, new PlcError('ABORTED', 'superseded'));
+      if (this.pending.has(id)) this.pending.reject(id, new PlcError('ABORTED', 'superseded'));
       this.current = undefined;
       this.quietSince = Date.now();
     }

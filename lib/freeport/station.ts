@@ -12,6 +12,8 @@ export class FreeportStation {
   silent = false;
   /** Fault: answers writes without storing them (the master must report the write as not taken). */
   ignoreWrites = false;
+  /** Fault: replies carry this address instead of its own (seen only with a profile whose replies echo DA). */
+  answerAs: number | undefined;
   /** Requests this station answered. */
   answered = 0;
 
@@ -30,6 +32,6 @@ export class FreeportStation {
     if (request.command === 'write' && !this.ignoreWrites) request.data.copy(this.data, 0, 0, request.length);
     this.answered++;
     const data = Buffer.from(this.data);
-    return echoAddress ? { station: this.address, data } : { data };
+    return echoAddress ? { station: this.answerAs ?? this.address, data } : { data };
   }
 }
