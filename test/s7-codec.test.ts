@@ -116,7 +116,7 @@ describe('S7 codec', () => {
 
   describe('errors in words', () => {
     it('maps item return codes to typed errors', () => {
-      expect(describeReturnCode(0x0a)).to.deep.equal({ code: 'OBJECT_DOES_NOT_EXIST', text: 'object does not exist (is the data block there?)' });
+      expect(describeReturnCode(0x0a)).to.deep.equal({ code: 'OBJECT_DOES_NOT_EXIST', text: 'object does not exist (missing DB?)' });
       expect(describeReturnCode(0x05).code).to.equal('ADDRESS_OUT_OF_RANGE');
       expect(describeReturnCode(0x03).code).to.equal('ACCESS_DENIED');
       expect(describeReturnCode(0x42).text).to.match(/0x42/);

@@ -54,8 +54,14 @@ export const enum S7Area {
   Q = 0x82,
   M = 0x83,
   DB = 0x84,
+  /** S7 counters (S5 style, 2 bytes each). */
   C = 0x1c,
+  /** S7 timers (S5 style, 2 bytes each). */
   T = 0x1d,
+  /** IEC counters (S7-200 family). */
+  IEC_C = 0x1e,
+  /** IEC timers (S7-200 family). */
+  IEC_T = 0x1f,
 }
 
 export const AREA_CODES: Readonly<Record<AreaName, S7Area>> = Object.freeze({
@@ -103,6 +109,9 @@ export function lengthInBits(size: number): boolean {
   return size === DataTransportSize.BIT || size === DataTransportSize.BYTE || size === DataTransportSize.INTEGER;
 }
 
+/** Most items one Read/Write Var job can carry (the item count is one byte). */
+export const MAX_ITEMS = 255;
+
 /** Return codes of a read/write item. */
 export const enum ReturnCode {
   Reserved = 0x00,
@@ -122,7 +131,7 @@ const RETURN_CODES: Readonly<Record<number, [PlcErrorCode, string]>> = Object.fr
   0x05: ['ADDRESS_OUT_OF_RANGE', 'address out of range (beyond the end of the area or data block)'],
   0x06: ['TYPE_NOT_SUPPORTED', 'data type not supported'],
   0x07: ['TYPE_NOT_SUPPORTED', 'data type inconsistent (size mismatch)'],
-  0x0a: ['OBJECT_DOES_NOT_EXIST', 'object does not exist (is the data block there?)'],
+  0x0a: ['OBJECT_DOES_NOT_EXIST', 'object does not exist (missing DB?)'],
 });
 
 /** The words and error code of an item return code. */
@@ -130,6 +139,13 @@ export function describeReturnCode(code: number): { code: PlcErrorCode; text: st
   const known = RETURN_CODES[code];
   if (known) return { code: known[0], text: known[1] };
   return { code: 'PLC_ERROR', text: `unknown return code 0x${code.toString(16).padStart(2, '0')}` };
+}
+
+/** An item return code as a typed PlcError: `${context}: the PLC answered 0x0A: object does not exist (missing DB?)`. */
+export function returnCodeError(returnCode: number, context: string, tag?: string): PlcError {
+  const { code, text } = describeReturnCode(returnCode);
+  const hex = `0x${returnCode.toString(16).padStart(2, '0').toUpperCase()}`;
+  return new PlcError(code, `${context}: the PLC answered ${hex}: ${text}`, tag === undefined ? { plcCode: returnCode } : { plcCode: returnCode, tag });
 }
 
 /** Header error class (ack and ack-data PDUs). */

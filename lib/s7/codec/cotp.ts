@@ -1,0 +1,122 @@
+/** COTP (ISO 8073 class 0, as used by RFC 1006): CR, CC, DR, DC, DT, ER TPDUs. */
+import { ProtocolError } from '../../errors';
+import { CotpParam, CotpType, TPKT_HEADER } from '../constants';
+import { assertTpkt, tpktFrame } from './tpkt';
+
+export interface CotpConnection {
+  /** Source reference of the sender. */
+  sourceRef: number;
+  /** The peer's reference (0 in a CR). */
+  destinationRef: number;
+  /** Parameter 0xC1. */
+  callingTsap: number;
+  /** Parameter 0xC2: for S7, (connection type << 8) | (rack << 5 | slot). */
+  calledTsap: number;
+  /** Parameter 0xC0: TPDU size code, bytes = 1 << code (0x0A = 1024). */
+  tpduSize: number;
+}
+
+/** Parameter order on the wire: the document's CR sends the TSAPs first, S7 CPUs' CC send the TPDU size first. */
+export type CotpParamOrder = 'tsap-first' | 'size-first';
+
+const CONNECTION_PARAMS = 11; // 3 + 4 + 4 bytes: C0 01 xx, C1 02 xxxx, C2 02 xxxx
+
+function encodeConnection(type: CotpType, c: CotpConnection, order: CotpParamOrder): Buffer {
+  const frame = tpktFrame(7 + CONNECTION_PARAMS);
+  frame[4] = 6 + CONNECTION_PARAMS; // length indicator: header bytes after this one
+  frame[5] = type;
+  frame.writeUInt16BE(c.destinationRef & 0xffff, 6);
+  frame.writeUInt16BE(c.sourceRef & 0xffff, 8);
+  frame[10] = 0; // class 0, no extended formats
+  let p = 11;
+  const size = () => {
+    frame[p] = CotpParam.TpduSize;
+    frame[p + 1] = 1;
+    frame[p + 2] = c.tpduSize;
+    p += 3;
+  };
+  if (order === 'size-first') size();
+  frame[p] = CotpParam.CallingTsap;
+  frame[p + 1] = 2;
+  frame.writeUInt16BE(c.callingTsap & 0xffff, p + 2);
+  frame[p + 4] = CotpParam.CalledTsap;
+  frame[p + 5] = 2;
+  frame.writeUInt16BE(c.calledTsap & 0xffff, p + 6);
+  p += 8;
+  if (order === 'tsap-first') size();
+  return frame;
+}
+
+/** COTP Connection Request; default order as in the source document's first handshake frame. */
+export function encodeConnectionRequest(c: Omit<CotpConnection, 'destinationRef'>, order: CotpParamOrder = 'tsap-first'): Buffer {
+  return encodeConnection(CotpType.CR, { ...c, destinationRef: 0 }, order);
+}
+
+/** COTP Connection Confirm; default order as an S7 CPU answers (TPDU size first, see the document's reply). */
+export function encodeConnectionConfirm(c: CotpConnection, order: CotpParamOrder = 'size-first'): Buffer {
+  return encodeConnection(CotpType.CC, c, order);
+}
+
+/** COTP Disconnect Request (ISO 8073 §13.5): reason 0x80 normal, 0x81 congestion, 0x85 unknown TSAP... (class 0 uses 0..4, 0x80+). */
+export function encodeDisconnectRequest(destinationRef: number, sourceRef: number, reason = 0x00): Buffer {
+  const frame = tpktFrame(7);
+  frame[4] = 6;
+  frame[5] = CotpType.DR;
+  frame.writeUInt16BE(destinationRef & 0xffff, 6);
+  frame.writeUInt16BE(sourceRef & 0xffff, 8);
+  frame[10] = reason & 0xff;
+  return frame;
+}
+
+/** COTP TPDU Error (ISO 8073 §13.12): reject cause 0 unspecified, 1 invalid parameter code, 2 invalid TPDU type, 3 invalid parameter value. */
+export function encodeCotpError(destinationRef: number, cause: number): Buffer {
+  const frame = tpktFrame(5);
+  frame[4] = 4;
+  frame[5] = CotpType.ER;
+  frame.writeUInt16BE(destinationRef & 0xffff, 6);
+  frame[8] = cause & 0xff;
+  return frame;
+}
+
+export type CotpMessage =
+  | ({ type: 'CR' | 'CC' } & CotpConnection)
+  | { type: 'DR' | 'DC'; destinationRef: number; sourceRef: number; reason: number }
+  | { type: 'DT'; last: boolean; payload: Buffer }
+  | { type: 'ER'; destinationRef: number; cause: number };
+
+/** Decodes the COTP part of one whole TPKT frame. DT payloads are subarrays of `frame`. Throws ProtocolError only. */
+export function decodeCotp(frame: Buffer): CotpMessage {
+  assertTpkt(frame, 'COTP');
+  const li = frame[4]!;
+  const end = TPKT_HEADER + 1 + li;
+  if (li < 2) throw new ProtocolError(`COTP: length indicator ${li} is too short`);
+  if (end > frame.length) throw new ProtocolError(`COTP: length indicator ${li} runs past the frame`);
+  const type = frame[5]! & 0xf0;
+  if (type === CotpType.DT) return { type: 'DT', last: (frame[6]! & 0x80) !== 0, payload: frame.subarray(end) };
+  if (type === CotpType.ER) {
+    if (li < 4) throw new ProtocolError('COTP ER: header too short');
+    return { type: 'ER', destinationRef: frame.readUInt16BE(6), cause: frame[8]! };
+  }
+  if (type !== CotpType.CR && type !== CotpType.CC && type !== CotpType.DR && type !== CotpType.DC) {
+    throw new ProtocolError(`COTP: unexpected TPDU type 0x${type.toString(16)}`);
+  }
+  if (li < 6) throw new ProtocolError(`COTP 0x${type.toString(16)}: header too short`);
+  const destinationRef = frame.readUInt16BE(6);
+  const sourceRef = frame.readUInt16BE(8);
+  if (type === CotpType.DR || type === CotpType.DC) {
+    return { type: type === CotpType.DR ? 'DR' : 'DC', destinationRef, sourceRef, reason: type === CotpType.DR ? frame[10]! : 0 };
+  }
+  const c: CotpConnection = { sourceRef, destinationRef, callingTsap: -1, calledTsap: -1, tpduSize: 0 };
+  let p = 11;
+  while (p < end) {
+    if (p + 2 > end) throw new ProtocolError('COTP: truncated parameter');
+    const code = frame[p]!;
+    const len = frame[p + 1]!;
+    if (p + 2 + len > end) throw new ProtocolError(`COTP: parameter 0x${code.toString(16)} runs past the header`);
+    if (code === CotpParam.TpduSize && len === 1) c.tpduSize = frame[p + 2]!;
+    else if (code === CotpParam.CallingTsap && len === 2) c.callingTsap = frame.readUInt16BE(p + 2);
+    else if (code === CotpParam.CalledTsap && len === 2) c.calledTsap = frame.readUInt16BE(p + 2);
+    p += 2 + len;
+  }
+  return { type: type === CotpType.CR ? 'CR' : 'CC', ...c };
+}
