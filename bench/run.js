@@ -44,7 +44,13 @@ function ask(child, msg) {
 
 async function startServer(kind, extra = {}) {
   const child = fork(path.join(__dirname, 'server-worker.js'), [], { serialization: 'advanced', stdio: 'inherit' });
-  const { port } = await ask(child, { op: 'start', kind, ...extra });
+  let port;
+  try {
+    ({ port } = await ask(child, { op: 'start', kind, ...extra }));
+  } catch (err) {
+    child.kill();
+    throw err;
+  }
   return {
     port,
     fill: (db1) => ask(child, { op: 'fill', db1 }),

@@ -50,6 +50,7 @@ class CountingProxy {
     this.bytesToServer = 0;
     this.bytesToClient = 0;
     this.maxItemsPerJob = 0;
+    this.items = 0;
   }
   listen() {
     return new Promise((resolve) => this.server.listen(0, '127.0.0.1', () => resolve(this.server.address().port)));
@@ -68,7 +69,9 @@ class CountingProxy {
       this.jobs++;
       if (h.fn === 0x04) this.readJobs++;
       if (h.fn === 0x05) this.writeJobs++;
-      this.maxItemsPerJob = Math.max(this.maxItemsPerJob, f[TPKT_HEADER + COTP_DT + 11]);
+      const items = f[TPKT_HEADER + COTP_DT + 11];
+      this.items += items;
+      this.maxItemsPerJob = Math.max(this.maxItemsPerJob, items);
       this.bytesToServer += f.length;
     });
     const down = new FrameCounter((f) => {

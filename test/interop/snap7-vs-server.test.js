@@ -141,6 +141,7 @@ describe('interop: snap7 client against our S7Server', function () {
 
   it('our client and snap7 see each other’s writes through the simulator', async () => {
     await start();
+    server.memory.area('DB', 4)[4] = 8; // the PLC program declared a STRING[8] there
     const { call } = await client();
     const plc = await support.plcwire.connect(`s7://127.0.0.1:${port}?rack=0&slot=1`);
     try {

@@ -40,6 +40,11 @@ async function startSnap7Server(areas) {
         port,
         db: (n) => server.GetArea(server.srvAreaDB, n),
         area: (name) => server.GetArea(server[`srvArea${name}`]),
+        /** Replaces the contents of registered areas (same sizes). */
+        reset: (next) => {
+          for (const [db, buf] of Object.entries(next.db ?? {})) server.SetArea(server.srvAreaDB, Number(db), buf);
+          for (const name of ['PE', 'PA', 'MK', 'CT', 'TM']) if (next[name]) server.SetArea(server[`srvArea${name}`], next[name]);
+        },
         stop: () => {
           server.Stop();
         },
