@@ -7,6 +7,7 @@ import { createInterface } from 'node:readline';
 import { createClient, type AnyClient } from '../connect';
 import { PlcError, TagErrors } from '../errors';
 import type { PlcValue } from '../types';
+import { validateValue, type TagShape } from '../values';
 import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
 import { parseArgs, UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
 import { serve, SERVE_FLAGS } from './serve';
@@ -152,6 +153,13 @@ async function withClient<R>(endpoint: Endpoint, io: CliIo, work: (client: AnyCl
 async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const { endpoint, addresses } = endpointArg(rest, 'read');
   const json = args.flags.has('json');
+  // Every address is parsed before connecting: a typo never costs a PLC connection.
+  const probe = createClient(endpoint);
+  try {
+    for (const a of addresses) probe.tag(a);
+  } finally {
+    await probe.close();
+  }
   const results = await withClient(withTimeout(endpoint, args), io, (c) => c.readDetailed(addresses, { signal: io.signal }));
   const values: Record<string, PlcValue | null> = {};
   const errors: PlcError[] = [];
@@ -181,8 +189,9 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   const values: Record<string, unknown> = {};
   try {
     for (const { address, text } of pairs) {
-      const tag = client.tag(address) as unknown as TypedTag;
+      const tag = client.tag(address) as unknown as TypedTag & TagShape;
       values[address] = valueFromText(tag, text);
+      validateValue(tag, values[address]);
     }
   } finally {
     await client.close();

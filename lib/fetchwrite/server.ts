@@ -51,6 +51,7 @@ export class FetchWriteServer extends EventEmitter {
   private readonly dbUnit: 'word' | 'byte';
   private readonly servers: net.Server[] = [];
   private readonly sockets = new Set<net.Socket>();
+  private readonly modes = new Map<net.Socket, 'fetch' | 'write' | 'both'>();
   private ports = { fetchPort: 0, writePort: 0 };
 
   constructor(options: FetchWriteServerOptions = {}) {
@@ -72,8 +73,14 @@ export class FetchWriteServer extends EventEmitter {
     return this.ports.writePort;
   }
 
+  /**
+   * Clients connected: connections on the fetch port (each client holds one
+   * there, and one on the write port when the ports differ).
+   */
   get connectionCount(): number {
-    return this.sockets.size;
+    let n = 0;
+    for (const mode of this.modes.values()) if (mode !== 'write') n++;
+    return n;
   }
 
   async listen(): Promise<{ fetchPort: number; writePort: number }> {
@@ -120,7 +127,8 @@ export class FetchWriteServer extends EventEmitter {
   private accept(socket: net.Socket, mode: 'fetch' | 'write' | 'both'): void {
     socket.setNoDelay(true);
     this.sockets.add(socket);
-    this.emit('connection', this.sockets.size);
+    this.modes.set(socket, mode);
+    this.emit('connection', this.connectionCount);
     const reader = new FrameReader((buf) => this.check(buf, mode), MAX_DATA * 2 + HEADER);
     let busy = Promise.resolve();
     socket.on('data', (chunk: Buffer) => {
@@ -139,7 +147,8 @@ export class FetchWriteServer extends EventEmitter {
     socket.on('error', () => undefined);
     socket.on('close', () => {
       this.sockets.delete(socket);
-      this.emit('disconnect', this.sockets.size);
+      this.modes.delete(socket);
+      this.emit('disconnect', this.connectionCount);
     });
   }
 

@@ -42,7 +42,7 @@ export async function fetchWriteSim(): Promise<Sim> {
     addr: (i) => `DB1,INT${2 * i}`,
     set: (i, v) => void db().writeInt16BE(v, 2 * i),
     get: (i) => db().readInt16BE(2 * i),
-    missing: 'DB999,INT0',
+    missing: 'DB200,INT0', // DB 1..255 is reachable; the simulator has DB1..DB100
     connectionCount: () => server.connectionCount,
     stop: () => server.close(),
     restart: async () => {
