@@ -3,7 +3,7 @@
 // client's alone. Driven over IPC by bench/run.js with
 //   { client, table, pdu, port, proxyPort?, durationMs?, countPolls?, latencyPolls? }
 // and answers one result object.
-const { CLIENTS } = require('./lib/clients');
+const { CLIENTS, LOADERS } = require('./lib/clients');
 const { table, firstMismatch } = require('./lib/tables');
 
 const gc = global.gc || (() => undefined);
@@ -15,6 +15,7 @@ function settle() {
 
 async function run(job) {
   const open = CLIENTS[job.client];
+  LOADERS[job.client]();
   const tags = table(job.table);
   const addresses = tags.map((t) => t.address);
   const result = { client: job.client, table: job.table, tags: tags.length };

@@ -5,7 +5,7 @@
 // planner's lower bound and the simulator's own requests per second.
 // Each server and each client runs in its own process; see bench/README.md.
 //
-//   node bench/run.js [--quick] [--clients ours,nodes7,st-one] [--tables 10,100] [--duration ms]
+//   node bench/run.js [--quick] [--clients ours,nodes7,st-one] [--tables 10,100] [--duration ms] [--latency ms]
 const { fork } = require('node:child_process');
 const path = require('node:path');
 const { CountingProxy } = require('./lib/proxy');
@@ -21,7 +21,7 @@ const opt = (name, dflt) => {
 const QUICK = args.includes('--quick');
 const DURATION_MS = Number(opt('duration', QUICK ? 300 : 1000));
 const COUNT_POLLS = 3;
-const LATENCY_MS = 10;
+const LATENCY_MS = Number(opt('latency', 20));
 const LATENCY_POLLS = QUICK ? 2 : 4;
 const LOAD_MS = QUICK ? 300 : 1000;
 const clients = opt('clients', CLIENT_NAMES.join(',')).split(',');
@@ -101,9 +101,8 @@ async function runClient(job, proxy) {
 function lowerBound(tags, pdu) {
   try {
     const lib = plcwire();
-    const planner = lib.s7planner ?? require(path.join(__dirname, '../dist/lib/s7/planner.js'));
-    if (typeof planner.lowerBoundPdus !== 'function') return undefined;
-    return planner.lowerBoundPdus(tags.map((t) => t.address), pdu);
+    const { lowerBoundPdus } = require(path.join(__dirname, '../dist/lib/s7/planner.js'));
+    return lowerBoundPdus(tags.map((t) => lib.parseAddress(t.address)), pdu);
   } catch {
     return undefined;
   }

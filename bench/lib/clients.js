@@ -1,6 +1,8 @@
 'use strict';
 // The three clients behind one shape, each through its documented API:
 //   open({ port, pdu, addresses }) → { read(): Promise<Record<address, value>>, close() }
+// LOADERS[name]() requires the library, so a worker can load code before it
+// takes its memory baseline (memory per tag then counts tags, not code).
 const { once } = require('node:events');
 const { peer, plcwire } = require('./peers');
 
@@ -45,4 +47,10 @@ const CLIENTS = {
   },
 };
 
-module.exports = { CLIENTS, CLIENT_NAMES: Object.keys(CLIENTS) };
+const LOADERS = {
+  ours: () => plcwire(),
+  nodes7: () => peer('nodes7'),
+  'st-one': () => peer('@st-one-io/nodes7'),
+};
+
+module.exports = { CLIENTS, LOADERS, CLIENT_NAMES: Object.keys(CLIENTS) };
