@@ -12,44 +12,32 @@
  */
 import type * as net from 'node:net';
 import { parseAddress } from '../address';
-import { AddressError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError, type TagResult } from '../errors';
+import { AddressError, ConnectionError, PlcError, TimeoutError, toPlcError, type TagResult } from '../errors';
 import { BaseClient, type ClientOptions } from '../link/client-base';
-import { FrameReader, type FrameCheck } from '../link/framer';
+import { FrameReader } from '../link/framer';
 import { JobQueue } from '../link/jobs';
 import { PendingRequests } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { PlcValue, Protocol, Tag } from '../types';
 import { endpointName, type FetchWriteEndpoint } from '../url';
 import { decodeTag, encodeInto, validateValue, writeSpan } from '../values';
-import { HEADER, MAX_DATA, OpCode, ORG_BY_AREA, ORG_RANGES, Org, byteLength, decodeResponse, encodeRequest, errorFor, type FwResponse } from './codec';
+import { HEADER, MAX_DATA, OpCode, ORG_BY_AREA, ORG_RANGES, Org, byteLength, checkResponse, decodeResponse, encodeRequest, errorFor, type FwResponse, type ResponseExpectation } from './codec';
 
 /** Merging two ranges costs less than a second round trip while the gap is under this many bytes. */
 const MERGE_GAP = 128;
 
-interface Expectation {
-  op: OpCode;
-  dataBytes: number;
-}
-
 class Channel {
   readonly pending = new PendingRequests<FwResponse>();
   readonly reader: FrameReader;
-  expect: Expectation | undefined;
+  /** The one job this connection waits for; cleared as soon as its answer is cut, so trailing bytes are caught. */
+  expect: ResponseExpectation | undefined;
 
   constructor(readonly socket: net.Socket) {
-    this.reader = new FrameReader((buf) => this.check(buf), MAX_DATA + HEADER + 1);
-  }
-
-  /** Cuts the one response we wait for: 16 bytes, plus the fetched data when the error byte is 0. */
-  private check(buf: Buffer): FrameCheck {
-    if (!this.expect) return { kind: 'bad', error: new ProtocolError('data from the CP while no job was pending') };
-    if (buf.length < HEADER) return { kind: 'need' };
-    const op = buf[5];
-    if (op !== (this.expect.op === OpCode.FetchRequest ? OpCode.FetchResponse : OpCode.WriteAck)) {
-      return { kind: 'bad', error: new ProtocolError(`answer op code 0x${(op ?? 0).toString(16)} does not match the job`) };
-    }
-    const length = op === OpCode.FetchResponse && buf[8] === 0 ? HEADER + this.expect.dataBytes : HEADER;
-    return buf.length >= length ? { kind: 'frame', length } : { kind: 'need' };
+    this.reader = new FrameReader((buf) => {
+      const verdict = checkResponse(buf, this.expect);
+      if (verdict.kind === 'frame') this.expect = undefined;
+      return verdict;
+    }, MAX_DATA + HEADER + 1);
   }
 }
 
@@ -179,7 +167,6 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
         } catch (err) {
           return fail(toPlcError(err, 'PROTOCOL_ERROR'));
         }
-        channel.expect = undefined;
         channel.pending.resolve(1, response);
       }
     });
