@@ -15,29 +15,14 @@ import {
   encodeSetupCommunication,
   encodeWriteRequest,
   encodeWriteResponse,
+  encodeDisconnectRequest,
+  encodeCotpError,
+  dataPartLength,
+  type S7Item,
+  type S7WriteItem,
 } from '../lib/s7/codec';
-import { describeReturnCode, headerError, remoteTsapFor } from '../lib/s7/constants';
-
-const hex = (s: string) => Buffer.from(s.replace(/[\s|]+/g, ''), 'hex');
-const show = (b: Buffer) => b.toString('hex').toUpperCase();
-
-/** Frames verbatim from the S7 source document (seeds/000, PROTOCOLS.md §1). */
-const DOC = {
-  connectionRequest: hex('03 00 00 16 11 E0 00 00 00 01 00 C1 02 10 00 C2 02 03 01 C0 01 0A'),
-  connectionConfirm: hex('03 00 00 16 11 D0 00 01 00 11 00 C0 01 0A C1 02 10 00 C2 02 03 01'),
-  setup: hex('03 00 00 19 02 F0 80 32 01 00 00 CC C1 00 08 00 00 F0 00 00 01 00 01 03 C0'),
-  setupAck: hex('03 00 00 1B 02 F0 80 32 03 00 00 CC C1 00 08 00 00 00 00 F0 00 00 01 00 01 00 F0'),
-  // Four BYTE items of DB200 at bit addresses 0, 17, 81, 89 (the document's erratum: 17/81/89 are not byte aligned).
-  read: hex(
-    '03 00 00 43 02 F0 80 32 01 00 00 00 01 00 32 00 00 04 04' +
-      '12 0A 10 02 00 01 00 C8 84 00 00 00' +
-      '12 0A 10 02 00 01 00 C8 84 00 00 11' +
-      '12 0A 10 02 00 01 00 C8 84 00 00 51' +
-      '12 0A 10 02 00 01 00 C8 84 00 00 59',
-  ),
-  // One BYTE of DB200, value 9 (at bit address 9, as printed).
-  write: hex('03 00 00 24 02 F0 80 32 01 00 00 00 09 00 0E 00 05 05 01 12 0A 10 02 00 01 00 C8 84 00 00 09 00 04 00 08 09'),
-};
+import { describeReturnCode, headerError, remoteTsapFor, returnCodeError } from '../lib/s7/constants';
+import { CAPTURE, DOC, HAND, hex, show } from './fixtures/s7';
 
 describe('S7 codec', () => {
   describe('the source document frames', () => {
@@ -76,6 +61,66 @@ describe('S7 codec', () => {
         expect(job.items[0]!.data).to.deep.equal(Buffer.of(9));
         expect(job.items[0]!.dataTransportSize).to.equal(0x04);
       }
+    });
+  });
+
+  describe('frames of real peers', () => {
+    it('encodes the S7-300 connection request (TPDU size first, called TSAP 0x0102 = PG rack 0 slot 2)', () => {
+      const frame = encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x0100, calledTsap: remoteTsapFor('pg', 0, 2), tpduSize: 0x0a }, 'size-first');
+      expect(show(frame)).to.equal(show(CAPTURE.connectionRequestSlot2));
+      expect(decodeCotp(CAPTURE.connectionRequestSlot2)).to.deep.include({ type: 'CR', callingTsap: 0x0100, calledTsap: 0x0102, tpduSize: 0x0a });
+    });
+
+    it('encodes setup communication asking for 480 and decodes an S7-1200 answering 240', () => {
+      expect(show(encodeSetupCommunication(0, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 480 }))).to.equal(show(CAPTURE.setup480));
+      expect(show(encodeSetupCommunication(0x0400, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 480 }))).to.equal(show(CAPTURE.setup1200Request));
+      expect(decodeS7(CAPTURE.setup1200Ack)).to.deep.equal({ kind: 'setup-ack', pduRef: 0x0400, params: { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 } });
+    });
+
+    it('decodes the PUT/GET refusal of an S7-1200 and words it', () => {
+      const msg = decodeS7(CAPTURE.putGetRefused);
+      expect(msg).to.deep.equal({ kind: 'error', pduRef: 0, errorClass: 0x81, errorCode: 0x04, rosctr: 2 });
+      expect(show(encodeErrorAck(0, 0x81, 0x04))).to.equal(show(CAPTURE.putGetRefused));
+      const err = headerError(0x81, 0x04, 'read DB1,INT0');
+      expect(err).to.be.instanceOf(PlcError);
+      expect(err.code).to.equal('ACCESS_DENIED');
+      expect(err.message).to.equal('read DB1,INT0: the PLC answered 0x8104: function not supported or access denied: PUT/GET access is not enabled on this S7-1200/1500 (or the block is optimized)');
+    });
+
+    it('encodes an ack-data refusal that echoes the function with zero items', () => {
+      expect(show(encodeErrorAck(5, 0x85, 0x00, 0x04))).to.equal('0300001502F08032030000000500020000850004' + '00');
+      expect(decodeS7(encodeErrorAck(5, 0x85, 0x00, 0x04))).to.deep.equal({ kind: 'error', pduRef: 5, errorClass: 0x85, errorCode: 0, rosctr: 3, func: 4 });
+    });
+  });
+
+  describe('hand-built frames', () => {
+    it('decodes a read ack with a fill byte after an odd item and a failed item', () => {
+      const ack = decodeS7(HAND.readAckWithFill);
+      if (ack.kind !== 'read-ack') throw new Error(ack.kind);
+      expect(ack.items.map((i) => [i.returnCode, i.transportSize, show(i.data)])).to.deep.equal([[0xff, 4, 'AA'], [0x0a, 0, '']]);
+      expect(show(encodeReadResponse(1, [{ returnCode: 0xff, transportSize: 4, data: hex('AA') }, { returnCode: 0x0a, transportSize: 0, data: Buffer.alloc(0) }]))).to.equal(show(HAND.readAckWithFill));
+    });
+
+    it('encodes and decodes a write ack with per-item return codes', () => {
+      expect(show(encodeWriteResponse(2, [0xff, 0x05, 0x0a]))).to.equal(show(HAND.writeAck));
+      expect(decodeS7(HAND.writeAck)).to.deep.equal({ kind: 'write-ack', pduRef: 2, returnCodes: [0xff, 0x05, 0x0a] });
+    });
+
+    it('encodes and decodes COTP DR and ER', () => {
+      expect(show(encodeDisconnectRequest(1, 1, 3))).to.equal(show(HAND.disconnect));
+      expect(decodeCotp(HAND.disconnect)).to.deep.equal({ type: 'DR', destinationRef: 1, sourceRef: 1, reason: 3 });
+      expect(show(encodeCotpError(1, 2))).to.equal(show(HAND.cotpError));
+      expect(decodeCotp(HAND.cotpError)).to.deep.equal({ type: 'ER', destinationRef: 1, cause: 2 });
+    });
+
+    it('puts a fill byte between write items after odd data, never after the last', () => {
+      const items: S7WriteItem[] = [
+        { area: 0x84, dbNumber: 1, transportSize: 0x02, count: 3, address: 0, dataTransportSize: 0x04, data: hex('010203') },
+        { area: 0x84, dbNumber: 1, transportSize: 0x02, count: 1, address: 80, dataTransportSize: 0x04, data: hex('04') },
+      ];
+      const frame = encodeWriteRequest(1, items);
+      expect(show(frame.subarray(7 + 10 + 2 + 24))).to.equal('0004001801020300' + '0004000804');
+      expect(frame.readUInt16BE(15)).to.equal(dataPartLength(items)).and.to.equal(13);
     });
   });
 
@@ -122,6 +167,18 @@ describe('S7 codec', () => {
       expect(describeReturnCode(0x42).text).to.match(/0x42/);
     });
 
+    it('words item return codes as typed errors naming the context and tag', () => {
+      const missing = returnCodeError(0x0a, 'read DB7,INT0', 'DB7,INT0');
+      expect(missing.code).to.equal('OBJECT_DOES_NOT_EXIST');
+      expect(missing.tag).to.equal('DB7,INT0');
+      expect(missing.message).to.equal('read DB7,INT0: the PLC answered 0x0A: object does not exist (missing DB?)');
+      expect(returnCodeError(0x05, 'x').code).to.equal('ADDRESS_OUT_OF_RANGE');
+      expect(returnCodeError(0x03, 'x').code).to.equal('ACCESS_DENIED');
+      expect(returnCodeError(0x06, 'x').code).to.equal('TYPE_NOT_SUPPORTED');
+      expect(returnCodeError(0x07, 'x').code).to.equal('TYPE_NOT_SUPPORTED');
+      expect(headerError(0x83, 0x04, 'write').code).to.equal('ACCESS_DENIED');
+    });
+
     it('maps header errors: PUT/GET access and PDU too large', () => {
       const putget = headerError(0x81, 0x04, 'read');
       expect(putget.code).to.equal('ACCESS_DENIED');
@@ -157,6 +214,58 @@ describe('S7 codec', () => {
       ack.writeUInt16BE(0x0100, ack.length - 4); // announce 32 bytes
       expect(() => decodeS7(ack)).to.throw(ProtocolError, /announced/);
       expect(() => decodeS7(DOC.connectionRequest)).to.throw(ProtocolError, /expected COTP data/);
+    });
+
+    it('rejects fragmented COTP data, trailing garbage and a TPKT length that is not the frame', () => {
+      const frag = Buffer.from(DOC.read);
+      frag[6] = 0x00;
+      expect(() => decodeS7(frag)).to.throw(ProtocolError, /fragmented/);
+      expect(() => decodeS7(Buffer.concat([DOC.read, hex('00')]))).to.throw(ProtocolError, /TPKT length/);
+      const longer = Buffer.concat([HAND.writeAck, hex('FF FF')]);
+      longer.writeUInt16BE(longer.length, 2);
+      longer.writeUInt16BE(5, 15); // data length
+      expect(() => decodeS7(longer)).to.throw(ProtocolError, /3 items but 5 return codes/);
+      const padded = Buffer.concat([HAND.readAckWithFill, hex('00 00')]);
+      padded.writeUInt16BE(padded.length, 2);
+      padded.writeUInt16BE(12, 15);
+      expect(() => decodeS7(padded)).to.throw(ProtocolError, /2 stray bytes/);
+    });
+
+    it('property: read and write jobs round-trip through encode and decode', () => {
+      const item = fc.record({
+        area: fc.constantFrom(0x81, 0x82, 0x83, 0x84, 0x80, 0x1c, 0x1d),
+        dbNumber: fc.nat(0xffff),
+        transportSize: fc.constantFrom(0x01, 0x02, 0x04, 0x06, 0x08),
+        count: fc.nat(0xffff),
+        address: fc.nat(0xffffff),
+      });
+      fc.assert(
+        fc.property(fc.nat(0xffff), fc.array(item, { maxLength: 20 }), (ref, items: S7Item[]) => {
+          expect(decodeS7(encodeReadRequest(ref, items))).to.deep.equal({ kind: 'read-request', pduRef: ref, items });
+        }),
+        { numRuns: 500 },
+      );
+      const writeItem = fc.tuple(item, fc.constantFrom(0x04, 0x09, 0x07), fc.uint8Array({ maxLength: 40 })).map(([i, ts, d]) => ({ ...i, dataTransportSize: ts, data: Buffer.from(d) }));
+      fc.assert(
+        fc.property(fc.array(writeItem, { maxLength: 10 }), (items: S7WriteItem[]) => {
+          const msg = decodeS7(encodeWriteRequest(7, items));
+          if (msg.kind !== 'write-request') throw new Error(msg.kind);
+          expect(msg.items.map((i) => ({ ...i, data: show(i.data) }))).to.deep.equal(items.map((i) => ({ ...i, data: show(i.data) })));
+        }),
+        { numRuns: 500 },
+      );
+      const responseItem = fc.oneof(
+        fc.tuple(fc.constantFrom(0x04, 0x05, 0x07, 0x09), fc.uint8Array({ maxLength: 40 })).map(([ts, d]) => ({ returnCode: 0xff, transportSize: ts, data: Buffer.from(d) })),
+        fc.constantFrom(0x01, 0x03, 0x05, 0x06, 0x07, 0x0a).map((rc) => ({ returnCode: rc, transportSize: 0, data: Buffer.alloc(0) })),
+      );
+      fc.assert(
+        fc.property(fc.array(responseItem, { maxLength: 20 }), (items) => {
+          const msg = decodeS7(encodeReadResponse(3, items));
+          if (msg.kind !== 'read-ack') throw new Error(msg.kind);
+          expect(msg.items.map((i) => [i.returnCode, show(i.data)])).to.deep.equal(items.map((i) => [i.returnCode, show(i.data)]));
+        }),
+        { numRuns: 500 },
+      );
     });
 
     it('property: any bytes decode to a message or a ProtocolError, never anything else', () => {
