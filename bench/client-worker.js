@@ -10,7 +10,8 @@ const gc = global.gc || (() => undefined);
 
 function settle() {
   gc();
-  return process.memoryUsage().rss;
+  const m = process.memoryUsage();
+  return { rss: m.rss, heap: m.heapUsed + m.external };
 }
 
 async function run(job) {
@@ -21,7 +22,7 @@ async function run(job) {
   const result = { client: job.client, table: job.table, tags: tags.length };
 
   if (job.durationMs) {
-    const rss0 = settle();
+    const mem0 = settle();
     const c = await open({ port: job.port, pdu: job.pdu, addresses });
     const wrong = firstMismatch(tags, await c.read());
     if (wrong) throw new Error(`wrong value from ${job.client}: ${wrong}`);
@@ -37,13 +38,15 @@ async function run(job) {
     }
     const elapsedMs = Number(process.hrtime.bigint() - t0) / 1e6;
     const cpu = process.cpuUsage(cpu0);
-    const rss1 = settle();
+    const mem1 = settle();
     await c.close();
     Object.assign(result, {
       polls,
       pollsPerSecond: (polls * 1000) / elapsedMs,
       cpuMsPer1000Tags: ((cpu.user + cpu.system) / 1000 / (polls * tags.length)) * 1000,
-      rssBytesPerTag: Math.max(0, rss1 - rss0) / tags.length,
+      rssBytesPerTag: Math.max(0, mem1.rss - mem0.rss) / tags.length,
+      // What stays reachable while connected: the client, its plan and its last results.
+      heapBytesPerTag: Math.max(0, mem1.heap - mem0.heap) / tags.length,
     });
   }
 

@@ -19,12 +19,15 @@ function peer(name) {
   }
 }
 
+// PLCWIRE_DIST=/other/checkout/dist benchmarks another build (e.g. a commit in a worktree).
+const DIST = process.env.PLCWIRE_DIST ? path.resolve(process.env.PLCWIRE_DIST) : path.join(ROOT, 'dist');
+
 function plcwire() {
   try {
-    return require(path.join(ROOT, 'dist/lib/index.js'));
+    return require(path.join(DIST, 'lib/index.js'));
   } catch (err) {
     throw new Error(`dist/ is not built (run \`npm run build\`): ${err.message}`);
   }
 }
 
-module.exports = { peer, plcwire, ROOT };
+module.exports = { peer, plcwire, ROOT, DIST };
