@@ -287,6 +287,12 @@ describe('FETCH/WRITE client against the CP simulator', function () {
     await waitFor(client, 'connected', 3000);
     await client.write({ MW0: 6 });
     expect(server.memory.area('M')!.readUInt16BE(0)).to.equal(6);
+    // Several writes when the link fails at the first: every one is reported failed, none silently skipped.
+    server.faults.truncateAnswers = 1;
+    const w = await client.writeDetailed({ MW2: 1, MW4: 2, 'M6.0': true });
+    expect(Object.values(w).map((r) => r.ok || r.error.code)).to.deep.equal(['CONNECTION_LOST', 'CONNECTION_LOST', 'CONNECTION_LOST']);
+    expect(server.memory.area('M')!.readUInt16BE(4)).to.equal(0);
+    await waitFor(client, 'connected', 3000);
   });
 
   it('reconnects after the CP drops the connections, failing fast meanwhile', async () => {

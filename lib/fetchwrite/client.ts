@@ -9,6 +9,9 @@
  * addressed in words) fetches the enclosing byte or word, changes the bits
  * or bytes, and writes it back. It is not atomic against the PLC program: a
  * change the program makes to the same byte/word in between is overwritten.
+ * Likewise a value split over several jobs (beyond the ORG's length range) is
+ * written job by job; if the link fails in between, part of it is written and
+ * the tag's result is an error.
  */
 import type * as net from 'node:net';
 import { parseAddress } from '../address';
@@ -46,6 +49,8 @@ class Channel {
 
 class FwSession {
   readonly jobs: JobQueue;
+  /** Set when the link failed: later jobs fail at once instead of waiting for their timeout. */
+  lost: PlcError | undefined;
   constructor(
     readonly fetch: Channel,
     readonly write: Channel,
@@ -150,6 +155,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   private attach(session: FwSession, channel: Channel): void {
     const fail = (cause: PlcError) => {
       const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+      session.lost ??= err;
       session.fetch.pending.rejectAll(err);
       session.write.pending.rejectAll(err);
       session.jobs.rejectAll(err);
@@ -179,6 +185,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
 
   /** One job on one channel (the caller holds the session's job queue). */
   private async job(session: FwSession, op: OpCode.FetchRequest | OpCode.WriteRequest, org: Org, dbNumber: number, startByte: number, bytes: number, data: Buffer | undefined, signal?: AbortSignal): Promise<Buffer> {
+    if (session.lost) throw session.lost;
     const channel = op === OpCode.FetchRequest ? session.fetch : session.write;
     const wordUnits = this.granule(org) === 2;
     const start = org === Org.C || org === Org.T ? startByte / 2 : wordUnits ? startByte / 2 : startByte;
@@ -196,8 +203,10 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     } catch (err) {
       if (err instanceof TimeoutError || (err instanceof PlcError && err.code === 'ABORTED')) {
         // Without request ids a late answer would be taken for the next job's: drop the link.
+        const lost = new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err });
+        session.lost ??= lost;
         session.destroy();
-        this.sessionLost(session, new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`));
+        this.sessionLost(session, lost);
       }
       throw err;
     }
