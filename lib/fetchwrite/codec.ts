@@ -12,14 +12,14 @@ export const HEADER = 16;
 /** A frame carries at most 64 KiB of data. */
 export const MAX_DATA = 0xffff;
 
-export const enum OpCode {
+export enum OpCode {
   WriteRequest = 0x03,
   WriteAck = 0x04,
   FetchRequest = 0x05,
   FetchResponse = 0x06,
 }
 
-export const enum Org {
+export enum Org {
   DB = 0x01,
   M = 0x02,
   I = 0x03,
