@@ -188,9 +188,15 @@ describe('FETCH/WRITE client against the CP simulator', function () {
     expect(jobs.map(jobText)).to.deep.equal(['write 1/5@100+2048', 'write 1/5@2148+2048', 'write 1/5@4196+904']);
   });
 
+  it('reads analog inputs from byte 256 up (PIW256), where S7 CPUs put them', async () => {
+    await start();
+    server.memory.area('PE')!.writeInt16BE(13824, 256);
+    expect(await client.read(['PIW256'])).to.deep.equal({ PIW256: 13824 });
+  });
+
   it('refuses impossible addresses before sending anything', async () => {
     await start();
-    const r = await client.readDetailed(['DB0,INT0', 'DB256,INT0', 'MB256', 'IB200', 'QB128', 'DB1.DBW4095', 'C256', 'T300', 'PIW256']);
+    const r = await client.readDetailed(['DB0,INT0', 'DB256,INT0', 'MB256', 'IB200', 'QB128', 'DB1.DBW4095', 'C256', 'T300']);
     for (const [address, result] of Object.entries(r)) {
       expect(result.ok, address).to.equal(false);
       if (!result.ok) {

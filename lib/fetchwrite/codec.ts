@@ -51,7 +51,9 @@ export const ORG_RANGES: Readonly<Record<number, { name: string; unit: 'word' | 
   [Org.M]: { name: 'M', unit: 'byte', maxStart: 255, maxLength: 256 },
   [Org.I]: { name: 'I', unit: 'byte', maxStart: 127, maxLength: 128 },
   [Org.Q]: { name: 'Q', unit: 'byte', maxStart: 127, maxLength: 128 },
-  [Org.PEPA]: { name: 'PE/PA', unit: 'byte', maxStart: 255, maxLength: 256 },
+  // The document's 0–255 is the S5 I/O range; S7 CPUs put analog modules from byte 256 up (PIW256),
+  // and the start field is 16 bits, so any byte address is allowed here.
+  [Org.PEPA]: { name: 'PE/PA', unit: 'byte', maxStart: 0xffff, maxLength: 256 },
   [Org.C]: { name: 'C', unit: 'word', maxStart: 255, maxLength: 1 },
   [Org.T]: { name: 'T', unit: 'word', maxStart: 255, maxLength: 1 },
 });
