@@ -5,6 +5,7 @@
 import type { BindingInterface } from '@serialport/bindings-interface';
 import { FetchWriteClient } from './fetchwrite/client';
 import { FreeportClient } from './freeport/client';
+import type { FreeportProfile } from './freeport/profile';
 import type { ClientOptions } from './link/client-base';
 import { S7Client } from './s7/client';
 import type { PlcClient } from './types';
@@ -13,6 +14,8 @@ import { parseUrl, type Endpoint } from './url';
 export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
   /** Serial binding for freeport (tests inject `@serialport/binding-mock`). */
   binding?: BindingInterface;
+  /** Freeport frame profile of your PLC program; unnamed fields keep the document's (see README). */
+  profile?: Partial<FreeportProfile>;
 }
 
 export type AnyClient = S7Client | FetchWriteClient | FreeportClient;
@@ -20,14 +23,14 @@ export type AnyClient = S7Client | FetchWriteClient | FreeportClient;
 /** Creates the client for a URL (or parsed endpoint) without connecting: call `connect()` or `start()` on it. */
 export function createClient(url: string | Endpoint, options: ConnectOptions = {}): AnyClient {
   const endpoint = typeof url === 'string' ? parseUrl(url) : url;
-  const { binding, ...common } = options;
+  const { binding, profile, ...common } = options;
   switch (endpoint.protocol) {
     case 's7':
       return new S7Client(endpoint, common);
     case 'fetchwrite':
       return new FetchWriteClient(endpoint, common);
     case 'freeport':
-      return new FreeportClient(endpoint, binding ? { ...common, binding } : common);
+      return new FreeportClient(endpoint, { ...common, ...(binding ? { binding } : {}), ...(profile ? { profile } : {}) });
   }
 }
 
