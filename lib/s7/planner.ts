@@ -1,225 +1,579 @@
 /**
- * The S7 request planner (pure): packs tags into the fewest PDUs the
- * negotiated size allows. Reads: nearby tags of one area are merged into one
- * item when the gap costs less than a new item, items too large for one PDU
- * are split, and items are packed first-fit-decreasing under both limits
- * (request: 12 + 12·n; response: 14 + Σ(4 + len + fill)). Writes: one item
- * per tag (bits as BIT items, which the CPU writes atomically), split and
- * packed likewise (request: 12 + Σ(12 + 4 + len + fill); response: 14 + n).
+ * The S7 request planner (pure): which Read Var / Write Var items go into
+ * which PDU at the negotiated PDU size.
+ *
+ * Sizes (S7 header 10 + function and item count 2; see PROTOCOLS.md §1):
+ *   read request   12 + 12·items                       ≤ PDU
+ *   read response  14 + Σ(4 + len + fill)              ≤ PDU
+ *   write request  12 + 12·items + Σ(4 + len + fill)   ≤ PDU
+ *   write response 14 + items                          ≤ PDU
+ * where fill is one byte after odd-length data, except after the last item.
+ *
+ * Reads: tags are sorted by area and address; tags whose bytes overlap are
+ * one "atom" that is never cut (a value is read in one piece, so it is never
+ * torn between two PLC cycles) unless it is larger than one item can carry
+ * (STRING[254] at PDU 240), then it is cut into chunks and reassembled.
+ * Atoms are filled into PDUs in address order, bridging the gap to the
+ * previous item when it is small, opening a new item otherwise. Several gap
+ * thresholds are tried (including the 16 bytes a new item costs) and the plan
+ * with the fewest PDUs, then the fewest bytes on the wire, wins: plans are
+ * cached, so this runs once per tag list.
  */
+import { PlcError, toPlcError } from '../errors';
 import type { Tag } from '../types';
-import { writeSpan } from '../values';
+import { validateValue, writeSpan } from '../values';
 import { AREA_CODES, DataTransportSize, S7Area, TransportSize } from './constants';
-import type { S7Item, S7WriteItem } from './codec';
 
-/** Bytes of S7 header + function + count in a job / an ack-data. */
 const REQUEST_BASE = 12;
 const RESPONSE_BASE = 14;
-const ITEM = 12;
+const REQUEST_ITEM = 12;
 const DATA_HEADER = 4;
-/** Merging across a gap is worth it while the gap is smaller than a new item costs (12 + 4 + a fill byte). */
-const MERGE_GAP = ITEM + DATA_HEADER + 1;
+/** The item count is one byte. */
+const MAX_ITEMS = 255;
+/** Gap thresholds tried by planRead; 16 = the 12 + 4 bytes a new item costs. */
+const GAP_THRESHOLDS = [0, 3, 5, 8, 16, 32, 64, 128];
 
-/** A contiguous byte range of one area, read as one or more items. */
-export interface ReadRange {
-  area: S7Area;
+/** A Read Var item, shaped like the codec's request item (area, dbNumber, transportSize, count, address). */
+export interface PlannedReadItem {
+  area: number;
   dbNumber: number;
-  /** Byte offset (C/T: first number). */
-  start: number;
-  /** Bytes (C/T: 2 per number). */
+  transportSize: number;
+  /** Elements of transportSize (bytes, or counters/timers). */
+  count: number;
+  /** Bit address (byte × 8) or, for C/T, the first counter/timer number. */
+  address: number;
+  /** Bytes the PLC returns for this item. */
   length: number;
-  /** Indexes into the planned tags. */
-  tags: number[];
 }
 
-export interface ReadChunk {
-  range: number;
-  /** Byte offset of this chunk inside its range. */
+export interface ReadPdu {
+  items: PlannedReadItem[];
+  /** S7 bytes of the request and of the expected response (without TPKT/COTP). */
+  requestSize: number;
+  responseSize: number;
+}
+
+/** One piece of a tag: `length` bytes at `offset` in an item's data are the tag's bytes from `at`. */
+export interface TagSlice {
+  pdu: number;
+  item: number;
   offset: number;
-  item: S7Item;
-  /** Bytes expected back. */
   length: number;
+  at: number;
 }
 
 export interface ReadPlan {
-  ranges: ReadRange[];
-  /** PDUs, each a list of chunks. */
-  pdus: ReadChunk[][];
+  pduSize: number;
+  pdus: ReadPdu[];
+  /** Per tag (in the order given): its pieces, in order of `at`; one piece unless the tag was split. */
+  slices: TagSlice[][];
+  /** Per tag: the bytes it covers. */
+  tagLengths: number[];
 }
 
-export interface WriteChunk {
-  /** Index of the tag in the write request. */
-  tag: number;
-  item: S7WriteItem;
+export interface PlanOptions {
+  /** false: every tag is its own item (used to isolate a failing tag from good neighbours). Default true. */
+  merge?: boolean;
+  /** At most this many items per PDU (e.g. 20 for snap7's server). Default 255. */
+  maxItems?: number;
 }
 
-export interface WritePlan {
-  pdus: WriteChunk[][];
-}
-
-function areaOf(tag: Tag): S7Area {
-  return AREA_CODES[tag.area];
-}
-
-function isCounterOrTimer(area: S7Area): boolean {
-  return area === S7Area.C || area === S7Area.T;
-}
-
-/** Largest data a single read item can return in one PDU. */
+/** Bytes one read item can return in a PDU of `pduSize`. */
 export function maxReadItemData(pduSize: number): number {
   return pduSize - RESPONSE_BASE - DATA_HEADER;
 }
 
-/** Largest data a single write item can carry in one PDU. */
+/** Bytes one write item can carry in a PDU of `pduSize`. */
 export function maxWriteItemData(pduSize: number): number {
-  return pduSize - REQUEST_BASE - ITEM - DATA_HEADER;
+  return pduSize - REQUEST_BASE - REQUEST_ITEM - DATA_HEADER;
 }
 
-/** Merges the tags' byte ranges (same area, gap under the cost of an item, never past one PDU's item). */
-export function mergeRanges(tags: readonly Tag[], pduSize: number, merge = true): ReadRange[] {
+/** Items one read request can carry. */
+export function maxReadItems(pduSize: number, maxItems = MAX_ITEMS): number {
+  return Math.max(1, Math.min(maxItems, MAX_ITEMS, Math.floor((pduSize - REQUEST_BASE) / REQUEST_ITEM)));
+}
+
+// ------------------------------------------------------------------ geometry
+
+/** Where a tag lives in the planner's byte space: C/T numbers are 2 bytes each. */
+interface Span {
+  tag: number;
+  group: number;
+  area: number;
+  dbNumber: number;
+  /** 2 for counters/timers (items count numbers), else 1. */
+  unit: number;
+  start: number;
+  end: number;
+}
+
+interface Atom {
+  group: number;
+  area: number;
+  dbNumber: number;
+  unit: number;
+  start: number;
+  end: number;
+  spans: Span[];
+}
+
+function isCounterOrTimer(area: number): boolean {
+  return area === S7Area.C || area === S7Area.T;
+}
+
+function areaCode(tag: Tag): number {
+  const code = AREA_CODES[tag.area];
+  if (code === undefined) throw new PlcError('INVALID_ADDRESS', `${tag.address}: area ${tag.area} cannot be read over S7`, { tag: tag.address });
+  return code;
+}
+
+function spanOf(tag: Tag, index: number): Span {
+  const area = areaCode(tag);
+  const unit = isCounterOrTimer(area) ? 2 : 1;
+  const start = tag.byteOffset * unit;
+  const length = unit === 2 ? 2 * tag.count : tag.byteLength;
+  return { tag: index, group: area * 0x10000 + tag.dbNumber, area, dbNumber: tag.dbNumber, unit, start, end: start + length };
+}
+
+function spansOf(tags: readonly Tag[]): Span[] {
+  const spans = tags.map(spanOf);
+  spans.sort((a, b) => a.group - b.group || a.start - b.start || b.end - a.end);
+  return spans;
+}
+
+/** Overlapping tags form one atom; with merge = false every tag is its own atom. */
+function atomsOf(spans: readonly Span[], merge: boolean): Atom[] {
+  const atoms: Atom[] = [];
+  let current: Atom | undefined;
+  for (const s of spans) {
+    if (merge && current && current.group === s.group && s.start < current.end) {
+      if (s.end > current.end) current.end = s.end;
+      current.spans.push(s);
+      continue;
+    }
+    current = { group: s.group, area: s.area, dbNumber: s.dbNumber, unit: s.unit, start: s.start, end: s.end, spans: [s] };
+    atoms.push(current);
+  }
+  return atoms;
+}
+
+// ------------------------------------------------------------------ packing
+
+interface DraftItem {
+  group: number;
+  area: number;
+  dbNumber: number;
+  unit: number;
+  start: number;
+  end: number;
+}
+
+interface Bin {
+  items: DraftItem[];
+  /** 14 + Σ(4 + len) + fills between items, with the last item counted without fill. */
+  response: number;
+}
+
+interface Draft {
+  bins: Bin[];
+  /** Per atom: the items it lies in (one, or the chunks of a split atom), with their bin. */
+  placements: { bin: Bin; item: DraftItem }[][];
+}
+
+function fillAfter(bin: Bin): number {
+  const last = bin.items[bin.items.length - 1];
+  return last && (last.end - last.start) % 2 === 1 ? 1 : 0;
+}
+
+function pack(atoms: readonly Atom[], pduSize: number, maxItems: number, gapThreshold: number, merge: boolean): Draft {
   const maxItem = maxReadItemData(pduSize);
-  const order = tags.map((_, i) => i);
-  const key = (t: Tag) => areaOf(t) * 0x10000 + t.dbNumber;
-  order.sort((a, b) => key(tags[a]!) - key(tags[b]!) || tags[a]!.byteOffset - tags[b]!.byteOffset);
-  const ranges: ReadRange[] = [];
-  let current: ReadRange | undefined;
-  for (const i of order) {
-    const t = tags[i]!;
-    const area = areaOf(t);
-    const ct = isCounterOrTimer(area);
-    const start = ct ? t.byteOffset : t.byteOffset;
-    const length = ct ? 2 * t.count : t.byteLength;
-    const unit = ct ? 2 : 1; // C/T ranges count numbers, 2 bytes each
-    if (current && merge && current.area === area && current.dbNumber === t.dbNumber) {
-      const end = current.start + current.length / unit;
-      const newEnd = Math.max(end, start + length / unit);
-      const gap = (start - end) * unit;
-      if (gap <= MERGE_GAP && (newEnd - current.start) * unit <= Math.max(maxItem, current.length)) {
-        current.length = (newEnd - current.start) * unit;
-        current.tags.push(i);
-        continue;
+  const bins: Bin[] = [];
+  const placements: Draft['placements'] = [];
+  let current: Bin | undefined;
+
+  const openBin = (): Bin => {
+    current = { items: [], response: RESPONSE_BASE };
+    bins.push(current);
+    return current;
+  };
+  const newItemFits = (bin: Bin, length: number) =>
+    bin.items.length < maxItems && bin.response + fillAfter(bin) + DATA_HEADER + length <= pduSize;
+  const addItem = (bin: Bin, a: { group: number; area: number; dbNumber: number; unit: number }, start: number, end: number): DraftItem => {
+    const item: DraftItem = { group: a.group, area: a.area, dbNumber: a.dbNumber, unit: a.unit, start, end };
+    bin.response += fillAfter(bin) + DATA_HEADER + (end - start);
+    bin.items.push(item);
+    return item;
+  };
+  /** The last item of the current bin, if `atom` could extend it (same area, ahead of it). */
+  const bridgeable = (atom: Atom): DraftItem | undefined => {
+    if (!merge || !current) return undefined;
+    const last = current.items[current.items.length - 1];
+    if (!last || last.group !== atom.group || atom.start < last.end) return undefined;
+    return current.response + (atom.end - last.end) <= pduSize ? last : undefined;
+  };
+  const extend = (item: DraftItem, end: number) => {
+    current!.response += end - item.end;
+    item.end = end;
+  };
+
+  for (const atom of atoms) {
+    const length = atom.end - atom.start;
+    if (length > maxItem) {
+      placements.push(placeHuge(atom));
+      continue;
+    }
+    const last = bridgeable(atom);
+    if (last && atom.start - last.end <= gapThreshold) {
+      extend(last, atom.end);
+      placements.push([{ bin: current!, item: last }]);
+      continue;
+    }
+    const bin = current && newItemFits(current, length) ? current : bins.find((b) => newItemFits(b, length));
+    if (bin) {
+      placements.push([{ bin, item: addItem(bin, atom, atom.start, atom.end) }]);
+      continue;
+    }
+    if (last) {
+      // The PDU ran out of items before bytes: bridging a larger gap still fits.
+      extend(last, atom.end);
+      placements.push([{ bin: current!, item: last }]);
+      continue;
+    }
+    const fresh = openBin();
+    placements.push([{ bin: fresh, item: addItem(fresh, atom, atom.start, atom.end) }]);
+  }
+  return { bins, placements };
+
+  /** An atom larger than one item: the first chunk fills what the current PDU has left, then full chunks. */
+  function placeHuge(atom: Atom): { bin: Bin; item: DraftItem }[] {
+    const out: { bin: Bin; item: DraftItem }[] = [];
+    const even = (n: number) => n - (n % atom.unit);
+    let at = atom.start;
+    if (current && current.items.length < maxItems) {
+      const room = even(pduSize - current.response - fillAfter(current) - DATA_HEADER);
+      if (room >= Math.max(atom.unit, 16)) {
+        out.push({ bin: current, item: addItem(current, atom, at, at + room) });
+        at += room;
       }
     }
-    current = { area, dbNumber: t.dbNumber, start, length, tags: [i] };
-    ranges.push(current);
+    while (at < atom.end) {
+      const length = Math.min(even(maxItem), atom.end - at);
+      const bin = (length < even(maxItem) && bins.find((b) => newItemFits(b, length))) || openBin();
+      out.push({ bin, item: addItem(bin, atom, at, at + length) });
+      at += length;
+    }
+    return out;
   }
-  return ranges;
 }
 
-/** Plans a read of `tags` at a PDU size. `merge = false` reads every tag on its own (used to isolate a failing tag). */
-export function planRead(tags: readonly Tag[], pduSize: number, merge = true): ReadPlan {
-  const ranges = mergeRanges(tags, pduSize, merge);
-  const maxItem = maxReadItemData(pduSize);
-  const chunks: ReadChunk[] = [];
-  ranges.forEach((r, index) => {
-    const ct = isCounterOrTimer(r.area);
-    // C/T items count numbers; keep chunks on number boundaries.
-    const step = ct ? maxItem - (maxItem % 2) : maxItem;
-    for (let offset = 0; offset < r.length; offset += step) {
-      const length = Math.min(step, r.length - offset);
-      const item: S7Item = ct
-        ? { area: r.area, dbNumber: 0, transportSize: r.area === S7Area.C ? TransportSize.COUNTER : TransportSize.TIMER, count: length / 2, address: r.start + offset / 2 }
-        : { area: r.area, dbNumber: r.dbNumber, transportSize: TransportSize.BYTE, count: length, address: (r.start + offset) * 8 };
-      chunks.push({ range: index, offset, item, length });
+function wireBytes(draft: Draft): number {
+  let n = 0;
+  for (const b of draft.bins) n += REQUEST_BASE + REQUEST_ITEM * b.items.length + b.response;
+  return n;
+}
+
+/** Plans a read of `tags` (in the order given) at a negotiated PDU size. Throws only for an unusable PDU size or area. */
+export function planRead(tags: readonly Tag[], pduSize: number, options: PlanOptions = {}): ReadPlan {
+  checkPduSize(pduSize);
+  const merge = options.merge ?? true;
+  const maxItems = maxReadItems(pduSize, options.maxItems);
+  const atoms = atomsOf(spansOf(tags), merge);
+  let best: Draft | undefined;
+  let bestBytes = Infinity;
+  for (const gap of merge ? GAP_THRESHOLDS : [-1]) {
+    const draft = pack(atoms, pduSize, maxItems, gap, merge);
+    const bytes = wireBytes(draft);
+    if (!best || draft.bins.length < best.bins.length || (draft.bins.length === best.bins.length && bytes < bestBytes)) {
+      best = draft;
+      bestBytes = bytes;
+    }
+  }
+  return finish(tags, pduSize, atoms, best ?? { bins: [], placements: [] });
+}
+
+function finish(tags: readonly Tag[], pduSize: number, atoms: readonly Atom[], draft: Draft): ReadPlan {
+  const where = new Map<DraftItem, { pdu: number; item: number }>();
+  const pdus: ReadPdu[] = draft.bins.map((bin, pdu) => ({
+    items: bin.items.map((d, item) => {
+      where.set(d, { pdu, item });
+      return readItem(d);
+    }),
+    requestSize: REQUEST_BASE + REQUEST_ITEM * bin.items.length,
+    responseSize: bin.response,
+  }));
+  const slices: TagSlice[][] = tags.map(() => []);
+  const tagLengths: number[] = tags.map(() => 0);
+  atoms.forEach((atom, a) => {
+    const pieces = draft.placements[a]!;
+    for (const span of atom.spans) {
+      tagLengths[span.tag] = span.end - span.start;
+      for (const { item } of pieces) {
+        const from = Math.max(span.start, item.start);
+        const to = Math.min(span.end, item.end);
+        if (from >= to) continue;
+        const at = where.get(item)!;
+        slices[span.tag]!.push({ pdu: at.pdu, item: at.item, offset: from - item.start, length: to - from, at: from - span.start });
+      }
     }
   });
-  return { ranges, pdus: pack(chunks, (c) => c.length, pduSize, 'read') };
+  return { pduSize, pdus, slices, tagLengths };
 }
 
-/**
- * First-fit decreasing under both the request and the response limit.
- * Read: request 12 + 12n, response 14 + Σ(4 + len + fill). Write: request
- * 12 + Σ(16 + len + fill), response 14 + n.
- */
-function pack<C>(chunks: C[], lengthOf: (c: C) => number, pduSize: number, kind: 'read' | 'write'): C[][] {
-  const sorted = [...chunks].sort((a, b) => lengthOf(b) - lengthOf(a));
-  const bins: { chunks: C[]; request: number; response: number; odd: boolean }[] = [];
-  for (const c of sorted) {
-    const len = lengthOf(c);
-    let placed = false;
-    for (const bin of bins) {
-      // A fill byte is needed after the previous item when its data was odd.
-      const fill = bin.odd ? 1 : 0;
-      const request = kind === 'read' ? bin.request + ITEM : bin.request + ITEM + DATA_HEADER + len + fill;
-      const response = kind === 'read' ? bin.response + DATA_HEADER + len + fill : bin.response + 1;
-      if (request <= pduSize && response <= pduSize) {
-        bin.chunks.push(c);
-        bin.request = request;
-        bin.response = response;
-        bin.odd = len % 2 === 1;
-        placed = true;
-        break;
-      }
-    }
-    if (!placed) {
-      bins.push({
-        chunks: [c],
-        request: kind === 'read' ? REQUEST_BASE + ITEM : REQUEST_BASE + ITEM + DATA_HEADER + len,
-        response: kind === 'read' ? RESPONSE_BASE + DATA_HEADER + len : RESPONSE_BASE + 1,
-        odd: len % 2 === 1,
-      });
-    }
+function readItem(d: DraftItem): PlannedReadItem {
+  const length = d.end - d.start;
+  if (d.unit === 2) {
+    const transportSize = d.area === S7Area.C ? TransportSize.COUNTER : TransportSize.TIMER;
+    return { area: d.area, dbNumber: 0, transportSize, count: length / 2, address: d.start / 2, length };
   }
-  return bins.map((b) => b.chunks);
+  return { area: d.area, dbNumber: d.dbNumber, transportSize: TransportSize.BYTE, count: length, address: d.start * 8, length };
+}
+
+function checkPduSize(pduSize: number): void {
+  if (!Number.isInteger(pduSize) || pduSize < 64 || pduSize > 0xffff) {
+    throw new PlcError('INVALID_VALUE', `unusable S7 PDU size ${pduSize} (expected 64..65535)`);
+  }
 }
 
 /**
- * A lower bound on the PDUs any packing needs to read `tags` at `pduSize`,
- * given the same merged ranges: the response bytes over the payload one PDU
- * carries, and the items over the items one request carries.
+ * A tag's bytes from the items' answers: `data[pdu][item]` is the data of
+ * that item. Returns the buffer and the offset of the tag's first byte in it
+ * (no copy unless the tag was split across items).
  */
-export function lowerBoundPdus(tags: readonly Tag[], pduSize: number): number {
+export function tagData(plan: ReadPlan, tag: number, data: readonly (readonly (Buffer | undefined)[])[]): { data: Buffer; offset: number } {
+  const slices = plan.slices[tag]!;
+  if (slices.length === 1) {
+    const s = slices[0]!;
+    return { data: data[s.pdu]![s.item]!, offset: s.offset };
+  }
+  const out = Buffer.alloc(plan.tagLengths[tag]!);
+  for (const s of slices) data[s.pdu]![s.item]!.copy(out, s.at, s.offset, s.offset + s.length);
+  return { data: out, offset: 0 };
+}
+
+/**
+ * The fewest PDUs any plan could read `tags` in at `pduSize` — a bin-packing
+ * lower bound, max(bytes bound, items bound):
+ * - bytes: every response carries at most PDU − 14 bytes of items. Per run of
+ *   tags whose gaps are under 4 bytes (bridging a larger gap never saves
+ *   bytes), with T tag bytes over a span S: at least k = ceil(T / max item)
+ *   items, so at least max(T + 4k, S + k + 3) bytes (each gap left out costs
+ *   an item header instead).
+ * - items: per area, ceil(tag bytes / max item) items, at most
+ *   maxReadItems(pduSize) per request.
+ */
+export function lowerBoundPdus(tags: readonly Tag[], pduSize: number, options: Pick<PlanOptions, 'maxItems'> = {}): number {
+  checkPduSize(pduSize);
   if (tags.length === 0) return 0;
-  const ranges = mergeRanges(tags, pduSize);
   const maxItem = maxReadItemData(pduSize);
+  const spans = spansOf(tags);
   let bytes = 0;
   let items = 0;
-  for (const r of ranges) {
-    const n = Math.ceil(r.length / maxItem);
-    items += n;
-    bytes += r.length + DATA_HEADER * n;
+  let run: { group: number; start: number; end: number; tagBytes: number } | undefined;
+  let group: { id: number; tagBytes: number } | undefined;
+  const closeRun = () => {
+    if (!run) return;
+    const k = Math.ceil(run.tagBytes / maxItem);
+    bytes += Math.max(run.tagBytes + DATA_HEADER * k, run.end - run.start + k + 3);
+  };
+  const closeGroup = () => {
+    if (group) items += Math.max(1, Math.ceil(group.tagBytes / maxItem));
+  };
+  for (const s of spans) {
+    if (!group || group.id !== s.group) {
+      closeGroup();
+      group = { id: s.group, tagBytes: 0 };
+    }
+    if (run && run.group === s.group && s.start - run.end < DATA_HEADER) {
+      // Count only bytes not already covered (overlapping tags).
+      const added = Math.max(0, s.end - Math.max(s.start, run.end));
+      run.tagBytes += added;
+      group.tagBytes += added;
+      if (s.end > run.end) run.end = s.end;
+      continue;
+    }
+    closeRun();
+    run = { group: s.group, start: s.start, end: s.end, tagBytes: s.end - s.start };
+    group.tagBytes += s.end - s.start;
   }
+  closeRun();
+  closeGroup();
   const byBytes = Math.ceil(bytes / (pduSize - RESPONSE_BASE));
-  const byItems = Math.ceil(items / Math.floor((pduSize - REQUEST_BASE) / ITEM));
+  const byItems = Math.ceil(items / maxReadItems(pduSize, options.maxItems));
   return Math.max(byBytes, byItems);
 }
 
+// ------------------------------------------------------------------ plan cache
+
 /**
- * Plans a write. Values are encoded here (throws the tag's ValueError, which
- * the client turns into that tag's result before calling).
+ * Remembers read plans by tag list: the same list (the same array, or the
+ * same addresses in the same order) at the same PDU size is not planned
+ * again. Bounded: the oldest plan goes when `capacity` is reached.
  */
-export function planWrite(items: readonly { tag: Tag; value: unknown }[], pduSize: number): WritePlan {
+export class ReadPlanCache {
+  private readonly byArray = new WeakMap<readonly Tag[], ReadPlan>();
+  private readonly byKey = new Map<string, { tags: readonly Tag[]; plan: ReadPlan; options: PlanOptions }[]>();
+  private count = 0;
+  hits = 0;
+  misses = 0;
+
+  constructor(readonly capacity = 64) {}
+
+  get(tags: readonly Tag[], pduSize: number, options: PlanOptions = {}): ReadPlan {
+    const same = this.byArray.get(tags);
+    if (same && same.pduSize === pduSize) {
+      this.hits++;
+      return same;
+    }
+    const key = cacheKey(tags, pduSize, options);
+    const bucket = this.byKey.get(key);
+    const found = bucket?.find((e) => sameTags(e.tags, tags));
+    if (found) {
+      this.hits++;
+      this.byArray.set(tags, found.plan);
+      return found.plan;
+    }
+    this.misses++;
+    const plan = planRead(tags, pduSize, options);
+    if (this.count >= this.capacity) {
+      this.byKey.clear();
+      this.count = 0;
+    }
+    const entry = { tags: [...tags], plan, options };
+    if (bucket) bucket.push(entry);
+    else this.byKey.set(key, [entry]);
+    this.count++;
+    this.byArray.set(tags, plan);
+    return plan;
+  }
+
+  clear(): void {
+    this.byKey.clear();
+    this.count = 0;
+  }
+}
+
+function cacheKey(tags: readonly Tag[], pduSize: number, options: PlanOptions): string {
+  const first = tags[0]?.address ?? '';
+  const last = tags[tags.length - 1]?.address ?? '';
+  return `${pduSize}|${options.merge ?? true}|${options.maxItems ?? ''}|${tags.length}|${first}|${last}`;
+}
+
+function sameTags(a: readonly Tag[], b: readonly Tag[]): boolean {
+  if (a.length !== b.length) return false;
+  for (let i = 0; i < a.length; i++) if (a[i] !== b[i] && a[i]!.address !== b[i]!.address) return false;
+  return true;
+}
+
+// ------------------------------------------------------------------ writes
+
+/** A Write Var item, shaped like the codec's write item. */
+export interface PlannedWriteItem {
+  area: number;
+  dbNumber: number;
+  transportSize: number;
+  count: number;
+  address: number;
+  dataTransportSize: number;
+  data: Buffer;
+}
+
+export interface WritePdu {
+  items: PlannedWriteItem[];
+  /** Per item: the index of its tag in the write. */
+  tags: number[];
+  requestSize: number;
+  responseSize: number;
+}
+
+export interface WritePlan {
+  pduSize: number;
+  pdus: WritePdu[];
+  /** Per tag: the ValueError that kept it out of the plan, if any. */
+  errors: (PlcError | undefined)[];
+}
+
+/**
+ * Plans a write. Each tag becomes its own items: bits as BIT items, one per
+ * bit (the CPU writes a single bit atomically; no read-modify-write, so
+ * neighbouring bits are never clobbered); STRING/WSTRING from the current
+ * length byte(s) on (writeSpan: the PLC's declared max length stays); data
+ * larger than one PDU is cut into chunks. Items are packed first-fit
+ * decreasing. A value that does not fit its tag is reported in `errors` and
+ * not sent.
+ */
+export function planWrite(writes: readonly { tag: Tag; value: unknown }[], pduSize: number, options: Pick<PlanOptions, 'maxItems'> = {}): WritePlan {
+  checkPduSize(pduSize);
   const maxData = maxWriteItemData(pduSize);
-  const chunks: WriteChunk[] = [];
-  items.forEach(({ tag, value }, index) => {
-    const area = areaOf(tag);
-    if (tag.type === 'BOOL') {
-      const bits = tag.isArray ? (value as boolean[]) : [value as boolean];
-      bits.forEach((bit, i) => {
-        const n = tag.bitOffset + i;
-        chunks.push({
-          tag: index,
-          item: { area, dbNumber: tag.dbNumber, transportSize: TransportSize.BIT, count: 1, address: (tag.byteOffset + (n >> 3)) * 8 + (n & 7), dataTransportSize: DataTransportSize.BIT, data: Buffer.of(bit ? 1 : 0) },
-        });
-      });
-      return;
-    }
-    const { start, data } = writeSpan(tag, value);
-    if (isCounterOrTimer(area)) {
-      const ts = area === S7Area.C ? TransportSize.COUNTER : TransportSize.TIMER;
-      for (let o = 0; o < data.length; o += maxData - (maxData % 2)) {
-        const part = data.subarray(o, o + maxData - (maxData % 2));
-        chunks.push({ tag: index, item: { area, dbNumber: 0, transportSize: ts, count: part.length / 2, address: tag.byteOffset + o / 2, dataTransportSize: DataTransportSize.OCTET_STRING, data: part } });
-      }
-      return;
-    }
-    for (let o = 0; o < data.length; o += maxData) {
-      const part = data.subarray(o, o + maxData);
-      chunks.push({
-        tag: index,
-        item: { area, dbNumber: tag.dbNumber, transportSize: TransportSize.BYTE, count: part.length, address: (tag.byteOffset + start + o) * 8, dataTransportSize: DataTransportSize.BYTE, data: part },
-      });
+  const maxItems = Math.min(options.maxItems ?? MAX_ITEMS, MAX_ITEMS, pduSize - RESPONSE_BASE);
+  const pieces: { tag: number; item: PlannedWriteItem }[] = [];
+  const errors: (PlcError | undefined)[] = writes.map(() => undefined);
+  writes.forEach(({ tag, value }, index) => {
+    try {
+      pieces.push(...writeItems(tag, value, maxData).map((item) => ({ tag: index, item })));
+    } catch (err) {
+      errors[index] = toPlcError(err, 'INVALID_VALUE');
     }
   });
-  return { pdus: pack(chunks, (c) => c.item.data.length, pduSize, 'write') };
+  pieces.sort((a, b) => b.item.data.length - a.item.data.length);
+  const bins: { pdu: WritePdu; lastOdd: boolean }[] = [];
+  for (const p of pieces) {
+    const len = p.item.data.length;
+    let bin = bins.find(
+      (b) => b.pdu.items.length < maxItems && b.pdu.requestSize + REQUEST_ITEM + (b.lastOdd ? 1 : 0) + DATA_HEADER + len <= pduSize,
+    );
+    if (!bin) {
+      bin = { pdu: { items: [], tags: [], requestSize: REQUEST_BASE, responseSize: RESPONSE_BASE }, lastOdd: false };
+      bins.push(bin);
+    }
+    bin.pdu.requestSize += REQUEST_ITEM + (bin.lastOdd ? 1 : 0) + DATA_HEADER + len;
+    bin.pdu.responseSize += 1;
+    bin.pdu.items.push(p.item);
+    bin.pdu.tags.push(p.tag);
+    bin.lastOdd = len % 2 === 1;
+  }
+  return { pduSize, pdus: bins.map((b) => b.pdu), errors };
+}
+
+function writeItems(tag: Tag, value: unknown, maxData: number): PlannedWriteItem[] {
+  const area = areaCode(tag);
+  validateValue(tag, value);
+  if (tag.type === 'BOOL') {
+    const bits = tag.isArray ? (value as readonly boolean[]) : [value as boolean];
+    return bits.map((bit, i) => {
+      const n = tag.bitOffset + i;
+      return {
+        area,
+        dbNumber: tag.dbNumber,
+        transportSize: TransportSize.BIT,
+        count: 1,
+        address: (tag.byteOffset + (n >> 3)) * 8 + (n & 7),
+        dataTransportSize: DataTransportSize.BIT,
+        data: Buffer.of(bit ? 1 : 0),
+      };
+    });
+  }
+  const { start, data } = writeSpan(tag, value);
+  const items: PlannedWriteItem[] = [];
+  if (isCounterOrTimer(area)) {
+    const step = maxData - (maxData % 2);
+    const transportSize = area === S7Area.C ? TransportSize.COUNTER : TransportSize.TIMER;
+    for (let o = 0; o < data.length; o += step) {
+      const part = data.subarray(o, o + step);
+      items.push({ area, dbNumber: 0, transportSize, count: part.length / 2, address: tag.byteOffset + o / 2, dataTransportSize: DataTransportSize.OCTET_STRING, data: part });
+    }
+    return items;
+  }
+  for (let o = 0; o < data.length; o += maxData) {
+    const part = data.subarray(o, o + maxData);
+    items.push({
+      area,
+      dbNumber: tag.dbNumber,
+      transportSize: TransportSize.BYTE,
+      count: part.length,
+      address: (tag.byteOffset + start + o) * 8,
+      dataTransportSize: DataTransportSize.BYTE,
+      data: part,
+    });
+  }
+  return items;
 }

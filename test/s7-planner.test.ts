@@ -1,0 +1,303 @@
+import { expect } from 'chai';
+import fc from 'fast-check';
+import { parseAddress } from '../lib/address';
+import { S7Area, TransportSize, DataTransportSize } from '../lib/s7/constants';
+import {
+  lowerBoundPdus,
+  maxReadItemData,
+  maxReadItems,
+  maxWriteItemData,
+  planRead,
+  planWrite,
+  ReadPlanCache,
+  tagData,
+  type ReadPlan,
+} from '../lib/s7/planner';
+import type { Tag } from '../lib/types';
+
+const tags = (addresses: string[]) => addresses.map(parseAddress);
+
+/** Checks both PDU limits of every read PDU, recomputing the sizes from the items. */
+function checkReadLimits(plan: ReadPlan, pduSize: number, maxItems = 255): void {
+  for (const pdu of plan.pdus) {
+    expect(pdu.items.length).to.be.within(1, maxItems);
+    const request = 12 + 12 * pdu.items.length;
+    let response = 14;
+    pdu.items.forEach((it, i) => (response += 4 + it.length + (it.length % 2 === 1 && i < pdu.items.length - 1 ? 1 : 0)));
+    expect(request, 'request size').to.be.at.most(pduSize);
+    expect(response, 'response size').to.be.at.most(pduSize);
+    expect(pdu.requestSize).to.equal(request);
+    expect(pdu.responseSize).to.equal(response);
+  }
+}
+
+/** Memory per area/DB filled with a pattern; answers items like a PLC would. */
+function answer(plan: ReadPlan): Buffer[][] {
+  return plan.pdus.map((pdu) =>
+    pdu.items.map((it) => {
+      const start = it.area === S7Area.C || it.area === S7Area.T ? it.address * 2 : it.address / 8;
+      return patternBytes(it.area, it.dbNumber, start, it.length);
+    }),
+  );
+}
+
+function patternBytes(area: number, db: number, start: number, length: number): Buffer {
+  const b = Buffer.alloc(length);
+  for (let i = 0; i < length; i++) b[i] = (area * 31 + db * 7 + (start + i) * 13 + ((start + i) >> 8)) & 0xff;
+  return b;
+}
+
+function expectedBytes(tag: Tag): Buffer {
+  const area = { I: 0x81, Q: 0x82, M: 0x83, DB: 0x84, PE: 0x80, PA: 0x80, C: 0x1c, T: 0x1d }[tag.area];
+  const ct = tag.area === 'C' || tag.area === 'T';
+  return patternBytes(area, tag.dbNumber, ct ? tag.byteOffset * 2 : tag.byteOffset, ct ? tag.count * 2 : tag.byteLength);
+}
+
+function checkCoverage(list: readonly Tag[], plan: ReadPlan): void {
+  const data = answer(plan);
+  list.forEach((tag, i) => {
+    const slices = plan.slices[i]!;
+    expect(slices.length, `${tag.address} slices`).to.be.greaterThan(0);
+    // The pieces tile the tag's bytes exactly once, in order.
+    let at = 0;
+    for (const s of slices) {
+      expect(s.at).to.equal(at);
+      expect(s.offset + s.length).to.be.at.most(plan.pdus[s.pdu]!.items[s.item]!.length);
+      at += s.length;
+    }
+    expect(at).to.equal(plan.tagLengths[i]);
+    const { data: buf, offset } = tagData(plan, i, data);
+    expect(buf.subarray(offset, offset + at).equals(expectedBytes(tag)), `${tag.address} bytes`).to.equal(true);
+  });
+}
+
+const addressArb = fc.oneof(
+  fc.tuple(fc.integer({ min: 1, max: 3 }), fc.integer({ min: 0, max: 3000 }), fc.constantFrom('INT', 'REAL', 'B', 'LREAL', 'DINT')).map(([db, off, t]) => `DB${db},${t}${off}`),
+  fc.tuple(fc.integer({ min: 1, max: 3 }), fc.integer({ min: 0, max: 3000 }), fc.integer({ min: 0, max: 7 })).map(([db, off, bit]) => `DB${db},X${off}.${bit}`),
+  fc.tuple(fc.integer({ min: 1, max: 2 }), fc.integer({ min: 0, max: 3000 }), fc.constantFrom(1, 20, 40, 200, 254)).map(([db, off, n]) => `DB${db},S${off}.${n}`),
+  fc.tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: 1, max: 300 })).map(([off, n]) => `DB4,BYTE${off}.${n}`),
+  fc.integer({ min: 0, max: 200 }).map((n) => `MW${n}`),
+  fc.integer({ min: 0, max: 60 }).map((n) => `I${n}.${n % 8}`),
+  fc.integer({ min: 0, max: 100 }).map((n) => `C${n}`),
+  fc.tuple(fc.integer({ min: 0, max: 100 }), fc.integer({ min: 2, max: 150 })).map(([n, k]) => `T${n}:TIMER[${k}]`),
+);
+
+describe('S7 planner: reads', () => {
+  it('merges neighbours into one item and keeps distant tags apart', () => {
+    const plan = planRead(tags(['DB1,INT0', 'DB1,INT2', 'DB1,REAL10', 'DB1,INT200', 'M0.1', 'M0.2']), 240);
+    expect(plan.pdus).to.have.length(1);
+    const items = plan.pdus[0]!.items.map((it) => [it.area, it.address, it.length]);
+    expect(items).to.have.deep.members([
+      [0x83, 0, 1],
+      [0x84, 0, 14],
+      [0x84, 200 * 8, 2],
+    ]);
+    // DB1,REAL10 lies 10 bytes into the merged DB1 item.
+    const s = plan.slices[2]!;
+    expect(s).to.have.length(1);
+    expect(plan.pdus[0]!.items[s[0]!.item]!.address).to.equal(0);
+    expect(s[0]!.offset).to.equal(10);
+  });
+
+  it('read items are shaped for the codec: BYTE transport, bit address, count in bytes', () => {
+    const plan = planRead(tags(['DB200,B2']), 240);
+    expect(plan.pdus[0]!.items[0]).to.deep.equal({ area: 0x84, dbNumber: 200, transportSize: TransportSize.BYTE, count: 1, address: 16, length: 1 });
+  });
+
+  it('counters and timers are read as COUNTER/TIMER items addressed by number, 2 bytes each', () => {
+    const plan = planRead(tags(['C5', 'C6', 'T3']), 240);
+    const items = plan.pdus.flatMap((p) => p.items);
+    expect(items).to.have.deep.members([
+      { area: S7Area.C, dbNumber: 0, transportSize: TransportSize.COUNTER, count: 2, address: 5, length: 4 },
+      { area: S7Area.T, dbNumber: 0, transportSize: TransportSize.TIMER, count: 1, address: 3, length: 2 },
+    ]);
+    checkCoverage(tags(['C5', 'C6', 'T3']), plan);
+  });
+
+  it('splits STRING[254] (256 bytes) at PDU 240 into chunks of at most 222 bytes in 2 PDUs and reassembles it', () => {
+    const list = tags(['DB1,S0.254']);
+    const plan = planRead(list, 240);
+    expect(plan.pdus).to.have.length(2);
+    const lengths = plan.pdus.flatMap((p) => p.items.map((i) => i.length));
+    expect(lengths.reduce((a, b) => a + b)).to.equal(256);
+    expect(Math.max(...lengths)).to.equal(maxReadItemData(240));
+    expect(plan.slices[0]).to.have.length(2);
+    checkCoverage(list, plan);
+  });
+
+  it('never cuts a value that fits one item: neighbours go whole into the next PDU', () => {
+    // 12 REAL[5] of 20 bytes back to back: 240 bytes, more than one PDU's 222.
+    const list = Array.from({ length: 12 }, (_, i) => parseAddress(`DB1,REAL${i * 20}.5`));
+    const plan = planRead(list, 240);
+    expect(plan.pdus).to.have.length(2);
+    plan.slices.forEach((s) => expect(s).to.have.length(1));
+    checkCoverage(list, plan);
+  });
+
+  it('merge: false reads every tag as its own item', () => {
+    const plan = planRead(tags(['DB1,INT0', 'DB1,INT2', 'DB1,INT4']), 240, { merge: false });
+    expect(plan.pdus.flatMap((p) => p.items)).to.have.length(3);
+  });
+
+  it('respects the item limit of the request: 12 + 12·items ≤ PDU (19 at 240), or a smaller maxItems', () => {
+    const list = Array.from({ length: 40 }, (_, i) => parseAddress(`DB${i + 1},INT0`));
+    expect(maxReadItems(240)).to.equal(19);
+    const plan = planRead(list, 240);
+    expect(plan.pdus.map((p) => p.items.length)).to.deep.equal([19, 19, 2]);
+    const capped = planRead(list, 960, { maxItems: 20 });
+    expect(capped.pdus.map((p) => p.items.length)).to.deep.equal([20, 20]);
+    checkReadLimits(capped, 960, 20);
+  });
+
+  it('bridges larger gaps once a PDU runs out of items before bytes', () => {
+    // 40 INTs 20 bytes apart in one DB: 40 items would need 3 PDUs; bridged they fit 226 bytes × 4.
+    const list = Array.from({ length: 40 }, (_, i) => parseAddress(`DB1,INT${i * 20}`));
+    const plan = planRead(list, 240);
+    expect(plan.pdus.length).to.equal(lowerBoundPdus(list, 240));
+    checkReadLimits(plan, 240);
+    checkCoverage(list, plan);
+  });
+
+  it('property: every plan respects both limits, covers each tag exactly once, reassembles its bytes, and needs no fewer PDUs than the lower bound', () => {
+    fc.assert(
+      fc.property(fc.array(addressArb, { minLength: 1, maxLength: 150 }), fc.constantFrom(240, 480, 960), fc.boolean(), (addresses, pdu, merge) => {
+        const list = addresses.map(parseAddress);
+        const plan = planRead(list, pdu, { merge });
+        checkReadLimits(plan, pdu);
+        checkCoverage(list, plan);
+        expect(plan.pdus.length).to.be.at.least(lowerBoundPdus(list, pdu));
+      }),
+      { numRuns: 300 },
+    );
+  });
+
+  it('reaches the lower bound on contiguous and evenly scattered tables', () => {
+    const contiguous = Array.from({ length: 1000 }, (_, i) => parseAddress(`DB1,INT${i * 2}`));
+    const kinds = ['INT', 'REAL', 'X', 'S'];
+    let offset = 0;
+    const scattered = Array.from({ length: 1000 }, (_, i) => {
+      const kind = kinds[i % 4]!;
+      const tag = kind === 'X' ? parseAddress(`DB1,X${offset}.${i % 8}`) : kind === 'S' ? parseAddress(`DB1,S${offset}.20`) : parseAddress(`DB1,${kind}${offset}`);
+      offset += tag.byteLength + (i % 3) * 2 + 2;
+      return tag;
+    });
+    for (const pdu of [240, 480, 960]) {
+      for (const list of [contiguous, scattered, scattered.slice(0, 100), scattered.slice(0, 10)]) {
+        const plan = planRead(list, pdu);
+        expect(plan.pdus.length, `${list.length} tags at PDU ${pdu}`).to.equal(lowerBoundPdus(list, pdu));
+      }
+    }
+  });
+});
+
+describe('S7 planner: lower bound', () => {
+  it('counts response bytes per PDU and items per request', () => {
+    expect(lowerBoundPdus([], 240)).to.equal(0);
+    // 1000 contiguous INTs: 2000 bytes need 10 items of ≤ 222 → 2040 bytes over 226 per PDU → 10.
+    expect(lowerBoundPdus(Array.from({ length: 1000 }, (_, i) => parseAddress(`DB1,INT${i * 2}`)), 240)).to.equal(10);
+    // 40 INTs in 40 DBs: 40 items, 19 per request → 3.
+    expect(lowerBoundPdus(Array.from({ length: 40 }, (_, i) => parseAddress(`DB${i + 1},INT0`)), 240)).to.equal(3);
+    // STRING[254]: 256 bytes need 2 items → 264 bytes > 226.
+    expect(lowerBoundPdus(tags(['DB1,S0.254']), 240)).to.equal(2);
+  });
+});
+
+describe('S7 planner: plan cache', () => {
+  it('reuses the plan for the same array or the same addresses, and plans anew otherwise', () => {
+    const cache = new ReadPlanCache(4);
+    const a = tags(['DB1,INT0', 'DB1,REAL4']);
+    const p1 = cache.get(a, 240);
+    expect(cache.get(a, 240)).to.equal(p1);
+    expect(cache.get(tags(['DB1,INT0', 'DB1,REAL4']), 240)).to.equal(p1);
+    expect(cache.get(a, 480)).to.not.equal(p1);
+    expect(cache.get(tags(['DB1,INT0', 'DB1,REAL8']), 240)).to.not.equal(p1);
+    expect(cache.hits).to.equal(2);
+    expect(cache.misses).to.equal(3);
+  });
+
+  it('stays bounded', () => {
+    const cache = new ReadPlanCache(3);
+    for (let i = 0; i < 10; i++) cache.get(tags([`DB1,INT${i * 2}`]), 240);
+    const first = tags(['DB1,INT0']);
+    cache.get(first, 240);
+    expect(cache.misses).to.equal(11);
+  });
+});
+
+describe('S7 planner: writes', () => {
+  it('writes each bit as its own BIT item, never a byte', () => {
+    const plan = planWrite([{ tag: parseAddress('DB1,X12.2'), value: true }, { tag: parseAddress('DB1.DBX0.6:BOOL[3]'), value: [true, false, true] }], 240);
+    const items = plan.pdus.flatMap((p) => p.items);
+    expect(items).to.have.length(4);
+    for (const it of items) {
+      expect(it.transportSize).to.equal(TransportSize.BIT);
+      expect(it.dataTransportSize).to.equal(DataTransportSize.BIT);
+      expect(it.count).to.equal(1);
+      expect(it.data.length).to.equal(1);
+    }
+    expect(items.map((i) => [i.address, i.data[0]])).to.have.deep.members([
+      [12 * 8 + 2, 1],
+      [6, 1],
+      [7, 0],
+      [8, 1],
+    ]);
+  });
+
+  it('writes a STRING from its length byte on, keeping the max-length byte', () => {
+    const plan = planWrite([{ tag: parseAddress('DB1,S10.20'), value: 'abc' }], 240);
+    const [item] = plan.pdus[0]!.items;
+    expect(item!.address).to.equal(11 * 8);
+    expect(item!.data.toString('hex')).to.equal('03616263');
+  });
+
+  it('reports a value that does not fit as that tag\'s error and sends the others', () => {
+    const plan = planWrite([{ tag: parseAddress('DB1,INT0'), value: 70000 }, { tag: parseAddress('DB1,INT2'), value: 5 }], 240);
+    expect(plan.errors[0]?.code).to.equal('INVALID_VALUE');
+    expect(plan.errors[0]?.message).to.contain('DB1,INT0');
+    expect(plan.errors[1]).to.equal(undefined);
+    expect(plan.pdus.flatMap((p) => p.tags)).to.deep.equal([1]);
+  });
+
+  it('splits a write larger than one PDU into chunks that rebuild the data', () => {
+    const value = Array.from({ length: 300 }, (_, i) => i & 0xff);
+    const plan = planWrite([{ tag: parseAddress('DB1,BYTE100.300'), value }], 240);
+    const items = plan.pdus.flatMap((p) => p.items);
+    expect(items.length).to.equal(Math.ceil(300 / maxWriteItemData(240)));
+    const rebuilt = Buffer.alloc(300);
+    for (const it of items) it.data.copy(rebuilt, it.address / 8 - 100);
+    expect([...rebuilt]).to.deep.equal(value);
+  });
+
+  it('property: write PDUs respect 12 + 12·items + Σ(4 + data + fill) ≤ PDU and 14 + items ≤ PDU', () => {
+    const writeArb = fc.array(
+      fc.oneof(
+        fc.tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: -32768, max: 32767 })).map(([o, v]) => ({ a: `DB1,INT${o}`, v: v as unknown })),
+        fc.tuple(fc.integer({ min: 0, max: 500 }), fc.boolean()).map(([o, v]) => ({ a: `DB1,X${o}.3`, v: v as unknown })),
+        fc.tuple(fc.integer({ min: 0, max: 500 }), fc.string({ maxLength: 254 })).map(([o, v]) => ({ a: `DB2,S${o}.254`, v: v.replace(/[^\x20-\x7e]/g, 'x') as unknown })),
+        fc.tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: 1, max: 600 })).map(([o, n]) => ({ a: `DB3,BYTE${o}.${n}`, v: new Array(n).fill(7) as unknown })),
+      ),
+      { minLength: 1, maxLength: 80 },
+    );
+    fc.assert(
+      fc.property(writeArb, fc.constantFrom(240, 480, 960), (writes, pdu) => {
+        const plan = planWrite(writes.map((w) => ({ tag: parseAddress(w.a), value: w.v })), pdu);
+        expect(plan.errors.every((e) => e === undefined)).to.equal(true);
+        const perTag = new Map<number, number>();
+        for (const p of plan.pdus) {
+          let request = 12;
+          p.items.forEach((it, i) => (request += 12 + 4 + it.data.length + (it.data.length % 2 === 1 && i < p.items.length - 1 ? 1 : 0)));
+          expect(request).to.be.at.most(pdu);
+          expect(14 + p.items.length).to.be.at.most(pdu);
+          expect(p.requestSize).to.equal(request);
+          p.items.forEach((it, i) => perTag.set(p.tags[i]!, (perTag.get(p.tags[i]!) ?? 0) + (it.dataTransportSize === DataTransportSize.BIT ? 1 : it.data.length)));
+        }
+        writes.forEach((w, i) => {
+          const tag = parseAddress(w.a);
+          const expected = tag.type === 'BOOL' ? 1 : tag.type === 'STRING' ? 1 + (w.v as string).length : tag.byteLength;
+          expect(perTag.get(i)).to.equal(expected);
+        });
+      }),
+      { numRuns: 200 },
+    );
+  });
+});
