@@ -266,6 +266,80 @@ function pack(atoms: readonly Atom[], pduSize: number, maxItems: number, gapThre
   }
 }
 
+/**
+ * Items for atoms i..j laid out in one PDU: a new item per area, and at the
+ * largest gaps while items remain (a gap over 4 bytes costs more than an item
+ * header); the other gaps are bridged. undefined when it does not fit.
+ */
+function layout(atoms: readonly Atom[], i: number, j: number, maxItems: number, pduSize: number): { items: DraftItem[]; itemOf: number[]; response: number } | undefined {
+  let forced = 1;
+  const gaps: { k: number; gap: number }[] = [];
+  for (let k = i + 1; k <= j; k++) {
+    if (atoms[k]!.group !== atoms[k - 1]!.group) forced++;
+    else if (atoms[k]!.start - atoms[k - 1]!.end > DATA_HEADER) gaps.push({ k, gap: atoms[k]!.start - atoms[k - 1]!.end });
+  }
+  if (forced > maxItems) return undefined;
+  gaps.sort((a, b) => b.gap - a.gap);
+  const split = new Set<number>();
+  for (let g = 0; g < gaps.length && g < maxItems - forced; g++) split.add(gaps[g]!.k);
+  const items: DraftItem[] = [];
+  const itemOf: number[] = [];
+  let response = RESPONSE_BASE;
+  for (let k = i; k <= j; k++) {
+    const a = atoms[k]!;
+    const last = items[items.length - 1];
+    if (!last || last.group !== a.group || split.has(k) || a.start < last.end) {
+      response += (last && (last.end - last.start) % 2 === 1 ? 1 : 0) + DATA_HEADER + (a.end - a.start);
+      items.push({ group: a.group, area: a.area, dbNumber: a.dbNumber, unit: a.unit, start: a.start, end: a.end });
+    } else {
+      response += a.end - last.end;
+      last.end = a.end;
+    }
+    itemOf.push(items.length - 1);
+    if (response > pduSize || items.length > maxItems) return undefined;
+  }
+  return { items, itemOf, response };
+}
+
+/** Contiguous runs of atoms in address order, each as long as one PDU holds (optimal among such plans). */
+function packSegments(atoms: readonly Atom[], pduSize: number, maxItems: number): Draft {
+  const maxItem = maxReadItemData(pduSize);
+  const bins: Bin[] = [];
+  const placements: Draft['placements'] = [];
+  let i = 0;
+  while (i < atoms.length) {
+    const atom = atoms[i]!;
+    if (atom.end - atom.start > maxItem) {
+      const even = (n: number) => n - (n % atom.unit);
+      const pieces: { bin: Bin; item: DraftItem }[] = [];
+      for (let at = atom.start; at < atom.end; ) {
+        const length = Math.min(even(maxItem), atom.end - at);
+        const item: DraftItem = { group: atom.group, area: atom.area, dbNumber: atom.dbNumber, unit: atom.unit, start: at, end: at + length };
+        const bin: Bin = { items: [item], response: RESPONSE_BASE + DATA_HEADER + length };
+        bins.push(bin);
+        pieces.push({ bin, item });
+        at += length;
+      }
+      placements.push(pieces);
+      i++;
+      continue;
+    }
+    let best = layout(atoms, i, i, maxItems, pduSize)!;
+    let j = i;
+    while (j + 1 < atoms.length && atoms[j + 1]!.end - atoms[j + 1]!.start <= maxItem) {
+      const next = layout(atoms, i, j + 1, maxItems, pduSize);
+      if (!next) break;
+      best = next;
+      j++;
+    }
+    const bin: Bin = { items: best.items, response: best.response };
+    bins.push(bin);
+    for (let k = i; k <= j; k++) placements.push([{ bin, item: best.items[best.itemOf[k - i]!]! }]);
+    i = j + 1;
+  }
+  return { bins, placements };
+}
+
 function wireBytes(draft: Draft): number {
   let n = 0;
   for (const b of draft.bins) n += REQUEST_BASE + REQUEST_ITEM * b.items.length + b.response;
@@ -280,8 +354,10 @@ export function planRead(tags: readonly Tag[], pduSize: number, options: PlanOpt
   const atoms = atomsOf(spansOf(tags), merge);
   let best: Draft | undefined;
   let bestBytes = Infinity;
-  for (const gap of merge ? GAP_THRESHOLDS : [-1]) {
-    const draft = pack(atoms, pduSize, maxItems, gap, merge);
+  const drafts = (merge ? GAP_THRESHOLDS : [-1]).map((gap) => () => pack(atoms, pduSize, maxItems, gap, merge));
+  if (merge) drafts.push(() => packSegments(atoms, pduSize, maxItems));
+  for (const make of drafts) {
+    const draft = make();
     const bytes = wireBytes(draft);
     if (!best || draft.bins.length < best.bins.length || (draft.bins.length === best.bins.length && bytes < bestBytes)) {
       best = draft;
