@@ -21,10 +21,10 @@ interface Location {
 interface Syntax {
   /** How an address of this family starts. */
   family: RegExp;
-  /** Anchored at the start only: a shorter match means trailing garbage. */
-  pattern: RegExp;
+  /** Anchored at the start only: a shorter match means trailing garbage. None: the family is only recognised to give a hint. */
+  pattern?: RegExp;
   expected: (body: string) => string;
-  build: (address: string, m: RegExpExecArray, override: TypeSpec | undefined) => Tag;
+  build?: (address: string, m: RegExpExecArray, override: TypeSpec | undefined) => Tag;
 }
 
 /** Area mnemonics, English and German (E = I, A = Q, PE = PI, PA = PQ). */
@@ -60,12 +60,9 @@ const SYNTAXES: readonly Syntax[] = [
     },
   },
   {
+    // Any other DB…: only a hint.
     family: /^DB/i,
-    pattern: /(?!)/,
     expected: () => 'expected DB<n>.DBW<byte> (IEC) or DB<n>,<TYPE><byte> (nodes7), e.g. DB1.DBW2 or DB1,INT2',
-    build: (address) => {
-      throw new AddressError(address, 'not an S7 address');
-    },
   },
   {
     // S7-200 V memory = DB1: VB10  VW10  VD10  V10.1  VX10.1
@@ -119,8 +116,8 @@ export function parseAddress(address: string): Tag {
   const override = colon < 0 ? undefined : parseTypeSpec(text.slice(colon + 1), address);
   for (const syntax of SYNTAXES) {
     if (!syntax.family.test(body)) continue;
-    const m = syntax.pattern.exec(body);
-    if (!m) throw new AddressError(address, syntax.expected(body));
+    const m = syntax.pattern?.exec(body);
+    if (!m || !syntax.build) throw new AddressError(address, syntax.expected(body));
     if (m[0].length < body.length) throw new AddressError(address, `unexpected "${body.slice(m[0].length)}" after "${m[0]}"`);
     return syntax.build(address, m, override);
   }
