@@ -107,7 +107,7 @@ export function parseAddress(address: string): Tag {
   const text = address.trim();
   if (text === '') throw new AddressError(address, 'empty address');
   if (text.length > MAX_ADDRESS_LENGTH) throw new AddressError(`${text.slice(0, 40)}…`, `longer than ${MAX_ADDRESS_LENGTH} characters`);
-  // Only ASCII: toUpperCase() would turn 'ı' into 'I' and 'ſ' into 'S'.
+  // Printable ASCII only: a lookalike ('ı', 'ſ', a fullwidth digit) is named rather than half-matched.
   const odd = /[^\x20-\x7e]/.exec(text);
   if (odd) throw new AddressError(address, `unexpected character ${JSON.stringify(odd[0])}`);
 
