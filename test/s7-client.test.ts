@@ -1,12 +1,11 @@
 import { expect } from 'chai';
-import fc from 'fast-check';
 import * as net from 'node:net';
 import { parseAddress } from '../lib/address';
 import { PlcError, TagErrors } from '../lib/errors';
-import { S7Client } from '../lib/s7/client';
-import { lowerBoundPdus, maxReadItemData, planRead, planWrite } from '../lib/s7/planner';
+import { S7Client, localTsapFor } from '../lib/s7/client';
+import { encodeConnectionConfirm, encodeDisconnectRequest, encodeReadResponse, encodeSetupAck } from '../lib/s7/codec';
+import { lowerBoundPdus } from '../lib/s7/planner';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
-import type { Tag } from '../lib/types';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { activeHandles, settle, until, waitFor } from './support/wait';
 
@@ -15,84 +14,6 @@ function endpoint(port: number, query = ''): S7Endpoint {
 }
 
 const FAST = { backoff: { initialDelay: 20, maxDelay: 100, factor: 2, jitter: 0 } };
-
-describe('S7 planner', () => {
-  const tags = (addresses: string[]) => addresses.map(parseAddress);
-
-  it('merges neighbours into one item and keeps distant tags apart', () => {
-    const plan = planRead(tags(['DB1,INT0', 'DB1,INT2', 'DB1,REAL10', 'DB1,INT200', 'M0.1', 'M0.2']), 240);
-    expect(plan.ranges.map((r) => [r.area, r.start, r.length])).to.deep.equal([
-      [0x83, 0, 1],
-      [0x84, 0, 14],
-      [0x84, 200, 2],
-    ]);
-    expect(plan.pdus).to.have.length(1);
-  });
-
-  it('splits STRING[254] at PDU 240 into chunks of at most 222 bytes', () => {
-    const plan = planRead(tags(['DB1,S0.254']), 240);
-    const lengths = plan.pdus.flat().map((c) => c.length);
-    expect(lengths.reduce((a, b) => a + b)).to.equal(256);
-    expect(Math.max(...lengths)).to.be.at.most(maxReadItemData(240));
-    expect(plan.pdus.length).to.equal(2);
-  });
-
-  it('property: every read plan respects both PDU limits and covers each tag exactly once', () => {
-    const tagArb = fc.array(
-      fc.tuple(fc.integer({ min: 1, max: 3 }), fc.integer({ min: 0, max: 2000 }), fc.constantFrom('INT', 'REAL', 'X0', 'S0.40', 'B', 'LREAL', 'S0.254')),
-      { minLength: 1, maxLength: 120 },
-    );
-    fc.assert(
-      fc.property(tagArb, fc.constantFrom(240, 480, 960), (specs, pdu) => {
-        const list: Tag[] = specs.map(([db, off, t]) =>
-          t === 'X0' ? parseAddress(`DB${db},X${off}.3`) : t.startsWith('S') ? parseAddress(`DB${db},S${off}.${t.split('.')[1]}`) : parseAddress(`DB${db},${t}${off}`),
-        );
-        const plan = planRead(list, pdu);
-        for (const chunks of plan.pdus) {
-          expect(12 + 12 * chunks.length).to.be.at.most(pdu);
-          let response = 14;
-          chunks.forEach((c, i) => (response += 4 + c.length + (c.length % 2 && i < chunks.length - 1 ? 1 : 0)));
-          expect(response).to.be.at.most(pdu);
-        }
-        const covered = new Map<number, number>();
-        plan.ranges.forEach((r) => r.tags.forEach((i) => covered.set(i, (covered.get(i) ?? 0) + 1)));
-        expect(covered.size).to.equal(list.length);
-        plan.ranges.forEach((r, ri) => {
-          const bytes = plan.pdus.flat().filter((c) => c.range === ri).reduce((n, c) => n + c.length, 0);
-          expect(bytes).to.equal(r.length);
-          for (const i of r.tags) {
-            const t = list[i]!;
-            expect(t.byteOffset).to.be.at.least(r.start);
-            expect(t.byteOffset + t.byteLength).to.be.at.most(r.start + r.length);
-          }
-        });
-        expect(plan.pdus.length).to.be.at.least(lowerBoundPdus(list, pdu));
-      }),
-      { numRuns: 300 },
-    );
-  });
-
-  it('write plans respect the request limit and send bits as single BIT items', () => {
-    const plan = planWrite(
-      [
-        { tag: parseAddress('DB1.DBX0.6:BOOL[3]'), value: [true, false, true] },
-        { tag: parseAddress('DB1,S10.254'), value: 'x'.repeat(254) },
-      ],
-      240,
-    );
-    const items = plan.pdus.flat();
-    expect(items.filter((c) => c.tag === 0).map((c) => c.item.address)).to.deep.equal([6, 7, 8]);
-    for (const chunks of plan.pdus) {
-      let request = 12;
-      chunks.forEach((c, i) => (request += 16 + c.item.data.length + (c.item.data.length % 2 && i < chunks.length - 1 ? 1 : 0)));
-      expect(request).to.be.at.most(240);
-    }
-    // STRING write skips the max-length byte: starts at byte 11.
-    const str = items.filter((c) => c.tag === 1).sort((a, b) => a.item.address - b.item.address);
-    expect(str[0]!.item.address).to.equal(11 * 8);
-    expect(str.reduce((n, c) => n + c.item.data.length, 0)).to.equal(255);
-  });
-});
 
 describe('S7 client against the S7 simulator', function () {
   this.timeout(10000);
@@ -113,11 +34,29 @@ describe('S7 client against the S7 simulator', function () {
     await server.close();
   });
 
-  it('uses what the PLC negotiated, not what it asked for', async () => {
+  it('uses what the PLC negotiated (S7-1200: PDU 240, AmQ 3), not what it asked for', async () => {
+    expect(client.pduSize).to.equal(0);
     await client.connect();
     expect(client.pduSize).to.equal(240);
     expect(client.maxJobs).to.equal(3);
     expect(server.connectionCount).to.equal(1);
+  });
+
+  it('an S7-1500 negotiates PDU 960 and AmQ 8', async () => {
+    const big = new S7Server({ port: 0, profile: 's7-1500' });
+    await big.listen();
+    const c = new S7Client(endpoint(big.port, '&pdu=960'));
+    try {
+      await c.connect();
+      expect([c.pduSize, c.maxJobs]).to.deep.equal([960, 8]);
+    } finally {
+      await c.close();
+      await big.close();
+    }
+  });
+
+  it('local TSAP follows the connection type (PG 0x0100, OP 0x0200, basic 0x0300)', () => {
+    expect([localTsapFor('pg'), localTsapFor('op'), localTsapFor('basic')]).to.deep.equal([0x0100, 0x0200, 0x0300]);
   });
 
   it('reads and writes every data type, keyed as given', async () => {
@@ -151,10 +90,12 @@ describe('S7 client against the S7 simulator', function () {
       'DB1.DBB114:DTL': new Date('2025-12-31T23:59:59.999Z'),
       'DB1.DBW126:INT[3]': [1, -2, 3],
       'DB1.DBX132.6:BOOL[4]': [true, false, true, true],
+      'DB1,REAL140.3': [0.5, -2, 1e10],
+      'DB1.DBB160:CHAR[4]': ['a', 'b', 'c', 'd'],
       C5: 42,
       T3: 5000,
       MW10: 321,
-      'QB2': 7,
+      QB2: 7,
     };
     server.memory.area('DB', 1)![62] = 10; // the PLC's declared STRING[10]
     server.memory.area('DB', 1)!.writeUInt16BE(4, 74);
@@ -162,27 +103,72 @@ describe('S7 client against the S7 simulator', function () {
     const back = await client.read(Object.keys(values));
     expect(back).to.deep.equal(values);
     expect(Object.keys(back)).to.deep.equal(Object.keys(values));
+    expect(client.stats.requests).to.equal(2);
+    expect(client.stats.pdusSent).to.equal(requests.length);
+    expect(client.stats.bytesSent).to.equal(requests.reduce((n, r) => n + r.bytes, 0));
+    expect(client.stats.bytesReceived).to.be.greaterThan(0);
   });
 
-  it('one bad tag fails alone: missing DB and address out of range name the tag and the return code', async () => {
+  it('writing a STRING keeps the PLC\'s max-length byte; a too-long value is refused before anything is sent', async () => {
+    await client.connect();
+    const db = server.memory.area('DB', 1)!;
+    db[200] = 5;
+    await client.write({ 'DB1,S200.5': 'abc' });
+    expect(db.subarray(200, 205).toString('hex')).to.equal('0503616263');
+    const sent = requests.length;
+    const r = await client.writeDetailed({ 'DB1,S200.5': 'toolong' });
+    expect(r['DB1,S200.5']!.ok).to.equal(false);
+    expect((r['DB1,S200.5'] as { error: PlcError }).error.code).to.equal('INVALID_VALUE');
+    expect(requests.length).to.equal(sent);
+  });
+
+  it('writes bits one by one: neighbouring bits are never clobbered', async () => {
+    await client.connect();
+    const db = server.memory.area('DB', 1)!;
+    db[300] = 0b1010_1010;
+    db[301] = 0b0000_1111;
+    await client.write({ 'DB1,X300.0': true, 'DB1,X300.7': false, 'DB1.DBX301.3:BOOL[2]': [false, true] });
+    expect(db[300]).to.equal(0b0010_1011);
+    expect(db[301]).to.equal(0b0001_0111);
+    expect(await client.read(['DB1,X300.0', 'DB1,X300.1', 'DB1.DBX301.3:BOOL[2]'])).to.deep.equal({
+      'DB1,X300.0': true,
+      'DB1,X300.1': true,
+      'DB1.DBX301.3:BOOL[2]': [false, true],
+    });
+  });
+
+  it('one bad tag fails alone: missing DB and address out of range name the tag, its address and the return code in words', async () => {
     await client.connect();
     server.memory.area('DB', 1)!.writeInt16BE(77, 1020);
-    const r = await client.readDetailed(['DB1.DBW1020:INT', 'DB1.DBW1022:INT[2]', 'DB999,INT0', 'M0.0']);
+    const r = await client.readDetailed(['DB1.DBW1020:INT', 'DB1,INT1022.2', 'DB999,INT0', 'M0.0']);
     expect(r['DB1.DBW1020:INT']).to.deep.equal({ ok: true, value: 77 });
     expect(r['M0.0']).to.deep.equal({ ok: true, value: false });
-    const range = r['DB1.DBW1022:INT[2]']!;
+    const range = r['DB1,INT1022.2']!;
     const missing = r['DB999,INT0']!;
     if (range.ok || missing.ok) throw new Error('expected failures');
     expect(range.error.code).to.equal('ADDRESS_OUT_OF_RANGE');
-    expect(range.error.message).to.match(/^DB1\.DBW1022:INT\[2\] \(DB1 byte 1022\): address out of range .*0x05/);
+    expect(range.error.tag).to.equal('DB1,INT1022.2');
+    expect(range.error.message).to.match(/^DB1,INT1022\.2 \(DB1\.DB[BW]1022:INT\[2\]\): .*0x05.*address out of range/);
     expect(missing.error.code).to.equal('OBJECT_DOES_NOT_EXIST');
     expect(missing.error.plcCode).to.equal(0x0a);
+    expect(missing.error.message).to.match(/^DB999,INT0 .*0x0A.*object does not exist/);
     const err = await client.read(['DB999,INT0', 'M0.0']).catch((e: unknown) => e);
     expect(err).to.be.instanceOf(TagErrors);
     expect((err as TagErrors).results['M0.0']).to.deep.equal({ ok: true, value: false });
   });
 
-  it('splits STRING[254] at PDU 240 into several jobs and reassembles it', async () => {
+  it('a DB the PLC reports missing fails only its tags, on writes too', async () => {
+    await client.connect();
+    server.faults.missingDb = 7;
+    const r = await client.writeDetailed({ 'DB7,INT0': 1, 'DB8,INT0': 2 });
+    expect(r['DB8,INT0']).to.deep.equal({ ok: true, value: undefined });
+    const bad = r['DB7,INT0']!;
+    if (bad.ok) throw new Error('expected failure');
+    expect(bad.error.code).to.equal('OBJECT_DOES_NOT_EXIST');
+    expect(bad.error.message).to.match(/^DB7,INT0 .*object does not exist/);
+  });
+
+  it('splits STRING[254] at PDU 240 into two jobs each way and reassembles it', async () => {
     await client.connect();
     const text = 'S7'.repeat(127);
     server.memory.area('DB', 2)![0] = 254;
@@ -192,33 +178,31 @@ describe('S7 client against the S7 simulator', function () {
     expect(requests.filter((r) => r.kind === 'read').length).to.equal(2);
   });
 
-  it('packs 100 scattered tags into the planned number of PDUs, equal to the lower bound', async () => {
+  it('reads 100 scattered tags in the lower-bound number of PDUs, and plans them once', async () => {
     await client.connect();
     const addresses = Array.from({ length: 100 }, (_, i) => `DB1,INT${i * 10}`);
     await client.read(addresses);
-    const bound = lowerBoundPdus(addresses.map(parseAddress), 240);
-    expect(requests.length).to.equal(bound);
+    expect(requests.length).to.equal(lowerBoundPdus(addresses.map(parseAddress), 240));
+    const plan = client.planFor(addresses);
+    expect(client.planFor([...addresses])).to.equal(plan);
+    await client.read(addresses);
+    expect(client.planFor(addresses)).to.equal(plan);
+    expect(requests.length).to.equal(2 * plan.pdus.length);
   });
 
-  it('keeps at most AmQ (3) jobs in flight, and the writes queued behind them all land', async () => {
-    server.faults.latencyMs = 30;
+  it('keeps at most AmQ (3) jobs at the PLC at once, and every queued write lands', async () => {
+    server.faults.latencyMs = 25;
     await client.connect();
-    let inFlight = 0;
+    let outstanding = 0;
     let most = 0;
-    server.on('request', () => {
-      inFlight++;
-      most = Math.max(most, inFlight);
-    });
-    const origWrite = server.memory.write.bind(server.memory);
-    server.memory.write = (...args: Parameters<typeof origWrite>) => {
-      inFlight--;
-      origWrite(...args);
-    };
-    const writes = Array.from({ length: 12 }, (_, i) => client.write({ [`DB3,INT${i * 2}`]: i + 1 }));
+    server.on('request', () => (most = Math.max(most, ++outstanding)));
+    server.memory.on('write', () => outstanding--);
+    server.memory.on('read', () => outstanding--);
+    const writes = Array.from({ length: 30 }, (_, i) => client.write({ [`DB3,INT${i * 2}`]: i + 1 }));
     await Promise.all(writes);
     expect(most).to.equal(3);
-    const back = await client.read(Array.from({ length: 12 }, (_, i) => `DB3,INT${i * 2}`));
-    expect(Object.values(back)).to.deep.equal(Array.from({ length: 12 }, (_, i) => i + 1));
+    const back = await client.read(Array.from({ length: 30 }, (_, i) => `DB3,INT${i * 2}`));
+    expect(Object.values(back)).to.deep.equal(Array.from({ length: 30 }, (_, i) => i + 1));
   });
 
   it('fails fast with NOT_CONNECTED while down, reconnects by itself and reads correct values after', async () => {
@@ -227,26 +211,24 @@ describe('S7 client against the S7 simulator', function () {
     const disconnected = waitFor(client, 'disconnected');
     server.dropConnections();
     await disconnected;
+    const started = Date.now();
     const err = await client.read(['DB1,INT0']).catch((e: PlcError) => e);
     expect((err as PlcError).code).to.equal('NOT_CONNECTED');
+    expect(Date.now() - started).to.be.below(50);
     await waitFor(client, 'connected', 3000);
     server.memory.area('DB', 1)!.writeInt16BE(12, 0);
     expect(await client.read(['DB1,INT0'])).to.deep.equal({ 'DB1,INT0': 12 });
   });
 
-  it('refuses the 9th connection on an S7-1200', async () => {
-    const clients = Array.from({ length: 8 }, () => new S7Client(endpoint(server.port)));
-    try {
-      await Promise.all(clients.map((c) => c.connect()));
-      expect(server.connectionCount).to.equal(8);
-      const ninth = new S7Client(endpoint(server.port));
-      const err = await ninth.connect().catch((e: PlcError) => e);
-      expect((err as PlcError).code).to.equal('CONNECT_FAILED');
-      expect((err as PlcError).message).to.match(/connection limit/);
-      await ninth.close();
-    } finally {
-      await Promise.all(clients.map((c) => c.close()));
-    }
+  it('a write in flight when the link drops is rejected, not lost', async () => {
+    server.faults.latencyMs = 200;
+    await client.connect();
+    const pending = client.writeDetailed({ 'DB1,INT0': 5 });
+    await until(() => requests.length === 1, 2000, 'the write reached the PLC');
+    server.dropConnections();
+    const r = (await pending)['DB1,INT0']!;
+    expect(r.ok).to.equal(false);
+    expect((r as { error: PlcError }).error.code).to.equal('CONNECTION_LOST');
   });
 
   it('refuses a wrong slot like a real CPU', async () => {
@@ -260,11 +242,21 @@ describe('S7 client against the S7 simulator', function () {
   it('turns PUT/GET access refused into ACCESS_DENIED with the words users search for', async () => {
     await client.connect();
     server.faults.accessDenied = true;
-    const r = await client.readDetailed(['DB1,INT0']);
-    const one = r['DB1,INT0']!;
-    if (one.ok) throw new Error('expected failure');
-    expect(one.error.code).to.equal('ACCESS_DENIED');
-    expect(one.error.message).to.include('PUT/GET access is not enabled on this S7-1200/1500');
+    const r = await client.readDetailed(['DB1,INT0', 'M0.0']);
+    for (const one of Object.values(r)) {
+      if (one.ok) throw new Error('expected failure');
+      expect(one.error.code).to.equal('ACCESS_DENIED');
+      expect(one.error.message).to.include('PUT/GET access is not enabled on this S7-1200/1500');
+    }
+  });
+
+  it('an aborted read rejects with ABORTED at once', async () => {
+    server.faults.latencyMs = 300;
+    await client.connect();
+    const ac = new AbortController();
+    const pending = client.read(['DB1,INT0'], { signal: ac.signal }).catch((e: PlcError) => e);
+    ac.abort();
+    expect(((await pending) as PlcError).code).to.equal('ABORTED');
   });
 
   it('close() resolves, fails pending requests with CLOSED, and leaves no handles', async () => {
@@ -273,6 +265,7 @@ describe('S7 client against the S7 simulator', function () {
     await client.connect();
     server.faults.silent = true;
     const pending = client.read(['DB1,INT0']).catch((e: PlcError) => e);
+    await until(() => requests.length === 1, 2000, 'the read reached the PLC');
     await client.close();
     expect(((await pending) as PlcError).code).to.equal('CLOSED');
     await until(() => server.connectionCount === 0, 2000, 'the simulator saw the close');
@@ -284,21 +277,36 @@ describe('S7 client against the S7 simulator', function () {
 describe('S7 client against hostile peers', function () {
   this.timeout(10000);
   const peers: net.Server[] = [];
-  afterEach(async () => {
-    await Promise.all(peers.splice(0).map((p) => new Promise((r) => p.close(r))));
+  const sockets = new Set<net.Socket>();
+  let uncaught: unknown[] = [];
+  const onUncaught = (e: unknown) => uncaught.push(e);
+
+  beforeEach(() => {
+    uncaught = [];
+    process.on('uncaughtException', onUncaught);
+    process.on('unhandledRejection', onUncaught);
   });
 
-  /** A peer that completes the handshake, then does `then` with each job. */
+  afterEach(async () => {
+    process.removeListener('uncaughtException', onUncaught);
+    process.removeListener('unhandledRejection', onUncaught);
+    for (const s of sockets) s.destroy();
+    sockets.clear();
+    await Promise.all(peers.splice(0).map((p) => new Promise((r) => p.close(r))));
+    expect(uncaught).to.deep.equal([]);
+  });
+
+  /** A peer that completes the handshake (PDU 240, AmQ 1), then does `then` with each job's bytes. */
   async function peer(then: (socket: net.Socket, job: Buffer) => void, handshake = true): Promise<number> {
-    const { encodeConnectionConfirm, encodeSetupAck } = await import('../lib/s7/codec');
     const server = net.createServer((socket) => {
+      sockets.add(socket);
       let stage = 0;
       socket.on('error', () => undefined);
       socket.on('data', (chunk) => {
         if (!handshake) return then(socket, chunk);
         if (stage === 0) {
           stage = 1;
-          socket.write(encodeConnectionConfirm({ sourceRef: 1, destinationRef: 1, callingTsap: 0x1000, calledTsap: 0x0301, tpduSize: 0x0a }));
+          socket.write(encodeConnectionConfirm({ sourceRef: 1, destinationRef: 1, callingTsap: 0x0100, calledTsap: 0x0301, tpduSize: 0x0a }));
         } else if (stage === 1) {
           stage = 2;
           socket.write(encodeSetupAck(chunk.readUInt16BE(11), { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 }));
@@ -310,12 +318,9 @@ describe('S7 client against hostile peers', function () {
     return (server.address() as net.AddressInfo).port;
   }
 
-  async function expectLinkError(answer: (socket: net.Socket, job: Buffer) => void, code: RegExp): Promise<PlcError> {
+  async function readError(answer: (socket: net.Socket, job: Buffer) => void, code: RegExp): Promise<{ err: PlcError; client: S7Client }> {
     const port = await peer(answer);
     const client = new S7Client(endpoint(port), FAST);
-    let uncaught: unknown;
-    const onUncaught = (e: unknown) => (uncaught = e);
-    process.on('uncaughtException', onUncaught);
     try {
       await client.connect();
       const started = Date.now();
@@ -323,44 +328,100 @@ describe('S7 client against hostile peers', function () {
       expect(err).to.be.instanceOf(PlcError);
       expect(err.code).to.match(code);
       expect(Date.now() - started).to.be.below(2500);
-      return err;
+      return { err, client };
     } finally {
-      process.removeListener('uncaughtException', onUncaught);
       await client.close();
-      expect(uncaught).to.equal(undefined);
     }
   }
 
-  it('a peer that stays silent: TIMEOUT within the configured timeout', async () => {
-    await expectLinkError(() => undefined, /^TIMEOUT$/);
+  it('a peer that accepts and says nothing: connect() rejects with TIMEOUT within the timeout, no handle left', async () => {
+    await settle();
+    const before = activeHandles();
+    const server = net.createServer((s) => {
+      sockets.add(s);
+      s.on('error', () => undefined);
+    });
+    peers.push(server);
+    await new Promise<void>((r) => server.listen(0, '127.0.0.1', r));
+    const client = new S7Client(parseUrl(`s7://127.0.0.1:${(server.address() as net.AddressInfo).port}?timeout=300`) as S7Endpoint);
+    const started = Date.now();
+    const err = (await client.connect().catch((e: unknown) => e)) as PlcError;
+    expect(err.code).to.equal('TIMEOUT');
+    expect(Date.now() - started).to.be.within(250, 1500);
+    await client.close();
+    for (const s of sockets) s.destroy();
+    server.close();
+    peers.splice(0);
+    await settle();
+    expect(activeHandles()).to.equal(before);
+  });
+
+  it('a peer that stops answering jobs: TIMEOUT, then the link is dropped and rebuilt', async () => {
+    const port = await peer(() => undefined);
+    const client = new S7Client(endpoint(port, '&timeout=300'), FAST);
+    try {
+      await client.connect();
+      const err = (await client.read(['DB1,INT0']).catch((e: unknown) => e)) as PlcError;
+      expect(err.code).to.equal('TIMEOUT');
+      await waitFor(client, 'connected', 3000);
+    } finally {
+      await client.close();
+    }
   });
 
   it('TPKT length 0: a connection error', async () => {
-    await expectLinkError((s) => s.write(Buffer.from('03000000', 'hex')), /PROTOCOL_ERROR|CONNECTION_LOST/);
+    await readError((s) => s.write(Buffer.from('03000000', 'hex')), /PROTOCOL_ERROR|CONNECTION_LOST/);
   });
 
   it('TPKT length 65535 with fewer bytes, then silence: TIMEOUT, no hang', async () => {
-    await expectLinkError((s) => s.write(Buffer.from('0300FFFF02F080', 'hex')), /^TIMEOUT$/);
+    await readError((s) => s.write(Buffer.from('0300FFFF02F080', 'hex')), /^TIMEOUT$/);
   });
 
   it('garbage after the handshake: a connection error', async () => {
-    await expectLinkError((s) => s.write(Buffer.from('deadbeefdeadbeef', 'hex')), /PROTOCOL_ERROR|CONNECTION_LOST/);
+    await readError((s) => s.write(Buffer.from('deadbeefdeadbeef', 'hex')), /PROTOCOL_ERROR|CONNECTION_LOST/);
+  });
+
+  it('a well-framed but malformed S7 answer: PROTOCOL_ERROR', async () => {
+    await readError((s) => s.write(Buffer.from('0300000b02f08032030000', 'hex')), /PROTOCOL_ERROR/);
+  });
+
+  it('a COTP disconnect after the handshake: CONNECTION_LOST', async () => {
+    await readError((s) => s.write(encodeDisconnectRequest(1, 1, 0x80)), /CONNECTION_LOST/);
   });
 
   it('reset in the middle of a response: CONNECTION_LOST', async () => {
-    await expectLinkError((s) => {
+    await readError((s) => {
       s.write(Buffer.from('0300001902F080320300', 'hex'));
       s.resetAndDestroy();
     }, /CONNECTION_LOST/);
   });
 
-  it('an answer with the wrong PDU reference is ignored; the request times out', async () => {
-    const { encodeReadResponse } = await import('../lib/s7/codec');
-    await expectLinkError((s, job) => s.write(encodeReadResponse(job.readUInt16BE(11) + 1, [{ returnCode: 0xff, transportSize: 4, data: Buffer.alloc(2) }])), /^TIMEOUT$/);
+  it('an answer with the wrong PDU reference is ignored (counted); the request times out', async () => {
+    const { client } = await readError(
+      (s, job) => s.write(encodeReadResponse(job.readUInt16BE(11) + 1, [{ returnCode: 0xff, transportSize: 4, data: Buffer.alloc(2) }])),
+      /^TIMEOUT$/,
+    );
+    expect(client.stats.ignoredReplies).to.equal(1);
+  });
+
+  it('a duplicated answer is ignored; the value and the link stay good', async () => {
+    const port = await peer((s, job) => {
+      const frame = encodeReadResponse(job.readUInt16BE(11), [{ returnCode: 0xff, transportSize: 4, data: Buffer.from('04D2', 'hex') }]);
+      s.write(Buffer.concat([frame, frame]));
+    });
+    const client = new S7Client(endpoint(port), FAST);
+    try {
+      await client.connect();
+      expect(await client.read(['DB1,INT0'])).to.deep.equal({ 'DB1,INT0': 1234 });
+      await until(() => client.stats.ignoredReplies === 1, 1000, 'the duplicate was seen');
+      expect(await client.read(['DB1,INT0'])).to.deep.equal({ 'DB1,INT0': 1234 });
+      expect(client.state).to.equal('connected');
+    } finally {
+      await client.close();
+    }
   });
 
   it('an answer dripped one byte at a time is read correctly', async () => {
-    const { encodeReadResponse } = await import('../lib/s7/codec');
     const port = await peer((s, job) => {
       const frame = encodeReadResponse(job.readUInt16BE(11), [{ returnCode: 0xff, transportSize: 4, data: Buffer.from('04D2', 'hex') }]);
       let i = 0;
@@ -394,12 +455,19 @@ describe('S7 client against hostile peers', function () {
   });
 
   it('COTP disconnect during the handshake: CONNECT_FAILED', async () => {
-    const { encodeDisconnectRequest } = await import('../lib/s7/codec');
     const port = await peer((s) => s.end(encodeDisconnectRequest(1, 1, 0x80)), false);
     const client = new S7Client(endpoint(port));
     const err = (await client.connect().catch((e: unknown) => e)) as PlcError;
     expect(err.code).to.equal('CONNECT_FAILED');
     await client.close();
-    await until(() => true);
+  });
+
+  it('garbage instead of a connection confirm: CONNECT_FAILED, no uncaught exception', async () => {
+    const port = await peer((s) => s.write(Buffer.from('0300000000', 'hex')), false);
+    const client = new S7Client(endpoint(port));
+    const err = (await client.connect().catch((e: unknown) => e)) as PlcError;
+    expect(err).to.be.instanceOf(PlcError);
+    expect(err.code).to.equal('CONNECT_FAILED');
+    await client.close();
   });
 });

@@ -203,6 +203,10 @@ describe('S7 planner: lower bound', () => {
     expect(lowerBoundPdus(Array.from({ length: 40 }, (_, i) => parseAddress(`DB${i + 1},INT0`)), 240)).to.equal(3);
     // STRING[254]: 256 bytes need 2 items → 264 bytes > 226.
     expect(lowerBoundPdus(tags(['DB1,S0.254']), 240)).to.equal(2);
+    // 100 INTs 10 bytes apart: 3 PDUs hold 57 items, so 43 gaps of 8 bytes are bridged: 200 + 344 + 228 > 3 × 226 → 4.
+    const spaced = Array.from({ length: 100 }, (_, i) => parseAddress(`DB1,INT${i * 10}`));
+    expect(lowerBoundPdus(spaced, 240)).to.equal(4);
+    expect(planRead(spaced, 240).pdus).to.have.length(4);
   });
 });
 

@@ -473,9 +473,49 @@ export function lowerBoundPdus(tags: readonly Tag[], pduSize: number, options: P
   }
   closeRun();
   closeGroup();
-  const byBytes = Math.ceil(bytes / (pduSize - RESPONSE_BASE));
-  const byItems = Math.ceil(items / maxReadItems(pduSize, options.maxItems));
-  return Math.max(byBytes, byItems);
+  const capacity = pduSize - RESPONSE_BASE;
+  const perPdu = maxReadItems(pduSize, options.maxItems);
+  let n = Math.max(Math.ceil(bytes / capacity), Math.ceil(items / perPdu));
+  // Both limits at once: n PDUs carry at most n·perPdu items, so at most that many gaps can be left out.
+  const least = bytesWithItems(spans);
+  while (least(n * perPdu) > n * capacity) n++;
+  return n;
+}
+
+/**
+ * The fewest response bytes (Σ 4 + len) any plan needs when it may use at
+ * most m items: one item per area at least, and each further item can leave
+ * out one gap; leaving out the largest gaps over 4 bytes saves the most.
+ */
+function bytesWithItems(spans: readonly Span[]): (m: number) => number {
+  let union = 0;
+  let groups = 0;
+  const gaps: number[] = [];
+  let prev: Span | undefined;
+  let end = 0;
+  for (const s of spans) {
+    if (!prev || prev.group !== s.group) {
+      groups++;
+      union += s.end - s.start;
+      end = s.end;
+    } else {
+      if (s.start > end) {
+        if (s.start - end > DATA_HEADER) gaps.push(s.start - end);
+        else union += s.start - end;
+      }
+      union += Math.max(0, s.end - Math.max(s.start, end));
+      end = Math.max(end, s.end);
+    }
+    prev = s;
+  }
+  gaps.sort((a, b) => b - a);
+  const bridged = gaps.reduce((a, b) => a + b, 0);
+  const saved = [0];
+  for (const g of gaps) saved.push(saved[saved.length - 1]! + g);
+  return (m) => {
+    const left = Math.max(0, Math.min(m - groups, gaps.length));
+    return union + bridged - saved[left]! + DATA_HEADER * (groups + left);
+  };
 }
 
 // ------------------------------------------------------------------ plan cache
