@@ -7,6 +7,11 @@ const { settleWithin } = require('./shared/user');
  * first user, gives it back after the last; forwards link errors to the users'
  * Catch nodes through `this.users` (the runtime's convention for config nodes).
  */
+/** The URL without a user:password@ part. */
+function withoutCredentials(url) {
+  return url.replace(/^([a-z0-9+.-]+:\/\/)[^/?#@]*@/i, '$1');
+}
+
 module.exports = function (RED) {
   function PlcwireConnection(config) {
     RED.nodes.createNode(this, config);
@@ -32,7 +37,9 @@ module.exports = function (RED) {
       const text = err && err.message ? err.message : String(err);
       if (text === lastError) return;
       lastError = text;
-      node.error(err, { topic: link ? link.name : node.url, payload: { url: node.url, state: node.linkStatus.state, code: err && err.code } });
+      // Catch messages end up in debug sidebars and files: never with the URL's user info.
+      const url = withoutCredentials(node.url);
+      node.error(err, { topic: link ? link.name : url, payload: { url, state: node.linkStatus.state, code: err && err.code } });
     }
 
     const onStatus = (status) => broadcast(status);
