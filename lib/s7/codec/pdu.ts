@@ -294,7 +294,7 @@ export function decodeS7(frame: Buffer): S7Message {
     }
   } else if (rosctr === Rosctr.AckData) {
     if (func === S7Function.Setup) return { kind: 'setup-ack', pduRef, params: decodeSetup(params) };
-    if (func === S7Function.ReadVar) return { kind: 'read-ack', pduRef, items: decodeDataItems(data, itemCount(params)) };
+    if (func === S7Function.ReadVar) return { kind: 'read-ack', pduRef, items: decodeDataItems(data, itemCount(params), true) };
     if (func === S7Function.WriteVar) {
       const count = itemCount(params);
       if (data.length !== count) throw new ProtocolError(`write ack: ${count} items but ${data.length} return codes`);
@@ -335,14 +335,19 @@ function decodeItems(params: Buffer): S7Item[] {
   return items;
 }
 
-function decodeDataItems(data: Buffer, count: number): ReadResponseItem[] {
+/**
+ * `answer`: items of a read answer. A failed item there carries no data,
+ * whatever its length field says: CPUs send length 0, snap7's server sends
+ * `05 00 00 04` and no bytes (its S7 data length counts 4 bytes for the item).
+ */
+function decodeDataItems(data: Buffer, count: number, answer = false): ReadResponseItem[] {
   const items: ReadResponseItem[] = new Array(count);
   let p = 0;
   for (let i = 0; i < count; i++) {
     if (p + 4 > data.length) throw new ProtocolError(`data item ${i + 1} of ${count} is missing`);
     const returnCode = data[p]!;
     const transportSize = data[p + 1]!;
-    const len = dataLengthBytes(transportSize, (data[p + 2]! << 8) | data[p + 3]!);
+    const len = answer && returnCode !== 0xff ? 0 : dataLengthBytes(transportSize, (data[p + 2]! << 8) | data[p + 3]!);
     if (p + 4 + len > data.length) throw new ProtocolError(`data item ${i + 1}: ${len} bytes announced, ${data.length - p - 4} present`);
     items[i] = { returnCode, transportSize, data: data.subarray(p + 4, p + 4 + len) };
     p += 4 + len;
