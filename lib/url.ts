@@ -100,6 +100,10 @@ export function parseUrl(text: string): Endpoint {
   } catch {
     throw urlError(text, 'not a URL (expected e.g. s7://192.168.0.2?rack=0&slot=1)');
   }
+  if (url.username || url.password) {
+    // None of these protocols has credentials; refuse them rather than drop them, and never echo them.
+    throw urlError(text.replace(/\/\/[^/@]*@/, '//***@'), 'PLC URLs take no user name or password; remove the "user:password@" part');
+  }
   const scheme = url.protocol.slice(0, -1).toLowerCase();
   const known = KNOWN_PARAMS[scheme];
   if (!known) throw urlError(text, `unknown protocol "${scheme}:" (use s7:, fetchwrite:, freeport: or freeport+tcp:)`);

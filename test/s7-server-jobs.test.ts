@@ -23,6 +23,8 @@ describe('S7 simulator job service (properties)', () => {
       .map((xs) => encodeWriteRequest(2, xs.map(([i, ts, d]) => ({ ...i, dataTransportSize: ts, data: Buffer.from(d) })))),
     fc.constant(DOC.read),
     fc.constant(DOC.write),
+    // 25 items do not fit a PDU of 240: the header-error path is always in reach
+    fc.constant(encodeReadRequest(3, Array.from({ length: 25 }, (_, i) => ({ area: 0x84, dbNumber: 1, transportSize: 0x02, count: 1, address: i * 8 })))),
   );
   const frames = fc.tuple(seeds, fc.array(fc.tuple(fc.nat(300), fc.nat(255)), { maxLength: 4 }), fc.boolean()).map(([seed, edits, keepHeader]) => {
     const b = Buffer.from(seed);
@@ -58,7 +60,8 @@ describe('S7 simulator job service (properties)', () => {
         else if (msg.kind === 'write-ack') expect(msg.returnCodes).to.have.length(count);
         else throw new Error(`unexpected ${msg.kind}`);
       }),
-      { numRuns: 5000 },
+      // a fixed seed: the suite is deterministic, and every outcome below is reached
+      { numRuns: 5000, seed: 7 },
     );
     // the generator reaches every outcome, so the property is not vacuous
     for (const [kind, n] of Object.entries(seen)) expect(n, kind).to.be.above(0);

@@ -21,6 +21,19 @@ describe('url: parseUrl', () => {
     });
   });
 
+  it('refuses credentials in a URL without repeating them in the error', () => {
+    let err: unknown;
+    try {
+      parseUrl('s7://admin:s3cret@10.0.0.2?rack=0&slot=1');
+    } catch (e) {
+      err = e;
+    }
+    expect(err).to.be.instanceOf(PlcError);
+    expect((err as PlcError).code).to.equal('INVALID_URL');
+    expect((err as PlcError).message).to.match(/no user name or password/);
+    expect((err as PlcError).message).not.to.include('s3cret');
+  });
+
   it('reads TSAPs in hex, the connection type, PDU, timeout and an IPv6 host', () => {
     const e = parseUrl('s7://[::1]:1102?localTsap=1000&remoteTsap=4D57&type=OP&pdu=240&timeout=250');
     expect(e).to.include({ host: '::1', port: 1102, localTsap: 0x1000, remoteTsap: 0x4d57, connectionType: 'op', pduSize: 240, timeout: 250 });

@@ -118,7 +118,7 @@ describe('interop: our S7Client against snap7 server', function () {
   it('reports a missing DB and an out-of-range address per tag, and still returns the good tags', async () => {
     const r = await plc.readDetailed(['DB1,INT2', 'DB99,INT0', 'DB2,INT1000', 'MW10']);
     expect(r['DB1,INT2']).to.deep.equal({ ok: true, value: 1234 });
-    expect(r.MW10).to.deep.equal({ ok: true, value: -7 });
+    expect(r.MW10).to.deep.equal({ ok: true, value: 65529 }); // MW is a WORD (unsigned); -7 as INT is MW10:INT
     expect(r['DB99,INT0'].ok).to.equal(false);
     expect(r['DB99,INT0'].error.code).to.equal('OBJECT_DOES_NOT_EXIST');
     expect(r['DB99,INT0'].error.message).to.contain('DB99,INT0');
