@@ -61,8 +61,9 @@ function demoFlow(urls) {
   nodes.push({
     id: 's7.route', type: 'switch', name: 'by tag', property: 'topic', propertyType: 'msg', checkall: 'false', outputs: 5,
     rules: ['level', 'running', 'speed', 'parts', 'temperature'].map((v) => ({ t: 'eq', v, vt: 'str' })),
-    ...at(360), wires: [['ui.level', 'ui.chart'], ['ui.running'], ['ui.speed'], ['ui.parts'], ['s7.round']],
+    ...at(360), wires: [['s7.round.level'], ['ui.running'], ['ui.speed'], ['ui.parts'], ['s7.round']],
   });
+  nodes.push({ id: 's7.round.level', type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(560), y: y - 40, wires: [['ui.level', 'ui.chart']] });
   nodes.push({ id: 's7.round', type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(560), wires: [['ui.temp', 'ui.chart']] });
   nodes.push({ id: 'ui.level', type: 'ui-gauge', name: 'Tank level', group: 'ui.g.s7', order: 1, width: 3, height: 3, gtype: 'gauge-half', gstyle: 'needle', title: 'Tank level', units: '%', min: 0, max: 100, segments: [{ from: 0, color: '#5cd65c' }, { from: 80, color: '#ffc800' }, { from: 90, color: '#ea5353' }], sizeThickness: 16, sizeGap: 4, sizeKeyThickness: 8, styleRounded: true, styleGlow: false, className: 'plcwire-level', ...at(800), wires: [] });
   nodes.push({ id: 'ui.chart', type: 'ui-chart', name: 'Level and temperature', group: 'ui.g.s7', order: 2, width: 6, height: 6, label: 'Level % and temperature °C', chartType: 'line', category: 'topic', categoryType: 'msg', xAxisType: 'time', xAxisPropertyType: 'timestamp', yAxisProperty: 'payload', yAxisPropertyType: 'msg', action: 'append', removeOlder: 2, removeOlderUnit: '60', removeOlderPoints: '', showLegend: true, pointShape: 'circle', pointRadius: 2, interpolation: 'linear', colors: ['#0095FF', '#FF7F0E'], className: 'plcwire-chart', ...at(820), wires: [] });
@@ -85,7 +86,7 @@ function demoFlow(urls) {
   // Link states of the three connections, from the read nodes' status.
   row();
   nodes.push({ id: 'st.s7', type: 'status', name: 'S7 link', scope: ['s7.read'], ...at(160), wires: [['st.text.s7']] });
-  nodes.push({ id: 'st.text.s7', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: 'status.text', tot: 'msg' }], ...at(360), wires: [['ui.link.s7']] });
+  nodes.push({ id: 'st.text.s7', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' }], ...at(360), wires: [['ui.link.s7']] });
   text('ui.link.s7', 'ui.g.s7', 'S7 link', 9);
 
   // FETCH/WRITE: the same DB1 through the CP.
@@ -103,7 +104,7 @@ function demoFlow(urls) {
   text('ui.fw.level', 'ui.g.other', 'CP: tank level (%)', 1);
   text('ui.fw.parts', 'ui.g.other', 'CP: parts', 2);
   nodes.push({ id: 'st.fw', type: 'status', name: 'CP link', scope: ['fw.read'], ...at(160), wires: [['st.text.fw']] });
-  nodes.push({ id: 'st.text.fw', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: 'status.text', tot: 'msg' }], ...at(360), wires: [['ui.link.fw']] });
+  nodes.push({ id: 'st.text.fw', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' }], ...at(360), wires: [['ui.link.fw']] });
   text('ui.link.fw', 'ui.g.other', 'CP link', 3);
 
   // Freeport: stations 5 (level, REAL) and 6 (parts, DINT) on the RS-485 bus, through a serial device server.
@@ -121,7 +122,7 @@ function demoFlow(urls) {
   text('ui.fp.level', 'ui.g.other', 'S7-200: tank level (%)', 4);
   text('ui.fp.parts', 'ui.g.other', 'S7-200: parts', 5);
   nodes.push({ id: 'st.fp', type: 'status', name: 'S7-200 link', scope: ['fp.read'], ...at(160), wires: [['st.text.fp']] });
-  nodes.push({ id: 'st.text.fp', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: 'status.text', tot: 'msg' }], ...at(360), wires: [['ui.link.fp']] });
+  nodes.push({ id: 'st.text.fp', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' }], ...at(360), wires: [['ui.link.fp']] });
   text('ui.link.fp', 'ui.g.other', 'S7-200 link', 6);
 
   // Errors from any plcwire node.

@@ -87,7 +87,8 @@ describe('browser: the npm start demo in headless Chromium', function () {
   it('clicking the motor switch writes the run command to the simulated PLC', async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
     expect(db1[4]! & 0x01).to.equal(0);
-    await page.locator('.plcwire-motor input[type="checkbox"], .plcwire-motor .v-switch, .plcwire-motor').first().click();
+    // The switch's own control (Vuetify draws the thumb over a hidden checkbox).
+    await page.locator('.plcwire-motor .v-selection-control__input').click();
     await until(() => (db1[4]! & 0x01) === 1, 10_000, 'DB1.DBX4.0 set by the dashboard');
     // The process reacts: the motor ramps up and the dashboard shows its speed.
     await until(() => db1.readInt16BE(6) > 0, 10_000, 'motor speed rising');

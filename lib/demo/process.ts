@@ -50,6 +50,7 @@ export class DemoProcess {
     if (!this.timer) {
       const db = this.db();
       if (db.readFloatBE(0) === 0) db.writeFloatBE(20, 0);
+      if (db.readFloatBE(16) === 0) db.writeFloatBE(20, 16);
       this.timer = setInterval(() => this.step(), this.periodMs);
       this.timer.unref();
     }
