@@ -142,6 +142,34 @@ describe('plcwire CLI', function () {
     });
   });
 
+  describe('other protocols', () => {
+    it('serve fetchwrite and serve freeport --tcp run simulators that read and write work against', async () => {
+      const [fetchPort, writePort, busPort] = [await freePort(), await freePort(), await freePort()];
+      const fw = run(['serve', 'fetchwrite', '--fetch-port', String(fetchPort), '--write-port', String(writePort)]);
+      const fp = run(['serve', 'freeport', '--tcp', String(busPort), '--stations', '5,6']);
+      try {
+        await until(() => /listening/.test(fw.output().out) && /answering on tcp/.test(fp.output().out), 10000, 'both simulators up');
+        const fwUrl = `fetchwrite://127.0.0.1?fetchPort=${fetchPort}&writePort=${writePort}`;
+        expect((await cli(['write', fwUrl, 'DB1,INT4=-12', 'MB3=7'])).code).to.equal(EXIT.OK);
+        const r1 = await cli(['read', fwUrl, 'DB1,INT4', 'MB3', '--json']);
+        expect(JSON.parse(r1.out)).to.deep.equal({ 'DB1,INT4': -12, MB3: 7 });
+        const fpUrl = `freeport+tcp://127.0.0.1:${busPort}`;
+        const w = await cli(['write', fpUrl, 'ST6,B0.4=[230,39,161,195]']);
+        expect(w.code, w.err).to.equal(EXIT.OK);
+        const r2 = await cli(['read', fpUrl, 'ST6,DWORD0', 'ST5,INT0', '--json']);
+        expect(r2.err).to.equal('');
+        expect(JSON.parse(r2.out)).to.deep.equal({ 'ST6,DWORD0': 0xe627a1c3, 'ST5,INT0': 0 });
+        const bad = await cli(['read', fpUrl, 'ST5,INT3']);
+        expect(bad.code).to.equal(EXIT.USAGE);
+      } finally {
+        fw.child.kill('SIGINT');
+        fp.child.kill('SIGINT');
+      }
+      expect(await fw.exit).to.equal(0);
+      expect(await fp.exit).to.equal(0);
+    });
+  });
+
   describe('the installed binary', () => {
     it('serve s7 runs the simulator until Ctrl-C, and read/write talk to it', async () => {
       const port = await freePort();
