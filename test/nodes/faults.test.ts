@@ -181,9 +181,8 @@ describe('nodes under faults (issue #8)', function () {
   it('logs neither tag values nor URL credentials at info level or above, also when things fail', async () => {
     ctx = await s7();
     const { sim } = ctx;
-    const url = sim.url.replace('s7://', 's7://operator:hunter2@');
     sim.set(0, 31337);
-    await helper.load(ALL_NODES, flow(url, sim.addr));
+    await helper.load(ALL_NODES, flow(sim.url, sim.addr));
     const spy = helper.log();
     const caught = rec('caught');
     await rec('out').next((m) => m.payload.a === 31337, 4000, 'a poll');
@@ -201,6 +200,25 @@ describe('nodes under faults (issue #8)', function () {
     // The credentials do not reach Catch messages either (they go to debug sidebars and files).
     const caughtText = JSON.stringify(caught.messages.map((m) => ({ ...m, error: { message: m.error.message } })));
     expect(caughtText).not.to.include('hunter2');
+  });
+
+  it('refuses a URL with credentials (PLC protocols have none) without logging or passing them on', async () => {
+    ctx = await s7();
+    const { sim } = ctx;
+    const spy = helper.log();
+    await helper.load(ALL_NODES, flow(sim.url.replace('s7://', 's7://operator:hunter2@'), sim.addr));
+    const caught = rec('caught');
+    helper.getNode('write').receive({ payload: { sp: 1 } });
+    const refused = await caught.next(() => true, 4000, 'an error at Catch');
+    expect(JSON.stringify({ ...refused, error: { message: refused.error.message } })).not.to.include('hunter2');
+    const text = spy
+      .getCalls()
+      .map((c: any) => c.args[0])
+      .filter((e: any) => e && typeof e.level === 'number')
+      .map((e: any) => (typeof e.msg === 'string' ? e.msg : JSON.stringify(e.msg)))
+      .join('\n');
+    expect(text).not.to.include('hunter2');
+    expect(sim.connectionCount()).to.equal(0);
   });
 });
 
