@@ -10,21 +10,30 @@ export * from './errors';
 export * from './types';
 export * from './url';
 
-export { parseAddress, parseTypeSpec, formatAddress } from './address';
+export { parseAddress, parseTypeSpec, formatAddress, type TypeSpec, type TagLocation } from './address';
 export * as values from './values';
 export { decodeTag, encodeTag, encodeInto, validateValue, elementByteLength, tagByteLength } from './values';
 
 export { BaseClient, type ClientOptions, type DriverSession } from './link/client-base';
+export type { BackoffOptions } from './link/backoff';
+export type { FrameCheck } from './link/framer';
 
 export * as s7 from './s7/codec';
-export { S7Client } from './s7/client';
-export { S7Server } from './s7/server';
+export { S7Client, type S7Stats } from './s7/client';
+export type { S7Session } from './s7/client-session';
+export { planRead, planWrite, lowerBoundPdus, ReadPlanCache, type ReadPlan, type WritePlan } from './s7/planner';
+export { S7Server, PROFILES as S7_PROFILES, type S7ServerOptions, type S7Faults, type S7Profile, type CpuProfile, type S7RequestEvent } from './s7/server';
 export * as fetchwrite from './fetchwrite/codec';
 export { FetchWriteClient } from './fetchwrite/client';
-export { FetchWriteServer } from './fetchwrite/server';
-export { FreeportClient } from './freeport/client';
-export { FreeportBus } from './freeport/bus';
+export { FetchWriteServer, type FetchWriteServerOptions, type FetchWriteFaults, type FetchWriteRequestEvent } from './fetchwrite/server';
+export * as freeport from './freeport';
+export { FreeportClient, type FreeportClientOptions } from './freeport/client';
+export type { FreeportSession } from './freeport/session';
+export { FreeportBus, type FreeportBusOptions, type FreeportBusFaults, type SerialAttachOptions } from './freeport/bus';
+export { FreeportStation } from './freeport/station';
+export { DOCUMENT_PROFILE, defineProfile, type FreeportProfile } from './freeport/profile';
+export { parseFreeportAddress, type FreeportTag } from './freeport/address';
 
-export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess } from './sim/memory';
-export { DemoProcess, DEMO_TAGS } from './demo/process';
-export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant } from './demo/plant';
+export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess, type MemoryFault } from './sim/memory';
+export { DemoProcess, DEMO_TAGS, type ProcessSnapshot } from './demo/process';
+export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './demo/plant';
