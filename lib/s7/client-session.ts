@@ -4,10 +4,9 @@
  * handshake (COTP CR/CC, setup communication) is `openS7Session`.
  */
 import type * as net from 'node:net';
-import { ConnectionError, PlcError, ProtocolError, toPlcError } from '../errors';
+import { ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
 import { FrameReader } from '../link/framer';
-import { JobQueue } from '../link/jobs';
-import { PendingRequests, abortError } from '../link/pending';
+import { abortError } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { S7Endpoint } from '../url';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication, type S7Message } from './codec';
@@ -21,12 +20,48 @@ const REQUESTED_AMQ = 8;
 const TPDU_SIZE_CODE = 0x0a;
 const CONNECTION_TYPES = { pg: 1, op: 2, basic: 3 } as const;
 
+/** Called once per job: with the PLC's answer, or with the error that ended the wait. */
+export type JobDone = (err: PlcError | undefined, answer: S7Message | undefined) => void;
+
+interface InFlight {
+  done: JobDone | undefined;
+  deadline: number;
+  what: string;
+  /** Called when the PLC answered or the session died: the request frame may be reused. */
+  release: (() => void) | undefined;
+}
+
+interface Waiting {
+  frame: Buffer;
+  what: string;
+  done: JobDone;
+  release: (() => void) | undefined;
+  signal: AbortSignal | undefined;
+  onAbort: (() => void) | undefined;
+}
+
+const DEFAULT_MAX_QUEUED = 1000;
+
+/**
+ * One live S7 connection and its jobs. At most AmQ jobs are in flight; more
+ * wait in a bounded FIFO. An AmQ slot is held until the PLC answers (an
+ * aborted caller stops waiting, the PLC still works on the job). One timer
+ * per session watches the oldest job: a job unanswered within the timeout
+ * fails with TimeoutError and drops the link (the PLC still counts it).
+ * No promise, closure or stack capture per job: this is the poll hot path.
+ */
 export class S7Session {
-  readonly pending = new PendingRequests<S7Message>();
-  readonly jobs: JobQueue;
   /** Drops this session (set by the client when it attaches). */
   lose: ((err: PlcError) => void) | undefined;
+  /** Counts each frame written (set by the client for its stats). */
+  onSend: ((frame: Buffer) => void) | undefined;
   private nextRef = 0;
+  private readonly inflight = new Map<number, InFlight>();
+  private readonly waiting: Waiting[] = [];
+  private head = 0;
+  private timer: NodeJS.Timeout | undefined;
+  private dead: PlcError | undefined;
+  private readonly maxQueued: number;
 
   constructor(
     readonly socket: net.Socket,
@@ -36,19 +71,161 @@ export class S7Session {
     /** The parallel jobs (AmQ) the PLC negotiated. */
     readonly maxJobs: number,
     maxQueued: number | undefined,
+    private readonly timeout = 5000,
+    private readonly name = 'S7',
   ) {
-    this.jobs = new JobQueue({ concurrency: maxJobs, ...(maxQueued === undefined ? {} : { maxQueued }) });
+    this.maxQueued = maxQueued ?? DEFAULT_MAX_QUEUED;
   }
 
-  /** The next PDU reference: 1..65535, skipping any still pending, so a late answer never matches a new job. */
+  /** Jobs sent and not answered yet (each holds an AmQ slot). */
+  get inFlight(): number {
+    return this.inflight.size;
+  }
+
+  /** Jobs waiting for a free AmQ slot. */
+  get queued(): number {
+    return this.waiting.length - this.head;
+  }
+
+  /** The next PDU reference: 1..65535, skipping any still in flight, so a late answer never matches a new job. */
   ref(): number {
     do this.nextRef = this.nextRef >= 0xffff ? 1 : this.nextRef + 1;
-    while (this.pending.has(this.nextRef));
+    while (this.inflight.has(this.nextRef));
     return this.nextRef;
+  }
+
+  /**
+   * Sends a job frame (its PDU reference, bytes 11–12, is set here) when an
+   * AmQ slot is free; `done` is called exactly once. `release` is called
+   * when the frame is no longer needed (answered, or the session died).
+   */
+  send(frame: Buffer, what: string, done: JobDone, signal?: AbortSignal, release?: () => void): void {
+    if (this.dead) {
+      release?.();
+      return done(this.dead, undefined);
+    }
+    if (signal?.aborted) {
+      release?.();
+      return done(abortError(`${this.name} ${what}`, signal), undefined);
+    }
+    if (this.inflight.size < this.maxJobs && this.head === this.waiting.length) {
+      if (signal) done = this.abortable(done, signal, what, undefined);
+      return this.start(frame, what, done, release);
+    }
+    if (this.queued >= this.maxQueued) {
+      release?.();
+      return done(new PlcError('QUEUE_FULL', `request queue is full (${this.maxQueued} waiting)`), undefined);
+    }
+    const item: Waiting = { frame, what, done, release, signal, onAbort: undefined };
+    if (signal) item.done = this.abortable(done, signal, what, item);
+    this.waiting.push(item);
+  }
+
+  /** Hands an answer to the job with that PDU reference; false when none waits for it. */
+  answer(ref: number, message: S7Message): boolean {
+    const job = this.inflight.get(ref);
+    if (!job) return false;
+    this.inflight.delete(ref);
+    job.release?.();
+    if (this.inflight.size === 0 && this.timer) {
+      clearTimeout(this.timer);
+      this.timer = undefined;
+    }
+    this.drain();
+    job.done?.(undefined, message);
+    return true;
+  }
+
+  /** Fails every job, running or waiting; later sends fail with `err` at once. */
+  rejectAll(err: PlcError): void {
+    this.dead ??= err;
+    if (this.timer) clearTimeout(this.timer);
+    this.timer = undefined;
+    const running = [...this.inflight.values()];
+    this.inflight.clear();
+    const waiting = this.waiting.slice(this.head);
+    this.waiting.length = 0;
+    this.head = 0;
+    for (const job of running) {
+      job.release?.();
+      job.done?.(err, undefined);
+    }
+    for (const job of waiting) {
+      job.release?.();
+      job.done(err, undefined);
+    }
   }
 
   destroy(): void {
     this.socket.destroy();
+  }
+
+  private start(frame: Buffer, what: string, done: JobDone, release: (() => void) | undefined): void {
+    const ref = this.ref();
+    frame[11] = ref >> 8;
+    frame[12] = ref & 0xff;
+    this.inflight.set(ref, { done, deadline: Date.now() + this.timeout, what, release });
+    this.timer ??= setTimeout(() => this.sweep(), this.timeout);
+    this.onSend?.(frame);
+    this.socket.write(frame);
+  }
+
+  private drain(): void {
+    while (this.inflight.size < this.maxJobs && this.head < this.waiting.length) {
+      const item = this.waiting[this.head]!;
+      this.waiting[this.head++] = undefined as unknown as Waiting;
+      if (this.head === this.waiting.length) {
+        this.waiting.length = 0;
+        this.head = 0;
+      } else if (this.head > 1024 && this.head * 2 > this.waiting.length) {
+        this.waiting.splice(0, this.head);
+        this.head = 0;
+      }
+      if (item.onAbort) item.signal!.removeEventListener('abort', item.onAbort);
+      // Still listening for an abort while in flight: abortable() wraps done.
+      if (item.signal) item.done = this.abortable(item.done, item.signal, item.what, undefined);
+      this.start(item.frame, item.what, item.done, item.release);
+    }
+  }
+
+  /** `done` that also settles (once) when `signal` aborts; a queued job then leaves the queue. */
+  private abortable(done: JobDone, signal: AbortSignal, what: string, queued: Waiting | undefined): JobDone {
+    let settled = false;
+    const onAbort = () => {
+      if (settled) return;
+      settled = true;
+      if (queued) {
+        const i = this.waiting.indexOf(queued, this.head);
+        if (i >= 0) this.waiting.splice(i, 1);
+        queued.release?.();
+      }
+      done(abortError(`${this.name} ${what}`, signal), undefined);
+    };
+    signal.addEventListener('abort', onAbort, { once: true });
+    if (queued) queued.onAbort = onAbort;
+    return (err, answer) => {
+      signal.removeEventListener('abort', onAbort);
+      if (settled) return;
+      settled = true;
+      done(err, answer);
+    };
+  }
+
+  /** The oldest job decides: past its deadline, it times out and the link goes. */
+  private sweep(): void {
+    this.timer = undefined;
+    const now = Date.now();
+    for (const [ref, job] of this.inflight) {
+      if (job.deadline > now) {
+        this.timer = setTimeout(() => this.sweep(), job.deadline - now);
+        return;
+      }
+      this.inflight.delete(ref);
+      const err = new TimeoutError(`${this.name} ${job.what} timed out after ${this.timeout} ms`);
+      job.done?.(err, undefined);
+      this.lose?.(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
+      return;
+    }
   }
 }
 
@@ -62,6 +239,8 @@ export interface OpenOptions {
   /** For the TCP connect; the supervisor aborts `signal` when the whole handshake takes longer. */
   timeout: number;
   maxQueued: number | undefined;
+  /** Per job; defaults to `timeout`. */
+  requestTimeout?: number;
   signal: AbortSignal;
   /** Installs the live listeners; called before the handshake's listeners go, so no socket event is ever unheard. */
   attach(session: S7Session): void;
@@ -93,7 +272,7 @@ export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Se
     if (pduSize < 64) throw new ProtocolError(`${o.name} negotiated an unusable PDU size of ${pduSize}`);
     // The PLC answers with what it grants; a 0 would mean "none", which no CPU sends: treat as 1.
     const maxJobs = Math.max(1, Math.min(maxAmqCalling, maxAmqCalled));
-    const session = new S7Session(socket, reader, pduSize, maxJobs, o.maxQueued);
+    const session = new S7Session(socket, reader, pduSize, maxJobs, o.maxQueued, o.requestTimeout ?? o.timeout, o.name);
     o.attach(session);
     next.stop();
     return session;

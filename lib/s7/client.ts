@@ -10,13 +10,12 @@
  * (the PLC still counts it against AmQ), and the supervisor reconnects.
  */
 import { formatAddress, parseAddress } from '../address';
-import { ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError, type TagResult } from '../errors';
+import { ConnectionError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
 import { BaseClient, type ClientOptions } from '../link/client-base';
-import { abortError } from '../link/pending';
 import type { PlcValue, Protocol, Tag } from '../types';
 import { endpointName, type S7Endpoint } from '../url';
 import { decodeTag } from '../values';
-import { decodeS7, encodeReadRequest, encodeWriteRequest, type S7Message } from './codec';
+import { decodeS7, encodeReadRequest, encodeWriteRequest, type ReadResponseItem, type S7Message } from './codec';
 import { CotpType, describeReturnCode, headerError } from './constants';
 import { openS7Session, S7Session } from './client-session';
 import { planRead, planWrite, ReadPlanCache, tagData, type ReadPlan } from './planner';
@@ -43,6 +42,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   readonly endpoint: S7Endpoint;
   readonly stats: S7Stats = { pdusSent: 0, bytesSent: 0, bytesReceived: 0, requests: 0, ignoredReplies: 0 };
   private readonly plans = new ReadPlanCache();
+  private readonly compiledPlans = new WeakMap<ReadPlan, CompiledRead>();
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
     super({
@@ -81,6 +81,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
       name: this.name,
       timeout: this.timeout,
       maxQueued: this.maxQueued,
+      requestTimeout: this.timeout,
       signal,
       attach: (session) => this.attach(session),
     });
@@ -93,8 +94,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
       if (lost) return;
       lost = true;
       const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
-      session.pending.rejectAll(err);
-      session.jobs.rejectAll(err);
+      session.rejectAll(err);
       socket.destroy();
       this.sessionLost(session, err);
     };
@@ -116,35 +116,25 @@ export class S7Client extends BaseClient<S7Session, Tag> {
         } catch (err) {
           return fail(linkError(this.name, err));
         }
-        if (!session.pending.resolve(message.pduRef, message)) this.stats.ignoredReplies++;
+        if (!session.answer(message.pduRef, message)) this.stats.ignoredReplies++;
       }
     });
     socket.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
     socket.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
     session.lose = fail;
+    session.onSend = (frame) => {
+      this.stats.pdusSent++;
+      this.stats.bytesSent += frame.length;
+    };
   }
 
   /**
    * Sends one job when an AmQ slot is free and waits for its reply. The slot
    * is held until the PLC answers (an aborted caller stops waiting, the PLC
-   * still works on it); a timeout drops the link.
+   * still works on it); a timeout drops the link (S7Session).
    */
-  private job(session: S7Session, frameFor: (ref: number) => Buffer, what: string, signal?: AbortSignal): Promise<S7Message> {
-    const run = session.jobs.run(async () => {
-      const ref = session.ref();
-      const frame = frameFor(ref);
-      const reply = session.pending.add(ref, this.timeout, `${this.name} ${what}`);
-      this.stats.pdusSent++;
-      this.stats.bytesSent += frame.length;
-      session.socket.write(frame);
-      try {
-        return await reply;
-      } catch (err) {
-        if (err instanceof TimeoutError) session.lose?.(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
-        throw err;
-      }
-    }, signal);
-    return signal ? withAbort(run, signal, `${this.name} ${what}`) : run;
+  private job(session: S7Session, frame: Buffer, what: string, signal?: AbortSignal): Promise<S7Message> {
+    return new Promise((resolve, reject) => session.send(frame, what, (err, answer) => (err ? reject(err) : resolve(answer!)), signal));
   }
 
   // ---------------------------------------------------------------- reads
@@ -162,57 +152,118 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     return results;
   }
 
-  private async execute(
-    session: S7Session,
-    tags: readonly Tag[],
-    plan: ReadPlan,
-    signal?: AbortSignal,
-  ): Promise<{ results: TagResult<PlcValue>[]; retry: number[] }> {
-    const data: (Buffer | undefined)[][] = plan.pdus.map((p) => new Array<Buffer | undefined>(p.items.length));
-    const errors: (PlcError | undefined)[][] = plan.pdus.map((p) => new Array<PlcError | undefined>(p.items.length));
-    await Promise.all(
-      plan.pdus.map(async (pdu, p) => {
-        const n = pdu.items.length;
-        const failAll = (err: PlcError) => errors[p]!.fill(err);
-        const answer = await this.job(session, (ref) => encodeReadRequest(ref, pdu.items), `read of ${n} item(s)`, signal);
-        if (answer.kind === 'error') return failAll(headerError(answer.errorClass, answer.errorCode, 'read'));
-        if (answer.kind !== 'read-ack' || answer.items.length !== n) {
-          return failAll(new ProtocolError(`the answer to a read of ${n} item(s) does not match it (${answer.kind})`));
+  /** A plan's request frames (reused while not in flight) and where each tag's bytes lie, computed once per plan. */
+  private compiled(plan: ReadPlan): CompiledRead {
+    let c = this.compiledPlans.get(plan);
+    if (!c) {
+      c = compileRead(plan);
+      this.compiledPlans.set(plan, c);
+    }
+    return c;
+  }
+
+  private execute(session: S7Session, tags: readonly Tag[], plan: ReadPlan, signal?: AbortSignal): Promise<{ results: TagResult<PlcValue>[]; retry: number[] }> {
+    const c = this.compiled(plan);
+    const n = plan.pdus.length;
+    const answers: S7Message[] = new Array<S7Message>(n);
+    if (n === 0) return Promise.resolve(this.collect(tags, plan, c, answers));
+    return new Promise((resolve, reject) => {
+      let left = n;
+      let failed = false;
+      for (let p = 0; p < n; p++) {
+        let frame = c.frames[p]!;
+        let release: (() => void) | undefined;
+        if (c.busy[p]) {
+          // The same plan is being polled concurrently: this poll gets its own frame.
+          frame = Buffer.from(frame);
+        } else {
+          c.busy[p] = 1;
+          release = c.release[p];
         }
-        for (let i = 0; i < n; i++) {
-          const item = answer.items[i]!;
-          const expected = pdu.items[i]!.length;
-          if (item.returnCode !== SUCCESS) errors[p]![i] = returnCodeError(item.returnCode);
-          else if (item.data.length !== expected) errors[p]![i] = new ProtocolError(`asked for ${expected} bytes, the PLC returned ${item.data.length}`);
-          else data[p]![i] = item.data;
-        }
-      }),
-    );
-    const results: TagResult<PlcValue>[] = new Array(tags.length);
-    const retry: number[] = [];
-    let shared: Map<number, number> | undefined;
-    for (let t = 0; t < tags.length; t++) {
-      const tag = tags[t]!;
-      let err: PlcError | undefined;
-      let retryAlone = false;
-      for (const s of plan.slices[t]!) {
-        const itemError = errors[s.pdu]![s.item];
-        if (!itemError) continue;
-        err ??= itemError;
-        // Only a return code of an item that also served other tags can be one tag's fault.
-        if (itemError.plcCode !== undefined && itemError.plcCode <= 0xff) {
-          shared ??= tagsPerItem(plan);
-          if (shared.get(s.pdu * 256 + s.item)! > 1) retryAlone = true;
-        }
+        session.send(
+          frame,
+          c.what[p]!,
+          (err, answer) => {
+            if (failed) return;
+            if (err) {
+              failed = true;
+              return reject(err);
+            }
+            answers[p] = answer!;
+            if (--left > 0) return;
+            try {
+              resolve(this.collect(tags, plan, c, answers));
+            } catch (e) {
+              reject(e);
+            }
+          },
+          signal,
+          release,
+        );
       }
-      if (err) {
-        if (retryAlone) retry.push(t);
-        results[t] = { ok: false, error: tagError(tag, err) };
+    });
+  }
+
+  /** Per-tag results straight from the answers' frames; values are decoded from subarrays of the frames, never copied unless split. */
+  private collect(tags: readonly Tag[], plan: ReadPlan, c: CompiledRead, answers: readonly S7Message[]): { results: TagResult<PlcValue>[]; retry: number[] } {
+    const n = plan.pdus.length;
+    const items: (ReadResponseItem[] | undefined)[] = new Array<ReadResponseItem[] | undefined>(n);
+    let errors: (PlcError | undefined)[][] | undefined;
+    const setError = (p: number, i: number, err: PlcError) => {
+      errors ??= plan.pdus.map((pd) => new Array<PlcError | undefined>(pd.items.length));
+      errors[p]![i] = err;
+    };
+    for (let p = 0; p < n; p++) {
+      const pdu = plan.pdus[p]!;
+      const count = pdu.items.length;
+      const answer = answers[p]!;
+      let failAll: PlcError | undefined;
+      if (answer.kind === 'error') failAll = headerError(answer.errorClass, answer.errorCode, 'read');
+      else if (answer.kind !== 'read-ack' || answer.items.length !== count) {
+        failAll = new ProtocolError(`the answer to a read of ${count} item(s) does not match it (${answer.kind})`);
+      }
+      if (failAll || answer.kind !== 'read-ack') {
+        for (let i = 0; i < count; i++) setError(p, i, failAll!);
         continue;
       }
+      for (let i = 0; i < count; i++) {
+        const item = answer.items[i]!;
+        const expected = pdu.items[i]!.length;
+        if (item.returnCode !== SUCCESS) setError(p, i, returnCodeError(item.returnCode));
+        else if (item.data.length !== expected) setError(p, i, new ProtocolError(`asked for ${expected} bytes, the PLC returned ${item.data.length}`));
+      }
+      items[p] = answer.items;
+    }
+    const results: TagResult<PlcValue>[] = new Array<TagResult<PlcValue>>(tags.length);
+    const retry: number[] = [];
+    for (let t = 0; t < tags.length; t++) {
+      const tag = tags[t]!;
+      if (errors) {
+        let err: PlcError | undefined;
+        let retryAlone = false;
+        for (const s of plan.slices[t]!) {
+          const itemError = errors[s.pdu]![s.item];
+          if (!itemError) continue;
+          err ??= itemError;
+          // Only a return code of an item that also served other tags can be one tag's fault.
+          if (itemError.plcCode !== undefined && itemError.plcCode <= 0xff && c.tagsPerItem().get(s.pdu * 256 + s.item)! > 1) retryAlone = true;
+        }
+        if (err) {
+          if (retryAlone) retry.push(t);
+          results[t] = { ok: false, error: tagError(tag, err) };
+          continue;
+        }
+      }
       try {
-        const { data: bytes, offset } = tagData(plan, t, data);
-        results[t] = { ok: true, value: decodeTag(tag, bytes, offset) };
+        const p = c.tagPdu[t]!;
+        let value: PlcValue;
+        if (p >= 0) value = decodeTag(tag, items[p]![c.tagItem[t]!]!.data, c.tagOffset[t]!);
+        else {
+          const data = items.map((list) => (list ? list.map((x) => x.data) : []));
+          const { data: bytes, offset } = tagData(plan, t, data);
+          value = decodeTag(tag, bytes, offset);
+        }
+        results[t] = { ok: true, value };
       } catch (e) {
         results[t] = { ok: false, error: tagError(tag, toPlcError(e, 'PROTOCOL_ERROR')) };
       }
@@ -232,7 +283,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
         const failAll = (err: PlcError) => pdu.tags.forEach((t) => (errors[t] ??= err));
         let answer: S7Message;
         try {
-          answer = await this.job(session, (ref) => encodeWriteRequest(ref, pdu.items), `write of ${n} item(s)`, signal);
+          answer = await this.job(session, encodeWriteRequest(0, pdu.items), `write of ${n} item(s)`, signal);
         } catch (err) {
           // The write may or may not have reached the PLC: its tags get the error, it is never silently dropped.
           return failAll(toPlcError(err));
@@ -252,6 +303,43 @@ export class S7Client extends BaseClient<S7Session, Tag> {
       return { ok: false, error: err.tag === tag.address ? err : tagError(tag, err) };
     });
   }
+}
+
+interface CompiledRead {
+  /** Per PDU: the Read Var frame (its PDU reference is set when sent), reused while not in flight. */
+  frames: Buffer[];
+  busy: Uint8Array;
+  release: (() => void)[];
+  what: string[];
+  /** Per tag: the PDU, item and offset of its bytes; PDU −1 when the tag was split across items. */
+  tagPdu: Int32Array;
+  tagItem: Int32Array;
+  tagOffset: Int32Array;
+  tagsPerItem(): Map<number, number>;
+}
+
+function compileRead(plan: ReadPlan): CompiledRead {
+  const busy = new Uint8Array(plan.pdus.length);
+  const tagPdu = new Int32Array(plan.slices.length);
+  const tagItem = new Int32Array(plan.slices.length);
+  const tagOffset = new Int32Array(plan.slices.length);
+  plan.slices.forEach((slices, t) => {
+    const s = slices.length === 1 ? slices[0]! : undefined;
+    tagPdu[t] = s ? s.pdu : -1;
+    tagItem[t] = s ? s.item : 0;
+    tagOffset[t] = s ? s.offset : 0;
+  });
+  let shared: Map<number, number> | undefined;
+  return {
+    frames: plan.pdus.map((pdu) => encodeReadRequest(0, pdu.items)),
+    busy,
+    release: plan.pdus.map((_, p) => () => (busy[p] = 0)),
+    what: plan.pdus.map((pdu) => `read of ${pdu.items.length} item(s)`),
+    tagPdu,
+    tagItem,
+    tagOffset,
+    tagsPerItem: () => (shared ??= tagsPerItem(plan)),
+  };
 }
 
 /** How many tags each item of a plan serves, keyed pdu × 256 + item (a PDU has at most 255 items). */
@@ -280,29 +368,4 @@ function tagError(tag: Tag, err: PlcError): PlcError {
 function linkError(name: string, err: unknown): PlcError {
   const e = toPlcError(err, 'PROTOCOL_ERROR');
   return e instanceof ProtocolError ? new ProtocolError(`${name}: ${e.message}`, { cause: e }) : e;
-}
-
-/** Rejects when `signal` aborts, without cancelling the job (its AmQ slot stays taken until the PLC answers). */
-function withAbort<T>(promise: Promise<T>, signal: AbortSignal, what: string): Promise<T> {
-  if (signal.aborted) {
-    promise.catch(() => undefined);
-    return Promise.reject(abortError(what, signal));
-  }
-  return new Promise<T>((resolve, reject) => {
-    const onAbort = () => {
-      promise.catch(() => undefined);
-      reject(abortError(what, signal));
-    };
-    signal.addEventListener('abort', onAbort, { once: true });
-    promise.then(
-      (v) => {
-        signal.removeEventListener('abort', onAbort);
-        resolve(v);
-      },
-      (e: unknown) => {
-        signal.removeEventListener('abort', onAbort);
-        reject(e);
-      },
-    );
-  });
 }
