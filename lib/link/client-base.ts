@@ -23,6 +23,19 @@ export interface ClientOptions {
 }
 
 export const DEFAULT_TIMEOUT = 5000;
+
+interface PreparedRead<T> {
+  /** A copy of the list, to notice a caller that changed its array between polls. */
+  addresses: readonly string[];
+  tags: T[];
+  bad: { address: string; error: PlcError }[];
+}
+
+function sameStrings(a: readonly string[], b: readonly string[]): boolean {
+  if (a.length !== b.length) return false;
+  for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) return false;
+  return true;
+}
 const MAX_CACHED_TAGS = 10_000;
 
 /**
@@ -43,6 +56,7 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
   protected readonly maxQueued: number | undefined;
   private readonly supervisor: LinkSupervisor<S>;
   private readonly tags = new Map<string, T | PlcError>();
+  private readonly preparedReads = new WeakMap<readonly string[], PreparedRead<T>>();
   private readonly readOnly: boolean;
   private readonly allow: readonly string[] | undefined;
   private allowed: { areas: Set<string>; tags: T[] } | undefined;
@@ -135,7 +149,24 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
   }
 
   async read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>> {
-    const results = await this.readDetailed(addresses, options);
+    const prepared = this.prepare(addresses);
+    if (prepared.bad.length > 0) {
+      const results = await this.readDetailed(addresses, options);
+      throw new TagErrors(results);
+    }
+    const session = this.liveSession();
+    const { tags } = prepared;
+    const read = tags.length > 0 ? await this.readTags(session, tags, options?.signal) : [];
+    const values: Record<string, PlcValue> = {};
+    for (let i = 0; i < tags.length; i++) {
+      const r = read[i]!;
+      if (!r.ok) return this.valuesOrThrow(this.byAddress(prepared, read));
+      values[tags[i]!.address] = r.value;
+    }
+    return values;
+  }
+
+  private valuesOrThrow(results: Record<string, TagResult<PlcValue>>): Record<string, PlcValue> {
     const values: Record<string, PlcValue> = {};
     for (const key of Object.keys(results)) {
       const r = results[key]!;
@@ -150,18 +181,39 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     options: RequestOptions = {},
   ): Promise<Record<string, TagResult<PlcValue>>> {
     const session = this.liveSession();
+    const prepared = this.prepare(addresses);
+    const read = prepared.tags.length > 0 ? await this.readTags(session, prepared.tags, options.signal) : [];
+    return this.byAddress(prepared, read);
+  }
+
+  /** Results keyed by address: unparsable addresses first, then the tags read (a tag given twice: its last result). */
+  private byAddress(prepared: PreparedRead<T>, read: readonly TagResult<PlcValue>[]): Record<string, TagResult<PlcValue>> {
     const results: Record<string, TagResult<PlcValue>> = {};
+    for (const { address, error } of prepared.bad) results[address] = { ok: false, error };
+    const { tags } = prepared;
+    for (let i = 0; i < tags.length; i++) results[tags[i]!.address] = read[i]!;
+    return results;
+  }
+
+  /**
+   * The parsed tags of an address list. Polls pass the same array again and
+   * again: it is recognised by identity (and checked element by element, in
+   * case the caller changed it), so the tags array keeps its identity too and
+   * the driver's plan cache finds it at once.
+   */
+  private prepare(addresses: readonly string[]): PreparedRead<T> {
+    const known = this.preparedReads.get(addresses);
+    if (known && sameStrings(known.addresses, addresses)) return known;
     const tags: T[] = [];
+    const bad: { address: string; error: PlcError }[] = [];
     for (const address of addresses) {
       const tag = this.parseCached(address);
-      if (tag instanceof PlcError) results[address] = { ok: false, error: tag };
+      if (tag instanceof PlcError) bad.push({ address, error: tag });
       else tags.push(tag);
     }
-    if (tags.length > 0) {
-      const read = await this.readTags(session, tags, options.signal);
-      for (let i = 0; i < tags.length; i++) results[tags[i]!.address] = read[i]!;
-    }
-    return results;
+    const prepared: PreparedRead<T> = { addresses: addresses.slice(), tags, bad };
+    this.preparedReads.set(addresses, prepared);
+    return prepared;
   }
 
   async write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void> {
