@@ -29,6 +29,38 @@ interface PreparedRead<T> {
   addresses: readonly string[];
   tags: T[];
   bad: { address: string; error: PlcError }[];
+  /** Reads of this list so far; from the second on, results are built by a compiled object literal. */
+  uses: number;
+  values?: RecordBuilder | null;
+  results?: RecordBuilder | null;
+}
+
+type RecordBuilder = (read: readonly TagResult<PlcValue>[]) => Record<string, unknown>;
+
+/**
+ * A function returning `{ "DB1,INT2": read[0].value, … }` for a polled list.
+ * Adding hundreds of string keys to an object one by one costs V8 a new
+ * hidden class per key (~125 µs for 1000 tags, as much as the whole poll);
+ * an object literal is built in one step (~4 µs). Keys are JSON-quoted
+ * address strings. Falls back to the loop (null) where code generation is
+ * disabled or a key would be special in a literal.
+ */
+function recordBuilder(prepared: PreparedRead<{ readonly address: string }>, kind: 'values' | 'results'): RecordBuilder | undefined {
+  let build = prepared[kind];
+  if (build !== undefined) return build ?? undefined;
+  if (++prepared.uses < 2) return undefined;
+  build = null;
+  const keys = prepared.tags.map((t) => t.address);
+  if (!keys.includes('__proto__')) {
+    const pick = kind === 'values' ? '.value' : '';
+    try {
+      build = new Function('read', `return {${keys.map((k, i) => `${JSON.stringify(k)}: read[${i}]${pick}`).join(',\n')}};`) as RecordBuilder;
+    } catch {
+      build = null;
+    }
+  }
+  prepared[kind] = build;
+  return build ?? undefined;
 }
 
 function sameStrings(a: readonly string[], b: readonly string[]): boolean {
@@ -157,12 +189,11 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     const session = this.liveSession();
     const { tags } = prepared;
     const read = tags.length > 0 ? await this.readTags(session, tags, options?.signal) : [];
+    for (let i = 0; i < tags.length; i++) if (!read[i]!.ok) return this.valuesOrThrow(this.byAddress(prepared, read));
+    const build = recordBuilder(prepared, 'values');
+    if (build) return build(read) as Record<string, PlcValue>;
     const values: Record<string, PlcValue> = {};
-    for (let i = 0; i < tags.length; i++) {
-      const r = read[i]!;
-      if (!r.ok) return this.valuesOrThrow(this.byAddress(prepared, read));
-      values[tags[i]!.address] = r.value;
-    }
+    for (let i = 0; i < tags.length; i++) values[tags[i]!.address] = (read[i] as { value: PlcValue }).value;
     return values;
   }
 
@@ -188,6 +219,8 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
 
   /** Results keyed by address: unparsable addresses first, then the tags read (a tag given twice: its last result). */
   private byAddress(prepared: PreparedRead<T>, read: readonly TagResult<PlcValue>[]): Record<string, TagResult<PlcValue>> {
+    const build = prepared.bad.length === 0 ? recordBuilder(prepared, 'results') : undefined;
+    if (build) return build(read) as Record<string, TagResult<PlcValue>>;
     const results: Record<string, TagResult<PlcValue>> = {};
     for (const { address, error } of prepared.bad) results[address] = { ok: false, error };
     const { tags } = prepared;
@@ -211,7 +244,7 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
       if (tag instanceof PlcError) bad.push({ address, error: tag });
       else tags.push(tag);
     }
-    const prepared: PreparedRead<T> = { addresses: addresses.slice(), tags, bad };
+    const prepared: PreparedRead<T> = { addresses: addresses.slice(), tags, bad, uses: 0 };
     this.preparedReads.set(addresses, prepared);
     return prepared;
   }
