@@ -1,11 +1,11 @@
 import { expect } from 'chai';
 import { spawn, type ChildProcess } from 'node:child_process';
 import { once } from 'node:events';
-import * as net from 'node:net';
 import * as path from 'node:path';
 import { PassThrough } from 'node:stream';
 import { EXIT, main } from '../lib/cli/main';
 import { S7Server } from '../lib/s7/server';
+import { freePort } from './support/net';
 import { until } from './support/wait';
 
 const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
@@ -32,15 +32,6 @@ function run(args: string[]): { child: ChildProcess; output: () => { out: string
   child.stderr!.on('data', (d: Buffer) => (err += d.toString()));
   const exit = once(child, 'exit').then(([code]) => code as number);
   return { child, output: () => ({ out, err }), exit };
-}
-
-async function freePort(): Promise<number> {
-  const s = net.createServer().listen(0, '127.0.0.1');
-  await once(s, 'listening');
-  const port = (s.address() as net.AddressInfo).port;
-  s.close();
-  await once(s, 'close');
-  return port;
 }
 
 describe('plcwire CLI', function () {
