@@ -133,9 +133,8 @@ function withTimeout(endpoint: Endpoint, args: ParsedArgs): Endpoint {
   return { ...endpoint, timeout: intFlag(args, 'timeout', endpoint.timeout, 1, 600_000) };
 }
 
-/** Connects, runs `work`, always closes; Ctrl-C aborts the connect or the request. */
-async function withClient<R>(endpoint: Endpoint, io: CliIo, work: (client: AnyClient) => Promise<R>): Promise<R> {
-  const client = createClient(endpoint);
+/** Connects `client`, runs `work`, always closes; Ctrl-C aborts the connect or the request. */
+async function withClient<R>(client: AnyClient, io: CliIo, work: (client: AnyClient) => Promise<R>): Promise<R> {
   const onAbort = () => void client.close();
   io.signal.addEventListener('abort', onAbort, { once: true });
   try {
@@ -153,14 +152,10 @@ async function withClient<R>(endpoint: Endpoint, io: CliIo, work: (client: AnyCl
 async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const { endpoint, addresses } = endpointArg(rest, 'read');
   const json = args.flags.has('json');
-  // Every address is parsed before connecting: a typo never costs a PLC connection.
-  const probe = createClient(endpoint);
-  try {
-    for (const a of addresses) probe.tag(a);
-  } finally {
-    await probe.close();
-  }
-  const results = await withClient(withTimeout(endpoint, args), io, (c) => c.readDetailed(addresses, { signal: io.signal }));
+  // Every address is parsed before connecting (an unstarted client holds nothing): a typo never costs a PLC connection.
+  const client = createClient(withTimeout(endpoint, args));
+  for (const a of addresses) client.tag(a);
+  const results = await withClient(client, io, (c) => c.readDetailed(addresses, { signal: io.signal }));
   const values: Record<string, PlcValue | null> = {};
   const errors: PlcError[] = [];
   for (const address of addresses) {
@@ -187,14 +182,10 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   // Parse addresses and values before connecting: bad input never reaches the PLC.
   const client = createClient(withTimeout(endpoint, args));
   const values: Record<string, unknown> = {};
-  try {
-    for (const { address, text } of pairs) {
-      const tag = client.tag(address) as unknown as TypedTag & TagShape;
-      values[address] = valueFromText(tag, text);
-      validateValue(tag, values[address]);
-    }
-  } finally {
-    await client.close();
+  for (const { address, text } of pairs) {
+    const tag = client.tag(address) as unknown as TypedTag & TagShape;
+    values[address] = valueFromText(tag, text);
+    validateValue(tag, values[address]);
   }
   if (!isLoopback(endpoint) && !args.flags.has('yes')) {
     if (!io.stdin.isTTY) {
@@ -206,7 +197,7 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     const ok = await confirm(io, `write ${pairs.length} value(s) to ${endpointName(endpoint)}? [y/N] `);
     if (!ok) throw new PlcError('WRITE_NOT_ALLOWED', 'write cancelled');
   }
-  const results = await withClient(withTimeout(endpoint, args), io, (c) => c.writeDetailed(values, { signal: io.signal }));
+  const results = await withClient(client, io, (c) => c.writeDetailed(values, { signal: io.signal }));
   const errors = Object.values(results).filter((r) => !r.ok);
   if (args.flags.has('json')) {
     const out: Record<string, string> = {};
