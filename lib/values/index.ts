@@ -67,6 +67,33 @@ export function decodeTag(tag: TagShape, data: Buffer, offset = 0): PlcValue {
   return out;
 }
 
+/** Decodes a whole tag from `data` at `offset`; the caller has checked that tagByteLength(tag) bytes are there. */
+export type TagDecoder = (data: Buffer, offset: number) => PlcValue;
+
+/**
+ * decodeTag for one tag, resolved once (the codec, the element size, the
+ * BOOL bit) so a poll that decodes the same tags again and again does no
+ * lookups. Unlike decodeTag it does not check the length: a read plan has
+ * already checked each item's length against the bytes its tags need.
+ */
+export function tagDecoder(tag: TagShape): TagDecoder {
+  if (tag.type === 'BOOL') {
+    if (tag.isArray) return (data, offset) => decodeBits(tag, data, offset);
+    const at = tag.bitOffset >> 3;
+    const mask = 1 << (tag.bitOffset & 7);
+    return (data, offset) => (data[offset + at]! & mask) !== 0;
+  }
+  const decode = CODECS[tag.type].decode;
+  if (!tag.isArray) return (data, offset) => decode(tag, data, offset);
+  const size = elementByteLength(tag.type, tag.stringLength);
+  const count = tag.count;
+  return (data, offset) => {
+    const out: PlcScalar[] = new Array<PlcScalar>(count);
+    for (let i = 0; i < count; i++) out[i] = decode(tag, data, offset + i * size);
+    return out;
+  };
+}
+
 /** The elements of a value: [value] for a scalar; an array of exactly tag.count (CHAR/WCHAR arrays may be given as text). */
 function elementsOf(tag: TagShape, value: unknown): readonly unknown[] {
   if (!tag.isArray) return [value];

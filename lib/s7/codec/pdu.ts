@@ -16,6 +16,7 @@ import {
   S7_ACK_HEADER,
   S7_JOB_HEADER,
   S7_PROTOCOL_ID,
+  TPKT_VERSION,
 } from '../constants';
 import { decodeCotp } from './cotp';
 import { tpktFrame } from './tpkt';
@@ -302,6 +303,66 @@ export function decodeS7(frame: Buffer): S7Message {
     }
   }
   return func === undefined ? { kind: 'other', pduRef, rosctr } : { kind: 'other', pduRef, rosctr, func };
+}
+
+/** Where the S7 header starts in a frame with the plain 3-byte COTP DT header (TPKT 4 + LI, code, EOT). */
+const PLAIN_S7_AT = FRAME_OVERHEAD;
+
+/**
+ * The PDU reference of a frame carrying the last (EOT) COTP DT with a
+ * 3-byte header and an S7 PDU whose lengths add up, or −1 for any other
+ * frame (decodeS7 then says what it is, or what is wrong with it). Makes no
+ * objects: the client routes each answer to its job with it, and the job
+ * decodes the rest.
+ */
+export function s7AnswerRef(frame: Buffer): number {
+  const at = PLAIN_S7_AT;
+  if (frame.length < at + S7_JOB_HEADER || frame[4] !== COTP_DT_HEADER - 1 || (frame[5]! & 0xf0) !== CotpType.DT || (frame[6]! & 0x80) === 0) return -1;
+  if (frame[0] !== TPKT_VERSION || ((frame[2]! << 8) | frame[3]!) !== frame.length || frame[at] !== S7_PROTOCOL_ID) return -1;
+  const rosctr = frame[at + 1]!;
+  const header = rosctr === Rosctr.Ack || rosctr === Rosctr.AckData ? S7_ACK_HEADER : S7_JOB_HEADER;
+  if (frame.length < at + header) return -1;
+  const paramLength = (frame[at + 6]! << 8) | frame[at + 7]!;
+  const dataLength = (frame[at + 8]! << 8) | frame[at + 9]!;
+  if (at + header + paramLength + dataLength !== frame.length) return -1;
+  return (frame[at + 4]! << 8) | frame[at + 5]!;
+}
+
+/** Per item of a read: return code, where its data starts in the answer frame, and its length (filled by scanReadAck). */
+export interface ReadItemTable {
+  code: Uint8Array;
+  start: Int32Array;
+  length: Int32Array;
+}
+
+/**
+ * The client's read hot path: when `frame` is a well-formed Read Var
+ * ack-data of `count` items without a header error, fills `table` at
+ * base … base + count − 1 (data offsets are into `frame`) and returns true.
+ * Returns false for any other frame, well-formed or not: decodeS7 then
+ * decodes it or throws the ProtocolError. Accepts exactly what decodeS7
+ * accepts for a read ack, without making an object or a subarray per item.
+ */
+export function scanReadAck(frame: Buffer, count: number, table: ReadItemTable, base: number): boolean {
+  const at = PLAIN_S7_AT;
+  if (s7AnswerRef(frame) < 0 || frame[at + 1] !== Rosctr.AckData) return false;
+  const params = at + S7_ACK_HEADER;
+  if (frame[at + 10] !== 0 || frame[at + 11] !== 0 || ((frame[at + 6]! << 8) | frame[at + 7]!) !== 2) return false;
+  if (frame[params] !== S7Function.ReadVar || frame[params + 1] !== count) return false;
+  const end = frame.length;
+  let p = params + 2;
+  for (let i = 0; i < count; i++) {
+    if (p + 4 > end) return false;
+    const code = frame[p]!;
+    const len = code !== 0xff ? 0 : dataLengthBytes(frame[p + 1]!, (frame[p + 2]! << 8) | frame[p + 3]!);
+    if (p + 4 + len > end) return false;
+    table.code[base + i] = code;
+    table.start[base + i] = p + 4;
+    table.length[base + i] = len;
+    p += 4 + len;
+    if (len & 1 && i < count - 1) p++;
+  }
+  return end - p <= 1;
 }
 
 function itemCount(params: Buffer): number {
