@@ -35,10 +35,22 @@ interface PreparedRead<T> {
   results?: RecordBuilder | null;
 }
 
-type RecordBuilder = (read: readonly TagResult<PlcValue>[]) => Record<string, unknown>;
+type RecordBuilder = (read: readonly unknown[]) => Record<string, unknown>;
 
 /**
- * A function returning `{ "DB1,INT2": read[0].value, … }` for a polled list.
+ * What read() needs from a driver: a value per tag and, only when some tag
+ * failed, an error at its index (its value is then undefined). No result
+ * object per tag: that is readDetailed's shape, built from readTags.
+ */
+export interface ReadValues {
+  values: PlcValue[];
+  errors: (PlcError | undefined)[] | undefined;
+}
+
+const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) as ReadValues;
+
+/**
+ * A function returning `{ "DB1,INT2": read[0], … }` for a polled list.
  * Adding hundreds of string keys to an object one by one costs V8 a new
  * hidden class per key (~125 µs for 1000 tags, as much as the whole poll);
  * an object literal is built in one step (~4 µs). Keys are JSON-quoted
@@ -52,15 +64,24 @@ function recordBuilder(prepared: PreparedRead<{ readonly address: string }>, kin
   build = null;
   const keys = prepared.tags.map((t) => t.address);
   if (!keys.includes('__proto__')) {
-    const pick = kind === 'values' ? '.value' : '';
     try {
-      build = new Function('read', `return {${keys.map((k, i) => `${JSON.stringify(k)}: read[${i}]${pick}`).join(',\n')}};`) as RecordBuilder;
+      build = new Function('read', `return {${keys.map((k, i) => `${JSON.stringify(k)}: read[${i}]`).join(',\n')}};`) as RecordBuilder;
     } catch {
       build = null;
     }
   }
   prepared[kind] = build;
   return build ?? undefined;
+}
+
+/** Result objects from values and errors (a loop: `values` has holes where tags failed). */
+export function toResults(values: readonly PlcValue[], errors: readonly (PlcError | undefined)[] | undefined): TagResult<PlcValue>[] {
+  const results = new Array<TagResult<PlcValue>>(values.length);
+  for (let i = 0; i < values.length; i++) {
+    const error = errors?.[i];
+    results[i] = error ? { ok: false, error } : { ok: true, value: values[i]! };
+  }
+  return results;
 }
 
 function sameStrings(a: readonly string[], b: readonly string[]): boolean {
@@ -116,6 +137,23 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
   protected abstract parseTag(address: string): T;
   /** One result per tag, in order. Throw only when the whole request failed. */
   protected abstract readTags(session: S, tags: readonly T[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]>;
+
+  /**
+   * read()'s path: the same outcome as readTags without a result object per
+   * tag. This default derives it from readTags; a driver whose poll is hot
+   * overrides it (and then derives readTags from it).
+   */
+  protected async readValues(session: S, tags: readonly T[], signal?: AbortSignal): Promise<ReadValues> {
+    const results = await this.readTags(session, tags, signal);
+    const values = new Array<PlcValue>(results.length);
+    let errors: (PlcError | undefined)[] | undefined;
+    for (let i = 0; i < results.length; i++) {
+      const r = results[i]!;
+      if (r.ok) values[i] = r.value;
+      else (errors ??= new Array<PlcError | undefined>(results.length))[i] = r.error;
+    }
+    return { values, errors };
+  }
   /** One result per item, in order. Encode values here: a ValueError is that tag's result. */
   protected abstract writeTags(
     session: S,
@@ -188,13 +226,13 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     }
     const session = this.liveSession();
     const { tags } = prepared;
-    const read = tags.length > 0 ? await this.readTags(session, tags, options?.signal) : [];
-    for (let i = 0; i < tags.length; i++) if (!read[i]!.ok) return this.valuesOrThrow(this.byAddress(prepared, read));
+    const { values, errors } = tags.length > 0 ? await this.readValues(session, tags, options?.signal) : NO_VALUES;
+    if (errors) return this.valuesOrThrow(this.byAddress(prepared, toResults(values, errors)));
     const build = recordBuilder(prepared, 'values');
-    if (build) return build(read) as Record<string, PlcValue>;
-    const values: Record<string, PlcValue> = {};
-    for (let i = 0; i < tags.length; i++) values[tags[i]!.address] = (read[i] as { value: PlcValue }).value;
-    return values;
+    if (build) return build(values) as Record<string, PlcValue>;
+    const record: Record<string, PlcValue> = {};
+    for (let i = 0; i < tags.length; i++) record[tags[i]!.address] = values[i]!;
+    return record;
   }
 
   private valuesOrThrow(results: Record<string, TagResult<PlcValue>>): Record<string, PlcValue> {

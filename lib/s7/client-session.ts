@@ -9,7 +9,7 @@ import { FrameReader } from '../link/framer';
 import { abortError } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { S7Endpoint } from '../url';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication, type S7Message } from './codec';
+import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
 import { headerError, remoteTsapFor } from './constants';
 
 /** The largest TPKT frame we accept (the biggest S7 PDU is 65535 anyway; the PLC cannot make us buffer more). */
@@ -20,8 +20,8 @@ const REQUESTED_AMQ = 8;
 const TPDU_SIZE_CODE = 0x0a;
 const CONNECTION_TYPES = { pg: 1, op: 2, basic: 3 } as const;
 
-/** Called once per job: with the PLC's answer, or with the error that ended the wait. */
-export type JobDone = (err: PlcError | undefined, answer: S7Message | undefined) => void;
+/** Called once per job: with the PLC's answer frame (headers checked by the caller of answer()), or with the error that ended the wait. */
+export type JobDone = (err: PlcError | undefined, answer: Buffer | undefined) => void;
 
 interface InFlight {
   done: JobDone | undefined;
@@ -62,6 +62,7 @@ export class S7Session {
   private timer: NodeJS.Timeout | undefined;
   private dead: PlcError | undefined;
   private readonly maxQueued: number;
+  private corked = false;
 
   constructor(
     readonly socket: net.Socket,
@@ -121,8 +122,8 @@ export class S7Session {
     this.waiting.push(item);
   }
 
-  /** Hands an answer to the job with that PDU reference; false when none waits for it. */
-  answer(ref: number, message: S7Message): boolean {
+  /** Hands an answer frame to the job with that PDU reference; false when none waits for it. */
+  answer(ref: number, frame: Buffer): boolean {
     const job = this.inflight.get(ref);
     if (!job) return false;
     this.inflight.delete(ref);
@@ -132,7 +133,7 @@ export class S7Session {
       this.timer = undefined;
     }
     this.drain();
-    job.done?.(undefined, message);
+    job.done?.(undefined, frame);
     return true;
   }
 
@@ -167,8 +168,20 @@ export class S7Session {
     this.inflight.set(ref, { done, deadline: Date.now() + this.timeout, what, release });
     this.timer ??= setTimeout(() => this.sweep(), this.timeout);
     this.onSend?.(frame);
+    // Jobs started in one tick (a poll's PDUs, or the queue draining on an
+    // answer) leave in one writev: one syscall instead of one per PDU.
+    if (!this.corked) {
+      this.corked = true;
+      this.socket.cork();
+      process.nextTick(this.uncork);
+    }
     this.socket.write(frame);
   }
+
+  private readonly uncork = (): void => {
+    this.corked = false;
+    this.socket.uncork();
+  };
 
   private drain(): void {
     while (this.inflight.size < this.maxJobs && this.head < this.waiting.length) {

@@ -11,11 +11,11 @@
  */
 import { formatAddress, parseAddress } from '../address';
 import { ConnectionError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, type ClientOptions } from '../link/client-base';
+import { BaseClient, toResults, type ClientOptions, type ReadValues } from '../link/client-base';
 import type { PlcValue, Protocol, Tag } from '../types';
 import { endpointName, type S7Endpoint } from '../url';
-import { decodeTag } from '../values';
-import { decodeS7, encodeReadRequest, encodeWriteRequest, type ReadResponseItem, type S7Message } from './codec';
+import { decodeTag, tagDecoder, type TagDecoder } from '../values';
+import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadAck, type ReadItemTable, type S7Message } from './codec';
 import { CotpType, describeReturnCode, headerError } from './constants';
 import { openS7Session, S7Session } from './client-session';
 import { planRead, planWrite, ReadPlanCache, tagData, type ReadPlan } from './planner';
@@ -110,13 +110,17 @@ export class S7Client extends BaseClient<S7Session, Tag> {
         if ((frame[5]! & 0xf0) === CotpType.DR) {
           return fail(new ConnectionError('CONNECTION_LOST', `${this.name} disconnected (COTP disconnect request, reason 0x${(frame[10] ?? 0).toString(16)})`));
         }
-        let message: S7Message;
-        try {
-          message = decodeS7(frame);
-        } catch (err) {
-          return fail(linkError(this.name, err));
+        // The headers are checked here (a frame that is not S7 drops the link);
+        // the job that asked decodes the rest (S7Client.decode, scanReadAck).
+        let ref = s7AnswerRef(frame);
+        if (ref < 0) {
+          try {
+            ref = decodeS7(frame).pduRef;
+          } catch (err) {
+            return fail(linkError(this.name, err));
+          }
         }
-        if (!session.answer(message.pduRef, message)) this.stats.ignoredReplies++;
+        if (!session.answer(ref, frame)) this.stats.ignoredReplies++;
       }
     });
     socket.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
@@ -134,39 +138,62 @@ export class S7Client extends BaseClient<S7Session, Tag> {
    * still works on it); a timeout drops the link (S7Session).
    */
   private job(session: S7Session, frame: Buffer, what: string, signal?: AbortSignal): Promise<S7Message> {
-    return new Promise((resolve, reject) => session.send(frame, what, (err, answer) => (err ? reject(err) : resolve(answer!)), signal));
+    return new Promise((resolve, reject) =>
+      session.send(frame, what, (err, answer) => (err ? reject(err) : resolve(this.decode(session, answer!))), signal),
+    );
+  }
+
+  /** Decodes an answer; a malformed one drops the link, as any frame the client cannot make sense of does. */
+  private decode(session: S7Session, frame: Buffer): S7Message {
+    try {
+      return decodeS7(frame);
+    } catch (err) {
+      const e = linkError(this.name, err);
+      session.lose?.(e);
+      throw e;
+    }
   }
 
   // ---------------------------------------------------------------- reads
 
   protected async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+    const { values, errors } = await this.readValues(session, tags, signal);
+    return toResults(values, errors);
+  }
+
+  protected override async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
     this.stats.requests++;
     const plan = this.plans.get(tags, session.pduSize);
-    const { results, retry } = await this.execute(session, tags, plan, signal);
-    if (retry.length > 0) {
+    const read = await this.execute(session, tags, plan, signal);
+    if (read.retry.length > 0) {
       // An item merged from several tags failed (e.g. one tag past the end of a DB): read those tags alone.
-      const alone = retry.map((i) => tags[i]!);
+      const alone = read.retry.map((i) => tags[i]!);
       const again = await this.execute(session, alone, planRead(alone, session.pduSize, { merge: false }), signal);
-      retry.forEach((i, k) => (results[i] = again.results[k]!));
+      const errors = read.errors!;
+      read.retry.forEach((i, k) => {
+        errors[i] = again.errors?.[k];
+        if (!errors[i]) read.values[i] = again.values[k]!;
+      });
+      if (errors.every((e) => e === undefined)) read.errors = undefined;
     }
-    return results;
+    return read;
   }
 
   /** A plan's request frames (reused while not in flight) and where each tag's bytes lie, computed once per plan. */
-  private compiled(plan: ReadPlan): CompiledRead {
+  private compiled(plan: ReadPlan, tags: readonly Tag[]): CompiledRead {
     let c = this.compiledPlans.get(plan);
     if (!c) {
-      c = compileRead(plan);
+      c = compileRead(plan, tags);
       this.compiledPlans.set(plan, c);
     }
     return c;
   }
 
-  private execute(session: S7Session, tags: readonly Tag[], plan: ReadPlan, signal?: AbortSignal): Promise<{ results: TagResult<PlcValue>[]; retry: number[] }> {
-    const c = this.compiled(plan);
+  private execute(session: S7Session, tags: readonly Tag[], plan: ReadPlan, signal?: AbortSignal): Promise<ReadValues & { retry: number[] }> {
+    const c = this.compiled(plan, tags);
     const n = plan.pdus.length;
-    const answers: S7Message[] = new Array<S7Message>(n);
-    if (n === 0) return Promise.resolve(this.collect(tags, plan, c, answers));
+    const answers: Buffer[] = new Array<Buffer>(n);
+    if (n === 0) return Promise.resolve(this.collect(session, tags, plan, c, answers));
     return new Promise((resolve, reject) => {
       let left = n;
       let failed = false;
@@ -192,7 +219,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
             answers[p] = answer!;
             if (--left > 0) return;
             try {
-              resolve(this.collect(tags, plan, c, answers));
+              resolve(this.collect(session, tags, plan, c, answers));
             } catch (e) {
               reject(e);
             }
@@ -204,71 +231,108 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     });
   }
 
-  /** Per-tag results straight from the answers' frames; values are decoded from subarrays of the frames, never copied unless split. */
-  private collect(tags: readonly Tag[], plan: ReadPlan, c: CompiledRead, answers: readonly S7Message[]): { results: TagResult<PlcValue>[]; retry: number[] } {
+  /**
+   * Values straight from the answer frames: each item is located in place
+   * (scanReadAck, into the plan's scratch table: collect runs synchronously,
+   * so polls of the same plan never share it at once), each tag decoded at
+   * its offset. No object per item or per tag; a tag split across items is
+   * reassembled. Errors are per tag: a failed PDU fails its tags, a failed
+   * item the tags in it.
+   */
+  private collect(session: S7Session, tags: readonly Tag[], plan: ReadPlan, c: CompiledRead, answers: readonly Buffer[]): ReadValues & { retry: number[] } {
     const n = plan.pdus.length;
-    const items: (ReadResponseItem[] | undefined)[] = new Array<ReadResponseItem[] | undefined>(n);
-    let errors: (PlcError | undefined)[][] | undefined;
-    const setError = (p: number, i: number, err: PlcError) => {
-      errors ??= plan.pdus.map((pd) => new Array<PlcError | undefined>(pd.items.length));
-      errors[p]![i] = err;
-    };
+    const { table, itemBase, itemLength } = c;
+    let pduErrors: (PlcError | undefined)[] | undefined;
+    let itemsFailed = false;
     for (let p = 0; p < n; p++) {
-      const pdu = plan.pdus[p]!;
-      const count = pdu.items.length;
-      const answer = answers[p]!;
-      let failAll: PlcError | undefined;
-      if (answer.kind === 'error') failAll = headerError(answer.errorClass, answer.errorCode, 'read');
-      else if (answer.kind !== 'read-ack' || answer.items.length !== count) {
-        failAll = new ProtocolError(`the answer to a read of ${count} item(s) does not match it (${answer.kind})`);
-      }
-      if (failAll || answer.kind !== 'read-ack') {
-        for (let i = 0; i < count; i++) setError(p, i, failAll!);
-        continue;
-      }
-      for (let i = 0; i < count; i++) {
-        const item = answer.items[i]!;
-        const expected = pdu.items[i]!.length;
-        if (item.returnCode !== SUCCESS) setError(p, i, returnCodeError(item.returnCode));
-        else if (item.data.length !== expected) setError(p, i, new ProtocolError(`asked for ${expected} bytes, the PLC returned ${item.data.length}`));
-      }
-      items[p] = answer.items;
-    }
-    const results: TagResult<PlcValue>[] = new Array<TagResult<PlcValue>>(tags.length);
-    const retry: number[] = [];
-    for (let t = 0; t < tags.length; t++) {
-      const tag = tags[t]!;
-      if (errors) {
-        let err: PlcError | undefined;
-        let retryAlone = false;
-        for (const s of plan.slices[t]!) {
-          const itemError = errors[s.pdu]![s.item];
-          if (!itemError) continue;
-          err ??= itemError;
-          // Only a return code of an item that also served other tags can be one tag's fault.
-          if (itemError.plcCode !== undefined && itemError.plcCode <= 0xff && c.tagsPerItem().get(s.pdu * 256 + s.item)! > 1) retryAlone = true;
-        }
+      const count = plan.pdus[p]!.items.length;
+      const base = itemBase[p]!;
+      const frame = answers[p]!;
+      if (!scanReadAck(frame, count, table, base)) {
+        const err = this.unusualReadAnswer(session, frame, count, table, base);
         if (err) {
-          if (retryAlone) retry.push(t);
-          results[t] = { ok: false, error: tagError(tag, err) };
+          (pduErrors ??= new Array<PlcError | undefined>(n))[p] = err;
           continue;
         }
       }
+      for (let i = base; i < base + count; i++) if (table.code[i] !== SUCCESS || table.length[i] !== itemLength[i]) itemsFailed = true;
+    }
+    const values = new Array<PlcValue>(tags.length);
+    const { tagPdu, tagItem, tagOffset, decoders } = c;
+    if (!pduErrors && !itemsFailed) {
+      for (let t = 0; t < tags.length; t++) {
+        const p = tagPdu[t]!;
+        values[t] = p >= 0 ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!) : this.splitValue(tags[t]!, t, plan, c, answers);
+      }
+      return { values, errors: undefined, retry: [] };
+    }
+    const errors = new Array<PlcError | undefined>(tags.length);
+    const retry: number[] = [];
+    const itemError = (p: number, i: number): PlcError | undefined => {
+      const failAll = pduErrors?.[p];
+      if (failAll) return failAll;
+      const k = itemBase[p]! + i;
+      const rc = table.code[k]!;
+      if (rc !== SUCCESS) return returnCodeError(rc);
+      if (table.length[k] !== itemLength[k]) return new ProtocolError(`asked for ${itemLength[k]} bytes, the PLC returned ${table.length[k]}`);
+      return undefined;
+    };
+    for (let t = 0; t < tags.length; t++) {
+      const tag = tags[t]!;
+      let err: PlcError | undefined;
+      let retryAlone = false;
+      for (const s of plan.slices[t]!) {
+        const e = itemError(s.pdu, s.item);
+        if (!e) continue;
+        err ??= e;
+        // Only a return code of an item that also served other tags can be one tag's fault.
+        if (e.plcCode !== undefined && e.plcCode <= 0xff && c.tagsPerItem().get(s.pdu * 256 + s.item)! > 1) retryAlone = true;
+      }
+      if (err) {
+        if (retryAlone) retry.push(t);
+        errors[t] = tagError(tag, err);
+        continue;
+      }
       try {
-        const p = c.tagPdu[t]!;
-        let value: PlcValue;
-        if (p >= 0) value = decodeTag(tag, items[p]![c.tagItem[t]!]!.data, c.tagOffset[t]!);
-        else {
-          const data = items.map((list) => (list ? list.map((x) => x.data) : []));
-          const { data: bytes, offset } = tagData(plan, t, data);
-          value = decodeTag(tag, bytes, offset);
-        }
-        results[t] = { ok: true, value };
+        const p = tagPdu[t]!;
+        values[t] = p >= 0 ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!) : this.splitValue(tag, t, plan, c, answers);
       } catch (e) {
-        results[t] = { ok: false, error: tagError(tag, toPlcError(e, 'PROTOCOL_ERROR')) };
+        errors[t] = tagError(tag, toPlcError(e, 'PROTOCOL_ERROR'));
       }
     }
-    return { results, retry };
+    return { values, errors, retry };
+  }
+
+  /**
+   * An answer scanReadAck did not take: decodes it (malformed drops the
+   * link and throws). A header error, another kind of answer or a wrong item
+   * count is the error of the whole PDU; a read ack in an unusual framing
+   * fills the table like scanReadAck.
+   */
+  private unusualReadAnswer(session: S7Session, frame: Buffer, count: number, table: ReadItemTable, base: number): PlcError | undefined {
+    const answer = this.decode(session, frame);
+    if (answer.kind === 'error') return headerError(answer.errorClass, answer.errorCode, 'read');
+    if (answer.kind !== 'read-ack' || answer.items.length !== count) {
+      return new ProtocolError(`the answer to a read of ${count} item(s) does not match it (${answer.kind})`);
+    }
+    answer.items.forEach((item, i) => {
+      table.code[base + i] = item.returnCode;
+      table.start[base + i] = item.data.byteOffset - frame.byteOffset;
+      table.length[base + i] = item.data.length;
+    });
+    return undefined;
+  }
+
+  /** A tag whose bytes the planner split over several items (a STRING longer than an item can carry). */
+  private splitValue(tag: Tag, t: number, plan: ReadPlan, c: CompiledRead, answers: readonly Buffer[]): PlcValue {
+    const data = plan.pdus.map((pdu, p) =>
+      pdu.items.map((_, i) => {
+        const k = c.itemBase[p]! + i;
+        return answers[p]!.subarray(c.table.start[k]!, c.table.start[k]! + c.table.length[k]!);
+      }),
+    );
+    const { data: bytes, offset } = tagData(plan, t, data);
+    return decodeTag(tag, bytes, offset);
   }
 
   // ---------------------------------------------------------------- writes
@@ -311,15 +375,29 @@ interface CompiledRead {
   busy: Uint8Array;
   release: (() => void)[];
   what: string[];
+  /** Per PDU: the index of its first item in the item arrays. */
+  itemBase: Int32Array;
+  /** Per item (all PDUs): the bytes asked for; `table` is scratch for the answers' items. */
+  itemLength: Int32Array;
+  table: ReadItemTable;
   /** Per tag: the PDU, item and offset of its bytes; PDU −1 when the tag was split across items. */
   tagPdu: Int32Array;
   tagItem: Int32Array;
   tagOffset: Int32Array;
+  decoders: TagDecoder[];
   tagsPerItem(): Map<number, number>;
 }
 
-function compileRead(plan: ReadPlan): CompiledRead {
+function compileRead(plan: ReadPlan, tags: readonly Tag[]): CompiledRead {
   const busy = new Uint8Array(plan.pdus.length);
+  const itemBase = new Int32Array(plan.pdus.length);
+  let items = 0;
+  plan.pdus.forEach((pdu, p) => {
+    itemBase[p] = items;
+    items += pdu.items.length;
+  });
+  const itemLength = new Int32Array(items);
+  plan.pdus.forEach((pdu, p) => pdu.items.forEach((item, i) => (itemLength[itemBase[p]! + i] = item.length)));
   const tagPdu = new Int32Array(plan.slices.length);
   const tagItem = new Int32Array(plan.slices.length);
   const tagOffset = new Int32Array(plan.slices.length);
@@ -335,9 +413,13 @@ function compileRead(plan: ReadPlan): CompiledRead {
     busy,
     release: plan.pdus.map((_, p) => () => (busy[p] = 0)),
     what: plan.pdus.map((pdu) => `read of ${pdu.items.length} item(s)`),
+    itemBase,
+    itemLength,
+    table: { code: new Uint8Array(items), start: new Int32Array(items), length: new Int32Array(items) },
     tagPdu,
     tagItem,
     tagOffset,
+    decoders: tags.map(tagDecoder),
     tagsPerItem: () => (shared ??= tagsPerItem(plan)),
   };
 }
