@@ -43,6 +43,20 @@ describe('link: FrameReader', () => {
     expect(reader.buffered).to.equal(0);
   });
 
+  it('copies frames by default; with copy: false they share the chunks memory, also across chunks', () => {
+    const chunk = Buffer.from(stream);
+    const copied = new FrameReader(lengthPrefixed).push(chunk);
+    const shared = new FrameReader(lengthPrefixed, undefined, { copy: false }).push(chunk);
+    chunk[1] = 0xaa;
+    expect(copied[0]!.toString('hex')).to.equal('030102');
+    expect(shared[0]!.toString('hex')).to.equal('03aa02');
+    expect(shared[2]!.buffer).to.equal(chunk.buffer);
+    const reader = new FrameReader(lengthPrefixed, undefined, { copy: false });
+    const frames = [...reader.push(stream.subarray(0, 5)), ...reader.push(stream.subarray(5))];
+    expect(frames.map((f) => f.toString('hex'))).to.deep.equal(expected);
+    expect(reader.buffered).to.equal(0);
+  });
+
   it('refuses to buffer more than its limit (a hostile length field)', () => {
     const reader = new FrameReader(() => ({ kind: 'need' }), 16);
     reader.push(Buffer.alloc(10));

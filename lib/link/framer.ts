@@ -11,15 +11,30 @@ export type FrameCheck =
   | { kind: 'bad'; error: ProtocolError };
 
 const DEFAULT_MAX_BUFFERED = 1 << 20;
+const EMPTY = Buffer.alloc(0);
+
+export interface FrameReaderOptions {
+  /**
+   * false: frames and the bytes kept between chunks are subarrays of the
+   * chunks pushed, not copies. Only for chunks that stay the caller's, as a
+   * net.Socket's 'data' chunks do (each read gets its own memory); a stream
+   * that reuses its buffers needs the default, true.
+   */
+  copy?: boolean;
+}
 
 /** Cuts a byte stream into frames with a framer function. Knows nothing of sockets. */
 export class FrameReader {
   private pending: Buffer = Buffer.alloc(0);
+  private readonly copy: boolean;
 
   constructor(
     private readonly check: (buffered: Buffer) => FrameCheck,
     private readonly maxBuffered = DEFAULT_MAX_BUFFERED,
-  ) {}
+    options: FrameReaderOptions = {},
+  ) {
+    this.copy = options.copy ?? true;
+  }
 
   get buffered(): number {
     return this.pending.length;
@@ -33,26 +48,27 @@ export class FrameReader {
       const verdict = this.check(buf);
       if (verdict.kind === 'need') break;
       if (verdict.kind === 'bad') {
-        this.pending = Buffer.alloc(0);
+        this.pending = EMPTY;
         throw verdict.error;
       }
       const length = Math.max(1, Math.min(verdict.length, buf.length));
       if (verdict.kind === 'frame') {
         if (verdict.length > buf.length) break;
-        frames.push(Buffer.from(buf.subarray(0, length)));
+        const frame = buf.subarray(0, length);
+        frames.push(this.copy ? Buffer.from(frame) : frame);
       }
       buf = buf.subarray(length);
     }
     if (buf.length > this.maxBuffered) {
-      this.pending = Buffer.alloc(0);
+      this.pending = EMPTY;
       throw new ProtocolError(`peer sent ${buf.length} bytes without a complete frame (limit ${this.maxBuffered})`);
     }
-    // Keep a private copy: the chunk's memory belongs to the socket.
-    this.pending = buf.length === 0 ? Buffer.alloc(0) : Buffer.from(buf);
+    // Keep a private copy unless the chunks are ours to keep.
+    this.pending = buf.length === 0 ? EMPTY : this.copy ? Buffer.from(buf) : buf;
     return frames;
   }
 
   reset(): void {
-    this.pending = Buffer.alloc(0);
+    this.pending = EMPTY;
   }
 }

@@ -266,7 +266,8 @@ export interface OpenOptions {
  */
 export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Session> {
   const socket = await openTcp({ host: e.host, port: e.port, timeout: o.timeout, signal: o.signal });
-  const reader = new FrameReader(checkTpkt, MAX_FRAME);
+  // The socket's chunks are ours: frames are cut from them without a copy.
+  const reader = new FrameReader(checkTpkt, MAX_FRAME, { copy: false });
   const next = frameWaiter(socket, reader, o.signal, o.name);
   try {
     const calledTsap = e.remoteTsap ?? remoteTsapFor(e.connectionType, e.rack, e.slot);
