@@ -2,7 +2,7 @@ import { expect } from 'chai';
 import fc from 'fast-check';
 import { PlcError, ProtocolError, ValueError } from '../lib/errors';
 import type { DataTypeName } from '../lib/types';
-import { decodeTag, encodeInto, encodeTag, tagByteLength, validateValue, writeSpan, type TagShape } from '../lib/values';
+import { decodeTag, encodeInto, encodeTag, tagByteLength, tagDecoder, validateValue, writeSpan, type TagShape } from '../lib/values';
 
 const RUNS = 200;
 
@@ -124,6 +124,8 @@ describe('values: properties', () => {
           return;
         }
         expect(data.length - offset).to.be.at.least(tagByteLength(tag));
+        // The poll path's shared, per-shape decoder gives the same value.
+        expect(tagDecoder(tag)(data, offset)).to.deep.equal(value);
         const elements = tag.isArray ? (value as unknown[]) : [value];
         expect(elements).to.have.length(tag.count);
         for (const e of elements) expect(kindOf(e)).to.equal(jsTypeOf(tag.type));

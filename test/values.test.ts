@@ -4,6 +4,7 @@ import { PlcError, ProtocolError, ValueError } from '../lib/errors';
 import type { DataTypeName } from '../lib/types';
 import {
   decodeTag,
+  tagDecoder,
   describeJsType,
   elementByteLength,
   encodeInto,
@@ -154,6 +155,13 @@ describe('values: byte-exact fixtures for every type', () => {
   it('decodes at an offset into a larger buffer', () => {
     expect(decodeTag(shape('INT'), buf('FFFF 04D2 FFFF'), 2)).to.equal(1234);
     expect(decodeTag(shape('BOOL[2]@7'), buf('00 80 01'), 1)).to.deep.equal([true, true]);
+    // The poll path's decoders: the same values, one shared decoder per shape.
+    expect(tagDecoder(shape('INT'))(buf('FFFF 04D2 FFFF'), 2)).to.equal(1234);
+    expect(tagDecoder(shape('BOOL[2]@7'))(buf('00 80 01'), 1)).to.deep.equal([true, true]);
+    expect(tagDecoder(shape('INT', 'DB1,INT2'))).to.equal(tagDecoder(shape('INT', 'DB9,INT40')));
+    expect(tagDecoder(shape('BOOL@3'))).to.not.equal(tagDecoder(shape('BOOL@4')));
+    expect(tagDecoder(shape('BOOL@3'))(buf('08'), 0)).to.equal(true);
+    expect(tagDecoder(shape('BOOL@4'))(buf('08'), 0)).to.equal(false);
   });
 
   it('a 64-bit type accepts a safe-integer number on write and reads back a bigint', () => {

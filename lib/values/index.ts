@@ -70,13 +70,30 @@ export function decodeTag(tag: TagShape, data: Buffer, offset = 0): PlcValue {
 /** Decodes a whole tag from `data` at `offset`; the caller has checked that tagByteLength(tag) bytes are there. */
 export type TagDecoder = (data: Buffer, offset: number) => PlcValue;
 
+const decoders = new Map<string, TagDecoder>();
+const MAX_DECODERS = 4096;
+
 /**
  * decodeTag for one tag, resolved once (the codec, the element size, the
  * BOOL bit) so a poll that decodes the same tags again and again does no
  * lookups. Unlike decodeTag it does not check the length: a read plan has
  * already checked each item's length against the bytes its tags need.
+ * Decoders depend on the tag's shape only (type, count, string length, bit)
+ * and are shared: a table of 1000 tags holds a handful, not 1000 closures.
  */
 export function tagDecoder(tag: TagShape): TagDecoder {
+  const key = `${tag.type}|${tag.isArray ? tag.count : ''}|${tag.stringLength}|${tag.type === 'BOOL' ? tag.bitOffset : ''}`;
+  let decoder = decoders.get(key);
+  if (!decoder) {
+    if (decoders.size >= MAX_DECODERS) decoders.clear();
+    const shape: TagShape = { address: '', type: tag.type, count: tag.count, isArray: tag.isArray, stringLength: tag.stringLength, bitOffset: tag.bitOffset };
+    decoder = makeDecoder(shape);
+    decoders.set(key, decoder);
+  }
+  return decoder;
+}
+
+function makeDecoder(tag: TagShape): TagDecoder {
   if (tag.type === 'BOOL') {
     if (tag.isArray) return (data, offset) => decodeBits(tag, data, offset);
     const at = tag.bitOffset >> 3;
