@@ -23,7 +23,7 @@ const DURATION_MS = Number(opt('duration', QUICK ? 300 : 700));
 const ROUNDS = QUICK ? 1 : 2;
 const COUNT_POLLS = 3;
 const LATENCY_MS = Number(opt('latency', 20));
-const LATENCY_POLLS = QUICK ? 2 : 4;
+const LATENCY_POLLS = QUICK ? 3 : 9;
 const LOAD_MS = QUICK ? 300 : 1000;
 const clients = opt('clients', CLIENT_NAMES.join(',')).split(',');
 const tableNames = TABLES.map((t) => t.name).filter((n) => {
@@ -246,7 +246,7 @@ async function latencyModel() {
     await server.stop();
   }
   printTable(
-    `Latency model: the simulator delays each request ${LATENCY_MS} ms and serves up to AmQ at once; floor = ceil(PDUs / AmQ) × ${LATENCY_MS} ms`,
+    `Latency model: the simulator delays each request ${LATENCY_MS} ms and serves up to AmQ at once; poll ms = median of ${LATENCY_POLLS} polls; floor = ceil(PDUs / AmQ) × ${LATENCY_MS} ms`,
     ['model', 'table client', 'PDUs/poll', 'poll ms', 'floor ms', 'over floor'],
     rows,
   );
