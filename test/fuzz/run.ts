@@ -5,7 +5,7 @@
  */
 import { parseAddress } from '../../lib/address';
 import { FrameReader } from '../../lib/link/framer';
-import { checkTpkt, decodeCotp, decodeS7, encodeReadResponse, encodeSetupAck, encodeWriteResponse, encodeErrorAck, encodeReadRequest, encodeWriteRequest } from '../../lib/s7/codec';
+import { checkTpkt, decodeCotp, decodeS7, s7AnswerRef, scanReadAck, encodeReadResponse, encodeSetupAck, encodeWriteResponse, encodeErrorAck, encodeReadRequest, encodeWriteRequest } from '../../lib/s7/codec';
 import { decodeTag } from '../../lib/values';
 import { fuzz, type FuzzTarget } from './engine';
 import { extraTargets } from './targets';
@@ -51,6 +51,31 @@ const targets: FuzzTarget[] = [
           if (!(err instanceof Error) || !('code' in err)) throw err;
         }
       }
+    },
+  },
+  {
+    // The client's read path must accept exactly what decodeS7 accepts, at the same offsets.
+    name: 'S7 in-place read ack (client)',
+    seeds: s7Seeds,
+    run: (b) => {
+      const count = b[20] ?? 0;
+      const table = { code: new Uint8Array(count), start: new Int32Array(count), length: new Int32Array(count) };
+      const ref = s7AnswerRef(b);
+      const taken = scanReadAck(b, count, table, 0);
+      let m: ReturnType<typeof decodeS7> | undefined;
+      try {
+        m = decodeS7(b);
+      } finally {
+        if (taken && m === undefined) throw new Error('scanReadAck took a frame decodeS7 refuses');
+      }
+      if (ref >= 0 && ref !== m.pduRef) throw new Error(`s7AnswerRef ${ref}, decodeS7 ${m.pduRef}`);
+      if (taken !== (m.kind === 'read-ack' && m.items.length === count && b[4] === 2)) throw new Error('scanReadAck and decodeS7 disagree on taking it');
+      if (m.kind !== 'read-ack' || !taken) return;
+      m.items.forEach((item, i) => {
+        if (table.code[i] !== item.returnCode || table.length[i] !== item.data.length || table.start[i] !== item.data.byteOffset - b.byteOffset) {
+          throw new Error(`item ${i} located differently`);
+        }
+      });
     },
   },
   {
