@@ -267,41 +267,120 @@ function pack(atoms: readonly Atom[], pduSize: number, maxItems: number, gapThre
 }
 
 /**
- * Items for atoms i..j laid out in one PDU: a new item per area, and at the
- * largest gaps while items remain (a gap over 4 bytes costs more than an item
- * header); the other gaps are bridged. undefined when it does not fit.
+ * The cheapest items for each run of atoms i..j that one PDU can answer,
+ * grown one atom at a time: an exact dynamic program over the gaps (bridge
+ * it, or start a new item) whose state is the items used so far and the
+ * parity of the open item, because an odd-length item costs a fill byte
+ * unless it is the last. A new item is forced where the area changes.
+ * Each step costs O(maxItems), so growing a run to the PDU's end is linear.
  */
-function layout(atoms: readonly Atom[], i: number, j: number, maxItems: number, pduSize: number): { items: DraftItem[]; itemOf: number[]; response: number } | undefined {
-  let forced = 1;
-  const gaps: { k: number; gap: number }[] = [];
-  for (let k = i + 1; k <= j; k++) {
-    if (atoms[k]!.group !== atoms[k - 1]!.group) forced++;
-    else if (atoms[k]!.start - atoms[k - 1]!.end > DATA_HEADER) gaps.push({ k, gap: atoms[k]!.start - atoms[k - 1]!.end });
+class SegmentLayout {
+  /** Per step (atom i + s) and state (parity × (maxItems + 1) + items): response bytes so far, fills of closed items included. */
+  private readonly rows: Float64Array[] = [];
+  /** Per step and state: the previous state, negated when the atom started a new item. */
+  private readonly from: Int32Array[] = [];
+  private readonly width: number;
+
+  constructor(
+    private readonly atoms: readonly Atom[],
+    private readonly i: number,
+    private readonly maxItems: number,
+    private readonly pduSize: number,
+  ) {
+    this.width = maxItems + 1;
+    const row = new Float64Array(2 * this.width).fill(Infinity);
+    const len = atoms[i]!.end - atoms[i]!.start;
+    row[(len & 1) * this.width + 1] = DATA_HEADER + len;
+    this.rows.push(row);
+    this.from.push(new Int32Array(2 * this.width));
   }
-  if (forced > maxItems) return undefined;
-  gaps.sort((a, b) => b.gap - a.gap);
-  const split = new Set<number>();
-  for (let g = 0; g < gaps.length && g < maxItems - forced; g++) split.add(gaps[g]!.k);
-  const items: DraftItem[] = [];
-  const itemOf: number[] = [];
-  let response = RESPONSE_BASE;
-  for (let k = i; k <= j; k++) {
-    const a = atoms[k]!;
-    const last = items[items.length - 1];
-    if (!last || last.group !== a.group || split.has(k) || a.start < last.end) {
-      response += (last && (last.end - last.start) % 2 === 1 ? 1 : 0) + DATA_HEADER + (a.end - a.start);
-      items.push({ group: a.group, area: a.area, dbNumber: a.dbNumber, unit: a.unit, start: a.start, end: a.end });
-    } else {
-      response += a.end - last.end;
-      last.end = a.end;
+
+  /** The last atom laid out so far. */
+  get j(): number {
+    return this.i + this.rows.length - 1;
+  }
+
+  /** Adds atom j + 1; false (and nothing changes) when the run would no longer fit one PDU. */
+  grow(): boolean {
+    const a = this.atoms[this.j]!;
+    const b = this.atoms[this.j + 1]!;
+    const len = b.end - b.start;
+    const gap = b.start - a.end;
+    const bridge = a.group === b.group && gap >= 0;
+    const w = this.width;
+    const prev = this.rows[this.rows.length - 1]!;
+    const row = new Float64Array(2 * w).fill(Infinity);
+    const from = new Int32Array(2 * w);
+    for (let p = 0; p < 2; p++) {
+      for (let k = 1; k <= this.maxItems; k++) {
+        const cost = prev[p * w + k]!;
+        if (cost === Infinity) continue;
+        if (bridge) {
+          const q = (p + gap + len) & 1;
+          const c = cost + gap + len;
+          if (c < row[q * w + k]!) {
+            row[q * w + k] = c;
+            from[q * w + k] = p * w + k;
+          }
+        }
+        if (k < this.maxItems) {
+          const q = len & 1;
+          const c = cost + p + DATA_HEADER + len;
+          if (c < row[q * w + k + 1]!) {
+            row[q * w + k + 1] = c;
+            from[q * w + k + 1] = -(p * w + k);
+          }
+        }
+      }
     }
-    itemOf.push(items.length - 1);
-    if (response > pduSize || items.length > maxItems) return undefined;
+    if (this.best(row) === undefined) return false;
+    this.rows.push(row);
+    this.from.push(from);
+    return true;
   }
-  return { items, itemOf, response };
+
+  /** The state of `row` with the fewest wire bytes (answer + 12 request bytes per item) that fits the PDU. */
+  private best(row: Float64Array): number | undefined {
+    const w = this.width;
+    let state: number | undefined;
+    let wire = Infinity;
+    for (let s = 0; s < 2 * w; s++) {
+      const response = RESPONSE_BASE + row[s]!;
+      const k = s % w;
+      if (response > this.pduSize || REQUEST_BASE + REQUEST_ITEM * k > this.pduSize) continue;
+      if (response + REQUEST_ITEM * k < wire) {
+        wire = response + REQUEST_ITEM * k;
+        state = s;
+      }
+    }
+    return state;
+  }
+
+  /** The items of the run laid out so far, and per atom the index of its item. */
+  items(): { items: DraftItem[]; itemOf: number[]; response: number } {
+    const last = this.rows.length - 1;
+    let state = this.best(this.rows[last]!)!;
+    const response = RESPONSE_BASE + this.rows[last]![state]!;
+    const starts: boolean[] = new Array<boolean>(last + 1);
+    for (let s = last; s > 0; s--) {
+      const f = this.from[s]![state]!;
+      starts[s] = f < 0;
+      state = Math.abs(f);
+    }
+    starts[0] = true;
+    const items: DraftItem[] = [];
+    const itemOf: number[] = [];
+    for (let s = 0; s <= last; s++) {
+      const a = this.atoms[this.i + s]!;
+      if (starts[s]) items.push({ group: a.group, area: a.area, dbNumber: a.dbNumber, unit: a.unit, start: a.start, end: a.end });
+      else items[items.length - 1]!.end = a.end;
+      itemOf.push(items.length - 1);
+    }
+    return { items, itemOf, response };
+  }
 }
 
-/** Contiguous runs of atoms in address order, each as long as one PDU holds (optimal among such plans). */
+/** Contiguous runs of atoms in address order, each as long as one PDU holds, each laid out exactly (optimal among such plans). */
 function packSegments(atoms: readonly Atom[], pduSize: number, maxItems: number): Draft {
   const maxItem = maxReadItemData(pduSize);
   const bins: Bin[] = [];
@@ -324,14 +403,10 @@ function packSegments(atoms: readonly Atom[], pduSize: number, maxItems: number)
       i++;
       continue;
     }
-    let best = layout(atoms, i, i, maxItems, pduSize)!;
-    let j = i;
-    while (j + 1 < atoms.length && atoms[j + 1]!.end - atoms[j + 1]!.start <= maxItem) {
-      const next = layout(atoms, i, j + 1, maxItems, pduSize);
-      if (!next) break;
-      best = next;
-      j++;
-    }
+    const run = new SegmentLayout(atoms, i, maxItems, pduSize);
+    while (run.j + 1 < atoms.length && atoms[run.j + 1]!.end - atoms[run.j + 1]!.start <= maxItem && run.grow());
+    const best = run.items();
+    const j = run.j;
     const bin: Bin = { items: best.items, response: best.response };
     bins.push(bin);
     for (let k = i; k <= j; k++) placements.push([{ bin, item: best.items[best.itemOf[k - i]!]! }]);
@@ -428,7 +503,8 @@ export function tagData(plan: ReadPlan, tag: number, data: readonly (readonly (B
 
 /**
  * The fewest PDUs any plan could read `tags` in at `pduSize` — a bin-packing
- * lower bound, max(bytes bound, items bound):
+ * lower bound, the largest of a bytes bound, an items bound and a fill-byte
+ * bound (evenBytesWithItems), tags may be split anywhere in all three:
  * - bytes: every response carries at most PDU − 14 bytes of items. Per run of
  *   tags whose gaps are under 4 bytes (bridging a larger gap never saves
  *   bytes), with T tag bytes over a span S: at least k = ceil(T / max item)
@@ -479,7 +555,55 @@ export function lowerBoundPdus(tags: readonly Tag[], pduSize: number, options: P
   // Both limits at once: n PDUs carry at most n·perPdu items, so at most that many gaps can be left out.
   const least = bytesWithItems(spans);
   while (least(n * perPdu) > n * capacity) n++;
+  // Fill bytes: every item but the last of its PDU takes an even number of bytes.
+  const even = evenBytesWithItems(atomsOf(spans, true));
+  if (even) while (even[Math.min(even.length - 1, n * perPdu)]! - n > n * capacity) n++;
   return n;
+}
+
+/** Atoms beyond which evenBytesWithItems (quadratic) is not run and the bound goes without it. */
+const EVEN_BOUND_ATOMS = 4000;
+
+/**
+ * The fewest response bytes Σ (4 + len, rounded up to even) of items
+ * covering the atoms, per number of items allowed (index m: at most m
+ * items): a dynamic program over the gaps (bridge it or start an item),
+ * with the open item's parity as state. A PDU's items cost that less at
+ * most one byte (its last item needs no fill), which lowerBoundPdus
+ * subtracts. Any plan's items, trimmed to the atoms they cover and merged
+ * where they share an atom, are such a cover costing no more.
+ */
+function evenBytesWithItems(atoms: readonly Atom[]): Float64Array | undefined {
+  const n = atoms.length;
+  if (n === 0 || n > EVEN_BOUND_ATOMS) return undefined;
+  const w = n + 1;
+  let row = new Float64Array(2 * w).fill(Infinity);
+  const first = atoms[0]!.end - atoms[0]!.start;
+  row[(first & 1) * w + 1] = DATA_HEADER + first;
+  for (let i = 1; i < n; i++) {
+    const a = atoms[i - 1]!;
+    const b = atoms[i]!;
+    const len = b.end - b.start;
+    const gap = b.start - a.end;
+    const bridge = a.group === b.group && gap >= 0;
+    const next = new Float64Array(2 * w).fill(Infinity);
+    for (let p = 0; p < 2; p++) {
+      for (let k = 1; k <= i; k++) {
+        const cost = row[p * w + k]!;
+        if (cost === Infinity) continue;
+        if (bridge) {
+          const q = (p + gap + len) & 1;
+          if (cost + gap + len < next[q * w + k]!) next[q * w + k] = cost + gap + len;
+        }
+        const q = len & 1;
+        if (cost + p + DATA_HEADER + len < next[q * w + k + 1]!) next[q * w + k + 1] = cost + p + DATA_HEADER + len;
+      }
+    }
+    row = next;
+  }
+  const least = new Float64Array(w).fill(Infinity);
+  for (let m = 1; m < w; m++) least[m] = Math.min(least[m - 1]!, row[m]!, row[w + m]! + 1);
+  return least;
 }
 
 /**
