@@ -281,12 +281,13 @@ export class S7Client extends BaseClient<S7Session, Tag> {
       const tag = tags[t]!;
       let err: PlcError | undefined;
       let retryAlone = false;
-      for (const s of plan.slices[t]!) {
-        const e = itemError(s.pdu, s.item);
+      const { pieces } = plan;
+      for (let k = pieces.start[t]!; k < pieces.start[t + 1]!; k++) {
+        const e = itemError(pieces.pdu[k]!, pieces.item[k]!);
         if (!e) continue;
         err ??= e;
         // Only a return code of an item that also served other tags can be one tag's fault.
-        if (e.plcCode !== undefined && e.plcCode <= 0xff && c.tagsPerItem().get(s.pdu * 256 + s.item)! > 1) retryAlone = true;
+        if (e.plcCode !== undefined && e.plcCode <= 0xff && c.tagsPerItem().get(pieces.pdu[k]! * 256 + pieces.item[k]!)! > 1) retryAlone = true;
       }
       if (err) {
         if (retryAlone) retry.push(t);
@@ -398,15 +399,17 @@ function compileRead(plan: ReadPlan, tags: readonly Tag[]): CompiledRead {
   });
   const itemLength = new Int32Array(items);
   plan.pdus.forEach((pdu, p) => pdu.items.forEach((item, i) => (itemLength[itemBase[p]! + i] = item.length)));
-  const tagPdu = new Int32Array(plan.slices.length);
-  const tagItem = new Int32Array(plan.slices.length);
-  const tagOffset = new Int32Array(plan.slices.length);
-  plan.slices.forEach((slices, t) => {
-    const s = slices.length === 1 ? slices[0]! : undefined;
-    tagPdu[t] = s ? s.pdu : -1;
-    tagItem[t] = s ? s.item : 0;
-    tagOffset[t] = s ? s.offset : 0;
-  });
+  const { pieces } = plan;
+  const tagPdu = new Int32Array(tags.length);
+  const tagItem = new Int32Array(tags.length);
+  const tagOffset = new Int32Array(tags.length);
+  for (let t = 0; t < tags.length; t++) {
+    const k = pieces.start[t]!;
+    const whole = pieces.start[t + 1]! - k === 1;
+    tagPdu[t] = whole ? pieces.pdu[k]! : -1;
+    tagItem[t] = whole ? pieces.item[k]! : 0;
+    tagOffset[t] = whole ? pieces.offset[k]! : 0;
+  }
   let shared: Map<number, number> | undefined;
   return {
     frames: plan.pdus.map((pdu) => encodeReadRequest(0, pdu.items)),
@@ -427,7 +430,8 @@ function compileRead(plan: ReadPlan, tags: readonly Tag[]): CompiledRead {
 /** How many tags each item of a plan serves, keyed pdu × 256 + item (a PDU has at most 255 items). */
 function tagsPerItem(plan: ReadPlan): Map<number, number> {
   const counts = new Map<number, number>();
-  for (const slices of plan.slices) for (const s of slices) counts.set(s.pdu * 256 + s.item, (counts.get(s.pdu * 256 + s.item) ?? 0) + 1);
+  const { pdu, item } = plan.pieces;
+  for (let k = 0; k < pdu.length; k++) counts.set(pdu[k]! * 256 + item[k]!, (counts.get(pdu[k]! * 256 + item[k]!) ?? 0) + 1);
   return counts;
 }
 
