@@ -128,10 +128,8 @@ export class S7Session {
     if (!job) return false;
     this.inflight.delete(ref);
     job.release?.();
-    if (this.inflight.size === 0 && this.timer) {
-      clearTimeout(this.timer);
-      this.timer = undefined;
-    }
+    // The timer stays armed: when it fires with nothing in flight it just
+    // stops, so a poll does not create and clear a timer each time.
     this.drain();
     job.done?.(undefined, frame);
     return true;
@@ -166,7 +164,7 @@ export class S7Session {
     frame[11] = ref >> 8;
     frame[12] = ref & 0xff;
     this.inflight.set(ref, { done, deadline: Date.now() + this.timeout, what, release });
-    this.timer ??= setTimeout(() => this.sweep(), this.timeout);
+    this.timer ??= setTimeout(this.sweep, this.timeout);
     this.onSend?.(frame);
     // Jobs started in one tick (a poll's PDUs, or the queue draining on an
     // answer) leave in one writev: one syscall instead of one per PDU.
@@ -224,13 +222,13 @@ export class S7Session {
     };
   }
 
-  /** The oldest job decides: past its deadline, it times out and the link goes. */
-  private sweep(): void {
+  /** The oldest job (the first in the table) decides: past its deadline, it times out and the link goes. */
+  private readonly sweep = (): void => {
     this.timer = undefined;
     const now = Date.now();
     for (const [ref, job] of this.inflight) {
       if (job.deadline > now) {
-        this.timer = setTimeout(() => this.sweep(), job.deadline - now);
+        this.timer = setTimeout(this.sweep, job.deadline - now);
         return;
       }
       this.inflight.delete(ref);
@@ -239,7 +237,7 @@ export class S7Session {
       this.lose?.(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
       return;
     }
-  }
+  };
 }
 
 /** Local TSAP for rack/slot addressing: the connection type in the high byte (PG 0x0100, OP 0x0200, basic 0x0300). */
