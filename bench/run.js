@@ -123,6 +123,7 @@ function printTable(title, header, rows) {
 
 async function comparison() {
   const rows = [];
+  const memory = [];
   for (const s of SERVERS) {
     let server;
     try {
@@ -160,6 +161,7 @@ async function comparison() {
       const ours = results.find((r) => r.client === 'ours');
       const bound = lowerBound(tags, s.pdu);
       for (const r of results) {
+        if (!r.error) memory.push({ server: s.label, table: name, client: r.client, tags: tags.length, heap: r.heapBytesPerTag * tags.length, rss: r.rssBytesPerTag * tags.length });
         if (r.error) {
           rows.push([s.label, name, r.client ?? '', `error: ${r.error}`.slice(0, 60), '', '', '', '', '', '', '']);
           continue;
@@ -201,6 +203,44 @@ async function comparison() {
     `Polls against the same server (loopback; best of ${ROUNDS} rounds of ${DURATION_MS} ms per client; PDUs and bytes counted by a proxy over ${COUNT_POLLS} polls)`,
     ['server', 'table', 'client', 'polls/s', 'PDUs/poll', 'lower bound', 'max items', 'bytes/poll', 'CPU ms/1000 tags', 'RSS B/tag', 'heap B/tag'],
     rows.map((r) => [`${r[0]}`, `${r[1]} ${r[2]}`, ...r.slice(3)]),
+  );
+  printMarginalMemory(memory);
+}
+
+/**
+ * Heap per added tag: what a client keeps for the tags themselves, without
+ * its fixed cost (code, connection, buffers), which dominates "per tag" on
+ * small tables: (heap with table T − heap with the 10-tag table) / (tags of
+ * T − 10), both after the same 500 polls, per server and client. Only for
+ * the 1000-tag tables: the heap varies by ±100 kB between runs, which is
+ * ±1 kB per tag on 100 tags. (RSS varies by megabytes: not shown.)
+ */
+function printMarginalMemory(memory) {
+  const rows = [];
+  const servers = [...new Set(memory.map((m) => m.server))];
+  for (const server of servers) {
+    for (const name of tableNames) {
+      if (table(name).length < 1000) continue;
+      const per = {};
+      for (const client of clients) {
+        const base = memory.find((m) => m.server === server && m.client === client && m.table === '10 scattered');
+        const at = memory.find((m) => m.server === server && m.client === client && m.table === name);
+        if (!base || !at) continue;
+        per[client] = { heap: (at.heap - base.heap) / (at.tags - base.tags) };
+        rows.push([server, `${name} ${client}`, fmt(per[client].heap)]);
+      }
+      const anchors = Object.keys(per).filter((c) => c !== 'ours');
+      if (per.ours && anchors.length) {
+        const best = (key) => Math.min(...anchors.map((c) => per[c][key]));
+        rows.push([server, `${name} ours/best anchor`, `${fmt(per.ours.heap / best('heap'), 2)}×`]);
+      }
+    }
+  }
+  if (rows.length === 0) return;
+  printTable(
+    'Heap per added tag: (heap with the table − heap with the 10-tag table) / added tags, both after 500 polls',
+    ['server', 'table client', 'heap B/added tag'],
+    rows,
   );
 }
 
