@@ -14,10 +14,12 @@
  * torn between two PLC cycles) unless it is larger than one item can carry
  * (STRING[254] at PDU 240), then it is cut into chunks and reassembled.
  * Atoms are filled into PDUs in address order, bridging the gap to the
- * previous item when it is small, opening a new item otherwise. Several gap
- * thresholds are tried (including the 16 bytes a new item costs) and the plan
- * with the fewest PDUs, then the fewest bytes on the wire, wins: plans are
- * cached, so this runs once per tag list.
+ * previous item when it is small, opening a new item otherwise; several gap
+ * thresholds are tried (including the 16 bytes a new item costs). Another
+ * draft cuts the atoms into runs, each as long as one PDU holds, laid out
+ * exactly (SegmentLayout: bridge or split each gap, fill bytes included).
+ * The plan with the fewest PDUs, then the fewest bytes on the wire, wins:
+ * plans are cached, so this runs once per tag list.
  */
 import { PlcError, toPlcError } from '../errors';
 import type { Tag } from '../types';
