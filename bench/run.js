@@ -20,7 +20,7 @@ const opt = (name, dflt) => {
 };
 const QUICK = args.includes('--quick');
 const DURATION_MS = Number(opt('duration', QUICK ? 300 : 700));
-const ROUNDS = QUICK ? 1 : 2;
+const ROUNDS = QUICK ? 1 : 3;
 const COUNT_POLLS = 3;
 const LATENCY_MS = Number(opt('latency', 20));
 const LATENCY_POLLS = QUICK ? 3 : 9;
