@@ -109,6 +109,28 @@ describe('S7 client against the S7 simulator', function () {
     expect(client.stats.bytesReceived).to.be.greaterThan(0);
   });
 
+  it('plans a tag list once: polling it again reuses the plan and its request frames, a changed list is planned anew', async () => {
+    await client.connect();
+    const list = ['DB1,INT0', 'DB1,REAL2', 'DB1,X6.1', 'MW10', 'DB1,S8.4'];
+    const frames = new Set<Buffer>();
+    const session = (client as unknown as { session: { onSend: (f: Buffer) => void } }).session;
+    const counting = session.onSend;
+    session.onSend = (f) => {
+      frames.add(f);
+      counting(f);
+    };
+    for (let i = 0; i < 50; i++) await client.read(list);
+    expect(client.stats.plansMade).to.equal(1);
+    // 50 polls sent the plan's own frames again and again, not a new Buffer per poll.
+    expect(frames.size).to.equal(client.planFor(list).pdus.length);
+    await client.read([...list]); // the same addresses in a new array: the same plan
+    expect(client.stats.plansMade).to.equal(1);
+    list[1] = 'DB1,REAL4'; // the caller changed its array in place: noticed
+    expect(await client.read(list)).to.have.property('DB1,REAL4');
+    expect(client.stats.plansMade).to.equal(2);
+    session.onSend = counting;
+  });
+
   it('writing a STRING keeps the PLC\'s max-length byte; a too-long value is refused before anything is sent', async () => {
     await client.connect();
     const db = server.memory.area('DB', 1)!;

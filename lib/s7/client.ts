@@ -33,6 +33,8 @@ export interface S7Stats {
   requests: number;
   /** Replies that matched no pending job (wrong, duplicated or late PDU reference). */
   ignoredReplies: number;
+  /** Read plans computed; polling the same tag list again uses its plan (and its request frames) as they are. */
+  plansMade: number;
 }
 
 const SUCCESS = 0xff;
@@ -40,7 +42,7 @@ const SUCCESS = 0xff;
 export class S7Client extends BaseClient<S7Session, Tag> {
   readonly protocol: Protocol = 's7';
   readonly endpoint: S7Endpoint;
-  readonly stats: S7Stats = { pdusSent: 0, bytesSent: 0, bytesReceived: 0, requests: 0, ignoredReplies: 0 };
+  readonly stats: S7Stats = { pdusSent: 0, bytesSent: 0, bytesReceived: 0, requests: 0, ignoredReplies: 0, plansMade: 0 };
   private readonly plans = new ReadPlanCache();
   private readonly compiledPlans = new WeakMap<ReadPlan, CompiledRead>();
 
@@ -164,6 +166,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   protected override async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
     this.stats.requests++;
     const plan = this.plans.get(tags, session.pduSize);
+    this.stats.plansMade = this.plans.misses;
     const read = await this.execute(session, tags, plan, signal);
     if (read.retry.length > 0) {
       // An item merged from several tags failed (e.g. one tag past the end of a DB): read those tags alone.
