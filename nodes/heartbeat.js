@@ -18,6 +18,7 @@ module.exports = function (RED) {
     const interval = Math.max(100, Number(config.interval) || 1000);
     const timeout = Math.max(interval, Number(config.timeout) || 3 * interval);
     const watch = watchAddress ? new LifeSignWatch({ timeout }) : undefined;
+    const watchList = [watchAddress]; // one array for every beat: the client keeps its plan for it
     let lifeSign = writeMode === 'toggle' ? false : 0;
     let written = 0;
     let timer;
@@ -70,7 +71,7 @@ module.exports = function (RED) {
         } else if (r) throw Object.assign(r.error, { tag: writeAddress });
       }
       if (watch) {
-        const r = (await client.readDetailed([watchAddress]))[watchAddress];
+        const r = (await client.readDetailed(watchList))[watchAddress];
         if (!r || !r.ok) throw Object.assign(r ? r.error : new Error('no result'), { tag: watchAddress });
         const event = watch.observe(r.value);
         if (event) node.send({ topic: node.name || 'heartbeat', payload: watch.report(event) });

@@ -5,6 +5,11 @@ const { tagTable, tagsOfMessage, outcomes, ChangeFilter, codeError } = require('
 /** Reads waiting behind the running one at most; more is an error, not memory growth. */
 const MAX_WAITING_READS = 100;
 
+/** Each address once, in table order (a table may name one address twice). */
+function uniqueAddresses(list) {
+  return [...new Set(list.map((t) => t.address))];
+}
+
 /**
  * plcwire-read: polls `tags` every `interval` ms (0 = only on input) and
  * reads on every input message (`msg.tags` reads other addresses on demand).
@@ -48,12 +53,17 @@ module.exports = function (RED) {
       return run;
     }
 
+    // The configured table's addresses, made once: the client recognises an
+    // address array it has seen (its parsed tags, plan and request frames are
+    // kept for it), so every poll passes the same array.
+    const tableAddresses = uniqueAddresses(tags);
+
     async function read(list) {
       if (!connection) throw noConnectionError(RED);
       if (connection.problem) throw connection.problem;
       const client = connection.client;
       if (!client) throw noConnectionError(RED);
-      const results = await client.readDetailed([...new Set(list.map((t) => t.address))]);
+      const results = await client.readDetailed(list === tags ? tableAddresses : uniqueAddresses(list));
       return outcomes(list, results);
     }
 

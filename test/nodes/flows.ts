@@ -63,6 +63,23 @@ export function describeProtocol(title: string, factory: SimFactory): void {
         expect(later.payload.level).to.equal(-22);
       });
 
+      it('polls its table with one address array, so the client keeps its parsed tags and plan for it', async () => {
+        await load([conn(sim.url), readNode({ tags: [{ name: 'a', address: sim.addr(0) }, { name: 'b', address: sim.addr(1) }, { name: 'a2', address: sim.addr(0) }] }), out()]);
+        const rec = recorder('out');
+        await rec.next(() => true);
+        const client = helper.getNode('conn').client;
+        const seen = new Set<unknown>();
+        const readDetailed = client.readDetailed;
+        client.readDetailed = function (addresses: string[], ...rest: unknown[]) {
+          seen.add(addresses);
+          expect(addresses).to.deep.equal([sim.addr(0), sim.addr(1)]);
+          return readDetailed.call(this, addresses, ...rest);
+        };
+        for (let i = 0; i < 3; i++) await rec.next(() => true);
+        client.readDetailed = readDetailed;
+        expect(seen.size).to.equal(1);
+      });
+
       it('polls in per-tag mode: one message per tag, topic = name', async () => {
         sim.set(0, 5);
         sim.set(1, 6);
