@@ -263,11 +263,15 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     const values = new Array<PlcValue>(tags.length);
     const { tagPdu, tagItem, tagOffset, decoders } = c;
     if (!pduErrors && !itemsFailed) {
-      for (let t = 0; t < tags.length; t++) {
-        const p = tagPdu[t]!;
-        values[t] = p >= 0 ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!) : this.splitValue(tags[t]!, t, plan, c, answers);
+      try {
+        for (let t = 0; t < tags.length; t++) {
+          const p = tagPdu[t]!;
+          values[t] = p >= 0 ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!) : this.splitValue(tags[t]!, t, plan, c, answers);
+        }
+        return { values, errors: undefined, retry: [] };
+      } catch {
+        // A decoder threw (no decoder should): tag by tag below, so only that tag fails.
       }
-      return { values, errors: undefined, retry: [] };
     }
     const errors = new Array<PlcError | undefined>(tags.length);
     const retry: number[] = [];
