@@ -310,6 +310,42 @@ function pack(atoms: readonly Atom[], pduSize: number, maxItems: number, gapThre
 }
 
 /**
+ * One step of the bridge-or-split program (SegmentLayout, the lower bound):
+ * from `prev` to `next` for atom b after atom a. A state is parity × w +
+ * items (the open item's length parity, items used so far, 1 ≤ items ≤
+ * kMax); its value is the response bytes so far, the fill bytes of closed
+ * items included. Bridging the gap keeps the item count; starting an item
+ * (while items < maxItems) pays the open item's fill, a header and the atom.
+ * `from`, if given, gets each new state's previous state, negated when the
+ * atom started an item.
+ */
+function bridgeOrSplit(prev: Float64Array, next: Float64Array, w: number, kMax: number, maxItems: number, a: Atom, b: Atom, from?: Int32Array): void {
+  const len = b.end - b.start;
+  const gap = b.start - a.end;
+  const bridge = a.group === b.group && gap >= 0;
+  for (let p = 0; p < 2; p++) {
+    for (let k = 1; k <= kMax; k++) {
+      const cost = prev[p * w + k]!;
+      if (cost === Infinity) continue;
+      if (bridge) {
+        const q = (p + gap + len) & 1;
+        if (cost + gap + len < next[q * w + k]!) {
+          next[q * w + k] = cost + gap + len;
+          if (from) from[q * w + k] = p * w + k;
+        }
+      }
+      if (k < maxItems) {
+        const q = len & 1;
+        if (cost + p + DATA_HEADER + len < next[q * w + k + 1]!) {
+          next[q * w + k + 1] = cost + p + DATA_HEADER + len;
+          if (from) from[q * w + k + 1] = -(p * w + k);
+        }
+      }
+    }
+  }
+}
+
+/**
  * The cheapest items for each run of atoms i..j that one PDU can answer,
  * grown one atom at a time: an exact dynamic program over the gaps (bridge
  * it, or start a new item) whose state is the items used so far and the
@@ -345,37 +381,10 @@ class SegmentLayout {
 
   /** Adds atom j + 1; false (and nothing changes) when the run would no longer fit one PDU. */
   grow(): boolean {
-    const a = this.atoms[this.j]!;
-    const b = this.atoms[this.j + 1]!;
-    const len = b.end - b.start;
-    const gap = b.start - a.end;
-    const bridge = a.group === b.group && gap >= 0;
     const w = this.width;
-    const prev = this.rows[this.rows.length - 1]!;
     const row = new Float64Array(2 * w).fill(Infinity);
     const from = new Int32Array(2 * w);
-    for (let p = 0; p < 2; p++) {
-      for (let k = 1; k <= this.maxItems; k++) {
-        const cost = prev[p * w + k]!;
-        if (cost === Infinity) continue;
-        if (bridge) {
-          const q = (p + gap + len) & 1;
-          const c = cost + gap + len;
-          if (c < row[q * w + k]!) {
-            row[q * w + k] = c;
-            from[q * w + k] = p * w + k;
-          }
-        }
-        if (k < this.maxItems) {
-          const q = len & 1;
-          const c = cost + p + DATA_HEADER + len;
-          if (c < row[q * w + k + 1]!) {
-            row[q * w + k + 1] = c;
-            from[q * w + k + 1] = -(p * w + k);
-          }
-        }
-      }
-    }
+    bridgeOrSplit(this.rows[this.rows.length - 1]!, row, w, this.maxItems, this.maxItems, this.atoms[this.j]!, this.atoms[this.j + 1]!, from);
     if (this.best(row) === undefined) return false;
     this.rows.push(row);
     this.from.push(from);
@@ -646,24 +655,9 @@ function evenBytesWithItems(atoms: readonly Atom[]): Float64Array | undefined {
   const first = atoms[0]!.end - atoms[0]!.start;
   row[(first & 1) * w + 1] = DATA_HEADER + first;
   for (let i = 1; i < n; i++) {
-    const a = atoms[i - 1]!;
-    const b = atoms[i]!;
-    const len = b.end - b.start;
-    const gap = b.start - a.end;
-    const bridge = a.group === b.group && gap >= 0;
     const next = new Float64Array(2 * w).fill(Infinity);
-    for (let p = 0; p < 2; p++) {
-      for (let k = 1; k <= i; k++) {
-        const cost = row[p * w + k]!;
-        if (cost === Infinity) continue;
-        if (bridge) {
-          const q = (p + gap + len) & 1;
-          if (cost + gap + len < next[q * w + k]!) next[q * w + k] = cost + gap + len;
-        }
-        const q = len & 1;
-        if (cost + p + DATA_HEADER + len < next[q * w + k + 1]!) next[q * w + k + 1] = cost + p + DATA_HEADER + len;
-      }
-    }
+    // After atom i − 1 at most i items are open; no limit on items (the bound is taken per item count).
+    bridgeOrSplit(row, next, w, i, n + 1, atoms[i - 1]!, atoms[i]!);
     row = next;
   }
   const least = new Float64Array(w).fill(Infinity);
