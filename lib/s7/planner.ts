@@ -18,8 +18,11 @@
  * thresholds are tried (including the 16 bytes a new item costs). Another
  * draft cuts the atoms into runs, each as long as one PDU holds, laid out
  * exactly (SegmentLayout: bridge or split each gap, fill bytes included).
- * The plan with the fewest PDUs, then the fewest bytes on the wire, wins:
- * plans are cached, so this runs once per tag list.
+ * A last draft leaves address order (packCover): the cheapest cover of the
+ * atoms by the items fewer PDUs could carry, packed into those PDUs; it is
+ * kept only when it needs fewer PDUs. The plan with the fewest PDUs, then the
+ * fewest bytes on the wire, wins: plans are cached, so this runs once per tag
+ * list.
  */
 import { PlcError, toPlcError } from '../errors';
 import type { Tag } from '../types';
