@@ -642,8 +642,6 @@ export function planRead(tags: readonly Tag[], pduSize: number, options: PlanOpt
   let bestBytes = Infinity;
   const drafts = (merge ? GAP_THRESHOLDS : [-1]).map((gap) => () => pack(atoms, pduSize, maxItems, gap, merge));
   if (merge) drafts.push(() => packSegments(atoms, pduSize, maxItems));
-  // Last, and only when it needs fewer PDUs than the best so far: the cover packed out of address order.
-  if (merge) drafts.push(() => (best && packCover(atoms, pduSize, maxItems, best.bins.length)) || best!);
   for (const make of drafts) {
     const draft = make();
     const bytes = wireBytes(draft);
@@ -652,6 +650,8 @@ export function planRead(tags: readonly Tag[], pduSize: number, options: PlanOpt
       bestBytes = bytes;
     }
   }
+  // Out of address order, only where that needs fewer PDUs than the best so far.
+  if (merge && best) best = packCover(atoms, pduSize, maxItems, best.bins.length) ?? best;
   return finish(tags, pduSize, atoms, best ?? { bins: [], placements: [] });
 }
 
