@@ -198,7 +198,7 @@ describe('S7 planner: packing out of address order', () => {
   const { table } = require('../../bench/lib/tables') as { table: (name: string) => { address: string }[] };
   /** True when some PDU's items are not in address order, or PDUs' address ranges interleave: the cover draft won. */
   const outOfOrder = (plan: ReadPlan) => {
-    const keys = plan.pdus.map((pdu) => pdu.items.map((it) => it.dbNumber * 0x1000000 + it.address));
+    const keys = plan.pdus.map((pdu) => pdu.items.map((it) => (it.area * 0x10000 + it.dbNumber) * 0x1000000 + it.address));
     return keys.some((k, p) => k.some((v, i) => i > 0 && v < k[i - 1]!) || (p > 0 && Math.min(...k) < Math.max(...keys[p - 1]!)));
   };
 
@@ -214,15 +214,21 @@ describe('S7 planner: packing out of address order', () => {
 
   it('property: on dense scattered tables every plan respects both limits and covers each tag exactly once, in or out of order', () => {
     let reordered = 0;
-    const dense = fc.array(fc.tuple(fc.constantFrom('INT', 'REAL', 'X', 'S', 'B'), fc.integer({ min: 0, max: 14 })), { minLength: 150, maxLength: 400 });
+    const dense = fc.array(fc.tuple(fc.constantFrom('INT', 'REAL', 'X', 'S', 'B', 'MW', 'C'), fc.integer({ min: 0, max: 14 }), fc.integer({ min: 1, max: 3 })), {
+      minLength: 150,
+      maxLength: 400,
+    });
     fc.assert(
       fc.property(dense, fc.constantFrom(19, 12), (parts, maxItems) => {
-        let at = 0;
-        const list = parts.map(([kind, gap], i) => {
-          at += gap;
-          const address = kind === 'X' ? `DB1,X${at}.${i % 8}` : kind === 'S' ? `DB1,S${at}.${(gap % 4) * 5 + 1}` : kind === 'B' ? `DB1,BYTE${at}` : `DB1,${kind}${at}`;
+        const at = new Map<string, number>();
+        const list = parts.map(([kind, gap, db], i) => {
+          // Each area (three DBs, M, counters) is filled in address order with its own gaps.
+          const area = kind === 'MW' ? 'M' : kind === 'C' ? 'C' : `DB${db}`;
+          const offset = (at.get(area) ?? 0) + (kind === 'C' ? gap % 3 : gap);
+          const address =
+            kind === 'MW' ? `MW${offset}` : kind === 'C' ? `C${offset}` : kind === 'X' ? `DB${db},X${offset}.${i % 8}` : kind === 'S' ? `DB${db},S${offset}.${(gap % 4) * 5 + 1}` : kind === 'B' ? `DB${db},BYTE${offset}` : `DB${db},${kind}${offset}`;
           const tag = parseAddress(address);
-          at += tag.byteLength;
+          at.set(area, offset + (kind === 'C' ? tag.count : tag.byteLength));
           return tag;
         });
         const plan = planRead(list, 240, { maxItems });
