@@ -349,6 +349,40 @@ function bridgeOrSplit(prev: Float64Array, next: Float64Array, w: number, kMax: 
 }
 
 /**
+ * The bridge-or-split program over all the atoms with at most `most` items:
+ * the last row, and with `choices` each step's choices (for startsOf).
+ */
+function coverProgram(atoms: readonly Atom[], most: number, choices: boolean): { row: Float64Array; w: number; from: Int32Array[] } {
+  const w = most + 1;
+  const from: Int32Array[] = choices ? [new Int32Array(2 * w)] : [];
+  let row = new Float64Array(2 * w).fill(Infinity);
+  const first = atoms[0]!.end - atoms[0]!.start;
+  row[(first & 1) * w + 1] = DATA_HEADER + first;
+  for (let i = 1; i < atoms.length; i++) {
+    const next = new Float64Array(2 * w).fill(Infinity);
+    const back = choices ? new Int32Array(2 * w) : undefined;
+    // After atom i − 1 at most i items are open.
+    bridgeOrSplit(row, next, w, Math.min(i, most), most, atoms[i - 1]!, atoms[i]!, back);
+    if (back) from.push(back);
+    row = next;
+  }
+  return { row, w, from };
+}
+
+/** Which atoms start an item, following the program's choices back from the state `end` after the last step. */
+function startsOf(from: readonly Int32Array[], end: number): boolean[] {
+  const starts: boolean[] = new Array<boolean>(from.length).fill(false);
+  let state = end;
+  for (let s = from.length - 1; s > 0; s--) {
+    const f = from[s]![state]!;
+    starts[s] = f < 0;
+    state = Math.abs(f);
+  }
+  starts[0] = true;
+  return starts;
+}
+
+/**
  * The cheapest items for each run of atoms i..j that one PDU can answer,
  * grown one atom at a time: an exact dynamic program over the gaps (bridge
  * it, or start a new item) whose state is the items used so far and the
@@ -414,15 +448,9 @@ class SegmentLayout {
   /** The items of the run laid out so far, and per atom the index of its item. */
   items(): { items: DraftItem[]; itemOf: number[]; response: number } {
     const last = this.rows.length - 1;
-    let state = this.best(this.rows[last]!)!;
-    const response = RESPONSE_BASE + this.rows[last]![state]!;
-    const starts: boolean[] = new Array<boolean>(last + 1);
-    for (let s = last; s > 0; s--) {
-      const f = this.from[s]![state]!;
-      starts[s] = f < 0;
-      state = Math.abs(f);
-    }
-    starts[0] = true;
+    const end = this.best(this.rows[last]!)!;
+    const response = RESPONSE_BASE + this.rows[last]![end]!;
+    const starts = startsOf(this.from, end);
     const items: DraftItem[] = [];
     const itemOf: number[] = [];
     for (let s = 0; s <= last; s++) {
@@ -490,19 +518,8 @@ function packCover(atoms: readonly Atom[], pduSize: number, maxItems: number, fe
   const maxItem = maxReadItemData(pduSize);
   if (n === 0 || fewerThan <= 1 || atoms.some((a) => a.end - a.start > maxItem)) return undefined;
   const most = Math.min(n, (fewerThan - 1) * maxItems);
-  const w = most + 1;
-  if (n * 2 * w > COVER_STATES) return undefined;
-  const from: Int32Array[] = [new Int32Array(2 * w)];
-  let row = new Float64Array(2 * w).fill(Infinity);
-  const first = atoms[0]!.end - atoms[0]!.start;
-  row[(first & 1) * w + 1] = DATA_HEADER + first;
-  for (let i = 1; i < n; i++) {
-    const next = new Float64Array(2 * w).fill(Infinity);
-    const back = new Int32Array(2 * w);
-    bridgeOrSplit(row, next, w, Math.min(i, most), most, atoms[i - 1]!, atoms[i]!, back);
-    from.push(back);
-    row = next;
-  }
+  if (n * 2 * (most + 1) > COVER_STATES) return undefined;
+  const { row, w, from } = coverProgram(atoms, most, true);
   const capacity = pduSize - RESPONSE_BASE;
   // The cover's bytes with its last item's fill byte (a PDU's last item saves one, counted per PDU below).
   const bytes = (s: number) => row[s]! + (s >= w ? 1 : 0);
@@ -522,17 +539,11 @@ function packCover(atoms: readonly Atom[], pduSize: number, maxItems: number, fe
 
 /** The cover's items as runs of atoms, from the program's choices; a run is cut where it would outgrow one item. */
 function coverRuns(atoms: readonly Atom[], from: readonly Int32Array[], end: number, maxItem: number): { first: number; last: number }[] {
-  const starts: boolean[] = new Array<boolean>(atoms.length).fill(false);
-  let state = end;
-  for (let i = atoms.length - 1; i > 0; i--) {
-    const f = from[i]![state]!;
-    starts[i] = f < 0;
-    state = Math.abs(f);
-  }
+  const starts = startsOf(from, end);
   const runs: { first: number; last: number }[] = [];
   for (let i = 0; i < atoms.length; i++) {
     const open = runs[runs.length - 1];
-    if (i > 0 && !starts[i] && open && atoms[i]!.end - atoms[open.first]!.start <= maxItem) open.last = i;
+    if (!starts[i] && open && atoms[i]!.end - atoms[open.first]!.start <= maxItem) open.last = i;
     else runs.push({ first: i, last: i });
   }
   return runs;
@@ -811,16 +822,8 @@ const EVEN_BOUND_ATOMS = 4000;
 function evenBytesWithItems(atoms: readonly Atom[]): Float64Array | undefined {
   const n = atoms.length;
   if (n === 0 || n > EVEN_BOUND_ATOMS) return undefined;
-  const w = n + 1;
-  let row = new Float64Array(2 * w).fill(Infinity);
-  const first = atoms[0]!.end - atoms[0]!.start;
-  row[(first & 1) * w + 1] = DATA_HEADER + first;
-  for (let i = 1; i < n; i++) {
-    const next = new Float64Array(2 * w).fill(Infinity);
-    // After atom i − 1 at most i items are open; no limit on items (the bound is taken per item count).
-    bridgeOrSplit(row, next, w, i, n + 1, atoms[i - 1]!, atoms[i]!);
-    row = next;
-  }
+  // As many items as atoms: no limit (the bound is taken per item count).
+  const { row, w } = coverProgram(atoms, n, false);
   const least = new Float64Array(w).fill(Infinity);
   for (let m = 1; m < w; m++) least[m] = Math.min(least[m - 1]!, row[m]!, row[w + m]! + 1);
   return least;
