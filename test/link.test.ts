@@ -8,7 +8,8 @@ import { JobQueue } from '../lib/link/jobs';
 import { PendingRequests } from '../lib/link/pending';
 import { LinkSupervisor, type DriverSession } from '../lib/link/supervisor';
 import { openTcp } from '../lib/link/tcp';
-import { activeHandles, settle, waitFor } from './support/wait';
+import { collectGarbage } from './support/gc';
+import { activeHandles, settle, until, waitFor } from './support/wait';
 
 // A length-prefixed toy framing: first byte = total frame length (0 = bad).
 const lengthPrefixed = (buf: Buffer): FrameCheck => {
@@ -149,6 +150,23 @@ describe('link: JobQueue', () => {
     expect(((await bad.catch((e) => e)) as Error).message).to.equal('sync throw');
     expect(await queue.run(async () => 'ok')).to.equal('ok');
     await queue.idle();
+  });
+
+  it('lets go of a job once it started: the queue keeps no reply alive', async () => {
+    const queue = new JobQueue({ concurrency: 1 });
+    let freed = 0;
+    const registry = new FinalizationRegistry(() => freed++);
+    for (let i = 0; i < 20; i++) {
+      await queue.run(async () => {
+        const reply = { i };
+        registry.register(reply, i);
+        return reply;
+      });
+    }
+    await until(() => {
+      collectGarbage();
+      return freed === 20;
+    }, 2000, 'all 20 replies freed');
   });
 });
 

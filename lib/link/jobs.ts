@@ -86,8 +86,13 @@ export class JobQueue {
 
   private drain(): void {
     while (this.active < this.limit && this.head < this.waiting.length) {
-      const item = this.waiting[this.head++]!;
-      if (this.head > 1024 && this.head * 2 > this.waiting.length) {
+      const item = this.waiting[this.head]!;
+      // Let go of the started job: the queue must not keep it (nor the reply it resolves) alive.
+      this.waiting[this.head++] = undefined as unknown as Queued;
+      if (this.head === this.waiting.length) {
+        this.waiting.length = 0;
+        this.head = 0;
+      } else if (this.head > 1024 && this.head * 2 > this.waiting.length) {
         this.waiting.splice(0, this.head);
         this.head = 0;
       }
