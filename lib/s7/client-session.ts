@@ -24,6 +24,8 @@ const CONNECTION_TYPES = { pg: 1, op: 2, basic: 3 } as const;
 export type JobDone = (err: PlcError | undefined, answer: Buffer | undefined) => void;
 
 interface InFlight {
+  /** The job's PDU reference. */
+  ref: number;
   done: JobDone | undefined;
   deadline: number;
   what: string;
@@ -56,7 +58,16 @@ export class S7Session {
   /** Counts each frame written (set by the client for its stats). */
   onSend: ((frame: Buffer) => void) | undefined;
   private nextRef = 0;
-  private readonly inflight = new Map<number, InFlight>();
+  /**
+   * The jobs in flight, one slot per AmQ (at most 8), found by a scan. Not a
+   * Map: a Map that jobs enter and leave rehashes every few jobs, and V8 links
+   * each dropped table to its successor; once one of them is in the old
+   * generation, the chain keeps every later table, with the answers and values
+   * its jobs reached, alive through minor GCs (measured: ~20 KB per
+   * 1000-tag poll promoted, scavenges of 3-5 ms instead of 0.1 ms).
+   */
+  private readonly slots: (InFlight | undefined)[];
+  private running = 0;
   private readonly waiting: Waiting[] = [];
   private head = 0;
   private timer: NodeJS.Timeout | undefined;
@@ -76,11 +87,18 @@ export class S7Session {
     private readonly name = 'S7',
   ) {
     this.maxQueued = maxQueued ?? DEFAULT_MAX_QUEUED;
+    this.slots = new Array<InFlight | undefined>(Math.max(1, maxJobs)).fill(undefined);
+  }
+
+  private slotOf(ref: number): number {
+    const { slots } = this;
+    for (let i = 0; i < slots.length; i++) if (slots[i]?.ref === ref) return i;
+    return -1;
   }
 
   /** Jobs sent and not answered yet (each holds an AmQ slot). */
   get inFlight(): number {
-    return this.inflight.size;
+    return this.running;
   }
 
   /** Jobs waiting for a free AmQ slot. */
@@ -91,7 +109,7 @@ export class S7Session {
   /** The next PDU reference: 1..65535, skipping any still in flight, so a late answer never matches a new job. */
   ref(): number {
     do this.nextRef = this.nextRef >= 0xffff ? 1 : this.nextRef + 1;
-    while (this.inflight.has(this.nextRef));
+    while (this.slotOf(this.nextRef) >= 0);
     return this.nextRef;
   }
 
@@ -109,7 +127,7 @@ export class S7Session {
       release?.();
       return done(abortError(`${this.name} ${what}`, signal), undefined);
     }
-    if (this.inflight.size < this.maxJobs && this.head === this.waiting.length) {
+    if (this.running < this.maxJobs && this.head === this.waiting.length) {
       if (signal) done = this.abortable(done, signal, what, undefined);
       return this.start(frame, what, done, release);
     }
@@ -124,9 +142,11 @@ export class S7Session {
 
   /** Hands an answer frame to the job with that PDU reference; false when none waits for it. */
   answer(ref: number, frame: Buffer): boolean {
-    const job = this.inflight.get(ref);
-    if (!job) return false;
-    this.inflight.delete(ref);
+    const slot = this.slotOf(ref);
+    if (slot < 0) return false;
+    const job = this.slots[slot]!;
+    this.slots[slot] = undefined;
+    this.running--;
     job.release?.();
     // The timer stays armed: when it fires with nothing in flight it just
     // stops, so a poll does not create and clear a timer each time.
@@ -140,8 +160,9 @@ export class S7Session {
     this.dead ??= err;
     if (this.timer) clearTimeout(this.timer);
     this.timer = undefined;
-    const running = [...this.inflight.values()];
-    this.inflight.clear();
+    const running = this.slots.filter((job) => job !== undefined);
+    this.slots.fill(undefined);
+    this.running = 0;
     const waiting = this.waiting.slice(this.head);
     this.waiting.length = 0;
     this.head = 0;
@@ -163,7 +184,8 @@ export class S7Session {
     const ref = this.ref();
     frame[11] = ref >> 8;
     frame[12] = ref & 0xff;
-    this.inflight.set(ref, { done, deadline: Date.now() + this.timeout, what, release });
+    this.slots[this.slots.indexOf(undefined)] = { ref, done, deadline: Date.now() + this.timeout, what, release };
+    this.running++;
     this.timer ??= setTimeout(this.sweep, this.timeout);
     this.onSend?.(frame);
     // Jobs started in one tick (a poll's PDUs, or the queue draining on an
@@ -182,7 +204,7 @@ export class S7Session {
   };
 
   private drain(): void {
-    while (this.inflight.size < this.maxJobs && this.head < this.waiting.length) {
+    while (this.running < this.maxJobs && this.head < this.waiting.length) {
       const item = this.waiting[this.head]!;
       this.waiting[this.head++] = undefined as unknown as Waiting;
       if (this.head === this.waiting.length) {
@@ -226,17 +248,23 @@ export class S7Session {
   private readonly sweep = (): void => {
     this.timer = undefined;
     const now = Date.now();
-    for (const [ref, job] of this.inflight) {
-      if (job.deadline > now) {
-        this.timer = setTimeout(this.sweep, job.deadline - now);
-        return;
-      }
-      this.inflight.delete(ref);
-      const err = new TimeoutError(`${this.name} ${job.what} timed out after ${this.timeout} ms`);
-      job.done?.(err, undefined);
-      this.lose?.(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
+    // The oldest job (every job has the same timeout) decides.
+    let oldest = -1;
+    for (let i = 0; i < this.slots.length; i++) {
+      const job = this.slots[i];
+      if (job && (oldest < 0 || job.deadline < this.slots[oldest]!.deadline)) oldest = i;
+    }
+    if (oldest < 0) return;
+    const job = this.slots[oldest]!;
+    if (job.deadline > now) {
+      this.timer = setTimeout(this.sweep, job.deadline - now);
       return;
     }
+    this.slots[oldest] = undefined;
+    this.running--;
+    const err = new TimeoutError(`${this.name} ${job.what} timed out after ${this.timeout} ms`);
+    job.done?.(err, undefined);
+    this.lose?.(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
   };
 }
 
@@ -283,7 +311,8 @@ export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Se
     const { pduSize, maxAmqCalling, maxAmqCalled } = ack.params;
     if (pduSize < 64) throw new ProtocolError(`${o.name} negotiated an unusable PDU size of ${pduSize}`);
     // The PLC answers with what it grants; a 0 would mean "none", which no CPU sends: treat as 1.
-    const maxJobs = Math.max(1, Math.min(maxAmqCalling, maxAmqCalled));
+    // More than we asked for is not ours to use.
+    const maxJobs = Math.max(1, Math.min(maxAmqCalling, maxAmqCalled, REQUESTED_AMQ));
     const session = new S7Session(socket, reader, pduSize, maxJobs, o.maxQueued, o.requestTimeout ?? o.timeout, o.name);
     o.attach(session);
     next.stop();
