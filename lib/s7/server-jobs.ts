@@ -240,6 +240,7 @@ export function serveRead(frame: Buffer, ctx: JobContext): Buffer {
     const offset = itemOffset[i]!;
     const bit = itemBit[i]!;
     if (bit >= 0) reply[p + 4] = (buf[offset]! >> bit) & 1;
+    else if (len <= 16) for (let k = 0; k < len; k++) reply[p + 4 + k] = buf[offset + k]!;
     else buf.copy(reply, p + 4, offset, offset + len);
     p += 4 + len;
     if (len & 1 && i < count - 1) reply[p++] = 0;

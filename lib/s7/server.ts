@@ -175,7 +175,8 @@ export class S7Server extends EventEmitter {
     socket.setNoDelay(true);
     const conn: Connection = {
       socket,
-      reader: new FrameReader(checkTpkt, 0x10000 + 4),
+      // The socket's chunks are ours: frames are cut from them without a copy.
+      reader: new FrameReader(checkTpkt, 0x10000 + 4, { copy: false }),
       stage: 'cotp',
       pduLimit: this.profile.pduSize,
       ctx: { memory: this.memory, pduSize: this.profile.pduSize, missingDb: undefined },

@@ -56,6 +56,8 @@ export type MemoryFault = 'NO_SUCH_AREA' | 'OUT_OF_RANGE';
  */
 export class PlcMemory extends EventEmitter {
   private readonly areas = new Map<string, Buffer>();
+  /** Data blocks by number (a server looks one up per item: no key string to build). */
+  private readonly dataBlocks = new Map<number, Buffer>();
 
   constructor(layout: MemoryLayout = {}) {
     super();
@@ -69,21 +71,21 @@ export class PlcMemory extends EventEmitter {
     this.areas.set('PA', Buffer.alloc(l.peripheral));
     this.areas.set('C', Buffer.alloc(l.counters * 2));
     this.areas.set('T', Buffer.alloc(l.timers * 2));
-    for (const [db, size] of Object.entries(l.dataBlocks)) this.areas.set(`DB${db}`, Buffer.alloc(size));
+    for (const [db, size] of Object.entries(l.dataBlocks)) this.dataBlocks.set(Number(db), Buffer.alloc(size));
   }
 
   /** The live buffer of an area (not a copy), or undefined when it does not exist. */
   area(area: AreaName, dbNumber = 0): Buffer | undefined {
-    return this.areas.get(area === 'DB' ? `DB${dbNumber}` : area);
+    return area === 'DB' ? this.dataBlocks.get(dbNumber) : this.areas.get(area);
   }
 
   /** Adds (or replaces) a data block filled with zeros. */
   createDataBlock(dbNumber: number, size: number): void {
-    this.areas.set(`DB${dbNumber}`, Buffer.alloc(size));
+    this.dataBlocks.set(dbNumber, Buffer.alloc(size));
   }
 
   deleteDataBlock(dbNumber: number): void {
-    this.areas.delete(`DB${dbNumber}`);
+    this.dataBlocks.delete(dbNumber);
   }
 
   /** Checks an access; returns the fault or undefined when it is allowed. */
@@ -119,6 +121,6 @@ export class PlcMemory extends EventEmitter {
   private mustGet(area: AreaName, dbNumber: number, offset: number, length: number): Buffer {
     const fault = this.check(area, dbNumber, offset, length);
     if (fault) throw new RangeError(`${fault}: ${area}${area === 'DB' ? dbNumber : ''} ${offset}+${length}`);
-    return this.areas.get(area === 'DB' ? `DB${dbNumber}` : area)!;
+    return this.area(area, dbNumber)!;
   }
 }
