@@ -180,7 +180,7 @@ export class S7Session {
     this.socket.destroy();
   }
 
-  private start(frame: Buffer, what: string, done: JobDone, release: (() => void) | undefined): void {
+  private start(frame: Buffer, what: string, done: JobDone, release: (() => void) | undefined, cork = true): void {
     const ref = this.ref();
     frame[11] = ref >> 8;
     frame[12] = ref & 0xff;
@@ -190,7 +190,7 @@ export class S7Session {
     this.onSend?.(frame);
     // Jobs started in one tick (a poll's PDUs, or the queue draining on an
     // answer) leave in one writev: one syscall instead of one per PDU.
-    if (!this.corked) {
+    if (!this.corked && cork) {
       this.corked = true;
       this.socket.cork();
       process.nextTick(this.uncork);
@@ -204,6 +204,8 @@ export class S7Session {
   };
 
   private drain(): void {
+    // One job started on an answer leaves at once; several leave in one writev.
+    const cork = Math.min(this.maxJobs - this.running, this.waiting.length - this.head) > 1;
     while (this.running < this.maxJobs && this.head < this.waiting.length) {
       const item = this.waiting[this.head]!;
       this.waiting[this.head++] = undefined as unknown as Waiting;
@@ -217,7 +219,7 @@ export class S7Session {
       if (item.onAbort) item.signal!.removeEventListener('abort', item.onAbort);
       // Still listening for an abort while in flight: abortable() wraps done.
       if (item.signal) item.done = this.abortable(item.done, item.signal, item.what, undefined);
-      this.start(item.frame, item.what, item.done, item.release);
+      this.start(item.frame, item.what, item.done, item.release, cork);
     }
   }
 
