@@ -188,8 +188,9 @@ export class S7Session {
     this.running++;
     this.timer ??= setTimeout(this.sweep, this.timeout);
     this.onSend?.(frame);
-    // Jobs started in one tick (a poll's PDUs, or the queue draining on an
-    // answer) leave in one writev: one syscall instead of one per PDU.
+    // Jobs started together (a poll's PDUs, or several freed by one answer)
+    // leave in one writev: one syscall instead of one per PDU. A single job
+    // freed by an answer is not held back for the tick.
     if (!this.corked && cork) {
       this.corked = true;
       this.socket.cork();
