@@ -9,6 +9,8 @@ const { table, firstMismatch } = require('./lib/tables');
 const gc = global.gc || (() => undefined);
 /** Polls before memory is measured: the same number for every client, so a faster client's extra garbage does not count as memory. */
 const MEMORY_POLLS = 500;
+/** Polls before the latency model's polls are timed. */
+const LATENCY_WARM_POLLS = 20;
 
 /**
  * Memory after full GCs 30 ms apart, the least seen: freed ArrayBuffers leave
@@ -81,7 +83,10 @@ async function run(job) {
 
   if (job.latencyPolls) {
     const c = await open({ port: job.port, pdu: job.pdu, addresses });
-    for (let i = 0; i < 3; i++) await c.read(); // warm: the steady poll is measured, not the first ones' compiling
+    // Warm: the steady poll is measured, not the first ones' compiling. A
+    // 1000-tag poll takes ~15 polls to settle (1-2 ms slower before, measured
+    // poll by poll), so 20, the same for every client.
+    for (let i = 0; i < LATENCY_WARM_POLLS; i++) await c.read();
     // The median poll: on a shared VM one poll in a few is late by milliseconds (scheduling), which says nothing of the client.
     const times = [];
     for (let i = 0; i < job.latencyPolls; i++) {
