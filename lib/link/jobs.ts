@@ -1,4 +1,5 @@
 import { PlcError } from '../errors';
+import { Fifo } from './fifo';
 import { abortError } from './pending';
 
 interface Queued {
@@ -20,8 +21,7 @@ const DEFAULT_MAX_QUEUED = 1000;
 
 /** A FIFO queue with a concurrency limit and a bound. Every job's promise settles. */
 export class JobQueue {
-  private readonly waiting: Queued[] = [];
-  private head = 0;
+  private readonly waiting = new Fifo<Queued>();
   private active = 0;
   private readonly maxQueued: number;
   private idleWaiters: (() => void)[] = [];
@@ -42,7 +42,7 @@ export class JobQueue {
   }
 
   get queued(): number {
-    return this.waiting.length - this.head;
+    return this.waiting.size;
   }
 
   get running(): number {
@@ -68,10 +68,7 @@ export class JobQueue {
 
   /** Rejects every job that has not started. Running jobs finish on their own. */
   rejectAll(err: Error): void {
-    const items = this.waiting.slice(this.head);
-    this.waiting.length = 0;
-    this.head = 0;
-    for (const item of items) {
+    for (const item of this.waiting.takeAll()) {
       this.detach(item);
       item.reject(err);
     }
@@ -85,17 +82,8 @@ export class JobQueue {
   }
 
   private drain(): void {
-    while (this.active < this.limit && this.head < this.waiting.length) {
-      const item = this.waiting[this.head]!;
-      // Let go of the started job: the queue must not keep it (nor the reply it resolves) alive.
-      this.waiting[this.head++] = undefined as unknown as Queued;
-      if (this.head === this.waiting.length) {
-        this.waiting.length = 0;
-        this.head = 0;
-      } else if (this.head > 1024 && this.head * 2 > this.waiting.length) {
-        this.waiting.splice(0, this.head);
-        this.head = 0;
-      }
+    while (this.active < this.limit && this.waiting.size > 0) {
+      const item = this.waiting.shift()!;
       this.detach(item);
       this.active++;
       let started: Promise<unknown>;
@@ -113,9 +101,7 @@ export class JobQueue {
   }
 
   private remove(item: Queued, err: Error): void {
-    const index = this.waiting.indexOf(item, this.head);
-    if (index < 0) return;
-    this.waiting.splice(index, 1);
+    if (!this.waiting.remove(item)) return;
     this.detach(item);
     item.reject(err);
     this.notifyIdle();

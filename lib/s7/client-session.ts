@@ -5,6 +5,7 @@
  */
 import type * as net from 'node:net';
 import { ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
+import { Fifo } from '../link/fifo';
 import { FrameReader } from '../link/framer';
 import { abortError } from '../link/pending';
 import { openTcp } from '../link/tcp';
@@ -68,8 +69,7 @@ export class S7Session {
    */
   private readonly slots: (InFlight | undefined)[];
   private running = 0;
-  private readonly waiting: Waiting[] = [];
-  private head = 0;
+  private readonly waiting = new Fifo<Waiting>();
   private timer: NodeJS.Timeout | undefined;
   private dead: PlcError | undefined;
   private readonly maxQueued: number;
@@ -103,7 +103,7 @@ export class S7Session {
 
   /** Jobs waiting for a free AmQ slot. */
   get queued(): number {
-    return this.waiting.length - this.head;
+    return this.waiting.size;
   }
 
   /** The next PDU reference: 1..65535, skipping any still in flight, so a late answer never matches a new job. */
@@ -127,7 +127,7 @@ export class S7Session {
       release?.();
       return done(abortError(`${this.name} ${what}`, signal), undefined);
     }
-    if (this.running < this.maxJobs && this.head === this.waiting.length) {
+    if (this.running < this.maxJobs && this.waiting.size === 0) {
       if (signal) done = this.abortable(done, signal, what, undefined);
       return this.start(frame, what, done, release);
     }
@@ -163,9 +163,7 @@ export class S7Session {
     const running = this.slots.filter((job) => job !== undefined);
     this.slots.fill(undefined);
     this.running = 0;
-    const waiting = this.waiting.slice(this.head);
-    this.waiting.length = 0;
-    this.head = 0;
+    const waiting = this.waiting.takeAll();
     for (const job of running) {
       job.release?.();
       job.done?.(err, undefined);
@@ -206,17 +204,9 @@ export class S7Session {
 
   private drain(): void {
     // One job started on an answer leaves at once; several leave in one writev.
-    const cork = Math.min(this.maxJobs - this.running, this.waiting.length - this.head) > 1;
-    while (this.running < this.maxJobs && this.head < this.waiting.length) {
-      const item = this.waiting[this.head]!;
-      this.waiting[this.head++] = undefined as unknown as Waiting;
-      if (this.head === this.waiting.length) {
-        this.waiting.length = 0;
-        this.head = 0;
-      } else if (this.head > 1024 && this.head * 2 > this.waiting.length) {
-        this.waiting.splice(0, this.head);
-        this.head = 0;
-      }
+    const cork = Math.min(this.maxJobs - this.running, this.waiting.size) > 1;
+    while (this.running < this.maxJobs && this.waiting.size > 0) {
+      const item = this.waiting.shift()!;
       if (item.onAbort) item.signal!.removeEventListener('abort', item.onAbort);
       // Still listening for an abort while in flight: abortable() wraps done.
       if (item.signal) item.done = this.abortable(item.done, item.signal, item.what, undefined);
@@ -231,8 +221,7 @@ export class S7Session {
       if (settled) return;
       settled = true;
       if (queued) {
-        const i = this.waiting.indexOf(queued, this.head);
-        if (i >= 0) this.waiting.splice(i, 1);
+        this.waiting.remove(queued);
         queued.release?.();
       }
       done(abortError(`${this.name} ${what}`, signal), undefined);
@@ -247,11 +236,11 @@ export class S7Session {
     };
   }
 
-  /** The oldest job (the first in the table) decides: past its deadline, it times out and the link goes. */
+  /** The oldest job in flight decides: past its deadline, it times out and the link goes. */
   private readonly sweep = (): void => {
     this.timer = undefined;
     const now = Date.now();
-    // The oldest job (every job has the same timeout) decides.
+    // Every job has the same timeout: the earliest deadline is the oldest job.
     let oldest = -1;
     for (let i = 0; i < this.slots.length; i++) {
       const job = this.slots[i];
