@@ -39,11 +39,25 @@ export interface S7Stats {
 
 const SUCCESS = 0xff;
 
+/** Counters start at 0; plansMade is the plan cache's own count. */
+function newStats(plans: ReadPlanCache): S7Stats {
+  return {
+    pdusSent: 0,
+    bytesSent: 0,
+    bytesReceived: 0,
+    requests: 0,
+    ignoredReplies: 0,
+    get plansMade() {
+      return plans.misses;
+    },
+  };
+}
+
 export class S7Client extends BaseClient<S7Session, Tag> {
   readonly protocol: Protocol = 's7';
   readonly endpoint: S7Endpoint;
-  readonly stats: S7Stats = { pdusSent: 0, bytesSent: 0, bytesReceived: 0, requests: 0, ignoredReplies: 0, plansMade: 0 };
   private readonly plans = new ReadPlanCache();
+  readonly stats: S7Stats = newStats(this.plans);
   private readonly compiledPlans = new WeakMap<ReadPlan, CompiledRead>();
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
@@ -166,7 +180,6 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   protected override async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
     this.stats.requests++;
     const plan = this.plans.get(tags, session.pduSize);
-    this.stats.plansMade = this.plans.misses;
     const read = await this.execute(session, tags, plan, signal);
     if (read.retry.length > 0) {
       // An item merged from several tags failed (e.g. one tag past the end of a DB): read those tags alone.
