@@ -161,7 +161,7 @@ async function comparison() {
       const ours = results.find((r) => r.client === 'ours');
       const bound = lowerBound(tags, s.pdu);
       for (const r of results) {
-        if (!r.error) memory.push({ server: s.label, table: name, client: r.client, tags: tags.length, heap: r.heapBytesPerTag * tags.length, rss: r.rssBytesPerTag * tags.length });
+        if (!r.error) memory.push({ server: s.label, table: name, client: r.client, tags: tags.length, heap: r.heapBytesPerTag * tags.length });
         if (r.error) {
           rows.push([s.label, name, r.client ?? '', `error: ${r.error}`.slice(0, 60), '', '', '', '', '', '', '']);
           continue;
