@@ -109,7 +109,7 @@ class PlanOfPieces implements ReadPlan {
 }
 
 /** Tag t's pieces as objects. */
-export function slicesOf(pieces: TagPieces, t: number): TagSlice[] {
+function slicesOf(pieces: TagPieces, t: number): TagSlice[] {
   const out: TagSlice[] = [];
   for (let k = pieces.start[t]!; k < pieces.start[t + 1]!; k++) {
     out.push({ pdu: pieces.pdu[k]!, item: pieces.item[k]!, offset: pieces.offset[k]!, length: pieces.length[k]!, at: pieces.at[k]! });
