@@ -315,6 +315,44 @@ describe('S7Server', () => {
       expect(server.memory.area('DB', 200)![1]).to.equal(9);
     });
 
+    // Counters and timers as other clients ask for them (each item's origin in its comment; the CPU's rules
+    // and their sources are in lib/s7/server-jobs.ts). Address field: the counter/timer number.
+    it('serves C and T items of their own transport size and answers 0x05 to any other, as a CPU does', async () => {
+      const server = await start('s7-300');
+      const c = server.memory.area('C', 0)!;
+      const t = server.memory.area('T', 0)!;
+      c.writeUInt16BE(0x0123, 5 * 2);
+      c.writeUInt16BE(0x0040, 40 * 2);
+      t.writeUInt16BE(0x2100, 3 * 2);
+      t.writeUInt16BE(0x0010, 4 * 2);
+      const { peer } = await open(server, 240, 1, remoteTsapFor('pg', 0, 2));
+      peer.send(
+        hex(
+          '03 00 00 4F | 02 F0 80 | 32 01 00 00 00 05 00 3E 00 00 | 04 05' +
+            '12 0A 10 1C 00 01 00 00 1C 00 00 05' + // snap7 CTRead(5, 1): COUNTER ×1, C5
+            '12 0A 10 1D 00 02 00 00 1D 00 00 03' + // snap7 TMRead(3, 2): TIMER ×2, T3 and T4
+            '12 0A 10 02 00 02 00 00 1D 00 00 68' + // python-snap7 before #121 read_area(TM, 0, 13, 2): BYTE ×2 at bit address 13 × 8
+            '12 0A 10 09 00 02 00 00 1C 00 00 28' + // @st-one-io/nodes7 1.1.2 "C5": transport size 0x09, 2 bytes, bit address 5 × 8
+            '12 0A 10 1C 00 01 00 00 1C 00 00 28', // nodes7 0.3.18 "C5": COUNTER ×1 but the number × 8, so C40
+        ),
+      );
+      expect(show(await peer.next())).to.equal(
+        '03000031' + '02F080' + '320300000005000200' + '1C0000' + '0405' +
+          'FF0900020123' + 'FF09000421000010' + '05000000' + '05000000' + 'FF0900020040',
+      );
+      peer.send(
+        hex(
+          '03 00 00 49 | 02 F0 80 | 32 01 00 00 00 06 00 26 00 12 | 05 03' +
+            '12 0A 10 1C 00 01 00 00 1C 00 00 05' + // snap7 CTWrite(5, 1)
+            '12 0A 10 1C 00 01 00 00 1C 00 00 07' + // nodes7 0.3.18 writing C7 the same way (its data: 0x09, 2 bytes)
+            '12 0A 10 02 00 02 00 00 1C 00 00 30' + // BYTE ×2 at bit address 6 × 8
+            '00 09 00 02 02 34 | 00 09 00 02 00 07 | 00 04 00 10 AA BB',
+        ),
+      );
+      expect(show(await peer.next())).to.equal('03000018' + '02F080' + '320300000006000200030000' + '0503' + 'FFFF05');
+      expect([c.readUInt16BE(5 * 2), c.readUInt16BE(7 * 2), c.readUInt16BE(6 * 2)]).to.deep.equal([0x0234, 0x0007, 0]);
+    });
+
     it('uses a JSON layout: only the DBs listed exist, with their sizes', async () => {
       const server = await start('s7-1500', { layout: { dbs: { '1': 16, '7': 4 }, areas: { M: 8 } } });
       const { peer } = await open(server);
