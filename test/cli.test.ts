@@ -297,6 +297,35 @@ describe('plcwire CLI', function () {
       expect(await srv.exit).to.equal(0);
     });
 
+    for (const [profile, tsaps] of [['s7-200', 'localTsap=1000&remoteTsap=1001'], ['logo', 'localTsap=0100&remoteTsap=0200']] as const) {
+      it(`serve s7 --profile ${profile} answers its TSAP URL with V memory and refuses rack/slot`, async () => {
+        const port = await freePort();
+        const srv = run(['serve', 's7', '--port', String(port), '--profile', profile]);
+        try {
+          await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+          const target = /^try: plcwire read "([^"]+)"/m.exec(srv.output().out)![1]!;
+          expect(target).to.equal(`s7://127.0.0.1:${port}?${tsaps}`);
+          const w = run(['write', target, 'VW10=321', 'V3.1=true']);
+          expect(await w.exit, w.output().err).to.equal(0);
+          const r = run(['read', target, 'VW10', 'VB3', 'DB2,INT0', '--json']);
+          expect(await r.exit).to.equal(EXIT.TAG_ERROR);
+          expect(JSON.parse(r.output().out)).to.deep.equal({ VW10: 321, VB3: 2, 'DB2,INT0': null });
+          expect(r.output().err).to.match(/DB2,INT0.*0x0A/);
+          const slot = run(['read', `s7://127.0.0.1:${port}?rack=0&slot=1&timeout=2000`, 'VW10']);
+          expect(await slot.exit).to.equal(EXIT.CONNECTION);
+        } finally {
+          srv.child.kill('SIGINT');
+        }
+        expect(await srv.exit).to.equal(0);
+      });
+    }
+
+    it('serve s7 names the profiles when given an unknown one', async () => {
+      const r = await cli(['serve', 's7', '--port', '0', '--profile', 's7-201']);
+      expect(r.code).to.equal(EXIT.USAGE);
+      expect(r.err).to.match(/--profile must be one of s7-300, s7-400, s7-1200, s7-1500, s7-200, logo/);
+    });
+
     it('watch prints changes and survives the PLC going away and coming back', async () => {
       const port = server.port;
       const w = run(['watch', url, 'DB1,INT2', '--interval', '50', '--json']);

@@ -14,9 +14,12 @@ import {
   type S7Message,
   type S7WriteItem,
 } from '../lib/s7/codec';
+import { PlcError } from '../lib/errors';
+import { S7Client } from '../lib/s7/client';
 import { headerError, remoteTsapFor } from '../lib/s7/constants';
-import { S7Server, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
+import { PROFILES, S7Server, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
 import type { MemoryAccess } from '../lib/sim/memory';
+import { parseUrl, type S7Endpoint } from '../lib/url';
 import { CAPTURE, DOC, hex, show } from './fixtures/s7';
 import { until, waitFor } from './support/wait';
 
@@ -220,6 +223,104 @@ describe('S7Server', () => {
       expect(again.cc.type).to.equal('CC');
       expect(server.connectionCount).to.equal(8);
     });
+  });
+
+  describe('TSAP-addressed CPUs: s7-200 (CP 243-1) and logo', () => {
+    // The TSAP pair each profile accepts, as a client URL gives it (local = calling, remote = called).
+    const cases = [
+      { profile: 's7-200', tsaps: 'localTsap=1000&remoteTsap=1001', called: 0x1001, calling: 0x4d57, wrong: ['localTsap=1000&remoteTsap=0301', 'localTsap=1000&remoteTsap=1801'], vBytes: 10240 },
+      { profile: 'logo', tsaps: 'localTsap=0100&remoteTsap=0200', called: 0x0200, calling: 0x0100, wrong: ['localTsap=0100&remoteTsap=0201', 'localTsap=1000&remoteTsap=0200'], vBytes: 1470 },
+    ] as const;
+    const clients: S7Client[] = [];
+    const client = (port: number, query: string) => {
+      const c = new S7Client(parseUrl(`s7://127.0.0.1:${port}?timeout=1500&${query}`) as S7Endpoint);
+      clients.push(c);
+      return c;
+    };
+    afterEach(async () => {
+      await Promise.all(clients.splice(0).map((c) => c.close()));
+    });
+
+    it("a LOGO! profile object with a project's own TSAP pair (snap7's 10.00 / 20.00) accepts that pair only", async () => {
+      const own = { ...PROFILES.logo, tsaps: { called: { value: 0x2000, mask: 0xffff }, calling: { value: 0x1000, mask: 0xffff } } };
+      const server = new S7Server({ port: 0, profile: own });
+      servers.push(server);
+      await server.listen();
+      await client(server.port, 'localTsap=1000&remoteTsap=2000').connect();
+      const err = await client(server.port, 'localTsap=0100&remoteTsap=0200').connect().then(() => undefined, (e: unknown) => e);
+      expect((err as PlcError).code).to.equal('CONNECT_FAILED');
+      expect(server.memory.area('DB', 1)!.length).to.equal(1470);
+    });
+
+    for (const { profile, tsaps, called, calling, wrong, vBytes } of cases) {
+      describe(profile, () => {
+        it('the client reaches it with its TSAP URL and reads and writes V memory (= DB1) at PDU 240', async () => {
+          const server = await start(profile);
+          const c = client(server.port, tsaps);
+          await c.connect();
+          expect(c.pduSize).to.equal(240);
+          await c.write({ VW10: 64302, 'V20.3': true, VD30: 0xdeadbeef });
+          const v = server.memory.area('DB', 1)!;
+          expect(v.length).to.equal(vBytes);
+          expect([v.readUInt16BE(10), v[20], v.readUInt32BE(30)]).to.deep.equal([64302, 0b1000, 0xdeadbeef]);
+          v.writeUInt16BE(4321, vBytes - 2);
+          expect(await c.read([`VW${vBytes - 2}`, 'VW10', 'V20.3'])).to.deep.equal({ [`VW${vBytes - 2}`]: 4321, VW10: 64302, 'V20.3': true });
+        });
+
+        it('has V as its only DB and refuses the S5 counters and timers (0x03)', async () => {
+          const server = await start(profile);
+          const c = client(server.port, tsaps);
+          await c.connect();
+          const r = await c.readDetailed(['DB2,INT0', `VB${vBytes}`, 'C0', 'T0', 'VB0']);
+          const code = (a: string) => { const x = r[a]!; return x.ok ? 'ok' : x.error.code; };
+          expect(['DB2,INT0', `VB${vBytes}`, 'C0', 'T0', 'VB0'].map(code)).to.deep.equal(['OBJECT_DOES_NOT_EXIST', 'ADDRESS_OUT_OF_RANGE', 'ACCESS_DENIED', 'ACCESS_DENIED', 'ok']);
+        });
+
+        it('refuses a connection request with other TSAPs (rack/slot ones too) with a COTP DR, address unknown', async () => {
+          const server = await start(profile);
+          const reasons: S7RefusedEvent['reason'][] = [];
+          server.on('refused', (e: S7RefusedEvent) => reasons.push(e.reason));
+          for (const query of [...wrong, 'rack=0&slot=1', 'rack=0&slot=2']) {
+            const err = await client(server.port, query).connect().then(() => undefined, (e: unknown) => e);
+            expect(err, query).to.be.instanceOf(PlcError);
+            expect((err as PlcError).code, query).to.equal('CONNECT_FAILED');
+          }
+          const { peer, cc } = await connectCotp(server.port, remoteTsapFor('pg', 0, 1));
+          peers.push(peer);
+          expect(cc).to.deep.include({ type: 'DR', destinationRef: 0x42, reason: 3 });
+          await peer.closedWithin();
+          expect(reasons).to.deep.equal(Array(wrong.length + 3).fill('wrong-tsap'));
+          expect(server.connectionCount).to.equal(0);
+        });
+
+        it('serves 8 connections, refuses the 9th with a DR (congestion), and asked for PDU 960 offers 240', async () => {
+          const server = await start(profile);
+          const eight: RawPeer[] = [];
+          for (let i = 0; i < 8; i++) {
+            const peer = new RawPeer(server.port);
+            peers.push(peer);
+            peer.send(encodeConnectionRequest({ sourceRef: 0x0042, callingTsap: calling, calledTsap: called, tpduSize: 0x0a }));
+            expect(decodeCotp(await peer.next())).to.include({ type: 'CC', calledTsap: called, callingTsap: calling });
+            peer.send(encodeSetupCommunication(i, { maxAmqCalling: 8, maxAmqCalled: 8, pduSize: 960 }));
+            const ack = await peer.nextS7();
+            expect(ack).to.deep.include({ kind: 'setup-ack', params: { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 } });
+            eight.push(peer);
+          }
+          const ninth = new RawPeer(server.port);
+          peers.push(ninth);
+          ninth.send(encodeConnectionRequest({ sourceRef: 0x0042, callingTsap: calling, calledTsap: called, tpduSize: 0x0a }));
+          expect(decodeCotp(await ninth.next())).to.deep.include({ type: 'DR', reason: 1 });
+          await ninth.closedWithin();
+          expect(server.connectionCount).to.equal(8);
+          const gone = waitFor<number>(server, 'disconnect');
+          eight[0]!.destroy();
+          expect(await gone).to.equal(7);
+          const again = client(server.port, tsaps);
+          await again.connect();
+          expect(server.connectionCount).to.equal(8);
+        });
+      });
+    }
   });
 
   describe('Read Var and Write Var', () => {
