@@ -3,8 +3,12 @@ import { spawn, type ChildProcess } from 'node:child_process';
 import { once } from 'node:events';
 import * as path from 'node:path';
 import { PassThrough } from 'node:stream';
+import { parseAddress } from '../lib/address';
 import { EXIT, main } from '../lib/cli/main';
+import { toJson } from '../lib/cli/values';
 import { S7Server } from '../lib/s7/server';
+import type { DataTypeName } from '../lib/types';
+import { encodeInto, JS_TYPES } from '../lib/values';
 import { freePort } from './support/net';
 import { until } from './support/wait';
 
@@ -33,6 +37,111 @@ function run(args: string[]): { child: ChildProcess; output: () => { out: string
   const exit = once(child, 'exit').then(([code]) => code as number);
   return { child, output: () => ({ out, err }), exit };
 }
+
+/**
+ * A JSON parser that keeps every integer exact: an integer literal becomes a
+ * bigint, any other number a number. JSON.parse would round 18446744073709551615.
+ */
+function parseExactJson(text: string): unknown {
+  let i = 0;
+  const fail = (what: string): never => {
+    throw new SyntaxError(`${what} at ${i} in ${JSON.stringify(text.slice(0, 200))}`);
+  };
+  const space = () => {
+    while (/\s/.test(text[i] ?? '')) i++;
+  };
+  const value = (): unknown => {
+    space();
+    const c = text[i];
+    if (c === '{') {
+      i++;
+      const out: Record<string, unknown> = {};
+      space();
+      if (text[i] === '}') return i++, out;
+      for (;;) {
+        space();
+        const key = value();
+        if (typeof key !== 'string') fail('object key');
+        space();
+        if (text[i++] !== ':') fail('expected ":"');
+        out[key as string] = value();
+        space();
+        const next = text[i++];
+        if (next === '}') return out;
+        if (next !== ',') fail('expected "," or "}"');
+      }
+    }
+    if (c === '[') {
+      i++;
+      const out: unknown[] = [];
+      space();
+      if (text[i] === ']') return i++, out;
+      for (;;) {
+        out.push(value());
+        space();
+        const next = text[i++];
+        if (next === ']') return out;
+        if (next !== ',') fail('expected "," or "]"');
+      }
+    }
+    if (c === '"') {
+      const m = /^"(?:[^"\\\u0000-\u001f]|\\["\\/bfnrt]|\\u[0-9a-fA-F]{4})*"/.exec(text.slice(i));
+      if (!m) fail('bad string');
+      i += m![0].length;
+      return JSON.parse(m![0]) as string;
+    }
+    const m = /^-?(?:0|[1-9]\d*)(\.\d+)?([eE][-+]?\d+)?/.exec(text.slice(i));
+    if (m) {
+      i += m[0].length;
+      return m[1] === undefined && m[2] === undefined ? BigInt(m[0]) : Number(m[0]);
+    }
+    for (const [word, v] of [['true', true], ['false', false], ['null', null]] as const) {
+      if (text.startsWith(word, i)) return (i += word.length), v;
+    }
+    return fail('unexpected character');
+  };
+  const result = value();
+  space();
+  if (i !== text.length) fail('trailing text');
+  return result;
+}
+
+/**
+ * One tag of every type in the type table, with a value at the edge of its
+ * range and what an exact JSON parser must read back (integers as bigint,
+ * dates as ISO text).
+ */
+const EVERY_TYPE: readonly { type: DataTypeName; address: string; value: unknown; json: unknown }[] = [
+  { type: 'BOOL', address: 'DB1,X0.3', value: true, json: true },
+  { type: 'BYTE', address: 'DB1,BYTE1', value: 200, json: 200n },
+  { type: 'WORD', address: 'DB1,WORD2', value: 0xbeef, json: 48879n },
+  { type: 'DWORD', address: 'DB1,DWORD4', value: 4000000000, json: 4000000000n },
+  { type: 'LWORD', address: 'DB1,LWORD8', value: 0x8000000000000001n, json: 9223372036854775809n },
+  { type: 'SINT', address: 'DB1,SINT16', value: -100, json: -100n },
+  { type: 'USINT', address: 'DB1,USINT17', value: 250, json: 250n },
+  { type: 'INT', address: 'DB1,INT18', value: -30000, json: -30000n },
+  { type: 'UINT', address: 'DB1,UINT20', value: 60000, json: 60000n },
+  { type: 'DINT', address: 'DB1,DINT22', value: -2000000000, json: -2000000000n },
+  { type: 'UDINT', address: 'DB1,UDINT26', value: 4000000001, json: 4000000001n },
+  { type: 'LINT', address: 'DB1,LINT30', value: -1234567890123n, json: -1234567890123n },
+  { type: 'LINT', address: 'DB1,LINT38', value: -(2n ** 63n), json: -9223372036854775808n },
+  { type: 'ULINT', address: 'DB1,ULINT46', value: 2n ** 64n - 1n, json: 18446744073709551615n },
+  { type: 'REAL', address: 'DB1,REAL54', value: 1.5, json: 1.5 },
+  { type: 'LREAL', address: 'DB1,LREAL58', value: -0.1, json: -0.1 },
+  { type: 'CHAR', address: 'DB1,CHAR66', value: 'A', json: 'A' },
+  { type: 'WCHAR', address: 'DB1,WCHAR68', value: 'Ω', json: 'Ω' },
+  { type: 'STRING', address: 'DB1,S70.12', value: 'say "hi"\\', json: 'say "hi"\\' },
+  { type: 'WSTRING', address: 'DB1,WSTRING86.4', value: 'Grüß', json: 'Grüß' },
+  { type: 'S5TIME', address: 'DB1,S5TIME100', value: 1230, json: 1230n },
+  { type: 'TIME', address: 'DB1,TIME102', value: -86400000, json: -86400000n },
+  { type: 'LTIME', address: 'DB1,LTIME106', value: 2n ** 53n + 1n, json: 9007199254740993n },
+  { type: 'DATE', address: 'DB1,DATE114', value: new Date('2024-05-01T00:00:00Z'), json: '2024-05-01T00:00:00.000Z' },
+  { type: 'TIME_OF_DAY', address: 'DB1,TOD116', value: 45296789, json: 45296789n },
+  { type: 'DATE_AND_TIME', address: 'DB1,DT120', value: new Date('2023-12-31T23:59:58.123Z'), json: '2023-12-31T23:59:58.123Z' },
+  { type: 'DTL', address: 'DB1,DTL128', value: new Date('2024-02-29T12:34:56.789Z'), json: '2024-02-29T12:34:56.789Z' },
+  { type: 'COUNTER', address: 'C5', value: 999, json: 999n },
+  { type: 'TIMER', address: 'T3', value: 9990000, json: 9990000n },
+];
 
 describe('plcwire CLI', function () {
   this.timeout(15000);
@@ -96,6 +205,15 @@ describe('plcwire CLI', function () {
     it('exits 2 on an unknown URL parameter or option', async () => {
       expect((await cli(['read', `${url}&slto=1`, 'DB1,INT2'])).code).to.equal(EXIT.USAGE);
       expect((await cli(['read', url, 'DB1,INT2', '--jsn'])).code).to.equal(EXIT.USAGE);
+    });
+  });
+
+  describe('toJson', () => {
+    it('writes bigints (in arrays too) as bare digits and everything else as JSON.stringify does', () => {
+      expect(toJson({ a: [1n, -(2n ** 63n)], b: 2n ** 64n - 1n })).to.equal('{"a":[1,-9223372036854775808],"b":18446744073709551615}');
+      const plain = { n: 1.5, s: 'x"\\\u0001é', t: true, z: null, u: undefined, nan: NaN, inf: -Infinity, arr: [undefined, 1, [2]], d: new Date(0), o: {} };
+      expect(toJson(plain)).to.equal(JSON.stringify(plain));
+      expect(toJson(undefined)).to.equal('null');
     });
   });
 
@@ -179,6 +297,35 @@ describe('plcwire CLI', function () {
       expect(await srv.exit).to.equal(0);
     });
 
+    for (const [profile, tsaps] of [['s7-200', 'localTsap=1000&remoteTsap=1001'], ['logo', 'localTsap=0100&remoteTsap=0200']] as const) {
+      it(`serve s7 --profile ${profile} answers its TSAP URL with V memory and refuses rack/slot`, async () => {
+        const port = await freePort();
+        const srv = run(['serve', 's7', '--port', String(port), '--profile', profile]);
+        try {
+          await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+          const target = /^try: plcwire read "([^"]+)"/m.exec(srv.output().out)![1]!;
+          expect(target).to.equal(`s7://127.0.0.1:${port}?${tsaps}`);
+          const w = run(['write', target, 'VW10=321', 'V3.1=true']);
+          expect(await w.exit, w.output().err).to.equal(0);
+          const r = run(['read', target, 'VW10', 'VB3', 'DB2,INT0', '--json']);
+          expect(await r.exit).to.equal(EXIT.TAG_ERROR);
+          expect(JSON.parse(r.output().out)).to.deep.equal({ VW10: 321, VB3: 2, 'DB2,INT0': null });
+          expect(r.output().err).to.match(/DB2,INT0.*0x0A/);
+          const slot = run(['read', `s7://127.0.0.1:${port}?rack=0&slot=1&timeout=2000`, 'VW10']);
+          expect(await slot.exit).to.equal(EXIT.CONNECTION);
+        } finally {
+          srv.child.kill('SIGINT');
+        }
+        expect(await srv.exit).to.equal(0);
+      });
+    }
+
+    it('serve s7 names the profiles when given an unknown one', async () => {
+      const r = await cli(['serve', 's7', '--port', '0', '--profile', 's7-201']);
+      expect(r.code).to.equal(EXIT.USAGE);
+      expect(r.err).to.match(/--profile must be one of s7-300, s7-400, s7-1200, s7-1500, s7-200, logo/);
+    });
+
     it('watch prints changes and survives the PLC going away and coming back', async () => {
       const port = server.port;
       const w = run(['watch', url, 'DB1,INT2', '--interval', '50', '--json']);
@@ -199,6 +346,48 @@ describe('plcwire CLI', function () {
       expect(await w.exit).to.equal(0);
       const lines = w.output().out.trim().split('\n').map((l) => JSON.parse(l) as { values: Record<string, number> });
       expect(lines.map((l) => l.values['DB1,INT2'])).to.deep.equal([1234, 77, 78]);
+    });
+
+    describe('--json keeps every type exact', () => {
+      beforeEach(() => {
+        const db1 = server.memory.area('DB', 1)!;
+        db1[70] = 12; // STRING[12]'s and WSTRING[4]'s declared max lengths, as the PLC program sets them
+        db1.writeUInt16BE(4, 86);
+        for (const { address, value } of EVERY_TYPE) {
+          const tag = parseAddress(address);
+          const target = tag.area === 'DB' ? db1 : server.memory.area(tag.area)!;
+          encodeInto(tag, value, target, tag.area === 'C' || tag.area === 'T' ? tag.byteOffset * 2 : tag.byteOffset);
+        }
+      });
+      const expected = Object.fromEntries(EVERY_TYPE.map((t) => [t.address, t.json]));
+
+      it('the table covers every type a tag can have', () => {
+        expect([...new Set(EVERY_TYPE.map((t) => t.type))].sort()).to.deep.equal(Object.keys(JS_TYPES).sort());
+        for (const { address, type } of EVERY_TYPE) expect(parseAddress(address).type, address).to.equal(type);
+      });
+
+      it('read --json prints 64-bit integers as bare digits, exactly, and every other type as JSON', async () => {
+        const r = run(['read', url, ...EVERY_TYPE.map((t) => t.address), '--json']);
+        expect(await r.exit, r.output().err).to.equal(0);
+        const out = r.output().out;
+        expect(out).to.include('"DB1,LINT30":-1234567890123,');
+        expect(out).to.include('"DB1,ULINT46":18446744073709551615,');
+        expect(out).not.to.match(/bigint|\\u0000/);
+        expect(parseExactJson(out.trim())).to.deep.equal(expected);
+      });
+
+      it('watch --json prints the same exact values', async () => {
+        const w = run(['watch', url, ...EVERY_TYPE.map((t) => t.address), '--interval', '50', '--json']);
+        try {
+          await until(() => w.output().out.includes('\n'), 10000, 'first line');
+        } finally {
+          w.child.kill('SIGINT');
+        }
+        expect(await w.exit).to.equal(0);
+        const first = parseExactJson(w.output().out.split('\n')[0]!) as { time: string; values: unknown };
+        expect(first.time).to.match(/^\d{4}-\d\d-\d\dT/);
+        expect(first.values).to.deep.equal(expected);
+      });
     });
 
     it('prints usage and exits 2 without a command', async () => {

@@ -14,9 +14,12 @@ import {
   type S7Message,
   type S7WriteItem,
 } from '../lib/s7/codec';
+import { PlcError } from '../lib/errors';
+import { S7Client } from '../lib/s7/client';
 import { headerError, remoteTsapFor } from '../lib/s7/constants';
-import { S7Server, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
+import { PROFILES, S7Server, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
 import type { MemoryAccess } from '../lib/sim/memory';
+import { parseUrl, type S7Endpoint } from '../lib/url';
 import { CAPTURE, DOC, hex, show } from './fixtures/s7';
 import { until, waitFor } from './support/wait';
 
@@ -222,6 +225,104 @@ describe('S7Server', () => {
     });
   });
 
+  describe('TSAP-addressed CPUs: s7-200 (CP 243-1) and logo', () => {
+    // The TSAP pair each profile accepts, as a client URL gives it (local = calling, remote = called).
+    const cases = [
+      { profile: 's7-200', tsaps: 'localTsap=1000&remoteTsap=1001', called: 0x1001, calling: 0x4d57, wrong: ['localTsap=1000&remoteTsap=0301', 'localTsap=1000&remoteTsap=1801'], vBytes: 10240 },
+      { profile: 'logo', tsaps: 'localTsap=0100&remoteTsap=0200', called: 0x0200, calling: 0x0100, wrong: ['localTsap=0100&remoteTsap=0201', 'localTsap=1000&remoteTsap=0200'], vBytes: 1470 },
+    ] as const;
+    const clients: S7Client[] = [];
+    const client = (port: number, query: string) => {
+      const c = new S7Client(parseUrl(`s7://127.0.0.1:${port}?timeout=1500&${query}`) as S7Endpoint);
+      clients.push(c);
+      return c;
+    };
+    afterEach(async () => {
+      await Promise.all(clients.splice(0).map((c) => c.close()));
+    });
+
+    it("a LOGO! profile object with a project's own TSAP pair (snap7's 10.00 / 20.00) accepts that pair only", async () => {
+      const own = { ...PROFILES.logo, tsaps: { called: { value: 0x2000, mask: 0xffff }, calling: { value: 0x1000, mask: 0xffff } } };
+      const server = new S7Server({ port: 0, profile: own });
+      servers.push(server);
+      await server.listen();
+      await client(server.port, 'localTsap=1000&remoteTsap=2000').connect();
+      const err = await client(server.port, 'localTsap=0100&remoteTsap=0200').connect().then(() => undefined, (e: unknown) => e);
+      expect((err as PlcError).code).to.equal('CONNECT_FAILED');
+      expect(server.memory.area('DB', 1)!.length).to.equal(1470);
+    });
+
+    for (const { profile, tsaps, called, calling, wrong, vBytes } of cases) {
+      describe(profile, () => {
+        it('the client reaches it with its TSAP URL and reads and writes V memory (= DB1) at PDU 240', async () => {
+          const server = await start(profile);
+          const c = client(server.port, tsaps);
+          await c.connect();
+          expect(c.pduSize).to.equal(240);
+          await c.write({ VW10: 64302, 'V20.3': true, VD30: 0xdeadbeef });
+          const v = server.memory.area('DB', 1)!;
+          expect(v.length).to.equal(vBytes);
+          expect([v.readUInt16BE(10), v[20], v.readUInt32BE(30)]).to.deep.equal([64302, 0b1000, 0xdeadbeef]);
+          v.writeUInt16BE(4321, vBytes - 2);
+          expect(await c.read([`VW${vBytes - 2}`, 'VW10', 'V20.3'])).to.deep.equal({ [`VW${vBytes - 2}`]: 4321, VW10: 64302, 'V20.3': true });
+        });
+
+        it('has V as its only DB and refuses the S5 counters and timers (0x03)', async () => {
+          const server = await start(profile);
+          const c = client(server.port, tsaps);
+          await c.connect();
+          const r = await c.readDetailed(['DB2,INT0', `VB${vBytes}`, 'C0', 'T0', 'VB0']);
+          const code = (a: string) => { const x = r[a]!; return x.ok ? 'ok' : x.error.code; };
+          expect(['DB2,INT0', `VB${vBytes}`, 'C0', 'T0', 'VB0'].map(code)).to.deep.equal(['OBJECT_DOES_NOT_EXIST', 'ADDRESS_OUT_OF_RANGE', 'ACCESS_DENIED', 'ACCESS_DENIED', 'ok']);
+        });
+
+        it('refuses a connection request with other TSAPs (rack/slot ones too) with a COTP DR, address unknown', async () => {
+          const server = await start(profile);
+          const reasons: S7RefusedEvent['reason'][] = [];
+          server.on('refused', (e: S7RefusedEvent) => reasons.push(e.reason));
+          for (const query of [...wrong, 'rack=0&slot=1', 'rack=0&slot=2']) {
+            const err = await client(server.port, query).connect().then(() => undefined, (e: unknown) => e);
+            expect(err, query).to.be.instanceOf(PlcError);
+            expect((err as PlcError).code, query).to.equal('CONNECT_FAILED');
+          }
+          const { peer, cc } = await connectCotp(server.port, remoteTsapFor('pg', 0, 1));
+          peers.push(peer);
+          expect(cc).to.deep.include({ type: 'DR', destinationRef: 0x42, reason: 3 });
+          await peer.closedWithin();
+          expect(reasons).to.deep.equal(Array(wrong.length + 3).fill('wrong-tsap'));
+          expect(server.connectionCount).to.equal(0);
+        });
+
+        it('serves 8 connections, refuses the 9th with a DR (congestion), and asked for PDU 960 offers 240', async () => {
+          const server = await start(profile);
+          const eight: RawPeer[] = [];
+          for (let i = 0; i < 8; i++) {
+            const peer = new RawPeer(server.port);
+            peers.push(peer);
+            peer.send(encodeConnectionRequest({ sourceRef: 0x0042, callingTsap: calling, calledTsap: called, tpduSize: 0x0a }));
+            expect(decodeCotp(await peer.next())).to.include({ type: 'CC', calledTsap: called, callingTsap: calling });
+            peer.send(encodeSetupCommunication(i, { maxAmqCalling: 8, maxAmqCalled: 8, pduSize: 960 }));
+            const ack = await peer.nextS7();
+            expect(ack).to.deep.include({ kind: 'setup-ack', params: { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 } });
+            eight.push(peer);
+          }
+          const ninth = new RawPeer(server.port);
+          peers.push(ninth);
+          ninth.send(encodeConnectionRequest({ sourceRef: 0x0042, callingTsap: calling, calledTsap: called, tpduSize: 0x0a }));
+          expect(decodeCotp(await ninth.next())).to.deep.include({ type: 'DR', reason: 1 });
+          await ninth.closedWithin();
+          expect(server.connectionCount).to.equal(8);
+          const gone = waitFor<number>(server, 'disconnect');
+          eight[0]!.destroy();
+          expect(await gone).to.equal(7);
+          const again = client(server.port, tsaps);
+          await again.connect();
+          expect(server.connectionCount).to.equal(8);
+        });
+      });
+    }
+  });
+
   describe('Read Var and Write Var', () => {
     it('reads bytes, words, bits, REAL, counters and timers with fill bytes after odd items', async () => {
       const server = await start('s7-1500');
@@ -313,6 +414,44 @@ describe('S7Server', () => {
       peer.send(DOC.write);
       expect(await peer.nextS7()).to.deep.equal({ kind: 'write-ack', pduRef: 9, returnCodes: [0xff] });
       expect(server.memory.area('DB', 200)![1]).to.equal(9);
+    });
+
+    // Counters and timers as other clients ask for them (each item's origin in its comment; the CPU's rules
+    // and their sources are in lib/s7/server-jobs.ts). Address field: the counter/timer number.
+    it('serves C and T items of their own transport size and answers 0x05 to any other, as a CPU does', async () => {
+      const server = await start('s7-300');
+      const c = server.memory.area('C', 0)!;
+      const t = server.memory.area('T', 0)!;
+      c.writeUInt16BE(0x0123, 5 * 2);
+      c.writeUInt16BE(0x0040, 40 * 2);
+      t.writeUInt16BE(0x2100, 3 * 2);
+      t.writeUInt16BE(0x0010, 4 * 2);
+      const { peer } = await open(server, 240, 1, remoteTsapFor('pg', 0, 2));
+      peer.send(
+        hex(
+          '03 00 00 4F | 02 F0 80 | 32 01 00 00 00 05 00 3E 00 00 | 04 05' +
+            '12 0A 10 1C 00 01 00 00 1C 00 00 05' + // snap7 CTRead(5, 1): COUNTER ×1, C5
+            '12 0A 10 1D 00 02 00 00 1D 00 00 03' + // snap7 TMRead(3, 2): TIMER ×2, T3 and T4
+            '12 0A 10 02 00 02 00 00 1D 00 00 68' + // python-snap7 before #121 read_area(TM, 0, 13, 2): BYTE ×2 at bit address 13 × 8
+            '12 0A 10 09 00 02 00 00 1C 00 00 28' + // @st-one-io/nodes7 1.1.2 "C5": transport size 0x09, 2 bytes, bit address 5 × 8
+            '12 0A 10 1C 00 01 00 00 1C 00 00 28', // nodes7 0.3.18 "C5": COUNTER ×1 but the number × 8, so C40
+        ),
+      );
+      expect(show(await peer.next())).to.equal(
+        '03000031' + '02F080' + '320300000005000200' + '1C0000' + '0405' +
+          'FF0900020123' + 'FF09000421000010' + '05000000' + '05000000' + 'FF0900020040',
+      );
+      peer.send(
+        hex(
+          '03 00 00 49 | 02 F0 80 | 32 01 00 00 00 06 00 26 00 12 | 05 03' +
+            '12 0A 10 1C 00 01 00 00 1C 00 00 05' + // snap7 CTWrite(5, 1)
+            '12 0A 10 1C 00 01 00 00 1C 00 00 07' + // nodes7 0.3.18 writing C7 the same way (its data: 0x09, 2 bytes)
+            '12 0A 10 02 00 02 00 00 1C 00 00 30' + // BYTE ×2 at bit address 6 × 8
+            '00 09 00 02 02 34 | 00 09 00 02 00 07 | 00 04 00 10 AA BB',
+        ),
+      );
+      expect(show(await peer.next())).to.equal('03000018' + '02F080' + '320300000006000200030000' + '0503' + 'FFFF05');
+      expect([c.readUInt16BE(5 * 2), c.readUInt16BE(7 * 2), c.readUInt16BE(6 * 2)]).to.deep.equal([0x0234, 0x0007, 0]);
     });
 
     it('uses a JSON layout: only the DBs listed exist, with their sizes', async () => {

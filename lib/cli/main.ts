@@ -39,7 +39,7 @@ const USAGE = `usage:
   plcwire read  <url> <address>... [--json] [--timeout ms]
   plcwire write <url> <address>=<value>... [--yes] [--json] [--timeout ms]
   plcwire watch <url> <address>... [--interval ms] [--json]
-  plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1200] [--layout file.json]
+  plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json]
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
   plcwire demo

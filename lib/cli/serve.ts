@@ -3,14 +3,24 @@ import { readFileSync } from 'node:fs';
 import { FetchWriteServer } from '../fetchwrite/server';
 import { FreeportBus } from '../freeport/bus';
 import { S7Server, type S7Profile } from '../s7/server';
-import { PlcMemory, type MemoryLayout } from '../sim/memory';
+import type { MemoryLayout } from '../sim/memory';
 import { FREEPORT_BAUD_RATES } from '../url';
 import { UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
 import type { CliIo } from './main';
 
 export const SERVE_FLAGS = ['port', 'host', 'profile', 'layout', 'fetch-port', 'write-port', 'path', 'baud', 'tcp', 'stations'];
 
-const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500'];
+const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
+
+/** The URL query that reaches each profile's CPU: rack/slot, or the TSAP pair a TSAP-addressed CPU accepts. */
+const REACH: Readonly<Record<S7Profile, { query: string; addresses: string }>> = Object.freeze({
+  's7-300': { query: 'rack=0&slot=2', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-400': { query: 'rack=0&slot=2', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-1200': { query: 'rack=0&slot=1', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-1500': { query: 'rack=0&slot=1', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-200': { query: 'localTsap=1000&remoteTsap=1001', addresses: 'VW0 VB10 M0.1' },
+  logo: { query: 'localTsap=0100&remoteTsap=0200', addresses: 'VW0 V1024.0' },
+});
 
 export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const [protocol, ...extra] = rest;
@@ -22,11 +32,12 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
     case 's7': {
       const profile = (stringFlag(args, 'profile') ?? 's7-1500').toLowerCase() as S7Profile;
       if (!PROFILES.includes(profile)) throw new UsageError(`--profile must be one of ${PROFILES.join(', ')}`);
-      const memory = new PlcMemory(loadLayout(stringFlag(args, 'layout')));
-      const server = new S7Server({ host, port: intFlag(args, 'port', 102, 0, 65535), profile, memory });
+      // Without --layout the profile's own memory (DB1 only for s7-200 and logo).
+      const layout = loadLayout(stringFlag(args, 'layout'));
+      const server = new S7Server({ host, port: intFlag(args, 'port', 102, 0, 65535), profile, ...(layout ? { layout } : {}) });
       const port = await listen(() => server.listen(), 'port');
       say(`S7 simulator (${profile}) listening on ${host}:${port}`);
-      say(`try: plcwire read "s7://${urlHost(host)}:${port}?rack=0&slot=1" DB1,INT0 MW10 M0.1`);
+      say(`try: plcwire read "s7://${urlHost(host)}:${port}?${REACH[profile].query}" ${REACH[profile].addresses}`);
       close = () => server.close();
       break;
     }

@@ -69,9 +69,39 @@ export function valueToText(value: unknown): string {
   return String(value);
 }
 
-/** JSON where a bigint stays exact (written as its digits) and a Date as ISO text. */
+/**
+ * JSON text where a bigint (LINT, ULINT, LWORD, LTIME) is written as its exact
+ * digits, unquoted, and a Date as its ISO text; everything else as
+ * JSON.stringify writes it (non-finite numbers and undefined in arrays become
+ * null, undefined properties are left out). A serializer of its own because
+ * JSON.stringify cannot emit a bare bigint and a replacer's marker string
+ * comes back escaped.
+ */
 export function toJson(value: unknown): string {
-  const marker = '\u0000bigint:';
-  const text = JSON.stringify(value, (_k, v: unknown) => (typeof v === 'bigint' ? `${marker}${v}` : v));
-  return text.replace(new RegExp(`"${marker}(-?\\d+)"`, 'g'), '$1');
+  return jsonOf(value) ?? 'null';
+}
+
+/** undefined where JSON.stringify would leave the value out (undefined, functions, symbols). */
+function jsonOf(value: unknown): string | undefined {
+  switch (typeof value) {
+    case 'bigint':
+      return value.toString();
+    case 'number':
+      return Number.isFinite(value) ? JSON.stringify(value) : 'null';
+    case 'string':
+    case 'boolean':
+      return JSON.stringify(value);
+    case 'object':
+      if (value === null) return 'null';
+      if (value instanceof Date) return Number.isNaN(value.getTime()) ? 'null' : JSON.stringify(value.toISOString());
+      if (Array.isArray(value)) return `[${value.map((v: unknown) => jsonOf(v) ?? 'null').join(',')}]`;
+      return `{${Object.entries(value)
+        .flatMap(([k, v]) => {
+          const text = jsonOf(v);
+          return text === undefined ? [] : [`${JSON.stringify(k)}:${text}`];
+        })
+        .join(',')}}`;
+    default:
+      return undefined;
+  }
 }

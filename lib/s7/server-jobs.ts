@@ -30,12 +30,46 @@ export interface JobContext {
   pduSize: number;
   /** DBs that answer "object does not exist" (fault injection); undefined when none. */
   missingDb?: ((dbNumber: number) => boolean) | undefined;
+  /** false: the S5 counter and timer areas answer 0x03 (an S7-200 or LOGO!); default true. */
+  s5CountersTimers?: boolean;
 }
 
 /** Where the S7 parameters of a job start in a frame with the usual 3-byte COTP DT header. */
 const PARAMS = FRAME_OVERHEAD + S7_JOB_HEADER;
 const ACK_PARAMS = FRAME_OVERHEAD + S7_ACK_HEADER;
 
+/**
+ * COUNTERS_AND_TIMERS: how an S7-300/400 CPU serves the S5 counter (0x1C) and
+ * timer (0x1D) areas, and so the simulator.
+ * - An item whose transport size is the area's own code (COUNTER 0x1C for C,
+ *   TIMER 0x1D for T) counts counters/timers of 2 bytes, and its address field
+ *   is the counter/timer number, not a bit address. That is how snap7's client
+ *   asks (s7_micro_client.cpp: WordLen S7WLCounter/S7WLTimer, Address = Start
+ *   with no ×8) and how S7NetPlus reads (S7NetPlus/s7netplus#561: the start
+ *   address is the counter number).
+ * - The answer's data transport size is 0x09 OCTET STRING, its length in bytes
+ *   (2 per element): nodes7 checks exactly that (nodeS7.js, readTransportCode
+ *   0x09 for C and T), and snap7's server answers so (TS_ResOctet).
+ * - Any other transport size on C or T is refused with 0x05 "address out of
+ *   range". A real CPU did so to python-snap7 before its fix #121, which asked
+ *   for a timer with BYTE (0x02) at a bit address (gijzelaerr/python-snap7#62,
+ *   "CPU : Address out of range"); snap7's server applies the same rule to every
+ *   mismatch ("timers/counters coherence", RA_OutOfRange). No capture of a CPU
+ *   answering transport size 0x09 (which @st-one-io/nodes7 sends for C and T;
+ *   the item table names 0x09 DATE) was found: the simulator follows snap7's
+ *   rule and answers 0x05 there too.
+ * - S7-200 SMART CPUs refuse the 0x1C/0x1D areas with 0x03 "access denied"
+ *   (S7NetPlus/s7netplus#531, st-one-io/node-red-contrib-s7#144); their counters
+ *   and timers are the IEC areas 0x1E/0x1F (gijzelaerr/python-snap7#471), which
+ *   the simulator does not serve. JobContext.s5CountersTimers false models that.
+ * Where the sources disagree: snap7's server turns the number into a byte
+ * offset with `Start >> 1` (s7_server.cpp), so its CTRead(5) answers the word
+ * of C1 (checked against node-snap7 1.0.9), where the clients above get
+ * counter n for the number n. The simulator keeps counter n at bytes
+ * 2n..2n+1 and answers it for number n. Not known: what an S7-1200 (no S5
+ * counters or timers) answers; the simulator serves C and T on every
+ * S7-300/400/1200/1500 profile.
+ */
 /** Bytes per element of a request item's transport size; 0 = not supported. */
 const ELEMENT = new Uint8Array(256);
 ELEMENT[TransportSize.BIT] = 1;
@@ -131,17 +165,17 @@ function locate(frame: Buffer, i: number, o: number, ctx: JobContext, forWrite: 
   itemBit[i] = -1;
   const area = areaName(areaCode, forWrite);
   if (!area) return ReturnCode.AddressOutOfRange;
-  const element = ELEMENT[ts]!;
-  if (element === 0) return ReturnCode.DataTypeNotSupported;
   let offset: number;
   let length: number;
   if (area === 'C' || area === 'T') {
-    // Counters and timers are numbered; each is a 2-byte S5 word.
-    const own = area === 'C' ? TransportSize.COUNTER : TransportSize.TIMER;
-    if (ts !== own && ts !== TransportSize.WORD && ts !== TransportSize.BYTE) return ReturnCode.DataTypeNotSupported;
+    if (ctx.s5CountersTimers === false) return ReturnCode.AccessDenied;
+    // Only the area's own transport size is served (see COUNTERS_AND_TIMERS); the address is the number.
+    if (ts !== (area === 'C' ? TransportSize.COUNTER : TransportSize.TIMER)) return ReturnCode.AddressOutOfRange;
     offset = address * 2;
-    length = ts === TransportSize.BYTE ? count : count * 2;
+    length = count * 2;
   } else {
+    const element = ELEMENT[ts]!;
+    if (element === 0) return ReturnCode.DataTypeNotSupported;
     if (ts === TransportSize.COUNTER || ts === TransportSize.TIMER) return ReturnCode.DataTypeNotSupported;
     if (ts === TransportSize.BIT) {
       if (count !== 1) return ReturnCode.DataTypeInconsistent;

@@ -1,7 +1,13 @@
 /** CPU profiles and memory layouts of the S7 simulator. */
 import type { MemoryLayout } from '../sim/memory';
 
-export type S7Profile = 's7-300' | 's7-400' | 's7-1200' | 's7-1500';
+export type S7Profile = 's7-300' | 's7-400' | 's7-1200' | 's7-1500' | 's7-200' | 'logo';
+
+/** A TSAP the CPU accepts: the bits of `mask` must equal those of `value`. */
+export interface TsapMatch {
+  value: number;
+  mask: number;
+}
 
 export interface CpuProfile {
   /** PDU size the CPU offers; it answers min(requested, offered). */
@@ -12,6 +18,90 @@ export interface CpuProfile {
   maxConnections: number;
   /** Slots (rack 0) whose called TSAP the CPU accepts. */
   slots: readonly number[];
+  /**
+   * A CPU addressed by configured TSAPs instead of rack/slot (S7-200 with a CP 243-1, LOGO!): the
+   * called TSAP (the CPU's) and the calling TSAP (the client's) it accepts; any other is refused.
+   */
+  tsaps?: { readonly called: TsapMatch; readonly calling: TsapMatch };
+  /** Memory when the server is given neither `memory` nor `layout`. */
+  layout?: MemoryLayout;
+  /** false: the S5 counter and timer areas (0x1C/0x1D) answer 0x03, as on an S7-200; default true. */
+  s5CountersTimers?: boolean;
+}
+
+/**
+ * An S7-200 reached through a CP 243-1. The CP's TSAP (the one a client calls)
+ * is the connection number in its first byte, 0x10 for the Ethernet wizard's
+ * first connection up to 0x17 for its eighth (Micro/WIN greys it out:
+ * S7NetPlus/s7netplus#332), and "the structure of the second byte is not
+ * checked by the CP 243-1" (SIMATIC NET CP 243-1 manual, §4.2.3 TSAPs); "up to
+ * 8 such connections can be maintained" (same manual, the wizard's connection
+ * count). S7NetPlus's default pair for an S7-200 is local 0x1000, remote 0x1001
+ * (S7.Net/Protocol/TsapPair.cs). The client's TSAP is whatever the wizard was
+ * given, so the simulator accepts any. V memory is DB1 on the wire (nodes7's
+ * README and plcpeople/nodeS7#49: "V0.0 … use DB1,X0.0"), 10240 bytes as a
+ * CPU 226 has; I, Q 16 bytes and M 32 bytes as a CPU 22x. Its counters and
+ * timers are not the S5 areas: S7-200 SMART CPUs answer 0x03 there (see
+ * COUNTERS_AND_TIMERS in server-jobs.ts). PDU 240 and one job at a time are
+ * the simulator's choice (no capture of a CP 243-1's setup answer was found).
+ */
+const S7_200: CpuProfile = Object.freeze({
+  pduSize: 240,
+  maxJobs: 1,
+  maxConnections: 8,
+  slots: Object.freeze([]),
+  tsaps: Object.freeze({ called: Object.freeze({ value: 0x1000, mask: 0xf800 }), calling: Object.freeze({ value: 0, mask: 0 }) }),
+  layout: Object.freeze({ dataBlocks: Object.freeze({ 1: 10240 }), inputs: 16, outputs: 16, flags: 32, peripheral: 0, counters: 0, timers: 0 }),
+  s5CountersTimers: false,
+});
+
+/**
+ * A LOGO! 0BA7/0BA8 with an S7 server connection set up in LOGO!Soft Comfort.
+ * Both TSAPs are the ones configured there, so public sources disagree on
+ * "the" pair: nodes7's README connects a LOGO with local 0x0100 / remote
+ * 0x0200, python-snap7's LOGO example (after snap7's LOGO page) with 0x1000 /
+ * 0x2000, S7NetPlus with 0x0100 / 0x0102 ("probably on a per-project basis").
+ * The profile takes nodes7's pair, checks both TSAPs as a configured
+ * connection does, and a CpuProfile with a project's own pair serves another.
+ * "A LOGO! 0BA7 Base Module can support a maximum of eight network
+ * connections" (LOGO!Soft Comfort online help, Ethernet connections). The VM
+ * is DB1; the inputs, outputs and flags are read through their VM images
+ * (I1 at V1024.0 on a 0BA8, V923.0 on a 0BA7: python-snap7 example/logo_7_8.py;
+ * AM1 at VW1118: nodes7's README), so DB1 is the only area served: 1470 bytes
+ * (through the 0BA8 image) is the simulator's choice, as are PDU 240 and one
+ * job at a time. Counters and timers as for the S7-200.
+ */
+const LOGO: CpuProfile = Object.freeze({
+  pduSize: 240,
+  maxJobs: 1,
+  maxConnections: 8,
+  slots: Object.freeze([]),
+  tsaps: Object.freeze({ called: Object.freeze({ value: 0x0200, mask: 0xffff }), calling: Object.freeze({ value: 0x0100, mask: 0xffff }) }),
+  layout: Object.freeze({ dataBlocks: Object.freeze({ 1: 1470 }), inputs: 0, outputs: 0, flags: 0, peripheral: 0, counters: 0, timers: 0 }),
+  s5CountersTimers: false,
+});
+
+const hex4 = (tsap: number) => `0x${tsap.toString(16).padStart(4, '0')}`;
+
+/**
+ * Why the CPU refuses a connection request with these TSAPs, or undefined when
+ * it accepts them. Rack/slot CPUs check a called TSAP of the rack/slot form
+ * (connection type PG 1, OP 2, basic 3) against their slots and accept other
+ * TSAPs; TSAP-addressed CPUs (profile.tsaps) accept only their own.
+ */
+export function tsapRefusal(profile: CpuProfile, callingTsap: number, calledTsap: number): string | undefined {
+  const own = profile.tsaps;
+  if (own) {
+    if ((calledTsap & own.called.mask) !== own.called.value) return `no connection configured for called TSAP ${hex4(calledTsap)}`;
+    if ((callingTsap & own.calling.mask) !== own.calling.value) return `calling TSAP ${hex4(callingTsap)} is not the configured partner's`;
+    return undefined;
+  }
+  const type = calledTsap >> 8;
+  if (type < 1 || type > 3) return undefined;
+  const rack = (calledTsap >> 5) & 0x07;
+  const slot = calledTsap & 0x1f;
+  if (rack !== 0 || !profile.slots.includes(slot)) return `no CPU at rack ${rack} slot ${slot} (called TSAP ${hex4(calledTsap)})`;
+  return undefined;
 }
 
 /**
@@ -31,6 +121,8 @@ export const PROFILES: Readonly<Record<S7Profile, CpuProfile>> = Object.freeze({
   's7-400': Object.freeze({ pduSize: 480, maxJobs: 8, maxConnections: 32, slots: Object.freeze([2, 3, 4]) }),
   's7-1200': Object.freeze({ pduSize: 240, maxJobs: 3, maxConnections: 8, slots: Object.freeze([0, 1]) }),
   's7-1500': Object.freeze({ pduSize: 960, maxJobs: 8, maxConnections: 32, slots: Object.freeze([0, 1]) }),
+  's7-200': S7_200,
+  logo: LOGO,
 });
 
 /**

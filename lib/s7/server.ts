@@ -11,7 +11,7 @@ import { PlcMemory } from '../sim/memory';
 import { S7Function, tpduBytes } from './constants';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from './codec';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
-import { PROFILES, toMemoryLayout, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
+import { PROFILES, toMemoryLayout, tsapRefusal, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
 
 export { PROFILES, toMemoryLayout, type CpuProfile, type S7JsonLayout, type S7Layout, type S7Profile } from './server-profiles';
 
@@ -110,9 +110,9 @@ export class S7Server extends EventEmitter {
     this.wantPort = options.port ?? 102;
     const profile = options.profile ?? 's7-1500';
     const resolved = typeof profile === 'string' ? PROFILES[profile] : profile;
-    if (!resolved) throw new TypeError(`unknown S7 profile "${String(profile)}" (s7-300, s7-400, s7-1200, s7-1500)`);
+    if (!resolved) throw new TypeError(`unknown S7 profile "${String(profile)}" (${Object.keys(PROFILES).join(', ')})`);
     this.profile = resolved;
-    this.memory = options.memory ?? new PlcMemory(options.layout ? toMemoryLayout(options.layout) : undefined);
+    this.memory = options.memory ?? new PlcMemory(options.layout ? toMemoryLayout(options.layout) : resolved.layout);
     this.faults = {
       accessDenied: false,
       missingDb: undefined,
@@ -179,7 +179,7 @@ export class S7Server extends EventEmitter {
       reader: new FrameReader(checkTpkt, 0x10000 + 4, { copy: false }),
       stage: 'cotp',
       pduLimit: this.profile.pduSize,
-      ctx: { memory: this.memory, pduSize: this.profile.pduSize, missingDb: undefined },
+      ctx: { memory: this.memory, pduSize: this.profile.pduSize, missingDb: undefined, s5CountersTimers: this.profile.s5CountersTimers !== false },
       maxJobs: 1,
       running: 0,
       queue: [],
@@ -270,15 +270,8 @@ export class S7Server extends EventEmitter {
     if (this.counted >= this.profile.maxConnections) {
       return refuse('connection-limit', DR_CONGESTION, `all ${this.profile.maxConnections} connections of the CPU are in use`);
     }
-    // Called TSAPs of the rack/slot form (connection type PG 1, OP 2, basic 3) must name this CPU; other TSAPs (S7-200, LOGO) are accepted.
-    const type = cr.calledTsap >> 8;
-    if (type >= 1 && type <= 3) {
-      const rack = (cr.calledTsap >> 5) & 0x07;
-      const slot = cr.calledTsap & 0x1f;
-      if (rack !== 0 || !this.profile.slots.includes(slot)) {
-        return refuse('wrong-tsap', DR_ADDRESS_UNKNOWN, `no CPU at rack ${rack} slot ${slot} (called TSAP 0x${cr.calledTsap.toString(16).padStart(4, '0')})`);
-      }
-    }
+    const wrongTsap = tsapRefusal(this.profile, cr.callingTsap, cr.calledTsap);
+    if (wrongTsap !== undefined) return refuse('wrong-tsap', DR_ADDRESS_UNKNOWN, wrongTsap);
     const tpdu = tpduBytes(cr.tpduSize) ? Math.min(cr.tpduSize, MAX_TPDU) : MAX_TPDU;
     // A PDU travels in one TPDU (3 bytes of COTP DT header): a CPU offers the largest of its sizes that fits.
     let limit = this.profile.pduSize;
