@@ -198,6 +198,42 @@ function imageSources(markdown: string): string[] {
   return [...md, ...html];
 }
 
+/** The anchors GitHub and npm give a file's headings (lower case, punctuation dropped, spaces to hyphens, repeats numbered). */
+function headingAnchors(markdown: string): Set<string> {
+  const anchors = new Set<string>();
+  const seen = new Map<string, number>();
+  for (const m of proseOf(markdown).matchAll(/^#{1,6}\s+(.+?)\s*#*\s*$/gm)) {
+    const base = m[1]!.toLowerCase().replace(/[^\p{L}\p{N}\s_-]/gu, '').trim().replace(/\s/g, '-');
+    const n = seen.get(base) ?? 0;
+    seen.set(base, n + 1);
+    anchors.add(n === 0 ? base : `${base}-${n}`);
+  }
+  return anchors;
+}
+
+describe('packaging: links of the README and docs/', () => {
+  it('every relative link names a file of the repository, and every #anchor a heading of the file it points into', () => {
+    const pages = ['README.md', ...fs.readdirSync(path.join(ROOT, 'docs')).filter((f) => f.endsWith('.md')).map((f) => `docs/${f}`)];
+    const broken: string[] = [];
+    for (const page of pages) {
+      const text = fs.readFileSync(path.join(ROOT, page), 'utf8');
+      for (const m of proseOf(text).matchAll(/\]\(\s*<?([^)\s>]+)>?(?:\s+"[^"]*")?\s*\)/g)) {
+        const target = m[1]!;
+        if (/^[a-z][a-z0-9+.-]*:/i.test(target)) continue;
+        const [file, anchor] = target.split('#') as [string, string | undefined];
+        const resolved = file === '' ? page : path.posix.normalize(path.posix.join(path.posix.dirname(page), file));
+        const full = path.join(ROOT, resolved);
+        if (!fs.existsSync(full)) {
+          broken.push(`${page}: ${target} (no ${resolved})`);
+        } else if (anchor !== undefined && !headingAnchors(fs.readFileSync(full, 'utf8')).has(anchor)) {
+          broken.push(`${page}: ${target} (no heading #${anchor} in ${resolved})`);
+        }
+      }
+    }
+    expect(broken).to.deep.equal([]);
+  });
+});
+
 function listFiles(dir: string): string[] {
   return fs.readdirSync(dir, { withFileTypes: true }).flatMap((e) => {
     const p = path.join(dir, e.name);
