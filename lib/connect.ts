@@ -14,7 +14,7 @@ import { parseUrl, type Endpoint } from './url';
 export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
   /** Serial binding for freeport (tests inject `@serialport/binding-mock`). */
   binding?: BindingInterface;
-  /** Freeport frame profile of your PLC program; unnamed fields keep the document's (see README). */
+  /** Freeport frame profile of your PLC program; unnamed fields keep the default profile's (docs/protocols.md, "S7-200 freeport"). */
   profile?: Partial<FreeportProfile>;
 }
 

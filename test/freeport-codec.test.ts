@@ -70,7 +70,7 @@ describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
   });
 
   describe('erratum: the document example frame fails the document\'s own checksum rule', () => {
-    // seeds/004 says: writing E6 27 A1 C3 to station 5 is sent as "q W 0 5 0 4 E 6 2 7 A 1 C 3 2 D Q".
+    // The circulated paper says writing E6 27 A1 C3 to station 5 is sent as "q W 0 5 0 4 E 6 2 7 A 1 C 3 2 D Q" (docs/protocols.md, corrections).
     const documentExample = 'qW0504E627A1C32DQ';
 
     it('its FC 2D is not the XOR of DT..DU (that is 20), nor any other common rule', () => {

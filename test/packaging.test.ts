@@ -5,7 +5,7 @@
  */
 import { expect } from 'chai';
 import { execFileSync } from 'node:child_process';
-import { packTarball } from './support/pack';
+import { packTarball, ROOT } from './support/pack';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
@@ -159,9 +159,78 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
     }
   });
 
+  it('every README image shows on the package page: a file in the tarball, or an https URL of a file of this repository', () => {
+    const readme = fs.readFileSync(path.join(pkgDir, 'README.md'), 'utf8');
+    const sources = imageSources(readme);
+    expect(sources, 'images in the README').not.to.deep.equal([]);
+    const url = typeof pkg.repository === 'string' ? pkg.repository : pkg.repository?.url ?? '';
+    const repo = /github\.com\/([^/]+\/[^/.]+)/.exec(url)?.[1];
+    for (const src of sources) {
+      if (/^[a-z][a-z0-9+.-]*:/i.test(src)) {
+        expect(src, 'an absolute image URL').to.match(/^https:\/\//);
+        const raw = /^https:\/\/raw\.githubusercontent\.com\/([^/]+\/[^/]+)\/[^/]+\/(.+)$/.exec(src);
+        if (raw) {
+          expect(raw[1], src).to.equal(repo);
+          expect(fs.existsSync(path.join(ROOT, raw[2]!)), `${raw[2]} in the repository`).to.equal(true);
+        }
+      } else {
+        expect(files, `${src} in the tarball`).to.include(path.posix.normalize(src));
+      }
+    }
+  });
+
   it('ships the compiled library, the CLI and the docs, and no tests or sources', () => {
     expect(files).to.include.members(['dist/lib/index.js', 'dist/lib/index.d.ts', 'bin/plcwire.js', 'README.md']);
     expect(files.filter((f) => f.startsWith('dist/test/') || f.startsWith('test/') || f.endsWith('.ts') && !f.endsWith('.d.ts'))).to.deep.equal([]);
+  });
+});
+
+/** Markdown without fenced code blocks and inline code, where links are not links. */
+function proseOf(markdown: string): string {
+  return markdown.replace(/^(```|~~~)[^\n]*\n[\s\S]*?^\1[^\n]*$/gm, '').replace(/`[^`\n]*`/g, '');
+}
+
+/** Sources of the images a Markdown file shows: `![alt](src)` and `<img src="…">`. */
+function imageSources(markdown: string): string[] {
+  const prose = proseOf(markdown);
+  const md = [...prose.matchAll(/!\[[^\]]*\]\(\s*<?([^)\s>]+)>?(?:\s+"[^"]*")?\s*\)/g)].map((m) => m[1]!);
+  const html = [...prose.matchAll(/<img\s[^>]*\bsrc=["']([^"']+)["']/gi)].map((m) => m[1]!);
+  return [...md, ...html];
+}
+
+/** The anchors GitHub and npm give a file's headings (lower case, punctuation dropped, spaces to hyphens, repeats numbered). */
+function headingAnchors(markdown: string): Set<string> {
+  const anchors = new Set<string>();
+  const seen = new Map<string, number>();
+  for (const m of proseOf(markdown).matchAll(/^#{1,6}\s+(.+?)\s*#*\s*$/gm)) {
+    const base = m[1]!.toLowerCase().replace(/[^\p{L}\p{N}\s_-]/gu, '').trim().replace(/\s/g, '-');
+    const n = seen.get(base) ?? 0;
+    seen.set(base, n + 1);
+    anchors.add(n === 0 ? base : `${base}-${n}`);
+  }
+  return anchors;
+}
+
+describe('packaging: links of the README and docs/', () => {
+  it('every relative link names a file of the repository, and every #anchor a heading of the file it points into', () => {
+    const pages = ['README.md', ...fs.readdirSync(path.join(ROOT, 'docs')).filter((f) => f.endsWith('.md')).map((f) => `docs/${f}`)];
+    const broken: string[] = [];
+    for (const page of pages) {
+      const text = fs.readFileSync(path.join(ROOT, page), 'utf8');
+      for (const m of proseOf(text).matchAll(/\]\(\s*<?([^)\s>]+)>?(?:\s+"[^"]*")?\s*\)/g)) {
+        const target = m[1]!;
+        if (/^[a-z][a-z0-9+.-]*:/i.test(target)) continue;
+        const [file, anchor] = target.split('#') as [string, string | undefined];
+        const resolved = file === '' ? page : path.posix.normalize(path.posix.join(path.posix.dirname(page), file));
+        const full = path.join(ROOT, resolved);
+        if (!fs.existsSync(full)) {
+          broken.push(`${page}: ${target} (no ${resolved})`);
+        } else if (anchor !== undefined && !headingAnchors(fs.readFileSync(full, 'utf8')).has(anchor)) {
+          broken.push(`${page}: ${target} (no heading #${anchor} in ${resolved})`);
+        }
+      }
+    }
+    expect(broken).to.deep.equal([]);
   });
 });
 

@@ -91,7 +91,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     this.endpoint = endpoint;
   }
 
-  /** S7 address syntax, limited to what FETCH/WRITE can reach (the document's ORG table). */
+  /** S7 address syntax, limited to what FETCH/WRITE can reach (the ORG table: docs/protocols.md, "ORG areas and units"). */
   protected parseTag(address: string): Tag {
     const tag = parseAddress(address);
     const org = ORG_BY_AREA[tag.area];
@@ -127,7 +127,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return (org === Org.DB && this.endpoint.dbUnit === 'word') || org === Org.C || org === Org.T ? 2 : 1;
   }
 
-  /** The most bytes one job may carry: the document's length range and the 64 KiB frame limit. */
+  /** The most bytes one job may carry: the ORG table's length range and the 64 KiB frame limit. */
   private maxJobBytes(org: Org): number {
     const r = ORG_RANGES[org]!;
     const bytes = byteLength(org, r.maxLength, this.endpoint.dbUnit);

@@ -1,7 +1,8 @@
 /**
  * FETCH/WRITE codec (CP 343/443 and S5 CPs): the 16-byte request header,
  * the fetch response and write acknowledgement headers, exactly as the
- * document's tables (../shared/seeds/002, PROTOCOLS.md §2). Pure functions;
+ * SIMATIC NET NCM S7 manual's FETCH/WRITE tables give them (docs/protocols.md,
+ * "FETCH/WRITE over TCP"). Pure functions;
  * decoders throw only ProtocolError.
  */
 import { PlcError, ProtocolError, type PlcErrorCode } from '../errors';
@@ -41,18 +42,18 @@ export const ORG_BY_AREA: Readonly<Record<AreaName, Org>> = Object.freeze({
 });
 
 /**
- * The document's table: how each ORG area counts its start and length, and
- * the largest start and length a job may name (DB: in words). The table
- * permits a length of exactly 1 for counters and timers, so C/T ranges are
- * fetched one cell per job.
+ * The ORG table (docs/protocols.md, "ORG areas and units"): how each ORG
+ * area counts its start and length, and the largest start and length a job
+ * may name (DB: in words). The table permits a length of exactly 1 for
+ * counters and timers, so C/T ranges are fetched one cell per job.
  */
 export const ORG_RANGES: Readonly<Record<number, { name: string; unit: 'word' | 'byte'; maxStart: number; maxLength: number }>> = Object.freeze({
   [Org.DB]: { name: 'DB', unit: 'word', maxStart: 2047, maxLength: 2048 },
   [Org.M]: { name: 'M', unit: 'byte', maxStart: 255, maxLength: 256 },
   [Org.I]: { name: 'I', unit: 'byte', maxStart: 127, maxLength: 128 },
   [Org.Q]: { name: 'Q', unit: 'byte', maxStart: 127, maxLength: 128 },
-  // The document's 0–255 is the S5 I/O range; S7 CPUs put analog modules from byte 256 up (PIW256),
-  // and the start field is 16 bits, so any byte address is allowed here.
+  // The ORG table's 0–255 is the S5 I/O range; S7 CPUs put analog modules from byte 256 up (PIW256),
+  // and the start field is 16 bits, so any byte address is allowed here (docs/protocols.md, corrections).
   [Org.PEPA]: { name: 'PE/PA', unit: 'byte', maxStart: 0xffff, maxLength: 256 },
   [Org.C]: { name: 'C', unit: 'word', maxStart: 255, maxLength: 1 },
   [Org.T]: { name: 'T', unit: 'word', maxStart: 255, maxLength: 1 },

@@ -1,7 +1,7 @@
 /**
  * FetchWriteServer: an in-process CP with a "Fetch passive" and a "Write
  * passive" port (or one port for both), serving the shared PlcMemory with the
- * document's ORG areas and units. Hostile frames close only their connection.
+ * ORG areas and units of docs/protocols.md. Hostile frames close only their connection.
  *
  * connectionCount counts clients the way a CP's connection table does: the
  * most peers on either passive port (a client holding its fetch and its write

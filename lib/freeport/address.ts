@@ -1,6 +1,6 @@
 /**
  * Freeport addresses: `ST<station>,<TYPE><byte>[.<bit>|.<count>]`, a value
- * inside one station's data area (4 bytes with the document's profile):
+ * inside one station's data area (4 bytes with the default profile):
  *
  *   ST5,DWORD0   ST5,BYTE1   ST5,INT2   ST5,REAL0   ST5,X0.3 (bit 3 of byte 0)
  *   ST5,B0.4     (4 BYTEs from byte 0, an array)    ST5,INT0.2 (2 INTs)

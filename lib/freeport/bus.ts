@@ -4,7 +4,7 @@
  * (as through a serial device server), or in-process through a serialport
  * binding such as `@serialport/binding-mock`. Every station hears every frame
  * and answers only its own; frames with a bad checksum or framing get no
- * answer (the master times out and retries), as PROTOCOLS.md §3 chooses.
+ * answer (the master times out and retries): docs/protocols.md, "Frames".
  *
  * Faults for tests: `station(n).silent`, `faults` (bit flips and dropped
  * characters in replies, a reply delay), `sendRaw()` (garbage on the line),
@@ -25,7 +25,7 @@ import { FreeportStation } from './station';
 export interface FreeportBusOptions {
   /** Station addresses, or addresses with their initial data areas. */
   stations: readonly number[] | Readonly<Record<number, Buffer>>;
-  /** The frame profile (defaults: the document's); a partial profile is completed with defaults. */
+  /** The frame profile (default: DOCUMENT_PROFILE); a partial profile is completed with defaults. */
   profile?: Partial<FreeportProfile>;
   /** Injected for noise faults. */
   random?: () => number;

@@ -1,5 +1,5 @@
 /**
- * Pure encode/decode of freeport frames (PROTOCOLS.md §3). Every field is
+ * Pure encode/decode of freeport frames (docs/protocols.md, "S7-200 freeport"). Every field is
  * ASCII hex so data can never look like the start or end character.
  * Decoders throw ProtocolError for a frame that is not valid under the profile;
  * the stream parser (parser.ts) turns that into a 'corrupt' event instead.

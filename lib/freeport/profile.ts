@@ -1,7 +1,7 @@
 /**
  * A freeport frame profile: every S7-200 freeport program defines its own
- * frame, so the layout is data, not code. The default is the source
- * document's (PROTOCOLS.md §3, seeds/004):
+ * frame, so the layout is data, not code. The default is the frame of
+ * docs/protocols.md ("S7-200 freeport"):
  *
  *   master → station  start DT DA LE DU FC end    q W 05 04 00000000 FC Q
  *   station → master  start DU FC end             q 00000000 FC Q
@@ -12,19 +12,19 @@
  *                                   checksum: 'sum-mod-256', replyEchoesAddress: true });
  *
  * - `start`/`end`: one character each (the PLC's SMB88 start and SMB89 end character).
- * - `readCommand`/`writeCommand`: the DT letter of each command. The document
- *   defines 0x57 'W' as read and 0x52 'R' as write — the reverse of what the
+ * - `readCommand`/`writeCommand`: the DT letter of each command. The default
+ *   protocol defines 0x57 'W' as read and 0x52 'R' as write — the reverse of what the
  *   letters suggest, but it is what its PLC program decodes.
  * - `addressWidth`, `lengthWidth`: hex characters of DA and LE (2 each).
  * - `dataBytes`: bytes in DU (4; DU is twice as many hex characters).
  * - `checksum` (FC, two hex characters unless 'none'):
- *     'xor-chars'   XOR of the ASCII codes of the characters it covers (the document's rule)
+ *     'xor-chars'   XOR of the ASCII codes of the characters it covers (the default)
  *     'xor-bytes'   XOR of the values the fields encode: DT's code, then each hex pair as one byte
  *     'sum-mod-256' sum of the ASCII codes of the characters it covers, modulo 256
  *     'none'        no FC field at all
  *   A request's FC covers DT..DU, a reply's FC covers (DA and) DU.
  * - `replyEchoesAddress`: the reply carries DA after the start character, so
- *   the master can tell which station answered (the document's does not).
+ *   the master can tell which station answered (the default's does not).
  * - `verifyWrites`: the station answers a write with the data it now holds;
  *   the master checks the bytes it wrote are there (else a PLC_ERROR).
  */
@@ -47,7 +47,7 @@ export interface FreeportProfile {
   readonly verifyWrites: boolean;
 }
 
-/** The source document's frame (seeds/004, PLC init: SMB88 = 113 'q', SMB89 = 81 'Q'). */
+/** The default frame (docs/protocols.md; its station program sets SMB88 = 113 'q', SMB89 = 81 'Q'). */
 export const DOCUMENT_PROFILE: FreeportProfile = Object.freeze({
   start: 'q',
   end: 'Q',
@@ -66,12 +66,12 @@ export function checksumWidth(profile: FreeportProfile): number {
   return profile.checksum === 'none' ? 0 : 2;
 }
 
-/** Characters of a master's request frame (17 for the document's profile). */
+/** Characters of a master's request frame (17 for the default profile). */
 export function requestLength(p: FreeportProfile): number {
   return 2 + 1 + p.addressWidth + p.lengthWidth + 2 * p.dataBytes + checksumWidth(p);
 }
 
-/** Characters of a station's reply frame (12 for the document's profile). */
+/** Characters of a station's reply frame (12 for the default profile). */
 export function replyLength(p: FreeportProfile): number {
   return 2 + (p.replyEchoesAddress ? p.addressWidth : 0) + 2 * p.dataBytes + checksumWidth(p);
 }
@@ -83,7 +83,7 @@ export function maxStation(p: FreeportProfile): number {
 
 const HEX = /^[0-9A-Fa-f]$/;
 
-/** Fills in the document's defaults and checks the result; throws PlcError INVALID_VALUE naming the field. */
+/** Fills in the defaults (DOCUMENT_PROFILE) and checks the result; throws PlcError INVALID_VALUE naming the field. */
 export function defineProfile(overrides: Partial<FreeportProfile> = {}): FreeportProfile {
   const p: FreeportProfile = { ...DOCUMENT_PROFILE, ...overrides };
   const bad = (field: string, why: string): never => {

@@ -1,7 +1,7 @@
 /**
- * One simulated S7-200 freeport station: a data area and the document's PLC
- * program (answer frames for its own address, store the first LE bytes of a
- * write, reply with the data it now holds).
+ * One simulated S7-200 freeport station: a data area and the station program
+ * of docs/protocols.md (answer frames for its own address, store the first
+ * LE bytes of a write, reply with the data it now holds).
  */
 import type { FreeportReply, FreeportRequest } from './codec';
 

@@ -1,7 +1,7 @@
 /**
- * S7comm protocol constants. Sources: RFC 1006 (TPKT), ISO 8073 (COTP), the
- * S7 communication source document (../shared/seeds/000, PROTOCOLS.md §1) and
- * the publicly documented S7comm dissector field tables.
+ * S7comm protocol constants. Sources: RFC 1006 (TPKT), ISO 8073 = RFC 905
+ * (COTP) and the publicly documented S7comm dissector field tables; the
+ * bytes and tables are in docs/protocols.md, "S7comm over ISO-on-TCP".
  */
 import { PlcError, type PlcErrorCode } from '../errors';
 import type { AreaName } from '../types';
@@ -191,5 +191,5 @@ export function remoteTsapFor(type: 'pg' | 'op' | 'basic', rack: number, slot: n
   return (t << 8) | ((rack & 0x07) << 5) | (slot & 0x1f);
 }
 
-/** Local TSAP used with rack/slot addressing: the document's 0x1000 (any value is accepted by S7 CPUs). */
+/** Local TSAP 0x1000 of circulated S7 examples (docs/protocols.md, corrections); the client sends connection type << 8 (localTsapFor). */
 export const LOCAL_TSAP = 0x1000;

@@ -2,7 +2,7 @@
  * The S7 request planner (pure): which Read Var / Write Var items go into
  * which PDU at the negotiated PDU size.
  *
- * Sizes (S7 header 10 + function and item count 2; see PROTOCOLS.md §1):
+ * Sizes (S7 header 10 + function and item count 2; docs/protocols.md, "Sizes and limits"):
  *   read request   12 + 12·items                       ≤ PDU
  *   read response  14 + Σ(4 + len + fill)              ≤ PDU
  *   write request  12 + 12·items + Σ(4 + len + fill)   ≤ PDU

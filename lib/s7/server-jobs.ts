@@ -182,7 +182,7 @@ function locate(frame: Buffer, i: number, o: number, ctx: JobContext, forWrite: 
       itemBit[i] = address & 7;
       length = 1;
     } else {
-      // The bit part of a byte-sized item's address is ignored (see PROTOCOLS.md: the document's unaligned BYTE items).
+      // The bit part of a byte-sized item's address is ignored (docs/protocols.md, corrections: unaligned BYTE items).
       length = count * element;
     }
     offset = address >>> 3;

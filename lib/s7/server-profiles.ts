@@ -108,9 +108,9 @@ export function tsapRefusal(profile: CpuProfile, callingTsap: number, calledTsap
  * Figures as real CPUs negotiate them. PDU sizes: S7-300 and S7-1200 240,
  * S7-400 480, S7-1500 960 (e.g. a 1212C answers a request for 480 with 240:
  * robinson/gos7#56; a 1500 gives 960 only with a TPDU of 1024 or more, 480
- * with 512: S7NetPlus/s7netplus#21, #145). The S7-1200 takes 8 PG/OP/S7
- * connections (the source document: "8 active and 8 passive") and 3 parallel
- * jobs. The AmQ of S7-300 (1), S7-400 and S7-1500 (8) and the connection
+ * with 512: S7NetPlus/s7netplus#21, #145). The S7-1200 takes 3 parallel jobs
+ * (plcpeople/nodeS7#72); its 8 connections are the simulator's choice (the
+ * count varies by model and firmware). The AmQ of S7-300 (1), S7-400 and S7-1500 (8) and the connection
  * limits of 300/400/1500 are the simulator's choices, in the range of the CPU
  * families' manuals (they vary by CPU model).
  * S7-300/400 CPUs sit in slot 2 (an S7-400 CPU may sit in 3 or 4 behind a

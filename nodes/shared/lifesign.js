@@ -1,6 +1,6 @@
 'use strict';
 /**
- * The life-sign exchange of the S7 coupling document (its handshake timer):
+ * A life-sign exchange with the PLC program (a handshake timer):
  * the PC writes a counter or toggling bit every interval, and watches a value
  * the PLC keeps changing; no change within `timeout` means the partner is lost.
  * Pure logic with an injected clock; the heartbeat node drives it.

@@ -8,7 +8,7 @@ import { PlcError } from '../../lib/errors';
 
 export interface FuzzTarget {
   name: string;
-  /** Valid inputs to mutate (frames from the documents and our encoders). */
+  /** Valid inputs to mutate (published frames from test/fixtures and our encoders). */
   seeds: Buffer[];
   run(input: Buffer): void;
 }

@@ -16,7 +16,7 @@ export interface CotpConnection {
   tpduSize: number;
 }
 
-/** Parameter order on the wire: the document's CR sends the TSAPs first, S7 CPUs' CC send the TPDU size first. */
+/** Parameter order on the wire: circulated CRs send the TSAPs first, S7 CPUs' CC the TPDU size first (docs/protocols.md, "COTP"). */
 export type CotpParamOrder = 'tsap-first' | 'size-first';
 
 const CONNECTION_PARAMS = 11; // 3 + 4 + 4 bytes: C0 01 xx, C1 02 xxxx, C2 02 xxxx
@@ -47,12 +47,12 @@ function encodeConnection(type: CotpType, c: CotpConnection, order: CotpParamOrd
   return frame;
 }
 
-/** COTP Connection Request; default order as in the source document's first handshake frame. */
+/** COTP Connection Request; default order as in the CR circulated in S7 examples (test/fixtures/s7.ts, DOC). */
 export function encodeConnectionRequest(c: Omit<CotpConnection, 'destinationRef'>, order: CotpParamOrder = 'tsap-first'): Buffer {
   return encodeConnection(CotpType.CR, { ...c, destinationRef: 0 }, order);
 }
 
-/** COTP Connection Confirm; default order as an S7 CPU answers (TPDU size first, see the document's reply). */
+/** COTP Connection Confirm; default order as an S7 CPU answers (TPDU size first, as in test/fixtures/s7.ts DOC.connectionConfirm). */
 export function encodeConnectionConfirm(c: CotpConnection, order: CotpParamOrder = 'size-first'): Buffer {
   return encodeConnection(CotpType.CC, c, order);
 }

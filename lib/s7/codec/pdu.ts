@@ -141,7 +141,7 @@ function writeSetup(frame: Buffer, o: number, p: SetupParams): void {
   frame.writeUInt16BE(p.pduSize & 0xffff, o + 6);
 }
 
-/** Setup communication job (the source document's second handshake frame). */
+/** Setup communication job (docs/protocols.md, "Setup communication"). */
 export function encodeSetupCommunication(pduRef: number, p: SetupParams): Buffer {
   const frame = s7Frame(Rosctr.Job, pduRef, 8, 0);
   writeSetup(frame, JOB_PARAMS, p);
