@@ -20,7 +20,7 @@ const FETCH2: ResponseExpectation = { op: OpCode.FetchRequest, dataBytes: 2 };
 const WRITE: ResponseExpectation = { op: OpCode.WriteRequest, dataBytes: 0 };
 
 describe('FETCH/WRITE codec', () => {
-  describe('the document’s frames', () => {
+  describe('the FETCH/WRITE frames of docs/protocols.md', () => {
     it('encodes the fetch of MB0..MB1 byte for byte', () => {
       const frame = encodeRequest({ op: OpCode.FetchRequest, org: 2, dbNumber: 0, start: 0, length: 2 });
       expect(show(frame)).to.equal(show(hex('53 35 10 01 03 05 03 08 02 00 00 00 00 02 FF 02')));

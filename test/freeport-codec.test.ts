@@ -18,7 +18,7 @@ const text = (b: Buffer) => b.toString('latin1');
 const E627A1C3 = Buffer.from([0xe6, 0x27, 0xa1, 0xc3]);
 
 describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
-  describe('the document profile', () => {
+  describe('the default frame profile (docs/protocols.md)', () => {
     it('writes E6 27 A1 C3 to station 5 as exactly qR0504E627A1C325Q', () => {
       expect(text(encodeRequest(writeRequest(5, E627A1C3)))).to.equal('qR0504E627A1C325Q');
       expect(requestLength(DOCUMENT_PROFILE)).to.equal(17);
@@ -69,7 +69,7 @@ describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
     });
   });
 
-  describe('erratum: the document example frame fails the document\'s own checksum rule', () => {
+  describe('erratum: the circulated example write frame fails its own checksum rule', () => {
     // The circulated paper says writing E6 27 A1 C3 to station 5 is sent as "q W 0 5 0 4 E 6 2 7 A 1 C 3 2 D Q" (docs/protocols.md, corrections).
     const documentExample = 'qW0504E627A1C32DQ';
 
@@ -82,12 +82,12 @@ describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
       expect(() => decodeRequest(ascii(documentExample))).to.throw(ProtocolError, /frame carries 2D, its characters give 20/);
     });
 
-    it('is described as a write but uses W, which the same document defines as read (57H = read)', () => {
+    it('is described as a write but uses W, which the same description defines as read (57H = read)', () => {
       const corrected = `qW0504E627A1C320Q`; // the checksum fixed, W kept
       expect(decodeRequest(ascii(corrected)).command).to.equal('read');
     });
 
-    it('the write it describes, under the document\'s rules, is qR0504E627A1C325Q (XOR 0x25)', () => {
+    it('the write it describes, under its own rules, is qR0504E627A1C325Q (XOR 0x25)', () => {
       expect(computeChecksum('xor-chars', 'R0504E627A1C3', 1)).to.equal(0x25);
       expect(decodeRequest(ascii('qR0504E627A1C325Q')).command).to.equal('write');
     });

@@ -28,7 +28,7 @@ import { describeReturnCode, headerError, remoteTsapFor, returnCodeError } from 
 import { CAPTURE, DOC, HAND, hex, show } from './fixtures/s7';
 
 describe('S7 codec', () => {
-  describe('the source document frames', () => {
+  describe('the frames of docs/protocols.md', () => {
     it('encodes the connection request byte for byte (calling TSAP 0x1000, called 0x0301 = basic, rack 0 slot 1)', () => {
       const frame = encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x1000, calledTsap: remoteTsapFor('basic', 0, 1), tpduSize: 0x0a });
       expect(show(frame)).to.equal(show(DOC.connectionRequest));

@@ -143,7 +143,7 @@ describe('S7Server', () => {
       expect(server.connectionCount).to.equal(1);
     });
 
-    it('answers the document setup communication like the document PLC: PDU 240, AmQ 1', async () => {
+    it('answers the circulated setup communication frame like the PLC it was captured from: PDU 240, AmQ 1', async () => {
       const server = await start('s7-1200');
       const peer = new RawPeer(server.port);
       peers.push(peer);
@@ -402,7 +402,7 @@ describe('S7Server', () => {
       expect(show(writes[0]!.data!)).to.equal('010203');
     });
 
-    it('reads what the document frames ask for (unaligned BYTE addresses read the byte, bit part ignored)', async () => {
+    it('reads what the circulated frames ask for (unaligned BYTE addresses read the byte, bit part ignored)', async () => {
       const server = await start('s7-1200', { layout: { dbs: { '200': 16 } } });
       server.memory.area('DB', 200)!.set([0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0x99, 0xaa, 0xbb, 0xcc]);
       const { peer } = await open(server, 240, 1);
