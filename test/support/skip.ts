@@ -9,8 +9,8 @@ import type { Context, Runnable, Suite } from 'mocha';
 export const SKIP_REASON = Symbol.for('plcwire.skipReason');
 
 /**
- * Skips the current test, or in a `before`/`beforeEach` hook every test of its
- * suite, and records why. Use it instead of `this.skip()`.
+ * Skips the current test (in a test or a `beforeEach` hook) or, in a `before`
+ * hook, every test of its suite, and records why. Use it instead of `this.skip()`.
  */
 export function skipBecause(ctx: Context, reason: string): never {
   const runnable = ctx.test as (Runnable & { type?: string; originalTitle?: string }) | undefined;
