@@ -2,18 +2,18 @@
  * The first five minutes of a new user, in a real browser: `npm start`'s
  * Node-RED with the demo flow, the editor's palette, and the Dashboard 2.0
  * page showing live values and writing back to the simulated PLC.
- * Headless Debian Chromium driven by playwright-core (installed by .ci/run).
+ * Headless Chromium driven by playwright-core (test/support/browser.ts).
  */
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
 import type { Browser, Page } from 'playwright-core';
+import { launchChromium } from './support/browser';
 import { freePort } from './support/net';
 import { until } from './support/wait';
 
 const ROOT = path.resolve(__dirname, '../..');
-const CHROMIUM = process.env.CHROMIUM_PATH ?? '/usr/bin/chromium';
 
 interface Demo {
   editor: string;
@@ -30,17 +30,11 @@ describe('browser: the npm start demo in headless Chromium', function () {
   let profile: string;
 
   before(async () => {
-    if (!fs.existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} not found: install Debian's chromium (done by .ci/run)`);
     const { startDemo } = require(path.join(ROOT, 'demo/start.js')) as { startDemo(o: object): Promise<Demo> };
     const [port, s7, fetch, write, freeport] = await Promise.all([freePort(), freePort(), freePort(), freePort(), freePort()]);
     demo = await startDemo({ port, plantPorts: { s7, fetch, write, freeport }, quiet: true, log: () => undefined });
-    const { chromium } = await import('playwright-core');
     profile = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-chromium-'));
-    browser = await chromium.launch({
-      executablePath: CHROMIUM,
-      headless: true,
-      args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-quic', '--no-first-run', '--disable-component-update', '--disable-sync'],
-    });
+    browser = await launchChromium();
     page = await browser.newPage();
   });
 

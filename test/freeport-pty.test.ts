@@ -1,9 +1,8 @@
 /**
- * End to end over a real pseudo-terminal pair (socat) with the real
- * serialport bindings: the master on one end, the simulated stations on the other.
+ * End to end over a real pseudo-terminal pair (test/support/pty.ts) with the
+ * real serialport bindings: the master on one end, the simulated stations on the other.
  */
 import { expect } from 'chai';
-import { spawn, spawnSync, type ChildProcess } from 'node:child_process';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
@@ -11,59 +10,27 @@ import type { PlcError } from '../lib/errors';
 import { FreeportBus } from '../lib/freeport/bus';
 import { FreeportClient } from '../lib/freeport/client';
 import type { FreeportEndpoint } from '../lib/url';
+import { openPtyPair, ptyUnavailable, type PtyPair } from './support/pty';
+import { skipBecause } from './support/skip';
 import { activeHandles, settle, until, waitFor } from './support/wait';
 
-const HAS_SOCAT = spawnSync('socat', ['-V'], { stdio: 'ignore' }).status === 0;
-
-/** Starts socat with two linked ptys; resolves once it is relaying. */
-async function startPtyPair(dir: string): Promise<{ socat: ChildProcess; master: string; station: string; stop(): Promise<void> }> {
-  const master = path.join(dir, 'master');
-  const station = path.join(dir, 'station');
-  const socat = spawn('socat', ['-d', '-d', `pty,raw,echo=0,link=${master}`, `pty,raw,echo=0,link=${station}`], { stdio: ['ignore', 'ignore', 'pipe'] });
-  let log = '';
-  await new Promise<void>((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`socat did not start within 5 s: ${log}`)), 5000);
-    socat.stderr!.on('data', (chunk: Buffer) => {
-      log += chunk.toString();
-      if (log.includes('starting data transfer loop')) {
-        clearTimeout(timer);
-        resolve();
-      }
-    });
-    socat.once('exit', (code) => {
-      clearTimeout(timer);
-      reject(new Error(`socat exited with ${code}: ${log}`));
-    });
-  });
-  socat.stderr!.resume();
-  const stop = () =>
-    new Promise<void>((resolve) => {
-      if (socat.exitCode !== null || socat.signalCode !== null) return resolve();
-      socat.once('exit', () => resolve());
-      socat.kill('SIGTERM');
-    });
-  return { socat, master, station, stop };
-}
-
-describe('freeport end to end over a real pseudo-terminal pair (socat, real serialport bindings)', function () {
+describe('freeport end to end over a real pseudo-terminal pair (real serialport bindings)', function () {
   this.timeout(20000);
   let dir: string;
-  let pty: Awaited<ReturnType<typeof startPtyPair>>;
+  let pty: PtyPair;
   let bus: FreeportBus;
   let handles0: number;
 
   before(function () {
-    if (!HAS_SOCAT) {
-      console.log('    skipped: socat is not installed (apt-get install socat); CI installs it');
-      this.skip();
-    }
+    const unavailable = ptyUnavailable();
+    if (unavailable) skipBecause(this, `pseudo-terminal pair: ${unavailable}`);
   });
 
   beforeEach(async () => {
     await settle();
     handles0 = activeHandles();
     dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-pty-'));
-    pty = await startPtyPair(dir);
+    pty = await openPtyPair(dir);
     bus = new FreeportBus({ stations: { 5: Buffer.from([0x41, 0x20, 0, 0]), 6: Buffer.from([1, 2, 3, 4]), 7: Buffer.alloc(4) } });
     await bus.attachSerial(pty.station, { baudRate: 19200 });
   });
@@ -144,13 +111,60 @@ describe('freeport end to end over a real pseudo-terminal pair (socat, real seri
       expect(err.code).to.equal('CONNECTION_LOST');
       expect(client.state).to.equal('reconnecting');
 
-      pty = await startPtyPair(dir);
+      pty = await openPtyPair(dir);
       bus = new FreeportBus({ stations: { 5: Buffer.from([0, 0, 0, 9]) } });
       await bus.attachSerial(pty.station, { baudRate: 19200 });
       await until(() => client.state === 'connected', 5000, 'reconnected');
       expect(await client.read(['ST5,DINT0'])).to.deep.equal({ 'ST5,DINT0': 9 });
     } finally {
       await client.close();
+    }
+  });
+});
+
+describe('the pseudo-terminal pair under the real serialport bindings', function () {
+  this.timeout(20000);
+
+  before(function () {
+    const unavailable = ptyUnavailable();
+    if (unavailable) skipBecause(this, `pseudo-terminal pair: ${unavailable}`);
+  });
+
+  it('carries every byte value both ways unchanged (raw: no CR/LF mapping, no XON/XOFF, no echo)', async () => {
+    const { SerialPort } = await import('serialport');
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-pty-'));
+    const pair = await openPtyPair(dir);
+    const open = (p: string) =>
+      new Promise<InstanceType<typeof SerialPort>>((resolve, reject) => {
+        const port: InstanceType<typeof SerialPort> = new SerialPort({ path: p, baudRate: 19200 }, (err) => (err ? reject(err) : resolve(port)));
+      });
+    const received = (port: InstanceType<typeof SerialPort>, length: number) => {
+      const chunks: Buffer[] = [];
+      let n = 0;
+      const all = new Promise<Buffer>((resolve) =>
+        port.on('data', (chunk: Buffer) => {
+          chunks.push(chunk);
+          n += chunk.length;
+          if (n >= length) resolve(Buffer.concat(chunks));
+        }),
+      );
+      return Promise.race([all, new Promise<never>((_, reject) => setTimeout(() => reject(new Error(`got ${n} of ${length} bytes within 3 s`)), 3000).unref())]);
+    };
+    const master = await open(pair.master);
+    const station = await open(pair.station);
+    try {
+      const bytes = Buffer.from(Array.from({ length: 256 }, (_, i) => i));
+      const reversed = Buffer.from(bytes).reverse();
+      const atStation = received(station, bytes.length);
+      master.write(bytes);
+      expect(await atStation).to.deep.equal(bytes);
+      const atMaster = received(master, reversed.length);
+      station.write(reversed);
+      expect(await atMaster).to.deep.equal(reversed); // and nothing echoed back to the writer
+    } finally {
+      await Promise.all([master, station].map((p) => new Promise((r) => p.close(r))));
+      await pair.stop();
+      fs.rmSync(dir, { recursive: true, force: true });
     }
   });
 });
