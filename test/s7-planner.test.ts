@@ -305,6 +305,23 @@ describe('S7 planner: plan cache', () => {
     expect(cache.misses).to.equal(3);
   });
 
+  it('tells plans of the same array apart by item limit and merge', () => {
+    const cache = new ReadPlanCache(8);
+    const list = Array.from({ length: 30 }, (_, i) => parseAddress(`DB${i + 1},INT0`));
+    const wide = cache.get(list, 960);
+    const narrow = cache.get(list, 960, { maxItems: 20 });
+    expect(narrow).to.not.equal(wide);
+    expect([wide.maxItems, narrow.maxItems]).to.deep.equal([79, 20]);
+    expect(wide.pdus.map((p) => p.items.length)).to.deep.equal([30]);
+    expect(narrow.pdus.map((p) => p.items.length)).to.deep.equal([20, 10]);
+    expect(cache.get(list, 960, { maxItems: 20 })).to.equal(narrow);
+    expect(cache.get(list, 960)).to.equal(wide);
+    const neighbours = tags(['DB1,INT0', 'DB1,INT2']);
+    expect(cache.get(neighbours, 960).pdus[0]!.items).to.have.length(1);
+    const alone = cache.get(neighbours, 960, { merge: false });
+    expect([alone.merged, alone.pdus[0]!.items.length]).to.deep.equal([false, 2]);
+  });
+
   it('stays bounded', () => {
     const cache = new ReadPlanCache(3);
     for (let i = 0; i < 10; i++) cache.get(tags([`DB1,INT${i * 2}`]), 240);
