@@ -1,4 +1,5 @@
 import { expect } from 'chai';
+import { connect } from '../lib/connect';
 import { PlcError } from '../lib/errors';
 import { DEFAULTS, endpointKey, formatUrl, isLoopback, parseUrl, S7_CPU_PRESETS } from '../lib/url';
 
@@ -143,4 +144,18 @@ describe('url: formatUrl and endpointKey', () => {
     expect(isLoopback(parseUrl('s7://192.168.0.1'))).to.equal(false);
     expect(isLoopback(parseUrl('freeport:///dev/ttyUSB0'))).to.equal(false);
   });
+});
+
+describe('url: a host that does not resolve', () => {
+  // RFC 6761: names under .invalid never resolve, with or without a DNS server (EAI_AGAIN when none answers).
+  for (const url of ['s7://plc.invalid', 'fetchwrite://plc.invalid?port=2000', 'freeport+tcp://plc.invalid:4001']) {
+    it(`${url.split(':')[0]}: connect() fails with CONNECT_FAILED naming the host, in words`, async () => {
+      const err = (await connect(`${url}${url.includes('?') ? '&' : '?'}timeout=3000`).catch((e: unknown) => e)) as PlcError;
+      expect(err).to.be.instanceOf(PlcError);
+      expect(err.code).to.equal('CONNECT_FAILED');
+      expect(err.message).to.include('the host name "plc.invalid"');
+      expect(err.message).to.match(/does not resolve \(ENOTFOUND\)|could not be looked up \(EAI_AGAIN/);
+      expect(err.message).to.include("use the PLC's IP address");
+    });
+  }
 });
