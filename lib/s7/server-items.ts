@@ -9,7 +9,8 @@
  *
  * — a read ack with item count 0x14 = 20 and the data of the first 20 items
  * (test/interop/client-vs-snap7.test.js compares our simulator's answer with
- * snap7's byte for byte). A longer write overruns snap7's fixed table of 20
+ * snap7's byte for byte; snap7's fill bytes are whatever its answer buffer
+ * held, ours are 0). A longer write overruns snap7's fixed table of 20
  * items (it crashed its process); the simulator writes the first N and
  * answers N return codes, the same shape as its reads.
  */
