@@ -31,7 +31,8 @@ const tableNames = TABLES.map((t) => t.name).filter((n) => {
   return !only || only.split(',').some((x) => n.startsWith(`${x} `));
 });
 const SERVERS = [
-  // snap7 caps a request at 20 items: every client asks for PDU 240 there (at most 19 items a request).
+  // snap7's server serves at most 20 items a job, and the anchors fill a job up to the PDU: every client
+  // asks for PDU 240 there (at most 19 items a job). Ours sends at most 20 (its default maxItems) anywhere.
   { kind: 'ours', label: 'plcwire simulator', pdu: 960 },
   { kind: 'snap7', label: 'snap7 server', pdu: 240 },
 ];
@@ -99,11 +100,12 @@ async function runClient(job, proxy) {
   });
 }
 
+/** The planner's lower bound at the PDU size and the item limit our client uses by default (a build without one: 255). */
 function lowerBound(tags, pdu) {
   try {
     const lib = plcwire();
     const { lowerBoundPdus } = require(path.join(DIST, 'lib/s7/planner.js'));
-    return lowerBoundPdus(tags.map((t) => lib.parseAddress(t.address)), pdu);
+    return lowerBoundPdus(tags.map((t) => lib.parseAddress(t.address)), pdu, { maxItems: lib.DEFAULTS.maxItems });
   } catch {
     return undefined;
   }

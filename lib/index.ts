@@ -19,7 +19,7 @@ export type { BackoffOptions } from './link/backoff';
 export type { FrameCheck } from './link/framer';
 
 export * as s7 from './s7/codec';
-export { S7Client, type S7Stats } from './s7/client';
+export { S7Client, type ItemLimitEvent, type S7Stats } from './s7/client';
 export type { S7Session } from './s7/client-session';
 export { planRead, planWrite, lowerBoundPdus, ReadPlanCache, type ReadPlan, type WritePlan } from './s7/planner';
 export { S7Server, PROFILES as S7_PROFILES, type S7ServerOptions, type S7Faults, type S7Profile, type CpuProfile, type S7RequestEvent } from './s7/server';

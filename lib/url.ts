@@ -2,7 +2,7 @@
  * One URL model for all protocols: `connect(url)`, the CLI and the Node-RED
  * connection node all name a PLC the same way.
  *
- *   s7://host[:102]?rack=0&slot=1&type=pg|op|basic&pdu=960&timeout=5000
+ *   s7://host[:102]?rack=0&slot=1&type=pg|op|basic&pdu=960&timeout=5000&maxItems=20
  *   s7://host?localTsap=1000&remoteTsap=2000            (hex; S7-200/LOGO)
  *   fetchwrite://host?fetchPort=2000&writePort=2001&dbUnit=word|byte&timeout=5000
  *   fetchwrite://host?port=2000                          (one port serves both)
@@ -15,6 +15,7 @@
  * silently falls back to a default.
  */
 import { PlcError } from './errors';
+import { MAX_ITEMS } from './s7/constants';
 
 export type S7ConnectionType = 'pg' | 'op' | 'basic';
 export type Parity = 'none' | 'even' | 'odd';
@@ -39,6 +40,13 @@ export interface S7Endpoint extends SafetyOptions {
   /** Requested PDU size; the PLC's answer is what is used. */
   pduSize: number;
   timeout: number;
+  /**
+   * At most this many items per Read/Write Var job (the PDU size may allow
+   * fewer); absent: DEFAULTS.maxItems (20, what snap7's server and VIPA CPUs
+   * serve). A peer that answers fewer items than asked teaches the client a
+   * lower limit (the `itemLimit` event).
+   */
+  maxItems?: number;
 }
 
 export interface FetchWriteEndpoint extends SafetyOptions {
@@ -72,6 +80,8 @@ export const DEFAULTS = Object.freeze({
   slot: 1,
   pduSize: 960,
   timeout: 5000,
+  /** Items per S7 job unless the URL says more (DEFAULT_MAX_ITEMS in lib/s7/constants.ts says why). */
+  maxItems: 20,
   fetchPort: 2000,
   writePort: 2001,
   baudRate: 9600,
@@ -80,12 +90,45 @@ export const DEFAULTS = Object.freeze({
   interFrameGapMs: 10,
 });
 
+export type S7CpuPreset = 's7-1500' | 's7-1200' | 's7-400' | 's7-300' | 'logo' | 's7-200';
+
+/** What a CPU preset puts into an s7:// URL: where the CPU answers, and how many items per job it serves. */
+export interface S7CpuPresetParams {
+  rack?: number;
+  slot?: number;
+  localTsap?: number;
+  remoteTsap?: number;
+  /** Absent: DEFAULTS.maxItems (20). 255: as many as the PDU allows. */
+  maxItems?: number;
+}
+
+/**
+ * URL parameters per CPU family (the Node-RED connection dialog's presets).
+ * Items per job: Siemens S7-1200, S7-1500 and S7-400 CPUs limit a job by
+ * the PDU size only (more than 20 items in one job work on an S7-1200 and an
+ * S7-1500, frangoteam/FUXA#694; 36 written to an S7-1500 in one job,
+ * S7NetPlus/s7netplus#380; S7-400 as well, S7NetPlus/s7netplus#157), so
+ * their presets allow 255 and the PDU decides (19 at PDU 240, 39 at 480, 79
+ * at 960). The S7-300 preset keeps the default 20: S7-300 compatible CPUs
+ * (VIPA, frangoteam/FUXA#694) serve 20, and a Siemens S7-300 at PDU 240
+ * carries 19 anyway. LOGO! and S7-200 negotiate PDU 240 (19 items).
+ */
+export const S7_CPU_PRESETS: Readonly<Record<S7CpuPreset, Readonly<S7CpuPresetParams>>> = Object.freeze({
+  's7-1500': Object.freeze({ rack: 0, slot: 1, maxItems: MAX_ITEMS }),
+  's7-1200': Object.freeze({ rack: 0, slot: 1, maxItems: MAX_ITEMS }),
+  's7-400': Object.freeze({ rack: 0, slot: 3, maxItems: MAX_ITEMS }),
+  's7-300': Object.freeze({ rack: 0, slot: 2 }),
+  logo: Object.freeze({ localTsap: 0x0100, remoteTsap: 0x0200 }),
+  's7-200': Object.freeze({ localTsap: 0x4d57, remoteTsap: 0x4d57 }),
+});
+
 /** Baud rates an S7-200 port can run at (SMB30 / SMB130). */
 export const FREEPORT_BAUD_RATES: readonly number[] = [1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200];
 
 const SAFETY_PARAMS = ['readOnly', 'allow'];
+const FETCHWRITE_PORTS = 'give the ports as ?fetchPort=…&writePort=… (or ?port=… when one port serves both)';
 const KNOWN_PARAMS: Record<string, readonly string[]> = {
-  s7: ['rack', 'slot', 'localTsap', 'remoteTsap', 'type', 'pdu', 'timeout', ...SAFETY_PARAMS],
+  s7: ['rack', 'slot', 'localTsap', 'remoteTsap', 'type', 'pdu', 'timeout', 'maxItems', ...SAFETY_PARAMS],
   fetchwrite: ['fetchPort', 'writePort', 'port', 'dbUnit', 'timeout', ...SAFETY_PARAMS],
   freeport: ['baud', 'parity', 'databits', 'stopbits', 'timeout', 'retries', 'gap', ...SAFETY_PARAMS],
   'freeport+tcp': ['timeout', 'retries', 'gap', ...SAFETY_PARAMS],
@@ -98,7 +141,7 @@ export function parseUrl(text: string): Endpoint {
   try {
     url = new URL(text.trim());
   } catch {
-    throw urlError(text, 'not a URL (expected e.g. s7://192.168.0.2?rack=0&slot=1)');
+    throw urlError(text, whyNotAUrl(text.trim()));
   }
   if (url.username || url.password) {
     // None of these protocols has credentials; refuse them rather than drop them, and never echo them.
@@ -129,6 +172,7 @@ function parseS7(text: string, url: URL, p: Params): Omit<S7Endpoint, 'protocol'
     pduSize: p.int('pdu', DEFAULTS.pduSize, 240, 65535),
     timeout: p.int('timeout', DEFAULTS.timeout, 1, 3_600_000),
   };
+  if (p.has('maxItems')) endpoint.maxItems = p.int('maxItems', DEFAULTS.maxItems, 1, MAX_ITEMS);
   const local = p.hex('localTsap', 0, 0xffff);
   const remote = p.hex('remoteTsap', 0, 0xffff);
   if ((local === undefined) !== (remote === undefined)) {
@@ -143,7 +187,7 @@ function parseS7(text: string, url: URL, p: Params): Omit<S7Endpoint, 'protocol'
 
 function parseFetchWrite(text: string, url: URL, p: Params): Omit<FetchWriteEndpoint, 'protocol'> {
   const host = requireHost(text, url);
-  if (url.port) throw urlError(text, 'give the ports as ?fetchPort=…&writePort=… (or ?port=… when one port serves both)');
+  if (url.port) throw urlError(text, FETCHWRITE_PORTS);
   const single = p.int('port', 0, 1, 65535);
   if (single && (p.has('fetchPort') || p.has('writePort'))) {
     throw urlError(text, 'use either port, or fetchPort and writePort');
@@ -210,6 +254,7 @@ export function formatUrl(e: Endpoint): string {
     if (e.connectionType !== 'pg') q.set('type', e.connectionType);
     if (e.pduSize !== DEFAULTS.pduSize) q.set('pdu', String(e.pduSize));
     if (e.timeout !== DEFAULTS.timeout) q.set('timeout', String(e.timeout));
+    if (e.maxItems !== undefined) q.set('maxItems', String(e.maxItems));
   } else if (e.protocol === 'fetchwrite') {
     base = `fetchwrite://${hostPart(e.host)}`;
     if (e.fetchPort === e.writePort) q.set('port', String(e.fetchPort));
@@ -350,8 +395,24 @@ function requireHost(text: string, url: URL): string {
 function portOf(text: string, url: URL, fallback: number): number {
   if (!url.port) return fallback;
   const n = Number(url.port);
-  if (!(n >= 1 && n <= 65535)) throw urlError(text, `port ${url.port} is out of range`);
+  if (!(n >= 1 && n <= 65535)) throw urlError(text, `port ${url.port} is out of range (1–65535)`);
   return n;
+}
+
+/**
+ * Why the URL parser refused `text`: it refuses a port above 65535 or one
+ * that is not a number like any other malformed URL, so the port is looked
+ * at here to say which part is wrong.
+ */
+function whyNotAUrl(text: string): string {
+  const authority = /^([a-z][a-z0-9+.-]*):\/\/(\[[^\]]*\]|[^/?#:@]*)(?::([^/?#]*))?/i.exec(text);
+  const port = authority?.[3];
+  if (port !== undefined && port !== '') {
+    if (authority![1]!.toLowerCase() === 'fetchwrite') return FETCHWRITE_PORTS;
+    if (!/^\d+$/.test(port)) return `port "${port}" is not a number`;
+    return `port ${port} is out of range (1–65535)`;
+  }
+  return 'not a URL (expected e.g. s7://192.168.0.2?rack=0&slot=1)';
 }
 
 function hostPart(host: string): string {

@@ -2,7 +2,7 @@ import { expect } from 'chai';
 import * as net from 'node:net';
 import { parseAddress } from '../lib/address';
 import { PlcError, TagErrors } from '../lib/errors';
-import { S7Client, localTsapFor } from '../lib/s7/client';
+import { S7Client, localTsapFor, type ItemLimitEvent } from '../lib/s7/client';
 import { encodeConnectionConfirm, encodeDisconnectRequest, encodeReadResponse, encodeSetupAck } from '../lib/s7/codec';
 import { lowerBoundPdus } from '../lib/s7/planner';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
@@ -317,6 +317,124 @@ describe('S7 client against the S7 simulator', function () {
     await until(() => server.connectionCount === 0, 2000, 'the simulator saw the close');
     await settle();
     expect(activeHandles()).to.equal(before);
+  });
+});
+
+describe('S7 client: items per job', function () {
+  this.timeout(10000);
+  let server: S7Server;
+  let requests: S7RequestEvent[];
+  const clients: S7Client[] = [];
+  /** 60 INTs in 60 DBs: each its own item, never merged. */
+  const scattered = (n: number) => Array.from({ length: n }, (_, i) => `DB${i + 1},INT${2 * (i % 7)}`);
+  const open = async (query = '') => {
+    const c = new S7Client(endpoint(server.port, query), FAST);
+    clients.push(c);
+    await c.connect();
+    return c;
+  };
+
+  beforeEach(async () => {
+    server = new S7Server({ port: 0, profile: 's7-1500' });
+    await server.listen();
+    for (let db = 1; db <= 60; db++) server.memory.area('DB', db)!.writeInt16BE(db * 100 + 1, 2 * ((db - 1) % 7));
+    requests = [];
+    server.on('request', (r: S7RequestEvent) => requests.push(r));
+  });
+
+  afterEach(async () => {
+    for (const c of clients.splice(0)) await c.close();
+    await server.close();
+  });
+
+  const expected = (addresses: string[]) => Object.fromEntries(addresses.map((a, i) => [a, (i + 1) * 100 + 1]));
+
+  it('sends at most 20 items per read and write job by default, though PDU 960 carries 79', async () => {
+    const c = await open();
+    expect([c.pduSize, c.maxItems]).to.deep.equal([960, 20]);
+    const list = scattered(60);
+    expect(await c.read(list)).to.deep.equal(expected(list));
+    expect(requests.map((r) => r.items)).to.deep.equal([20, 20, 20]);
+    requests = [];
+    await c.write(Object.fromEntries(list.slice(0, 30).map((a, i) => [a, -i])));
+    expect(requests.every((r) => r.kind === 'write' && r.items <= 20)).to.equal(true);
+    expect(requests.reduce((n, r) => n + r.items, 0)).to.equal(30);
+    expect(Object.values(await c.read(list.slice(0, 30)))).to.deep.equal(list.slice(0, 30).map((_, i) => -i || 0));
+  });
+
+  it('maxItems=N in the URL raises or lowers the limit; the PDU still caps it', async () => {
+    const wide = await open('&maxItems=255');
+    const list = scattered(60);
+    expect(await wide.read(list)).to.deep.equal(expected(list));
+    expect(requests.map((r) => r.items)).to.deep.equal([60]);
+    requests = [];
+    const narrow = await open('&maxItems=7');
+    expect(await narrow.read(list)).to.deep.equal(expected(list));
+    expect(Math.max(...requests.map((r) => r.items))).to.equal(7);
+    expect(requests).to.have.length(9);
+    requests = [];
+    const small = await open('&maxItems=255&pdu=240');
+    await small.read(list);
+    expect(Math.max(...requests.map((r) => r.items))).to.equal(19);
+  });
+
+  it('a PLC that answers a read with fewer items: itemLimit event, a new plan, and that same poll returns every value', async () => {
+    server.maxItems = 7;
+    const c = await open('&maxItems=60');
+    const limits: ItemLimitEvent[] = [];
+    c.on('itemLimit', (e: ItemLimitEvent) => limits.push(e));
+    const list = scattered(60);
+    expect(await c.read(list)).to.deep.equal(expected(list));
+    expect(limits).to.deep.equal([{ limit: 7, was: 60 }]);
+    expect(c.maxItems).to.equal(7);
+    // One job of 60 answered with 7 items, then 9 jobs of at most 7.
+    expect(requests.map((r) => r.items)).to.deep.equal([60, ...c.planFor(list).pdus.map((p) => p.items.length)]);
+    expect(c.planFor(list).pdus).to.have.length(9);
+    requests = [];
+    expect(await c.readDetailed(list.slice(0, 20))).to.deep.equal(
+      Object.fromEntries(list.slice(0, 20).map((a, i) => [a, { ok: true, value: (i + 1) * 100 + 1 }])),
+    );
+    expect(Math.max(...requests.map((r) => r.items))).to.equal(7);
+    expect(limits).to.have.length(1);
+  });
+
+  it('learns again when the PLC serves fewer still, and the limit outlives a reconnect', async () => {
+    server.maxItems = 12;
+    const c = await open('&maxItems=60');
+    const limits: ItemLimitEvent[] = [];
+    c.on('itemLimit', (e: ItemLimitEvent) => limits.push(e));
+    const list = scattered(40);
+    expect(await c.read(list)).to.deep.equal(expected(list));
+    server.maxItems = 5;
+    expect(await c.read(list)).to.deep.equal(expected(list));
+    expect(limits).to.deep.equal([
+      { limit: 12, was: 60 },
+      { limit: 5, was: 12 },
+    ]);
+    const reconnected = waitFor(c, 'connected');
+    server.dropConnections();
+    await reconnected;
+    requests = [];
+    expect(await c.read(list)).to.deep.equal(expected(list));
+    expect(Math.max(...requests.map((r) => r.items))).to.equal(5);
+  });
+
+  it('a write answered with fewer return codes: the items left out are sent again, none twice, and every value lands', async () => {
+    server.maxItems = 7;
+    const c = await open('&maxItems=60');
+    const limits: ItemLimitEvent[] = [];
+    c.on('itemLimit', (e: ItemLimitEvent) => limits.push(e));
+    const writes = new Map<string, number>();
+    server.memory.on('write', (w: { dbNumber: number; offset: number }) => writes.set(`${w.dbNumber}.${w.offset}`, (writes.get(`${w.dbNumber}.${w.offset}`) ?? 0) + 1));
+    const list = scattered(30);
+    const values = Object.fromEntries(list.map((a, i) => [a, 1000 + i]));
+    const results = await c.writeDetailed(values);
+    expect(Object.values(results).every((r) => r.ok)).to.equal(true);
+    expect(limits).to.deep.equal([{ limit: 7, was: 60 }]);
+    expect(requests.map((r) => r.items)).to.deep.equal([30, 7, 7, 7, 2]);
+    expect(writes.size).to.equal(30);
+    expect([...writes.values()].every((n) => n === 1)).to.equal(true);
+    expect(await c.read(list)).to.deep.equal(values);
   });
 });
 

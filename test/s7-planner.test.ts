@@ -158,17 +158,34 @@ describe('S7 planner: reads', () => {
     checkCoverage(list, plan);
   });
 
-  it('property: every plan respects both limits, covers each tag exactly once, reassembles its bytes, and needs no fewer PDUs than the lower bound', () => {
+  it('property: every plan respects both limits and the item limit, covers each tag exactly once, reassembles its bytes, and needs no fewer PDUs than the lower bound', () => {
+    const limits = fc.constantFrom(undefined, 20, 7, 1);
     fc.assert(
-      fc.property(fc.array(addressArb, { minLength: 1, maxLength: 150 }), fc.constantFrom(240, 480, 960), fc.boolean(), (addresses, pdu, merge) => {
+      fc.property(fc.array(addressArb, { minLength: 1, maxLength: 150 }), fc.constantFrom(240, 480, 960), fc.boolean(), limits, (addresses, pdu, merge, maxItems) => {
         const list = addresses.map(parseAddress);
-        const plan = planRead(list, pdu, { merge });
-        checkReadLimits(plan, pdu);
+        const options = maxItems === undefined ? {} : { maxItems };
+        const plan = planRead(list, pdu, { merge, ...options });
+        checkReadLimits(plan, pdu, maxItems);
         checkCoverage(list, plan);
-        expect(plan.pdus.length).to.be.at.least(lowerBoundPdus(list, pdu));
+        expect(plan.pdus.length).to.be.at.least(lowerBoundPdus(list, pdu, options));
       }),
       { numRuns: 300 },
     );
+  });
+
+  it("at 20 items per job the benchmark's 1000 scattered tags take 11 PDUs at PDU 960 (9 when the PDU decides), the lower bound both times", () => {
+    const { table } = require('../../bench/lib/tables') as { table: (name: string) => { address: string }[] };
+    const list = table('1000 scattered').map((t) => parseAddress(t.address));
+    for (const [maxItems, pdus] of [
+      [20, 11],
+      [255, 9],
+    ] as const) {
+      const plan = planRead(list, 960, { maxItems });
+      expect(plan.pdus, `maxItems ${maxItems}`).to.have.length(pdus);
+      expect(lowerBoundPdus(list, 960, { maxItems })).to.equal(pdus);
+      checkReadLimits(plan, 960, maxItems);
+      checkCoverage(list, plan);
+    }
   });
 
   it('reaches the lower bound on contiguous and small tables, and on 1000 tightly scattered tags but at PDU 240 (49 vs 48)', () => {
@@ -181,13 +198,17 @@ describe('S7 planner: reads', () => {
       offset += tag.byteLength + (i % 3) * 2 + 2;
       return tag;
     });
-    for (const pdu of [240, 480, 960]) {
-      for (const list of [contiguous, scattered, scattered.slice(0, 100), scattered.slice(0, 10)]) {
-        const plan = planRead(list, pdu);
-        const bound = lowerBoundPdus(list, pdu);
-        // The bound may cut a tag across PDUs; the planner never does (its halves could come from two PLC cycles).
-        const slack = list === scattered && pdu === 240 ? 1 : 0;
-        expect(plan.pdus.length, `${list.length} tags at PDU ${pdu}`).to.be.within(bound, bound + slack);
+    // With the protocol's 255 items per job, and with the 20 the client sends by default.
+    for (const options of [{}, { maxItems: 20 }]) {
+      for (const pdu of [240, 480, 960]) {
+        for (const list of [contiguous, scattered, scattered.slice(0, 100), scattered.slice(0, 10)]) {
+          const plan = planRead(list, pdu, options);
+          const bound = lowerBoundPdus(list, pdu, options);
+          checkReadLimits(plan, pdu, options.maxItems);
+          // The bound may cut a tag across PDUs; the planner never does (its halves could come from two PLC cycles).
+          const slack = list === scattered && pdu === 240 ? 1 : 0;
+          expect(plan.pdus.length, `${list.length} tags at PDU ${pdu}, ${options.maxItems ?? 255} items`).to.be.within(bound, bound + slack);
+        }
       }
     }
   });
@@ -305,6 +326,23 @@ describe('S7 planner: plan cache', () => {
     expect(cache.misses).to.equal(3);
   });
 
+  it('tells plans of the same array apart by item limit and merge', () => {
+    const cache = new ReadPlanCache(8);
+    const list = Array.from({ length: 30 }, (_, i) => parseAddress(`DB${i + 1},INT0`));
+    const wide = cache.get(list, 960);
+    const narrow = cache.get(list, 960, { maxItems: 20 });
+    expect(narrow).to.not.equal(wide);
+    expect([wide.maxItems, narrow.maxItems]).to.deep.equal([79, 20]);
+    expect(wide.pdus.map((p) => p.items.length)).to.deep.equal([30]);
+    expect(narrow.pdus.map((p) => p.items.length)).to.deep.equal([20, 10]);
+    expect(cache.get(list, 960, { maxItems: 20 })).to.equal(narrow);
+    expect(cache.get(list, 960)).to.equal(wide);
+    const neighbours = tags(['DB1,INT0', 'DB1,INT2']);
+    expect(cache.get(neighbours, 960).pdus[0]!.items).to.have.length(1);
+    const alone = cache.get(neighbours, 960, { merge: false });
+    expect([alone.merged, alone.pdus[0]!.items.length]).to.deep.equal([false, 2]);
+  });
+
   it('stays bounded', () => {
     const cache = new ReadPlanCache(3);
     for (let i = 0; i < 10; i++) cache.get(tags([`DB1,INT${i * 2}`]), 240);
@@ -358,7 +396,7 @@ describe('S7 planner: writes', () => {
     expect([...rebuilt]).to.deep.equal(value);
   });
 
-  it('property: write PDUs respect 12 + 12·items + Σ(4 + data + fill) ≤ PDU and 14 + items ≤ PDU', () => {
+  it('property: write PDUs respect 12 + 12·items + Σ(4 + data + fill) ≤ PDU, 14 + items ≤ PDU and the item limit', () => {
     const writeArb = fc.array(
       fc.oneof(
         fc.tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: -32768, max: 32767 })).map(([o, v]) => ({ a: `DB1,INT${o}`, v: v as unknown })),
@@ -369,8 +407,8 @@ describe('S7 planner: writes', () => {
       { minLength: 1, maxLength: 80 },
     );
     fc.assert(
-      fc.property(writeArb, fc.constantFrom(240, 480, 960), (writes, pdu) => {
-        const plan = planWrite(writes.map((w) => ({ tag: parseAddress(w.a), value: w.v })), pdu);
+      fc.property(writeArb, fc.constantFrom(240, 480, 960), fc.constantFrom(undefined, 20, 3), (writes, pdu, maxItems) => {
+        const plan = planWrite(writes.map((w) => ({ tag: parseAddress(w.a), value: w.v })), pdu, maxItems === undefined ? {} : { maxItems });
         expect(plan.errors.every((e) => e === undefined)).to.equal(true);
         const perTag = new Map<number, number>();
         for (const p of plan.pdus) {
@@ -378,6 +416,7 @@ describe('S7 planner: writes', () => {
           p.items.forEach((it, i) => (request += 12 + 4 + it.data.length + (it.data.length % 2 === 1 && i < p.items.length - 1 ? 1 : 0)));
           expect(request).to.be.at.most(pdu);
           expect(14 + p.items.length).to.be.at.most(pdu);
+          expect(p.items.length).to.be.within(1, maxItems ?? 255);
           expect(p.requestSize).to.equal(request);
           p.items.forEach((it, i) => perTag.set(p.tags[i]!, (perTag.get(p.tags[i]!) ?? 0) + (it.dataTransportSize === DataTransportSize.BIT ? 1 : it.data.length)));
         }

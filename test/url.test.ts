@@ -1,6 +1,7 @@
 import { expect } from 'chai';
+import { connect } from '../lib/connect';
 import { PlcError } from '../lib/errors';
-import { endpointKey, formatUrl, isLoopback, parseUrl } from '../lib/url';
+import { DEFAULTS, endpointKey, formatUrl, isLoopback, parseUrl, S7_CPU_PRESETS } from '../lib/url';
 
 function urlError(text: string): PlcError {
   try {
@@ -37,6 +38,25 @@ describe('url: parseUrl', () => {
   it('reads TSAPs in hex, the connection type, PDU, timeout and an IPv6 host', () => {
     const e = parseUrl('s7://[::1]:1102?localTsap=1000&remoteTsap=4D57&type=OP&pdu=240&timeout=250');
     expect(e).to.include({ host: '::1', port: 1102, localTsap: 0x1000, remoteTsap: 0x4d57, connectionType: 'op', pduSize: 240, timeout: 250 });
+  });
+
+  it('reads the item limit per S7 job (maxItems, 1–255); without it the client uses 20', () => {
+    expect(parseUrl('s7://h?maxItems=60')).to.include({ maxItems: 60 });
+    expect(parseUrl('s7://h?maxitems=1')).to.include({ maxItems: 1 });
+    expect(parseUrl('s7://h?maxItems=255')).to.include({ maxItems: 255 });
+    expect(parseUrl('s7://h')).to.not.have.property('maxItems');
+    expect(DEFAULTS.maxItems).to.equal(20);
+    for (const bad of ['0', '256', '20.5', '-1', 'many']) {
+      const err = urlError(`s7://h?maxItems=${bad}`);
+      expect(err.message, bad).to.include(`maxItems=${bad}`);
+    }
+    expect(urlError('s7://h?maxItems=256').message).to.include('out of range (1–255)');
+    expect(urlError('fetchwrite://h?maxItems=20').message).to.include('unknown parameter "maxItems"');
+  });
+
+  it('CPU presets allow more than 20 items per job only where the CPU serves them (S7-1200, S7-1500, S7-400)', () => {
+    const limits = Object.fromEntries(Object.entries(S7_CPU_PRESETS).map(([cpu, p]) => [cpu, p.maxItems ?? DEFAULTS.maxItems]));
+    expect(limits).to.deep.equal({ 's7-1500': 255, 's7-1200': 255, 's7-400': 255, 's7-300': 20, logo: 20, 's7-200': 20 });
   });
 
   it('reads FETCH/WRITE with two ports, one port, and the DB unit', () => {
@@ -79,12 +99,27 @@ describe('url: parseUrl', () => {
     expect(urlError('fetchwrite://h:2000').message).to.include('fetchPort');
     expect(urlError('fetchwrite://h?port=1&fetchPort=2').message).to.include('either port');
   });
+
+  it('a port above 65535 or not a number is named as the port, on every scheme', () => {
+    for (const base of ['s7://plc', 's7://[::1]', 'freeport+tcp://gw']) {
+      expect(urlError(`${base}:99999`).message, base).to.include('port 99999 is out of range (1–65535)');
+      expect(urlError(`${base}:65536?timeout=5`).message, base).to.include('port 65536 is out of range');
+      expect(urlError(`${base}:12ab`).message, base).to.include('port "12ab" is not a number');
+    }
+    expect(urlError('s7://plc:0').message).to.include('port 0 is out of range (1–65535)');
+    expect(urlError('freeport+tcp://gw:0').message).to.include('port 0 is out of range');
+    // FETCH/WRITE takes its ports as parameters, whatever the number.
+    expect(urlError('fetchwrite://h:99999').message).to.include('?fetchPort=');
+    expect(urlError('s7://plc:99999').message).to.not.include('not a URL');
+    expect(urlError('s7 plc').message).to.include('not a URL');
+  });
 });
 
 describe('url: formatUrl and endpointKey', () => {
   const urls = [
     's7://192.168.0.2?rack=0&slot=1',
     's7://plc:1102?localTsap=1000&remoteTsap=2000&type=basic&pdu=240&timeout=100',
+    's7://plc?rack=0&slot=1&maxItems=60',
     'fetchwrite://10.0.0.5?fetchPort=2000&writePort=2001',
     'fetchwrite://10.0.0.5?port=2000&dbUnit=byte&readOnly=true',
     'freeport:///dev/ttyUSB0?baud=9600',
@@ -109,4 +144,18 @@ describe('url: formatUrl and endpointKey', () => {
     expect(isLoopback(parseUrl('s7://192.168.0.1'))).to.equal(false);
     expect(isLoopback(parseUrl('freeport:///dev/ttyUSB0'))).to.equal(false);
   });
+});
+
+describe('url: a host that does not resolve', () => {
+  // RFC 6761: names under .invalid never resolve, with or without a DNS server (EAI_AGAIN when none answers).
+  for (const url of ['s7://plc.invalid', 'fetchwrite://plc.invalid?port=2000', 'freeport+tcp://plc.invalid:4001']) {
+    it(`${url.split(':')[0]}: connect() fails with CONNECT_FAILED naming the host, in words`, async () => {
+      const err = (await connect(`${url}${url.includes('?') ? '&' : '?'}timeout=3000`).catch((e: unknown) => e)) as PlcError;
+      expect(err).to.be.instanceOf(PlcError);
+      expect(err.code).to.equal('CONNECT_FAILED');
+      expect(err.message).to.include('the host name "plc.invalid"');
+      expect(err.message).to.match(/does not resolve \(ENOTFOUND\)|could not be looked up \(EAI_AGAIN/);
+      expect(err.message).to.include("use the PLC's IP address");
+    });
+  }
 });

@@ -25,8 +25,7 @@ export function openTcp(options: TcpConnectOptions): Promise<net.Socket> {
     const socket = net.connect({ host, port, noDelay: true });
     const timer = setTimeout(() => fail(new TimeoutError(`connecting to ${where} timed out after ${timeout} ms`)), timeout);
     const onAbort = () => fail(abortError(where, signal!));
-    const onError = (err: NodeJS.ErrnoException) =>
-      fail(new ConnectionError('CONNECT_FAILED', `cannot connect to ${where}: ${err.code ?? err.message}`, { cause: err }));
+    const onError = (err: NodeJS.ErrnoException) => fail(new ConnectionError('CONNECT_FAILED', connectFailure(host, port, err), { cause: err }));
     const cleanup = () => {
       clearTimeout(timer);
       signal?.removeEventListener('abort', onAbort);
@@ -49,6 +48,28 @@ export function openTcp(options: TcpConnectOptions): Promise<net.Socket> {
     socket.once('error', onError);
     signal?.addEventListener('abort', onAbort, { once: true });
   });
+}
+
+/**
+ * A failed connect in words that say what to check, with the system's code
+ * kept (it is what people search for). A name that does not resolve is about
+ * the host, not the port.
+ */
+function connectFailure(host: string, port: number, err: NodeJS.ErrnoException): string {
+  const where = `${host}:${port}`;
+  switch (err.code) {
+    case 'ENOTFOUND':
+      return `cannot connect to ${where}: the host name "${host}" does not resolve (ENOTFOUND): check the name, or use the PLC's IP address`;
+    case 'EAI_AGAIN':
+      return `cannot connect to ${where}: the host name "${host}" could not be looked up (EAI_AGAIN: no DNS server answered): check the network's DNS, or use the PLC's IP address`;
+    case 'ECONNREFUSED':
+      return `cannot connect to ${where}: the connection was refused (ECONNREFUSED): nothing listens on port ${port} at ${host}`;
+    case 'EHOSTUNREACH':
+    case 'ENETUNREACH':
+      return `cannot connect to ${where}: no route to ${host} (${err.code}): check the IP address, the subnet and the cable`;
+    default:
+      return `cannot connect to ${where}: ${err.code ?? err.message}`;
+  }
 }
 
 function abortError(where: string, signal: AbortSignal): PlcError {

@@ -8,6 +8,13 @@
  * duplicated, or late after a timeout) is ignored and counted in
  * stats.ignoredReplies; a job unanswered within the timeout drops the link
  * (the PLC still counts it against AmQ), and the supervisor reconnects.
+ *
+ * A job carries at most the URL's maxItems items (default 20, what snap7's
+ * server and VIPA CPUs serve; DEFAULT_MAX_ITEMS). A PLC that answers fewer
+ * items than a job asked for has told its limit: the client keeps it for as
+ * long as it lives (reconnects included: it is the same PLC), emits
+ * `itemLimit` ({ limit, was }), and reads again with a plan for that limit,
+ * or sends the items of a write the answer left out again.
  */
 import { formatAddress, parseAddress } from '../address';
 import { ConnectionError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
@@ -16,9 +23,9 @@ import type { PlcValue, Protocol, Tag } from '../types';
 import { endpointName, type S7Endpoint } from '../url';
 import { decodeTag, tagDecoder, type TagDecoder } from '../values';
 import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadAck, type ReadItemTable, type S7Message } from './codec';
-import { CotpType, describeReturnCode, headerError } from './constants';
+import { CotpType, DEFAULT_MAX_ITEMS, describeReturnCode, headerError } from './constants';
 import { openS7Session, S7Session } from './client-session';
-import { planRead, planWrite, ReadPlanCache, tagData, type ReadPlan } from './planner';
+import { planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './planner';
 
 export { S7Session, localTsapFor } from './client-session';
 
@@ -38,6 +45,12 @@ export interface S7Stats {
 }
 
 const SUCCESS = 0xff;
+
+/** The `itemLimit` event: the PLC answered only `limit` items of a job; jobs had up to `was`. */
+export interface ItemLimitEvent {
+  limit: number;
+  was: number;
+}
 
 /** Counters start at 0; plansMade is the plan cache's own count. */
 function newStats(plans: ReadPlanCache): S7Stats {
@@ -59,6 +72,9 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   private readonly plans = new ReadPlanCache();
   readonly stats: S7Stats = newStats(this.plans);
   private readonly compiledPlans = new WeakMap<ReadPlan, CompiledRead>();
+  /** Items per job: the URL's maxItems or 20, lowered when the PLC serves fewer (learnItemLimit). */
+  private itemLimit: number;
+  private planOptions: PlanOptions;
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
     super({
@@ -69,6 +85,13 @@ export class S7Client extends BaseClient<S7Session, Tag> {
       ...options,
     });
     this.endpoint = endpoint;
+    this.itemLimit = endpoint.maxItems ?? DEFAULT_MAX_ITEMS;
+    this.planOptions = { maxItems: this.itemLimit };
+  }
+
+  /** The most items this client puts into one job (the PDU size may allow fewer). */
+  get maxItems(): number {
+    return this.itemLimit;
   }
 
   /** The PDU size the PLC negotiated (0 while not connected). */
@@ -85,7 +108,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   planFor(addresses: readonly string[]): ReadPlan {
     const pduSize = this.pduSize;
     if (pduSize === 0) throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name}`);
-    return this.plans.get(addresses.map((a) => this.tag(a)), pduSize);
+    return this.plans.get(addresses.map((a) => this.tag(a)), pduSize, this.planOptions);
   }
 
   protected parseTag(address: string): Tag {
@@ -179,12 +202,11 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   protected override async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
     this.stats.requests++;
-    const plan = this.plans.get(tags, session.pduSize);
-    const read = await this.execute(session, tags, plan, signal);
+    const read = await this.readServed(session, tags, true, signal);
     if (read.retry.length > 0) {
       // An item merged from several tags failed (e.g. one tag past the end of a DB): read those tags alone.
       const alone = read.retry.map((i) => tags[i]!);
-      const again = await this.execute(session, alone, planRead(alone, session.pduSize, { merge: false }), signal);
+      const again = await this.readServed(session, alone, false, signal);
       const errors = read.errors!;
       read.retry.forEach((i, k) => {
         errors[i] = again.errors?.[k];
@@ -193,6 +215,34 @@ export class S7Client extends BaseClient<S7Session, Tag> {
       if (errors.every((e) => e === undefined)) read.errors = undefined;
     }
     return read;
+  }
+
+  /**
+   * Reads `tags` with the plan for the current item limit (cached when
+   * merged). When the PLC answered fewer items than a job asked for, that is
+   * its limit: learnt, and the tags are read again with a plan for it (each
+   * round plans for fewer items than the one before, so this ends).
+   */
+  private async readServed(session: S7Session, tags: readonly Tag[], merge: boolean, signal?: AbortSignal): Promise<CollectedRead> {
+    for (;;) {
+      const plan = merge
+        ? this.plans.get(tags, session.pduSize, this.planOptions)
+        : planRead(tags, session.pduSize, { merge: false, maxItems: this.itemLimit });
+      const read = await this.execute(session, tags, plan, signal);
+      if (read.served === 0) return read;
+      this.learnItemLimit(read.served);
+    }
+  }
+
+  /** The PLC served only `served` items of a job: jobs carry at most that many from now on. */
+  private learnItemLimit(served: number): void {
+    if (served >= this.itemLimit) return;
+    const was = this.itemLimit;
+    this.itemLimit = served;
+    this.planOptions = { maxItems: served };
+    // The plans for the old limit are of no more use.
+    this.plans.clear();
+    this.emit('itemLimit', { limit: served, was } satisfies ItemLimitEvent);
   }
 
   /** A plan's request frames (reused while not in flight) and where each tag's bytes lie, computed once per plan. */
@@ -205,7 +255,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     return c;
   }
 
-  private execute(session: S7Session, tags: readonly Tag[], plan: ReadPlan, signal?: AbortSignal): Promise<ReadValues & { retry: number[] }> {
+  private execute(session: S7Session, tags: readonly Tag[], plan: ReadPlan, signal?: AbortSignal): Promise<CollectedRead> {
     const c = this.compiled(plan, tags);
     const n = plan.pdus.length;
     const answers: Buffer[] = new Array<Buffer>(n);
@@ -253,21 +303,28 @@ export class S7Client extends BaseClient<S7Session, Tag> {
    * so polls of the same plan never share it at once), each tag decoded at
    * its offset. No object per item or per tag; a tag split across items is
    * reassembled. Errors are per tag: a failed PDU fails its tags, a failed
-   * item the tags in it.
+   * item the tags in it. `served` > 0: a PDU was answered with only that
+   * many of its items (the fewest of such PDUs).
    */
-  private collect(session: S7Session, tags: readonly Tag[], plan: ReadPlan, c: CompiledRead, answers: readonly Buffer[]): ReadValues & { retry: number[] } {
+  private collect(session: S7Session, tags: readonly Tag[], plan: ReadPlan, c: CompiledRead, answers: readonly Buffer[]): CollectedRead {
     const n = plan.pdus.length;
     const { table, itemBase, itemLength } = c;
     let pduErrors: (PlcError | undefined)[] | undefined;
     let itemsFailed = false;
+    let served = 0;
     for (let p = 0; p < n; p++) {
       const count = plan.pdus[p]!.items.length;
       const base = itemBase[p]!;
       const frame = answers[p]!;
       if (!scanReadAck(frame, count, table, base)) {
-        const err = this.unusualReadAnswer(session, frame, count, table, base);
-        if (err) {
-          (pduErrors ??= new Array<PlcError | undefined>(n))[p] = err;
+        const unusual = this.unusualReadAnswer(session, frame, count, table, base);
+        if (typeof unusual === 'number') {
+          served = served === 0 ? unusual : Math.min(served, unusual);
+          (pduErrors ??= new Array<PlcError | undefined>(n))[p] = new ProtocolError(`the PLC answered ${unusual} of the ${count} items of a read`);
+          continue;
+        }
+        if (unusual) {
+          (pduErrors ??= new Array<PlcError | undefined>(n))[p] = unusual;
           continue;
         }
       }
@@ -281,7 +338,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
           const p = tagPdu[t]!;
           values[t] = p >= 0 ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!) : this.splitValue(tags[t]!, t, plan, c, answers);
         }
-        return { values, errors: undefined, retry: [] };
+        return { values, errors: undefined, retry: [], served: 0 };
       } catch {
         // A decoder threw (no decoder should): tag by tag below, so only that tag fails.
       }
@@ -321,18 +378,20 @@ export class S7Client extends BaseClient<S7Session, Tag> {
         errors[t] = tagError(tag, toPlcError(e, 'PROTOCOL_ERROR'));
       }
     }
-    return { values, errors, retry };
+    return { values, errors, retry, served };
   }
 
   /**
    * An answer scanReadAck did not take: decodes it (malformed drops the
-   * link and throws). A header error, another kind of answer or a wrong item
-   * count is the error of the whole PDU; a read ack in an unusual framing
+   * link and throws). A header error, another kind of answer or too many
+   * items is the error of the whole PDU; a read ack of fewer items (at least
+   * one) returns how many the PLC served; a read ack in an unusual framing
    * fills the table like scanReadAck.
    */
-  private unusualReadAnswer(session: S7Session, frame: Buffer, count: number, table: ReadItemTable, base: number): PlcError | undefined {
+  private unusualReadAnswer(session: S7Session, frame: Buffer, count: number, table: ReadItemTable, base: number): PlcError | number | undefined {
     const answer = this.decode(session, frame);
     if (answer.kind === 'error') return headerError(answer.errorClass, answer.errorCode, 'read');
+    if (answer.kind === 'read-ack' && answer.items.length > 0 && answer.items.length < count) return answer.items.length;
     if (answer.kind !== 'read-ack' || answer.items.length !== count) {
       return new ProtocolError(`the answer to a read of ${count} item(s) does not match it (${answer.kind})`);
     }
@@ -360,35 +419,53 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   protected async writeTags(session: S7Session, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
     this.stats.requests++;
-    const plan = planWrite(items, session.pduSize);
+    const plan = planWrite(items, session.pduSize, this.planOptions);
     const errors: (PlcError | undefined)[] = plan.errors.slice();
-    await Promise.all(
-      plan.pdus.map(async (pdu) => {
-        const n = pdu.items.length;
-        const failAll = (err: PlcError) => pdu.tags.forEach((t) => (errors[t] ??= err));
-        let answer: S7Message;
-        try {
-          answer = await this.job(session, encodeWriteRequest(0, pdu.items), `write of ${n} item(s)`, signal);
-        } catch (err) {
-          // The write may or may not have reached the PLC: its tags get the error, it is never silently dropped.
-          return failAll(toPlcError(err));
-        }
-        if (answer.kind === 'error') return failAll(headerError(answer.errorClass, answer.errorCode, 'write'));
-        if (answer.kind !== 'write-ack' || answer.returnCodes.length !== n) {
-          return failAll(new ProtocolError(`the answer to a write of ${n} item(s) does not match it (${answer.kind})`));
-        }
-        answer.returnCodes.forEach((rc, i) => {
-          if (rc !== SUCCESS) errors[pdu.tags[i]!] ??= returnCodeError(rc);
-        });
-      }),
-    );
+    await Promise.all(plan.pdus.map((pdu) => this.writeJob(session, pdu.items, pdu.tags, errors, signal)));
     return items.map(({ tag }, i) => {
       const err = errors[i];
       if (!err) return { ok: true, value: undefined };
       return { ok: false, error: err.tag === tag.address ? err : tagError(tag, err) };
     });
   }
+
+  /**
+   * One Write Var job; `tags[i]` is the index in `errors` of item i's tag,
+   * which gets the tag's first error. A PLC that answers fewer return codes
+   * than the job had items (at least one) served those first items (return
+   * codes come in item order): the limit is learnt and the items it left
+   * out are sent again in jobs it serves. The items it answered are not
+   * sent twice (a second write of a command bit could act twice).
+   */
+  private async writeJob(session: S7Session, items: PlannedWriteItem[], tags: number[], errors: (PlcError | undefined)[], signal?: AbortSignal): Promise<void> {
+    const n = items.length;
+    const failAll = (err: PlcError) => tags.forEach((t) => (errors[t] ??= err));
+    let answer: S7Message;
+    try {
+      answer = await this.job(session, encodeWriteRequest(0, items), `write of ${n} item(s)`, signal);
+    } catch (err) {
+      // The write may or may not have reached the PLC: its tags get the error, it is never silently dropped.
+      return failAll(toPlcError(err));
+    }
+    if (answer.kind === 'error') return failAll(headerError(answer.errorClass, answer.errorCode, 'write'));
+    const served = answer.kind === 'write-ack' ? answer.returnCodes.length : 0;
+    if (answer.kind !== 'write-ack' || served === 0 || served > n) {
+      return failAll(new ProtocolError(`the answer to a write of ${n} item(s) does not match it (${answer.kind})`));
+    }
+    answer.returnCodes.forEach((rc, i) => {
+      if (rc !== SUCCESS) errors[tags[i]!] ??= returnCodeError(rc);
+    });
+    if (served === n) return;
+    this.learnItemLimit(served);
+    const size = this.itemLimit;
+    const rest: Promise<void>[] = [];
+    for (let i = served; i < n; i += size) rest.push(this.writeJob(session, items.slice(i, i + size), tags.slice(i, i + size), errors, signal));
+    await Promise.all(rest);
+  }
 }
+
+/** What a read of one plan found: values and errors per tag, the tags to read alone, and `served` (see collect). */
+type CollectedRead = ReadValues & { retry: number[]; served: number };
 
 interface CompiledRead {
   /** Per PDU: the Read Var frame (its PDU reference is set when sent), reused while not in flight. */

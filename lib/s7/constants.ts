@@ -112,6 +112,19 @@ export function lengthInBits(size: number): boolean {
 /** Most items one Read/Write Var job can carry (the item count is one byte). */
 export const MAX_ITEMS = 255;
 
+/**
+ * Items per Read/Write Var job the client sends unless the URL says more
+ * (`maxItems=N`): 20. snap7's server serves at most 20 (`MaxVars` in its
+ * s7_types.h): it answers the first 20 items of a longer read as if that
+ * were all, and a longer write overruns its fixed table of 20. So do the
+ * devices and simulators built on snap7, and VIPA CPUs (frangoteam/FUXA#694:
+ * more than 20 tags fail on a VIPA CPU, work on an S7-1200 and S7-1500).
+ * Siemens CPUs limit a job by the PDU size only (12 + 12·items ≤ PDU: 19 at
+ * PDU 240, 39 at 480, 79 at 960; S7NetPlus/s7netplus#157, #380: 36 items
+ * written to an S7-1500 in one job).
+ */
+export const DEFAULT_MAX_ITEMS = 20;
+
 /** Return codes of a read/write item. */
 export const enum ReturnCode {
   Reserved = 0x00,

@@ -27,14 +27,12 @@
 import { PlcError, toPlcError } from '../errors';
 import type { Tag } from '../types';
 import { validateValue, writeSpan } from '../values';
-import { AREA_CODES, DataTransportSize, S7Area, TransportSize } from './constants';
+import { AREA_CODES, DataTransportSize, MAX_ITEMS, S7Area, TransportSize } from './constants';
 
 const REQUEST_BASE = 12;
 const RESPONSE_BASE = 14;
 const REQUEST_ITEM = 12;
 const DATA_HEADER = 4;
-/** The item count is one byte. */
-const MAX_ITEMS = 255;
 /** Gap thresholds tried by planRead; 16 = the 12 + 4 bytes a new item costs. */
 const GAP_THRESHOLDS = [0, 3, 5, 8, 16, 32, 64, 128];
 
@@ -84,6 +82,10 @@ export interface TagPieces {
 
 export interface ReadPlan {
   readonly pduSize: number;
+  /** Items per PDU the plan was made for (maxReadItems of its PDU size and item limit). */
+  readonly maxItems: number;
+  /** false when every tag is its own item (PlanOptions.merge). */
+  readonly merged: boolean;
   readonly pdus: ReadPdu[];
   /** Per tag (in the order given): its pieces, in order of `at`; one piece unless the tag was split. */
   readonly pieces: TagPieces;
@@ -98,6 +100,8 @@ class PlanOfPieces implements ReadPlan {
 
   constructor(
     readonly pduSize: number,
+    readonly maxItems: number,
+    readonly merged: boolean,
     readonly pdus: ReadPdu[],
     readonly pieces: TagPieces,
     readonly tagLengths: number[],
@@ -120,7 +124,7 @@ function slicesOf(pieces: TagPieces, t: number): TagSlice[] {
 export interface PlanOptions {
   /** false: every tag is its own item (used to isolate a failing tag from good neighbours). Default true. */
   merge?: boolean;
-  /** At most this many items per PDU (e.g. 20 for snap7's server). Default 255. */
+  /** At most this many items per PDU (the peer's limit, e.g. 20 for snap7's server). Default 255, the protocol's. */
   maxItems?: number;
 }
 
@@ -663,10 +667,10 @@ export function planRead(tags: readonly Tag[], pduSize: number, options: PlanOpt
   }
   // Out of address order, only where that needs fewer PDUs than the best so far.
   if (merge && best) best = packCover(atoms, pduSize, maxItems, best.bins.length) ?? best;
-  return finish(tags, pduSize, atoms, best ?? { bins: [], placements: [] });
+  return finish(tags, pduSize, maxItems, merge, atoms, best ?? { bins: [], placements: [] });
 }
 
-function finish(tags: readonly Tag[], pduSize: number, atoms: readonly Atom[], draft: Draft): ReadPlan {
+function finish(tags: readonly Tag[], pduSize: number, maxItems: number, merge: boolean, atoms: readonly Atom[], draft: Draft): ReadPlan {
   const where = new Map<DraftItem, { pdu: number; item: number }>();
   const pdus: ReadPdu[] = draft.bins.map((bin, pdu) => ({
     items: bin.items.map((d, item) => {
@@ -714,7 +718,7 @@ function finish(tags: readonly Tag[], pduSize: number, atoms: readonly Atom[], d
     }
   });
   pieces.start[tags.length] = k;
-  return new PlanOfPieces(pduSize, pdus, pieces, tagLengths);
+  return new PlanOfPieces(pduSize, maxItems, merge, pdus, pieces, tagLengths);
 }
 
 function readItem(d: DraftItem): PlannedReadItem {
@@ -869,8 +873,9 @@ function bytesWithItems(spans: readonly Span[]): (m: number) => number {
 
 /**
  * Remembers read plans by tag list: the same list (the same array, or the
- * same addresses in the same order) at the same PDU size is not planned
- * again. Bounded: the oldest plan goes when `capacity` is reached.
+ * same addresses in the same order) at the same PDU size and options (item
+ * limit, merge) is not planned again. Bounded: the oldest plan goes when
+ * `capacity` is reached.
  */
 export class ReadPlanCache {
   private readonly byArray = new WeakMap<readonly Tag[], ReadPlan>();
@@ -883,7 +888,7 @@ export class ReadPlanCache {
 
   get(tags: readonly Tag[], pduSize: number, options: PlanOptions = {}): ReadPlan {
     const same = this.byArray.get(tags);
-    if (same && same.pduSize === pduSize) {
+    if (same && same.pduSize === pduSize && same.maxItems === maxReadItems(pduSize, options.maxItems) && same.merged === (options.merge ?? true)) {
       this.hits++;
       return same;
     }

@@ -10,6 +10,7 @@ import { FrameReader } from '../link/framer';
 import { PlcMemory } from '../sim/memory';
 import { S7Function, tpduBytes } from './constants';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from './codec';
+import { firstItems } from './server-items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
 import { PROFILES, toMemoryLayout, tsapRefusal, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
 
@@ -25,6 +26,13 @@ export interface S7ServerOptions {
   memory?: PlcMemory;
   /** Memory layout when no `memory` is given (MemoryLayout or the JSON form `{ dbs, areas }`). */
   layout?: S7Layout;
+  /**
+   * Serve at most this many items per job, as snap7's server (20) and the
+   * devices built on it: a longer job is served for its first N items and
+   * answered as if those were all (server-items.ts). Default: no limit but
+   * the PDU's, as Siemens CPUs.
+   */
+  maxItems?: number;
 }
 
 /** Fault injection; every field can be changed at any time. */
@@ -93,6 +101,8 @@ export class S7Server extends EventEmitter {
   readonly memory: PlcMemory;
   readonly profile: CpuProfile;
   readonly faults: S7Faults;
+  /** Items served per job (S7ServerOptions.maxItems); may be changed at any time. */
+  maxItems: number | undefined;
   private readonly host: string;
   private readonly wantPort: number;
   private server: net.Server | undefined;
@@ -113,6 +123,10 @@ export class S7Server extends EventEmitter {
     if (!resolved) throw new TypeError(`unknown S7 profile "${String(profile)}" (${Object.keys(PROFILES).join(', ')})`);
     this.profile = resolved;
     this.memory = options.memory ?? new PlcMemory(options.layout ? toMemoryLayout(options.layout) : resolved.layout);
+    if (options.maxItems !== undefined && !(Number.isInteger(options.maxItems) && options.maxItems >= 1 && options.maxItems <= 255)) {
+      throw new TypeError(`maxItems must be a whole number 1..255, got ${String(options.maxItems)}`);
+    }
+    this.maxItems = options.maxItems;
     this.faults = {
       accessDenied: false,
       missingDb: undefined,
@@ -334,6 +348,7 @@ export class S7Server extends EventEmitter {
     if (func === 0) return refuseJob(pduRef, 0x81, 0x04);
     // S7-1200/1500 without PUT/GET: ack with header error 0x8104 (S7NetPlus/s7netplus#403 shows `32 02 … 81 04`).
     if (this.faults.accessDenied) return refuseJob(pduRef, 0x81, 0x04);
-    return func === S7Function.ReadVar ? serveRead(frame, conn.ctx) : serveWrite(frame, conn.ctx);
+    const job = this.maxItems === undefined ? frame : firstItems(frame, this.maxItems);
+    return func === S7Function.ReadVar ? serveRead(job, conn.ctx) : serveWrite(job, conn.ctx);
   }
 }

@@ -1,11 +1,47 @@
 'use strict';
 // Our S7 client against snap7's server (an independent implementation).
-// snap7's server answers at most 20 items per request; asking for PDU 240
-// keeps every request we send at 19 items or fewer, which the proxy checks.
+// snap7's server serves at most 20 items per job (it answers the first 20
+// of a longer read as if that were all; a longer write overruns its table):
+// the client sends 20 by default, and learns the limit from a short answer.
+const net = require('node:net');
 const { expect } = require('chai');
 const support = require('./support');
-const { startSnap7Server } = support;
-const { CountingProxy } = require('../../bench/lib/proxy');
+const { startSnap7Server, eventWithin } = support;
+const { CountingProxy, FrameCounter } = require('../../bench/lib/proxy');
+
+/** A read ack with its fill bytes zeroed: snap7 leaves whatever its answer buffer held there (the protocol gives them no value). */
+function withoutFill(frame) {
+  const out = Buffer.from(frame);
+  const count = out[20];
+  let p = 21;
+  for (let i = 0; i < count && p + 4 <= out.length; i++) {
+    const len = out[p] === 0xff ? (out.readUInt16BE(p + 2) + 7) >> 3 : 0; // BYTE data: length in bits
+    p += 4 + len;
+    if (len & 1 && i < count - 1) out[p++] = 0;
+  }
+  return out;
+}
+
+/** One raw job on a fresh S7 connection (rack 0, slot 1, PDU 960): the answer frame as the server sent it. */
+function rawJob(port, job) {
+  const { s7 } = support.plcwire;
+  return new Promise((resolve, reject) => {
+    const socket = net.connect(port, '127.0.0.1');
+    let stage = 0;
+    const frames = new FrameCounter((f) => {
+      stage++;
+      if (stage === 1) socket.write(s7.encodeSetupCommunication(0, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 960 }));
+      else if (stage === 2) socket.write(job);
+      else {
+        socket.destroy();
+        resolve(Buffer.from(f));
+      }
+    });
+    socket.on('connect', () => socket.write(s7.encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x0100, calledTsap: 0x0101, tpduSize: 0x0a })));
+    socket.on('data', (d) => frames.push(d));
+    socket.on('error', reject);
+  });
+}
 
 function memory() {
   const db1 = Buffer.alloc(1024);
@@ -143,6 +179,92 @@ describe('interop: our S7Client against snap7 server', function () {
       await viaProxy.close();
       await proxy.close();
     }
+  });
+
+  describe('more separate tags than snap7 serves in one job (20), at PDU 960', () => {
+    let proxy;
+    let wide;
+    /** Tags 30 bytes apart in DB3 (too far apart to share an item cheaply); DB3,BYTE(1000 + 30i) holds i. */
+    const separate = (n) => Array.from({ length: n }, (_, i) => `DB3,BYTE${1000 + 30 * i}`);
+    beforeEach(async () => {
+      proxy = new CountingProxy(peer.port);
+      const port = await proxy.listen();
+      wide = (query = '') => support.plcwire.connect(`s7://127.0.0.1:${port}?timeout=5000${query}`);
+    });
+    afterEach(() => proxy.close());
+
+    for (const n of [21, 60]) {
+      it(`reads ${n} separate tags in jobs of at most 20 items, every value right`, async () => {
+        const c = await wide();
+        try {
+          expect(c.pduSize).to.equal(960);
+          proxy.reset();
+          const v = await c.read(separate(n));
+          separate(n).forEach((a, i) => expect(v[a], a).to.equal(i));
+          expect(proxy.maxItemsPerJob).to.be.within(1, 20);
+        } finally {
+          await c.close();
+        }
+      });
+    }
+
+    it('writes 30 separate items in jobs of at most 20: snap7 holds every value and still serves', async () => {
+      const c = await wide();
+      try {
+        const values = Object.fromEntries(separate(30).map((a, i) => [a, 200 + i]));
+        proxy.reset();
+        await c.write(values);
+        expect(proxy.writeJobs).to.equal(2);
+        expect(proxy.maxItemsPerJob).to.be.within(1, 20);
+        const db3 = peer.db(3);
+        separate(30).forEach((a, i) => expect(db3[1000 + 30 * i], a).to.equal(200 + i));
+      } finally {
+        await c.close();
+      }
+      // The server process is still there and answers a new connection.
+      const again = await wide();
+      try {
+        expect(await again.read(['DB3,BYTE1000'])).to.deep.equal({ 'DB3,BYTE1000': 200 });
+      } finally {
+        await again.close();
+      }
+    });
+
+    it("told maxItems=60, the client learns snap7's 20 from its answer: itemLimit event, and that poll returns every value", async () => {
+      const c = await wide('&maxItems=60');
+      try {
+        const learnt = eventWithin(c, 'itemLimit', 5000);
+        proxy.reset();
+        const v = await c.read(separate(60));
+        separate(60).forEach((a, i) => expect(v[a], a).to.equal(i));
+        const [event] = await learnt;
+        expect(event).to.deep.equal({ limit: 20, was: 60 });
+        expect(c.maxItems).to.equal(20);
+        proxy.reset();
+        await c.read(separate(60));
+        expect(proxy.maxItemsPerJob).to.be.within(1, 20);
+      } finally {
+        await c.close();
+      }
+    });
+
+    it("our simulator with maxItems 20 answers a read of 21 items byte for byte as snap7's server does (fill bytes aside)", async () => {
+      const { s7, S7Server } = support.plcwire;
+      const items = separate(21).map((_, i) => ({ area: 0x84, dbNumber: 3, transportSize: 0x02, count: 1, address: (1000 + 30 * i) * 8 }));
+      const job = s7.encodeReadRequest(7, items);
+      const sim = new S7Server({ port: 0, maxItems: 20, layout: { dataBlocks: { 3: 4096 } } });
+      await sim.listen();
+      try {
+        sim.memory.area('DB', 3).set(peer.db(3));
+        const theirs = await rawJob(peer.port, job);
+        const ours = await rawJob(sim.port, job);
+        // A read ack of the first 20 items (item count 0x14), as if the job had been those alone.
+        expect(theirs[20]).to.equal(0x14);
+        expect(withoutFill(ours).toString('hex')).to.equal(withoutFill(theirs).toString('hex'));
+      } finally {
+        await sim.close();
+      }
+    });
   });
 
   it('splits an array larger than one PDU into several jobs', async () => {
