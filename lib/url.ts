@@ -112,6 +112,10 @@ export interface S7CpuPresetParams {
  * at 960). The S7-300 preset keeps the default 20: S7-300 compatible CPUs
  * (VIPA, frangoteam/FUXA#694) serve 20, and a Siemens S7-300 at PDU 240
  * carries 19 anyway. LOGO! and S7-200 negotiate PDU 240 (19 items).
+ * TSAPs: an S7-200's CP 243-1 is called at 10.xx, its connection number in
+ * the low byte (CP 243-1 manual, section 4.2.3; S7NetPlus TsapPair.cs uses
+ * 10.00 / 10.01); a LOGO! at the pair set in LOGO!Soft Comfort, 01.00 / 02.00
+ * by default (the simulator's s7-200 and logo profiles accept these).
  */
 export const S7_CPU_PRESETS: Readonly<Record<S7CpuPreset, Readonly<S7CpuPresetParams>>> = Object.freeze({
   's7-1500': Object.freeze({ rack: 0, slot: 1, maxItems: MAX_ITEMS }),
@@ -119,7 +123,7 @@ export const S7_CPU_PRESETS: Readonly<Record<S7CpuPreset, Readonly<S7CpuPresetPa
   's7-400': Object.freeze({ rack: 0, slot: 3, maxItems: MAX_ITEMS }),
   's7-300': Object.freeze({ rack: 0, slot: 2 }),
   logo: Object.freeze({ localTsap: 0x0100, remoteTsap: 0x0200 }),
-  's7-200': Object.freeze({ localTsap: 0x4d57, remoteTsap: 0x4d57 }),
+  's7-200': Object.freeze({ localTsap: 0x1000, remoteTsap: 0x1001 }),
 });
 
 /** Baud rates an S7-200 port can run at (SMB30 / SMB130). */
