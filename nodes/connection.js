@@ -48,9 +48,9 @@ module.exports = function (RED) {
       try {
         link = acquire(node.url, node);
       } catch (err) {
+        // Each user reports this to its own Catch nodes once the flows have started (see problemReport).
         node.problem = err;
         broadcast({ state: 'invalid', error: err });
-        reportError(err);
         return;
       }
       node.problem = undefined;
@@ -67,6 +67,18 @@ module.exports = function (RED) {
       held.off('link-error', reportError);
       return release(held, node);
     }
+
+    /**
+     * Why this connection cannot be opened, as the error its users report
+     * (naming the connection, with the parser's code) and their Catch message.
+     */
+    node.problemReport = function () {
+      const err = node.problem;
+      if (!err) return undefined;
+      const url = withoutCredentials(node.url);
+      const error = new plc.PlcError(err.code || 'INVALID_URL', `connection "${node.name || url}": ${err.message}`);
+      return { error, msg: { topic: node.name || url, payload: { url, state: 'invalid', code: error.code } } };
+    };
 
     node.register = function (user) {
       node.users[user.id] = user;

@@ -29,6 +29,13 @@ function attach(RED, node, connectionId, onStatus) {
     if (!onStatus || onStatus(status) !== false) show(status);
   };
   config.register(node);
+  const problem = typeof config.problemReport === 'function' ? config.problemReport() : undefined;
+  if (problem) {
+    whenStarted(RED, node, () => {
+      node.onLinkStatus(config.linkStatus);
+      node.error(problem.error, problem.msg);
+    });
+  }
   return {
     config,
     /** The shared client, or undefined when the connection could not be opened. */
@@ -42,6 +49,17 @@ function attach(RED, node, connectionId, onStatus) {
     showLink: () => show(config.linkStatus),
     detach: () => config.deregister(node),
   };
+}
+
+/**
+ * Runs `report` once the flows have started. While they start, the runtime
+ * has not yet collected a tab's Catch and Status nodes (it does so after
+ * creating all of its nodes): an error or status of a node being created
+ * reaches none of them.
+ */
+function whenStarted(RED, node, report) {
+  RED.events.once('flows:started', report);
+  node.on('close', () => RED.events.removeListener('flows:started', report));
 }
 
 /** The error a node reports when no connection node is configured. */
