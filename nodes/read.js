@@ -1,5 +1,5 @@
 'use strict';
-const { attach, settleWithin, noConnectionError } = require('./shared/user');
+const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
 const { tagTable, tagsOfMessage, outcomes, ChangeFilter, codeError } = require('./shared/tags');
 const { tagErrorsStatus } = require('./shared/status');
 
@@ -21,6 +21,7 @@ module.exports = function (RED) {
     RED.nodes.createNode(this, config);
     const node = this;
     const tags = tagTable(config.tags);
+    warnDuplicateNames(RED, node, tags);
     const interval = Math.max(0, Number(config.interval) || 0);
     const output = ['object', 'per-tag', 'changes'].includes(config.output) ? config.output : 'object';
     const changes = new ChangeFilter(config.deadband);

@@ -1,6 +1,7 @@
 'use strict';
 /** What the read, write and heartbeat nodes share: attaching to a connection and settling close in time. */
 const { linkStatus } = require('./status');
+const { plc } = require('./links');
 
 /** Close handlers must call done within a few seconds whatever happens (the runtime gives up at 15 s). */
 const CLOSE_DEADLINE_MS = 2000;
@@ -62,6 +63,16 @@ function whenStarted(RED, node, report) {
   node.on('close', () => RED.events.removeListener('flows:started', report));
 }
 
+/**
+ * Warns about every tag name the table gives to more than one row: in object
+ * output only one of their values could arrive, and a write by name reaches one of them.
+ */
+function warnDuplicateNames(RED, node, table) {
+  for (const { name, rows } of plc.duplicateNames(table)) {
+    node.warn(RED._('plcwire.errors.duplicateName', { name, rows: rows.map((i) => i + 1).join(', ') }));
+  }
+}
+
 /** The error a node reports when no connection node is configured. */
 function noConnectionError(RED) {
   const err = new Error(RED._('plcwire.errors.noConnection'));
@@ -69,4 +80,4 @@ function noConnectionError(RED) {
   return err;
 }
 
-module.exports = { attach, settleWithin, noConnectionError, CLOSE_DEADLINE_MS };
+module.exports = { attach, settleWithin, noConnectionError, warnDuplicateNames, CLOSE_DEADLINE_MS };

@@ -4,7 +4,8 @@
  * once per start of that node, with code INVALID_URL.
  */
 import { expect } from 'chai';
-import { ALL_NODES, helper, Recorder } from './support';
+import { loadCatalogs, withCatalog } from './catalogs';
+import { ALL_NODES, helper, nodes, Recorder } from './support';
 
 const TAB = { id: 'tab', type: 'tab', label: 'config errors' };
 const at = { z: 'tab', x: 100, y: 100 };
@@ -65,5 +66,38 @@ describe('nodes: a connection with an invalid URL', function () {
     await helper.load(ALL_NODES, flow('s7://user:hunter2@127.0.0.1?slott=1'));
     const caught = await new Recorder(helper.getNode('caught')).next(() => true, 3000, 'error on Catch');
     expect(JSON.stringify(caught)).not.to.include('hunter2');
+  });
+});
+
+describe('nodes: a tag table with a name used twice', function () {
+  this.timeout(10000);
+  beforeEach(() => helper.startServer());
+  afterEach(async () => {
+    await helper.unload();
+    await helper.stopServer();
+  });
+
+  it('is a warning naming it, from the read and the write node (in object output only one value could arrive)', async () => {
+    const catalogs = await loadCatalogs();
+    const tags = [{ name: 'speed', address: 'MW2' }, { name: 'level', address: 'MW4' }, { name: 'speed', address: 'MW6' }];
+    await helper.load(
+      [nodes.connection, withCatalog(nodes.read, catalogs.translator('en-US', 'plcwire-read')), withCatalog(nodes.write, catalogs.translator('en-US', 'plcwire-write'))],
+      [
+        TAB,
+        { id: 'conn', type: 'plcwire-connection', url: 's7://127.0.0.1?slott=1' },
+        { id: 'read', type: 'plcwire-read', ...at, connection: 'conn', interval: 0, output: 'object', tags, wires: [[]] },
+        { id: 'write', type: 'plcwire-write', ...at, connection: 'conn', tags, wires: [[]] },
+      ],
+    );
+    // The helper's log spy is made by load() and records what the nodes logged while being created.
+    const warnings = helper
+      .log()
+      .getCalls()
+      .map((c: any) => c.args[0])
+      .filter((e: any) => e && e.level === 30 && e.id);
+    expect(warnings.map((w: any) => [w.id, w.msg])).to.deep.equal([
+      ['read', 'tag name "speed" is given to rows 1, 3: give each row its own name'],
+      ['write', 'tag name "speed" is given to rows 1, 3: give each row its own name'],
+    ]);
   });
 });
