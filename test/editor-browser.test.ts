@@ -1,0 +1,189 @@
+/**
+ * The edit dialogs and deploy-time validation in a real browser: a real
+ * Node-RED (a child process with this package linked into its user
+ * directory, the way `npm install <folder>` does), a real S7 simulator, and
+ * headless Debian Chromium driven by playwright-core (installed by .ci/run).
+ */
+import { expect } from 'chai';
+import { spawn, type ChildProcess } from 'node:child_process';
+import * as fs from 'node:fs';
+import * as http from 'node:http';
+import * as os from 'node:os';
+import * as path from 'node:path';
+import type { Browser, BrowserContext, Page } from 'playwright-core';
+import { freePort } from './support/net';
+
+const ROOT = path.resolve(__dirname, '../..');
+const CHROMIUM = process.env.CHROMIUM_PATH ?? '/usr/bin/chromium';
+const LOCALES = { 'en-US': 'en-US', de: 'de-DE', 'zh-CN': 'zh-CN' } as const;
+type Locale = keyof typeof LOCALES;
+
+// eslint-disable-next-line @typescript-eslint/no-var-requires
+const lib = require(path.join(ROOT, 'dist/lib/index.js'));
+
+/** The flow the editor opens: nodes with and without configuration errors. */
+function testFlow(s7Port: number): object[] {
+  const at = (y: number) => ({ z: 'tab', x: 200, y, wires: [[]] });
+  const good = `s7://127.0.0.1:${s7Port}?rack=0&slot=1&timeout=1000`;
+  return [
+    { id: 'tab', type: 'tab', label: 'editor test' },
+    { id: 'conn-ok', type: 'plcwire-connection', name: 'plc', url: good },
+    { id: 'conn-bad', type: 'plcwire-connection', name: 'typo', url: 's7://127.0.0.1?rack=0&slott=1' },
+    { id: 'read-ok', type: 'plcwire-read', name: 'ok', ...at(40), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
+    { id: 'read-csv', type: 'plcwire-read', name: 'csv', ...at(100), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
+    { id: 'read-empty', type: 'plcwire-read', name: 'empty', ...at(160), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [] },
+    { id: 'read-badurl', type: 'plcwire-read', name: 'bad url', ...at(220), connection: 'conn-bad', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'a', address: 'DB1.DBW0:INT' }] },
+    { id: 'read-badtag', type: 'plcwire-read', name: 'bad tag', ...at(280), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'x', address: 'XYZ%' }] },
+    { id: 'read-dup', type: 'plcwire-read', name: 'dup', ...at(340), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 's', address: 'MW2' }, { name: 's', address: 'MW4' }] },
+    { id: 'write-badtag', type: 'plcwire-write', name: 'bad write', ...at(400), connection: 'conn-ok', tags: [{ name: 'w', address: 'DB1.DBX0' }] },
+    { id: 'hb-bad', type: 'plcwire-heartbeat', name: 'bad hb', ...at(460), connection: 'conn-ok', writeAddress: 'DB1.DBW2:REAL', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
+    { id: 'hb-ok', type: 'plcwire-heartbeat', name: 'hb', ...at(520), connection: 'conn-ok', writeAddress: 'DB1.DBW2:INT', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
+  ];
+}
+
+interface NodeRed {
+  url: string;
+  stop(): Promise<void>;
+}
+
+/** Node-RED 4 in a child process on a free port, with `flow` deployed; resolves once the flows have started. */
+async function startNodeRed(flow: object[]): Promise<NodeRed> {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-editor-'));
+  const port = await freePort();
+  fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
+  fs.symlinkSync(ROOT, path.join(dir, 'node_modules', '@plcwire', 'node-red-siemens'), 'dir');
+  fs.writeFileSync(path.join(dir, 'package.json'), JSON.stringify({ name: 'editor-test', private: true, dependencies: { '@plcwire/node-red-siemens': '*' } }));
+  fs.writeFileSync(path.join(dir, 'flows.json'), JSON.stringify(flow));
+  const settings = {
+    uiHost: '127.0.0.1',
+    uiPort: port,
+    flowFile: 'flows.json',
+    credentialSecret: false,
+    diagnostics: { enabled: false },
+    telemetry: { enabled: false },
+    editorTheme: { tours: false, projects: { enabled: false } },
+    logging: { console: { level: 'info', metrics: false, audit: false } },
+  };
+  fs.writeFileSync(path.join(dir, 'settings.js'), `module.exports = ${JSON.stringify(settings)};\n`);
+  const red = require.resolve('node-red/red.js', { paths: [ROOT] });
+  const child: ChildProcess = spawn(process.execPath, [red, '--userDir', dir, '--settings', path.join(dir, 'settings.js')], { cwd: dir, stdio: ['ignore', 'pipe', 'pipe'] });
+  let output = '';
+  child.stdout!.on('data', (d: Buffer) => (output += d.toString()));
+  child.stderr!.on('data', (d: Buffer) => (output += d.toString()));
+  const stop = async () => {
+    if (child.exitCode === null && child.signalCode === null) {
+      const exited = new Promise((r) => child.once('exit', r));
+      child.kill('SIGINT');
+      const force = setTimeout(() => child.kill('SIGKILL'), 5000);
+      await exited;
+      clearTimeout(force);
+    }
+    fs.rmSync(dir, { recursive: true, force: true });
+  };
+  const url = `http://127.0.0.1:${port}/`;
+  try {
+    await new Promise<void>((resolve, reject) => {
+      const deadline = Date.now() + 60_000;
+      const attempt = () => {
+        if (child.exitCode !== null) return reject(new Error(`Node-RED exited (${child.exitCode}):\n${output}`));
+        if (Date.now() > deadline) return reject(new Error(`Node-RED did not start within 60 s:\n${output}`));
+        if (!/Started flows/.test(output)) return void setTimeout(attempt, 100);
+        http
+          .get(`${url}flows`, (res) => {
+            res.resume();
+            if (res.statusCode === 200) resolve();
+            else setTimeout(attempt, 100);
+          })
+          .on('error', () => setTimeout(attempt, 100));
+      };
+      attempt();
+    });
+  } catch (err) {
+    await stop();
+    throw err;
+  }
+  return { url, stop };
+}
+
+describe('editor: the plcwire dialogs in headless Chromium', function () {
+  this.timeout(120_000);
+  let s7: any;
+  let red: NodeRed;
+  let browser: Browser;
+
+  before(async () => {
+    if (!fs.existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} not found: install Debian's chromium (done by .ci/run)`);
+    s7 = new lib.S7Server({ port: 0, memory: new lib.PlcMemory(), profile: 's7-1500' });
+    const port: number = await s7.listen();
+    red = await startNodeRed(testFlow(port));
+    const { chromium } = await import('playwright-core');
+    browser = await chromium.launch({
+      executablePath: CHROMIUM,
+      headless: true,
+      args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-quic', '--no-first-run', '--disable-component-update', '--disable-sync'],
+    });
+  });
+
+  after(async () => {
+    await browser?.close();
+    await red?.stop();
+    await s7?.close();
+  });
+
+  /** The editor in `locale`, with every page error collected. */
+  async function openEditor(locale: Locale = 'en-US'): Promise<{ context: BrowserContext; page: Page; errors: Error[] }> {
+    const context = await browser.newContext({ locale: LOCALES[locale] });
+    const page = await context.newPage();
+    const errors: Error[] = [];
+    page.on('pageerror', (err) => errors.push(err));
+    await page.goto(red.url, { waitUntil: 'domcontentloaded' });
+    await page.waitForFunction(() => (globalThis as any).RED?.nodes?.node('read-ok') && (globalThis as any).document.getElementById('read-ok'), undefined, { timeout: 30_000 });
+    return { context, page, errors };
+  }
+
+  describe('deploy-time validation with the library\'s parser', () => {
+    const INVALID = ['conn-bad', 'read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad'];
+
+    it('gives nodes with a config error the red triangle, and says why', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await page.waitForFunction((ids) => ids.every((id: string) => (globalThis as any).RED.nodes.node(id).valid === false), INVALID, { timeout: 10_000 });
+        const state = await page.evaluate(
+          (ids) =>
+            Object.fromEntries(
+              ids.map((id: string) => {
+                const n = (globalThis as any).RED.nodes.node(id);
+                const badge = (globalThis as any).document.querySelector(`[id="${id}"] .red-ui-flow-node-error`);
+                return [id, { valid: n.valid, errors: (n.validationErrors || []).join(' | '), triangle: badge ? !badge.classList.contains('hide') : null }];
+              }),
+            ),
+          [...INVALID, 'conn-ok', 'read-ok', 'read-csv', 'hb-ok'],
+        );
+        expect(state['conn-bad'].errors).to.include('unknown parameter "slott"');
+        expect(state['read-badtag'].errors).to.include('XYZ%');
+        expect(state['read-dup'].errors).to.include('"s"');
+        expect(state['write-badtag'].errors).to.include('DB1.DBX0');
+        expect(state['hb-bad'].errors).to.include('REAL');
+        for (const id of ['read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad']) expect(state[id].triangle, `${id} has the red triangle`).to.equal(true);
+        for (const id of ['conn-ok', 'read-ok', 'read-csv', 'hb-ok']) expect(state[id].valid, `${id}: ${state[id].errors}`).to.equal(true);
+        for (const id of ['read-ok', 'read-csv', 'hb-ok']) expect(state[id].triangle, `${id} has no red triangle`).to.equal(false);
+
+        // Deploy asks first, listing them (nothing is deployed: the test cancels).
+        await page.evaluate(() => (globalThis as any).RED.nodes.dirty(true));
+        await page.click('#red-ui-header-button-deploy');
+        const confirm = page.locator('.red-ui-notification', { has: page.locator('#red-ui-deploy-dialog-confirm-deploy-deploy') });
+        await confirm.waitFor({ state: 'visible', timeout: 10_000 });
+        const listed = await confirm.locator('.red-ui-deploy-dialog-confirm-list li').allInnerTexts();
+        // Node-RED lists five and counts the rest ("+ 1 more").
+        const more = Number(/^\+ (\d+)/.exec(listed[listed.length - 1] ?? '')?.[1] ?? 0);
+        expect(listed.length - (more > 0 ? 1 : 0) + more).to.equal(INVALID.length);
+        expect(listed[0]).to.equal('typo (plcwire-connection)');
+        expect(listed.filter((l) => l.includes('(plcwire-')).length).to.equal(Math.min(5, INVALID.length));
+        await confirm.getByRole('button', { name: 'Cancel' }).click();
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+  });
+});
