@@ -141,6 +141,24 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
     return { context, page, errors };
   }
 
+  /** Opens the edit dialog of node `id` and waits for its tag table. */
+  async function editTags(page: Page, id: string): Promise<void> {
+    await page.evaluate((nodeId) => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node(nodeId)), id);
+    await page.waitForSelector('#node-input-plcwire-tags .red-ui-editableList-item-content, .red-ui-editableList-addButton', { timeout: 10_000 });
+    await page.waitForSelector('#node-dialog-ok', { state: 'visible' });
+  }
+
+  /** Closes the open dialog with Done or Cancel and waits until its tray is gone. */
+  async function closeDialog(page: Page, button: 'ok' | 'cancel'): Promise<void> {
+    await page.click(`#node-dialog-${button}`);
+    await page.waitForSelector('#node-input-plcwire-tags', { state: 'detached', timeout: 10_000 });
+  }
+
+  /** Resolves once the page's timers of up to 300 ms set before now have fired (timers of shorter delay set earlier run first). */
+  const after300ms = (page: Page) => page.evaluate(() => new Promise((r) => setTimeout(r, 400)));
+
+  const tagsOf = (page: Page, id: string) => page.evaluate((nodeId) => (globalThis as any).RED.nodes.node(nodeId).tags, id);
+
   describe('deploy-time validation with the library\'s parser', () => {
     const INVALID = ['conn-bad', 'read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad'];
 
@@ -180,6 +198,46 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         expect(listed[0]).to.equal('typo (plcwire-connection)');
         expect(listed.filter((l) => l.includes('(plcwire-')).length).to.equal(Math.min(5, INVALID.length));
         await confirm.getByRole('button', { name: 'Cancel' }).click();
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+  });
+
+  describe('the tag table dialog', () => {
+    for (const button of ['ok', 'cancel'] as const) {
+      it(`a row typed and the dialog closed at once (${button === 'ok' ? 'Done' : 'Cancel'}) raises no error later`, async () => {
+        const { context, page, errors } = await openEditor();
+        try {
+          await editTags(page, 'read-ok');
+          await page.click('.red-ui-editableList-addButton');
+          const address = page.locator('#node-input-plcwire-tags .plcwire-tag-address').last();
+          await address.pressSequentially('DB1.DBW4:INT');
+          await closeDialog(page, button);
+          await after300ms(page);
+          expect(errors.map((e) => e.message)).to.deep.equal([]);
+          const tags = await tagsOf(page, 'read-ok');
+          expect(tags.map((t: any) => t.address)).to.deep.equal(button === 'ok' ? ['DB1.DBW0:INT', 'DB1.DBW4:INT'] : ['DB1.DBW0:INT']);
+        } finally {
+          await context.close();
+        }
+      });
+    }
+
+    it('the connection dialog keeps a field typed just before Done (the URL is built from the fields at once)', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn-ok'));
+        const slot = page.locator('#node-config-plcwire-slot');
+        await slot.waitFor({ state: 'visible' });
+        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-slot').value === '1');
+        await slot.fill('2');
+        await page.click('#node-config-dialog-ok');
+        await page.waitForSelector('#node-config-plcwire-slot', { state: 'detached', timeout: 10_000 });
+        await after300ms(page);
+        const url = await page.evaluate(() => (globalThis as any).RED.nodes.node('conn-ok').url);
+        expect(url).to.match(/[?&]slot=2(&|$)/);
         expect(errors).to.deep.equal([]);
       } finally {
         await context.close();
