@@ -105,6 +105,13 @@ async function startNodeRed(flow: object[]): Promise<NodeRed> {
   return { url, stop };
 }
 
+/** What a user should read for a catalog text of ours: its placeholders (in either syntax) filled in. */
+function catalogText(locale: Locale, key: string, params: Record<string, unknown> = {}): string {
+  const catalog = JSON.parse(fs.readFileSync(path.join(ROOT, 'nodes/locales', locale, 'read.json'), 'utf8'));
+  const template = String(key.split('.').reduce((o: any, k) => o?.[k], catalog));
+  return template.replace(/__(\w+)__|\{\{(\w+)\}\}/g, (_m, a?: string, b?: string) => String(params[(a ?? b)!]));
+}
+
 describe('editor: the plcwire dialogs in headless Chromium', function () {
   this.timeout(120_000);
   let s7: any;
@@ -243,5 +250,78 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         await context.close();
       }
     });
+
+    async function importCsv(page: Page, csv: string): Promise<void> {
+      await page.setInputFiles('.plcwire-tags-toolbar input[type=file]', { name: 'tags.csv', mimeType: 'text/csv', buffer: Buffer.from(csv) });
+    }
+
+    const rows = (page: Page) =>
+      page.$$eval('#node-input-plcwire-tags .plcwire-tag-row', (list) =>
+        list.map((r) => ({
+          name: (r.querySelector('.plcwire-tag-name') as any).value,
+          address: (r.querySelector('.plcwire-tag-address') as any).value,
+          duplicate: r.querySelector('.plcwire-tag-name')!.classList.contains('plcwire-invalid'),
+          type: r.querySelector('.plcwire-tag-type')!.textContent,
+        })),
+      );
+
+    it('imports CSV with a type column, appending or replacing as chosen, and flags names used twice', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await editTags(page, 'read-csv');
+        await importCsv(page, 'name,address,type\nspeed,DB1.DBW6,INT\nlevel,DB1.DBD8,REAL\n');
+        await page.waitForSelector('#plcwire-import-append');
+        await page.click('#plcwire-import-append');
+        await page.waitForFunction(() => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 3);
+        await page.waitForFunction(() => [...(globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-type')].every((e) => e.textContent !== ''));
+        expect(await rows(page)).to.deep.equal([
+          { name: 'speed', address: 'DB1.DBW0:INT', duplicate: true, type: 'INT' },
+          { name: 'speed', address: 'DB1.DBW6:INT', duplicate: true, type: 'INT' },
+          { name: 'level', address: 'DB1.DBD8:REAL', duplicate: false, type: 'REAL' },
+        ]);
+        await closeDialog(page, 'ok');
+        await page.waitForFunction(() => (globalThis as any).RED.nodes.node('read-csv').valid === false);
+
+        await editTags(page, 'read-csv');
+        await importCsv(page, 'speed;DB1.DBW6;INT\nlevel;DB1.DBD8;REAL\n');
+        await page.click('#plcwire-import-replace');
+        await page.waitForFunction(() => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 2);
+        expect((await rows(page)).map((r) => [r.name, r.address, r.duplicate])).to.deep.equal([
+          ['speed', 'DB1.DBW6:INT', false],
+          ['level', 'DB1.DBD8:REAL', false],
+        ]);
+        await closeDialog(page, 'ok');
+        await page.waitForFunction(() => (globalThis as any).RED.nodes.node('read-csv').valid === true);
+        expect(await tagsOf(page, 'read-csv')).to.deep.equal([
+          { name: 'speed', address: 'DB1.DBW6:INT' },
+          { name: 'level', address: 'DB1.DBD8:REAL' },
+        ]);
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+
+    for (const locale of Object.keys(LOCALES) as Locale[]) {
+      it(`${locale}: the import message shows the number of tags and names a row whose type does not fit; key status texts are translated`, async () => {
+        const { context, page, errors } = await openEditor(locale);
+        try {
+          // The canvas shows "connected" of a node of the working connection in the editor's language.
+          const connected = catalogText(locale, 'plcwire.status.connected');
+          await page.waitForFunction((text) => (globalThis as any).document.querySelector('[id="read-ok"] .red-ui-flow-node-status-label')?.textContent === text, connected, { timeout: 10_000 });
+          await editTags(page, 'read-empty');
+          await importCsv(page, 'a,MW2\nb,MW4\nc,MW6:INT,WORD\n');
+          const message = catalogText(locale, 'plcwire.editor.imported', { count: 3 });
+          await page.waitForFunction((text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification')].some((n) => n.textContent?.trim() === text), message, { timeout: 10_000 });
+          // The row whose type column contradicts its address is named, with its line.
+          const problem = catalogText(locale, 'plcwire.editor.line', { line: 3, message: '"MW6:INT" is INT, the type column says WORD' });
+          await page.waitForFunction((text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification li')].some((n) => n.textContent === text), problem, { timeout: 10_000 });
+          await closeDialog(page, 'cancel');
+          expect(errors).to.deep.equal([]);
+        } finally {
+          await context.close();
+        }
+      });
+    }
   });
 });
