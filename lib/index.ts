@@ -11,6 +11,7 @@ export * from './types';
 export * from './url';
 
 export { parseAddress, parseTypeSpec, formatAddress, type TypeSpec, type TagLocation } from './address';
+export { tagsFromCsv, tagsToCsv, addressWithType, duplicateNames, type TagRow, type CsvImport, type TagTableProblem, type TagTableProblemCode, type AddressParser } from './tags/table';
 export * as values from './values';
 export { decodeTag, encodeTag, encodeInto, validateValue, elementByteLength, tagByteLength } from './values';
 

@@ -48,9 +48,9 @@ module.exports = function (RED) {
       try {
         link = acquire(node.url, node);
       } catch (err) {
+        // Each user reports this to its own Catch nodes once the flows have started (see problemReport).
         node.problem = err;
         broadcast({ state: 'invalid', error: err });
-        reportError(err);
         return;
       }
       node.problem = undefined;
@@ -67,6 +67,18 @@ module.exports = function (RED) {
       held.off('link-error', reportError);
       return release(held, node);
     }
+
+    /**
+     * Why this connection cannot be opened, as the error its users report
+     * (naming the connection, with the parser's code) and their Catch message.
+     */
+    node.problemReport = function () {
+      const err = node.problem;
+      if (!err) return undefined;
+      const url = withoutCredentials(node.url);
+      const error = new plc.PlcError(err.code || 'INVALID_URL', `connection "${node.name || url}": ${err.message}`);
+      return { error, msg: { topic: node.name || url, payload: { url, state: 'invalid', code: error.code } } };
+    };
 
     node.register = function (user) {
       node.users[user.id] = user;
@@ -93,6 +105,23 @@ module.exports = function (RED) {
   const canRead = RED.auth.needsPermission('plcwire.read');
 
   /**
+   * The address parser of a URL's protocol (the client's own, which knows the
+   * URL's settings), or the S7 parser when no URL is given. `done()` frees it.
+   * { error } when the URL itself is invalid.
+   */
+  function parserFor(url) {
+    if (!url) return { parse: plc.parseAddress, done: () => undefined };
+    try {
+      const client = plc.createClient(String(url));
+      return { parse: (a) => client.tag(a), done: () => client.close().catch(() => undefined) };
+    } catch (err) {
+      return { error: err };
+    }
+  }
+
+  const urlAnswer = (err) => ({ ok: false, code: err.code, message: err.message });
+
+  /**
    * Address validation for the editor with the library's own parser (the
    * driver of the URL's protocol): POST { url?, addresses: [...] } →
    * { results: { address: { ok, type, count } | { ok: false, code, message } } }.
@@ -100,28 +129,37 @@ module.exports = function (RED) {
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
     const body = req.body || {};
     const addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 1000).map(String) : [];
-    let parse = plc.parseAddress;
-    let client;
-    if (body.url) {
-      try {
-        client = plc.createClient(String(body.url));
-        parse = (a) => client.tag(a);
-      } catch (err) {
-        res.json({ url: { ok: false, code: err.code, message: err.message }, results: {} });
-        return;
-      }
+    const parser = parserFor(body.url);
+    if (parser.error) {
+      res.json({ url: urlAnswer(parser.error), results: {} });
+      return;
     }
     const results = {};
     for (const address of addresses) {
       try {
-        const tag = parse(address);
+        const tag = parser.parse(address);
         results[address] = { ok: true, type: tag.type, count: tag.count };
       } catch (err) {
         results[address] = { ok: false, code: err.code || 'INVALID_ADDRESS', message: err.message };
       }
     }
-    if (client) client.close().catch(() => undefined);
+    parser.done();
     res.json({ url: { ok: true }, results });
+  });
+
+  /**
+   * CSV import for the tag table: POST { url?, text } → { url, tags: [{ name, address }],
+   * problems: [{ line, code, name, address, message }] }, a type column checked
+   * with the parser of the URL's protocol (the S7 parser when the URL is invalid).
+   */
+  RED.httpAdmin.post('/plcwire/csv', canRead, function (req, res) {
+    const body = req.body || {};
+    let parser = parserFor(body.url);
+    const url = parser.error ? urlAnswer(parser.error) : { ok: true };
+    if (parser.error) parser = parserFor(undefined);
+    const { tags, problems } = plc.tagsFromCsv(String(body.text || ''), parser.parse);
+    parser.done();
+    res.json({ url, tags, problems });
   });
 
   /** URL ⇄ fields for the edit dialog, with the library's own parser and formatter. */

@@ -1,7 +1,7 @@
 'use strict';
 const { attach, settleWithin } = require('./shared/user');
 const { LifeSignWatch, nextLifeSign } = require('./shared/lifesign');
-const { linkStatus } = require('./shared/status');
+const { linkStatus, sentStatus, aliveStatus, lostStatus, waitingStatus } = require('./shared/status');
 
 /**
  * plcwire-heartbeat: every `interval` ms writes the PC's life sign
@@ -34,16 +34,16 @@ module.exports = function (RED) {
 
     function showState() {
       if (!watch) {
-        if (node.linkState === 'connected') node.status({ fill: 'green', shape: 'dot', text: RED._('plcwire.status.sent', { n: written }) });
+        if (node.linkState === 'connected') node.status(sentStatus(RED._, written));
         else node.status(linkStatus(RED._, { state: node.linkState }));
         return;
       }
       if (watch.state === 'lost') {
-        node.status({ fill: 'red', shape: 'dot', text: RED._('plcwire.status.lost', { s: Math.round(watch.age / 1000) }) });
+        node.status(lostStatus(RED._, watch.age));
       } else if (watch.state === 'alive' && node.linkState === 'connected') {
-        node.status({ fill: 'green', shape: 'dot', text: RED._('plcwire.status.alive', { n: watch.changes }) });
+        node.status(aliveStatus(RED._, watch.changes));
       } else if (node.linkState === 'connected') {
-        node.status({ fill: 'yellow', shape: 'ring', text: 'plcwire.status.waiting' });
+        node.status(waitingStatus());
       }
     }
 

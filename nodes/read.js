@@ -1,6 +1,7 @@
 'use strict';
-const { attach, settleWithin, noConnectionError } = require('./shared/user');
+const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
 const { tagTable, tagsOfMessage, outcomes, ChangeFilter, codeError } = require('./shared/tags');
+const { tagErrorsStatus } = require('./shared/status');
 
 /** Reads waiting behind the running one at most; more is an error, not memory growth. */
 const MAX_WAITING_READS = 100;
@@ -20,6 +21,7 @@ module.exports = function (RED) {
     RED.nodes.createNode(this, config);
     const node = this;
     const tags = tagTable(config.tags);
+    warnDuplicateNames(RED, node, tags);
     const interval = Math.max(0, Number(config.interval) || 0);
     const output = ['object', 'per-tag', 'changes'].includes(config.output) ? config.output : 'object';
     const changes = new ChangeFilter(config.deadband);
@@ -70,7 +72,7 @@ module.exports = function (RED) {
     function showQuality(list) {
       const bad = list.filter((o) => !o.ok).length;
       failing = bad > 0;
-      if (failing) node.status({ fill: 'yellow', shape: 'dot', text: RED._('plcwire.status.tagErrors', { n: bad }) });
+      if (failing) node.status(tagErrorsStatus(RED._, bad));
       else if (connection) connection.showLink();
     }
 

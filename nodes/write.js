@@ -1,5 +1,5 @@
 'use strict';
-const { attach, settleWithin, noConnectionError } = require('./shared/user');
+const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
 const { tagTable, writeRequest, errorInfo } = require('./shared/tags');
 
 /**
@@ -12,6 +12,7 @@ module.exports = function (RED) {
     RED.nodes.createNode(this, config);
     const node = this;
     const table = tagTable(config.tags);
+    warnDuplicateNames(RED, node, table);
     let closing = false;
 
     const connection = attach(RED, node, config.connection);

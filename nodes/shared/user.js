@@ -1,6 +1,7 @@
 'use strict';
 /** What the read, write and heartbeat nodes share: attaching to a connection and settling close in time. */
 const { linkStatus } = require('./status');
+const { plc } = require('./links');
 
 /** Close handlers must call done within a few seconds whatever happens (the runtime gives up at 15 s). */
 const CLOSE_DEADLINE_MS = 2000;
@@ -29,6 +30,13 @@ function attach(RED, node, connectionId, onStatus) {
     if (!onStatus || onStatus(status) !== false) show(status);
   };
   config.register(node);
+  const problem = typeof config.problemReport === 'function' ? config.problemReport() : undefined;
+  if (problem) {
+    whenStarted(RED, node, () => {
+      node.onLinkStatus(config.linkStatus);
+      node.error(problem.error, problem.msg);
+    });
+  }
   return {
     config,
     /** The shared client, or undefined when the connection could not be opened. */
@@ -44,6 +52,27 @@ function attach(RED, node, connectionId, onStatus) {
   };
 }
 
+/**
+ * Runs `report` once the flows have started. While they start, the runtime
+ * has not yet collected a tab's Catch and Status nodes (it does so after
+ * creating all of its nodes): an error or status of a node being created
+ * reaches none of them.
+ */
+function whenStarted(RED, node, report) {
+  RED.events.once('flows:started', report);
+  node.on('close', () => RED.events.removeListener('flows:started', report));
+}
+
+/**
+ * Warns about every tag name the table gives to more than one row: in object
+ * output only one of their values could arrive, and a write by name reaches one of them.
+ */
+function warnDuplicateNames(RED, node, table) {
+  for (const { name, rows } of plc.duplicateNames(table)) {
+    node.warn(RED._('plcwire.errors.duplicateName', { name, rows: rows.map((i) => i + 1).join(', ') }));
+  }
+}
+
 /** The error a node reports when no connection node is configured. */
 function noConnectionError(RED) {
   const err = new Error(RED._('plcwire.errors.noConnection'));
@@ -51,4 +80,4 @@ function noConnectionError(RED) {
   return err;
 }
 
-module.exports = { attach, settleWithin, noConnectionError, CLOSE_DEADLINE_MS };
+module.exports = { attach, settleWithin, noConnectionError, warnDuplicateNames, CLOSE_DEADLINE_MS };

@@ -51,10 +51,31 @@ describe('nodes: editor endpoints', function () {
     expect(wrong.body).to.include({ ok: false, code: 'INVALID_URL' });
   });
 
+  it('imports CSV with the parser of the connection URL: the type column, names used twice', async () => {
+    await helper.load(ALL_NODES, []);
+    const s7 = await helper
+      .request()
+      .post('/plcwire/csv')
+      .send({ url: 's7://10.0.0.1?rack=0&slot=1', text: 'name,address,type\nspeed,DB1.DBW6,INT\nlevel,DB1.DBD8,REAL\nspeed,MW2,\n' })
+      .expect(200);
+    expect(s7.body.tags).to.deep.equal([
+      { name: 'speed', address: 'DB1.DBW6:INT' },
+      { name: 'level', address: 'DB1.DBD8:REAL' },
+      { name: 'speed', address: 'MW2' },
+    ]);
+    expect(s7.body.problems.map((p: any) => [p.line, p.code])).to.deep.equal([[4, 'DUPLICATE_NAME']]);
+    const freeport = await helper.request().post('/plcwire/csv').send({ url: 'freeport+tcp://10.0.0.1:4001', text: 'a;ST5,INT2;INT\nb;ST5,BYTE1;INT\n' }).expect(200);
+    expect(freeport.body.tags).to.deep.equal([{ name: 'a', address: 'ST5,INT2' }, { name: 'b', address: 'ST5,BYTE1' }]);
+    expect(freeport.body.problems.map((p: any) => [p.line, p.code])).to.deep.equal([[2, 'TYPE_MISMATCH']]);
+    const bad = await helper.request().post('/plcwire/csv').send({ url: 's7://host?rakc=0', text: 'MW2' }).expect(200);
+    expect(bad.body.url).to.include({ ok: false, code: 'INVALID_URL' });
+    expect(bad.body.tags).to.deep.equal([{ name: '', address: 'MW2' }]);
+  });
+
   it('asks for the plcwire.read permission', () => {
     const source = fs.readFileSync(path.join(ROOT, 'nodes/connection.js'), 'utf8');
     const routes = source.match(/RED\.httpAdmin\.(get|post)\([^)]*\)/g) ?? [];
-    expect(routes.length).to.equal(3);
+    expect(routes.length).to.equal(4);
     for (const r of routes) expect(r).to.include('canRead');
     expect(source).to.include("RED.auth.needsPermission('plcwire.read')");
   });

@@ -305,6 +305,7 @@ process.on('SIGTERM', () => RED.stop().then(() => process.exit(0)));
   const ENDPOINTS: [string, string, object | undefined][] = [
     ['POST', '/admin/plcwire/validate', { addresses: ['DB1,INT0'] }],
     ['POST', '/admin/plcwire/url', { url: 's7://127.0.0.1' }],
+    ['POST', '/admin/plcwire/csv', { text: 'MW2' }],
     ['GET', '/admin/plcwire/serialports', undefined],
   ];
 

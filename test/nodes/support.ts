@@ -9,7 +9,7 @@ import * as path from 'node:path';
 export const ROOT = path.resolve(__dirname, '../../..');
 const NODES_DIR = path.join(ROOT, 'nodes') + path.sep;
 const LIB_DIR = path.join(ROOT, 'dist', 'lib') + path.sep;
-const RED_PATH = require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red');
+export const RED_PATH = require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red');
 const CORE = path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(RED_PATH)] }));
 
 // eslint-disable-next-line @typescript-eslint/no-var-requires

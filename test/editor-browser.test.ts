@@ -1,0 +1,327 @@
+/**
+ * The edit dialogs and deploy-time validation in a real browser: a real
+ * Node-RED (a child process with this package linked into its user
+ * directory, the way `npm install <folder>` does), a real S7 simulator, and
+ * headless Debian Chromium driven by playwright-core (installed by .ci/run).
+ */
+import { expect } from 'chai';
+import { spawn, type ChildProcess } from 'node:child_process';
+import * as fs from 'node:fs';
+import * as http from 'node:http';
+import * as os from 'node:os';
+import * as path from 'node:path';
+import type { Browser, BrowserContext, Page } from 'playwright-core';
+import { freePort } from './support/net';
+
+const ROOT = path.resolve(__dirname, '../..');
+const CHROMIUM = process.env.CHROMIUM_PATH ?? '/usr/bin/chromium';
+const LOCALES = { 'en-US': 'en-US', de: 'de-DE', 'zh-CN': 'zh-CN' } as const;
+type Locale = keyof typeof LOCALES;
+
+// eslint-disable-next-line @typescript-eslint/no-var-requires
+const lib = require(path.join(ROOT, 'dist/lib/index.js'));
+
+/** The flow the editor opens: nodes with and without configuration errors. */
+function testFlow(s7Port: number): object[] {
+  const at = (y: number) => ({ z: 'tab', x: 200, y, wires: [[]] });
+  const good = `s7://127.0.0.1:${s7Port}?rack=0&slot=1&timeout=1000`;
+  return [
+    { id: 'tab', type: 'tab', label: 'editor test' },
+    { id: 'conn-ok', type: 'plcwire-connection', name: 'plc', url: good },
+    { id: 'conn-bad', type: 'plcwire-connection', name: 'typo', url: 's7://127.0.0.1?rack=0&slott=1' },
+    { id: 'read-ok', type: 'plcwire-read', name: 'ok', ...at(40), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
+    { id: 'read-csv', type: 'plcwire-read', name: 'csv', ...at(100), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
+    { id: 'read-empty', type: 'plcwire-read', name: 'empty', ...at(160), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [] },
+    { id: 'read-badurl', type: 'plcwire-read', name: 'bad url', ...at(220), connection: 'conn-bad', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'a', address: 'DB1.DBW0:INT' }] },
+    { id: 'read-badtag', type: 'plcwire-read', name: 'bad tag', ...at(280), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'x', address: 'XYZ%' }] },
+    { id: 'read-dup', type: 'plcwire-read', name: 'dup', ...at(340), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 's', address: 'MW2' }, { name: 's', address: 'MW4' }] },
+    { id: 'write-badtag', type: 'plcwire-write', name: 'bad write', ...at(400), connection: 'conn-ok', tags: [{ name: 'w', address: 'DB1.DBX0' }] },
+    { id: 'hb-bad', type: 'plcwire-heartbeat', name: 'bad hb', ...at(460), connection: 'conn-ok', writeAddress: 'DB1.DBW2:REAL', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
+    { id: 'hb-ok', type: 'plcwire-heartbeat', name: 'hb', ...at(520), connection: 'conn-ok', writeAddress: 'DB1.DBW2:INT', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
+  ];
+}
+
+interface NodeRed {
+  url: string;
+  stop(): Promise<void>;
+}
+
+/** Node-RED 4 in a child process on a free port, with `flow` deployed; resolves once the flows have started. */
+async function startNodeRed(flow: object[]): Promise<NodeRed> {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-editor-'));
+  const port = await freePort();
+  fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
+  fs.symlinkSync(ROOT, path.join(dir, 'node_modules', '@plcwire', 'node-red-siemens'), 'dir');
+  fs.writeFileSync(path.join(dir, 'package.json'), JSON.stringify({ name: 'editor-test', private: true, dependencies: { '@plcwire/node-red-siemens': '*' } }));
+  fs.writeFileSync(path.join(dir, 'flows.json'), JSON.stringify(flow));
+  const settings = {
+    uiHost: '127.0.0.1',
+    uiPort: port,
+    flowFile: 'flows.json',
+    credentialSecret: false,
+    diagnostics: { enabled: false },
+    telemetry: { enabled: false },
+    editorTheme: { tours: false, projects: { enabled: false } },
+    logging: { console: { level: 'info', metrics: false, audit: false } },
+  };
+  fs.writeFileSync(path.join(dir, 'settings.js'), `module.exports = ${JSON.stringify(settings)};\n`);
+  const red = require.resolve('node-red/red.js', { paths: [ROOT] });
+  const child: ChildProcess = spawn(process.execPath, [red, '--userDir', dir, '--settings', path.join(dir, 'settings.js')], { cwd: dir, stdio: ['ignore', 'pipe', 'pipe'] });
+  let output = '';
+  child.stdout!.on('data', (d: Buffer) => (output += d.toString()));
+  child.stderr!.on('data', (d: Buffer) => (output += d.toString()));
+  const stop = async () => {
+    if (child.exitCode === null && child.signalCode === null) {
+      const exited = new Promise((r) => child.once('exit', r));
+      child.kill('SIGINT');
+      const force = setTimeout(() => child.kill('SIGKILL'), 5000);
+      await exited;
+      clearTimeout(force);
+    }
+    fs.rmSync(dir, { recursive: true, force: true });
+  };
+  const url = `http://127.0.0.1:${port}/`;
+  try {
+    await new Promise<void>((resolve, reject) => {
+      const deadline = Date.now() + 60_000;
+      const attempt = () => {
+        if (child.exitCode !== null) return reject(new Error(`Node-RED exited (${child.exitCode}):\n${output}`));
+        if (Date.now() > deadline) return reject(new Error(`Node-RED did not start within 60 s:\n${output}`));
+        if (!/Started flows/.test(output)) return void setTimeout(attempt, 100);
+        http
+          .get(`${url}flows`, (res) => {
+            res.resume();
+            if (res.statusCode === 200) resolve();
+            else setTimeout(attempt, 100);
+          })
+          .on('error', () => setTimeout(attempt, 100));
+      };
+      attempt();
+    });
+  } catch (err) {
+    await stop();
+    throw err;
+  }
+  return { url, stop };
+}
+
+/** What a user should read for a catalog text of ours: its placeholders (in either syntax) filled in. */
+function catalogText(locale: Locale, key: string, params: Record<string, unknown> = {}): string {
+  const catalog = JSON.parse(fs.readFileSync(path.join(ROOT, 'nodes/locales', locale, 'read.json'), 'utf8'));
+  const template = String(key.split('.').reduce((o: any, k) => o?.[k], catalog));
+  return template.replace(/__(\w+)__|\{\{(\w+)\}\}/g, (_m, a?: string, b?: string) => String(params[(a ?? b)!]));
+}
+
+describe('editor: the plcwire dialogs in headless Chromium', function () {
+  this.timeout(120_000);
+  let s7: any;
+  let red: NodeRed;
+  let browser: Browser;
+
+  before(async () => {
+    if (!fs.existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} not found: install Debian's chromium (done by .ci/run)`);
+    s7 = new lib.S7Server({ port: 0, memory: new lib.PlcMemory(), profile: 's7-1500' });
+    const port: number = await s7.listen();
+    red = await startNodeRed(testFlow(port));
+    const { chromium } = await import('playwright-core');
+    browser = await chromium.launch({
+      executablePath: CHROMIUM,
+      headless: true,
+      args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-quic', '--no-first-run', '--disable-component-update', '--disable-sync'],
+    });
+  });
+
+  after(async () => {
+    await browser?.close();
+    await red?.stop();
+    await s7?.close();
+  });
+
+  /** The editor in `locale`, with every page error collected. */
+  async function openEditor(locale: Locale = 'en-US'): Promise<{ context: BrowserContext; page: Page; errors: Error[] }> {
+    const context = await browser.newContext({ locale: LOCALES[locale] });
+    const page = await context.newPage();
+    const errors: Error[] = [];
+    page.on('pageerror', (err) => errors.push(err));
+    await page.goto(red.url, { waitUntil: 'domcontentloaded' });
+    await page.waitForFunction(() => (globalThis as any).RED?.nodes?.node('read-ok') && (globalThis as any).document.getElementById('read-ok'), undefined, { timeout: 30_000 });
+    return { context, page, errors };
+  }
+
+  /** Opens the edit dialog of node `id` and waits for its tag table. */
+  async function editTags(page: Page, id: string): Promise<void> {
+    await page.evaluate((nodeId) => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node(nodeId)), id);
+    await page.waitForSelector('#node-input-plcwire-tags .red-ui-editableList-item-content, .red-ui-editableList-addButton', { timeout: 10_000 });
+    await page.waitForSelector('#node-dialog-ok', { state: 'visible' });
+  }
+
+  /** Closes the open dialog with Done or Cancel and waits until its tray is gone. */
+  async function closeDialog(page: Page, button: 'ok' | 'cancel'): Promise<void> {
+    await page.click(`#node-dialog-${button}`);
+    await page.waitForSelector('#node-input-plcwire-tags', { state: 'detached', timeout: 10_000 });
+  }
+
+  /** Resolves once the page's timers of up to 300 ms set before now have fired (timers of shorter delay set earlier run first). */
+  const after300ms = (page: Page) => page.evaluate(() => new Promise((r) => setTimeout(r, 400)));
+
+  const tagsOf = (page: Page, id: string) => page.evaluate((nodeId) => (globalThis as any).RED.nodes.node(nodeId).tags, id);
+
+  describe('deploy-time validation with the library\'s parser', () => {
+    const INVALID = ['conn-bad', 'read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad'];
+
+    it('gives nodes with a config error the red triangle, and says why', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await page.waitForFunction((ids) => ids.every((id: string) => (globalThis as any).RED.nodes.node(id).valid === false), INVALID, { timeout: 10_000 });
+        const state = await page.evaluate(
+          (ids) =>
+            Object.fromEntries(
+              ids.map((id: string) => {
+                const n = (globalThis as any).RED.nodes.node(id);
+                const badge = (globalThis as any).document.querySelector(`[id="${id}"] .red-ui-flow-node-error`);
+                return [id, { valid: n.valid, errors: (n.validationErrors || []).join(' | '), triangle: badge ? !badge.classList.contains('hide') : null }];
+              }),
+            ),
+          [...INVALID, 'conn-ok', 'read-ok', 'read-csv', 'hb-ok'],
+        );
+        expect(state['conn-bad'].errors).to.include('unknown parameter "slott"');
+        expect(state['read-badtag'].errors).to.include('XYZ%');
+        expect(state['read-dup'].errors).to.include('"s"');
+        expect(state['write-badtag'].errors).to.include('DB1.DBX0');
+        expect(state['hb-bad'].errors).to.include('REAL');
+        for (const id of ['read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad']) expect(state[id].triangle, `${id} has the red triangle`).to.equal(true);
+        for (const id of ['conn-ok', 'read-ok', 'read-csv', 'hb-ok']) expect(state[id].valid, `${id}: ${state[id].errors}`).to.equal(true);
+        for (const id of ['read-ok', 'read-csv', 'hb-ok']) expect(state[id].triangle, `${id} has no red triangle`).to.equal(false);
+
+        // Deploy asks first, listing them (nothing is deployed: the test cancels).
+        await page.evaluate(() => (globalThis as any).RED.nodes.dirty(true));
+        await page.click('#red-ui-header-button-deploy');
+        const confirm = page.locator('.red-ui-notification', { has: page.locator('#red-ui-deploy-dialog-confirm-deploy-deploy') });
+        await confirm.waitFor({ state: 'visible', timeout: 10_000 });
+        const listed = await confirm.locator('.red-ui-deploy-dialog-confirm-list li').allInnerTexts();
+        // Node-RED lists five and counts the rest ("+ 1 more").
+        const more = Number(/^\+ (\d+)/.exec(listed[listed.length - 1] ?? '')?.[1] ?? 0);
+        expect(listed.length - (more > 0 ? 1 : 0) + more).to.equal(INVALID.length);
+        expect(listed[0]).to.equal('typo (plcwire-connection)');
+        expect(listed.filter((l) => l.includes('(plcwire-')).length).to.equal(Math.min(5, INVALID.length));
+        await confirm.getByRole('button', { name: 'Cancel' }).click();
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+  });
+
+  describe('the tag table dialog', () => {
+    for (const button of ['ok', 'cancel'] as const) {
+      it(`a row typed and the dialog closed at once (${button === 'ok' ? 'Done' : 'Cancel'}) raises no error later`, async () => {
+        const { context, page, errors } = await openEditor();
+        try {
+          await editTags(page, 'read-ok');
+          await page.click('.red-ui-editableList-addButton');
+          const address = page.locator('#node-input-plcwire-tags .plcwire-tag-address').last();
+          await address.pressSequentially('DB1.DBW4:INT');
+          await closeDialog(page, button);
+          await after300ms(page);
+          expect(errors.map((e) => e.message)).to.deep.equal([]);
+          const tags = await tagsOf(page, 'read-ok');
+          expect(tags.map((t: any) => t.address)).to.deep.equal(button === 'ok' ? ['DB1.DBW0:INT', 'DB1.DBW4:INT'] : ['DB1.DBW0:INT']);
+        } finally {
+          await context.close();
+        }
+      });
+    }
+
+    it('the connection dialog keeps a field typed just before Done (the URL is built from the fields at once)', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn-ok'));
+        const slot = page.locator('#node-config-plcwire-slot');
+        await slot.waitFor({ state: 'visible' });
+        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-slot').value === '1');
+        await slot.fill('2');
+        await page.click('#node-config-dialog-ok');
+        await page.waitForSelector('#node-config-plcwire-slot', { state: 'detached', timeout: 10_000 });
+        await after300ms(page);
+        const url = await page.evaluate(() => (globalThis as any).RED.nodes.node('conn-ok').url);
+        expect(url).to.match(/[?&]slot=2(&|$)/);
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+
+    async function importCsv(page: Page, csv: string): Promise<void> {
+      await page.setInputFiles('.plcwire-tags-toolbar input[type=file]', { name: 'tags.csv', mimeType: 'text/csv', buffer: Buffer.from(csv) });
+    }
+
+    const rows = (page: Page) =>
+      page.$$eval('#node-input-plcwire-tags .plcwire-tag-row', (list) =>
+        list.map((r) => ({
+          name: (r.querySelector('.plcwire-tag-name') as any).value,
+          address: (r.querySelector('.plcwire-tag-address') as any).value,
+          duplicate: r.querySelector('.plcwire-tag-name')!.classList.contains('plcwire-invalid'),
+          type: r.querySelector('.plcwire-tag-type')!.textContent,
+        })),
+      );
+
+    it('imports CSV with a type column, appending or replacing as chosen, and flags names used twice', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await editTags(page, 'read-csv');
+        await importCsv(page, 'name,address,type\nspeed,DB1.DBW6,INT\nlevel,DB1.DBD8,REAL\n');
+        await page.waitForSelector('#plcwire-import-append');
+        await page.click('#plcwire-import-append');
+        await page.waitForFunction(() => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 3);
+        await page.waitForFunction(() => [...(globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-type')].every((e) => e.textContent !== ''));
+        expect(await rows(page)).to.deep.equal([
+          { name: 'speed', address: 'DB1.DBW0:INT', duplicate: true, type: 'INT' },
+          { name: 'speed', address: 'DB1.DBW6:INT', duplicate: true, type: 'INT' },
+          { name: 'level', address: 'DB1.DBD8:REAL', duplicate: false, type: 'REAL' },
+        ]);
+        await closeDialog(page, 'ok');
+        await page.waitForFunction(() => (globalThis as any).RED.nodes.node('read-csv').valid === false);
+
+        await editTags(page, 'read-csv');
+        await importCsv(page, 'speed;DB1.DBW6;INT\nlevel;DB1.DBD8;REAL\n');
+        await page.click('#plcwire-import-replace');
+        await page.waitForFunction(() => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 2);
+        expect((await rows(page)).map((r) => [r.name, r.address, r.duplicate])).to.deep.equal([
+          ['speed', 'DB1.DBW6:INT', false],
+          ['level', 'DB1.DBD8:REAL', false],
+        ]);
+        await closeDialog(page, 'ok');
+        await page.waitForFunction(() => (globalThis as any).RED.nodes.node('read-csv').valid === true);
+        expect(await tagsOf(page, 'read-csv')).to.deep.equal([
+          { name: 'speed', address: 'DB1.DBW6:INT' },
+          { name: 'level', address: 'DB1.DBD8:REAL' },
+        ]);
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+
+    for (const locale of Object.keys(LOCALES) as Locale[]) {
+      it(`${locale}: the import message shows the number of tags and names a row whose type does not fit; key status texts are translated`, async () => {
+        const { context, page, errors } = await openEditor(locale);
+        try {
+          // The canvas shows "connected" of a node of the working connection in the editor's language.
+          const connected = catalogText(locale, 'plcwire.status.connected');
+          await page.waitForFunction((text) => (globalThis as any).document.querySelector('[id="read-ok"] .red-ui-flow-node-status-label')?.textContent === text, connected, { timeout: 10_000 });
+          await editTags(page, 'read-empty');
+          await importCsv(page, 'a,MW2\nb,MW4\nc,MW6:INT,WORD\n');
+          const message = catalogText(locale, 'plcwire.editor.imported', { count: 3 });
+          await page.waitForFunction((text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification')].some((n) => n.textContent?.trim() === text), message, { timeout: 10_000 });
+          // The row whose type column contradicts its address is named, with its line.
+          const problem = catalogText(locale, 'plcwire.editor.line', { line: 3, message: '"MW6:INT" is INT, the type column says WORD' });
+          await page.waitForFunction((text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification li')].some((n) => n.textContent === text), problem, { timeout: 10_000 });
+          await closeDialog(page, 'cancel');
+          expect(errors).to.deep.equal([]);
+        } finally {
+          await context.close();
+        }
+      });
+    }
+  });
+});

@@ -1,0 +1,193 @@
+/**
+ * What users read: the message catalogs and the status texts as Node-RED
+ * renders them, in every locale, from the real catalogs (the test helper's
+ * `RED._` is the identity, so only these tests see the rendered text).
+ */
+import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+import { freePort } from '../support/net';
+import { catalogFiles, LOCALES, loadCatalogs, rawCatalog, withCatalog, type Catalogs, type Locale } from './catalogs';
+import { s7Sim } from './sims';
+import { helper, nodes, Recorder, ROOT, type Sim } from './support';
+
+const status = require(path.join(ROOT, 'nodes/shared/status.js'));
+
+/** Types whose nodes show a status (the config node shows none). */
+const SHOWN_BY = ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat'];
+
+/** Every key of a catalog, flattened: "plcwire.status.connected". */
+function keysOf(catalog: object, prefix = ''): string[] {
+  return Object.entries(catalog).flatMap(([k, v]) => (v && typeof v === 'object' ? keysOf(v, `${prefix}${k}.`) : [`${prefix}${k}`]));
+}
+
+function valueAt(catalog: any, key: string): unknown {
+  return key.split('.').reduce((o, k) => (o == null ? undefined : o[k]), catalog);
+}
+
+/** A status text is an i18n key when it has the shape of one; the editor translates those with the node's catalog. */
+const isKey = (text: string) => /^plcwire\.[\w.-]+$/.test(text);
+
+/** Every status the nodes show, built with `t`, and the numbers each must show. */
+function everyStatus(t: (key: string, params?: object) => string): { what: string; status: { fill: string; shape: string; text: string }; numbers: number[] }[] {
+  const list = [
+    ...['connected', 'connecting', 'closed', 'invalid', 'unconfigured'].map((state) => ({ what: state, status: status.linkStatus(t, { state }), numbers: [] })),
+    { what: 'reconnecting 0.5 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 500 }), numbers: [1] },
+    { what: 'reconnecting 30 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 30_000 }), numbers: [30] },
+    { what: 'waiting', status: status.waitingStatus(), numbers: [] },
+  ];
+  for (const n of [1, 999]) list.push({ what: `${n} tag errors`, status: status.tagErrorsStatus(t, n), numbers: [n] });
+  // A year of one life sign per second.
+  for (const n of [1, 31_536_000]) {
+    list.push({ what: `sent ${n}`, status: status.sentStatus(t, n), numbers: [n] });
+    list.push({ what: `alive ${n}`, status: status.aliveStatus(t, n), numbers: [n] });
+  }
+  for (const ms of [3_000, 86_400_000]) list.push({ what: `lost ${ms} ms`, status: status.lostStatus(t, ms), numbers: [ms / 1000] });
+  return list;
+}
+
+describe('nodes: message catalogs', () => {
+  it('no catalog writes a placeholder as {{name}}: Node-RED interpolates __name__ and shows {{name}} raw', () => {
+    const files = catalogFiles().filter((f) => f.endsWith('.json'));
+    expect(files.length).to.equal(12);
+    for (const file of files) {
+      const text = fs.readFileSync(path.join(ROOT, file), 'utf8');
+      expect(text.match(/\{\{[^}]*\}\}/g), file).to.equal(null);
+    }
+  });
+
+  it('every locale has exactly the keys of en-US, with the same placeholders', () => {
+    for (const type of Object.keys(JSON.parse(fs.readFileSync(path.join(ROOT, 'package.json'), 'utf8'))['node-red'].nodes)) {
+      const en = rawCatalog('en-US', type);
+      for (const locale of LOCALES) {
+        const other = rawCatalog(locale, type);
+        expect(keysOf(other).sort(), `${locale} ${type}`).to.deep.equal(keysOf(en).sort());
+        for (const key of keysOf(en)) {
+          const placeholders = (s: unknown) => (String(s).match(/__\w+__/g) ?? []).sort();
+          expect(placeholders(valueAt(other, key)), `${locale} ${type} ${key}`).to.deep.equal(placeholders(valueAt(en, key)));
+        }
+      }
+    }
+  });
+
+  it('every key the nodes and dialogs name exists in the catalog that renders it', () => {
+    const dir = path.join(ROOT, 'nodes');
+    const sources = [...fs.readdirSync(dir).filter((f) => /\.(js|html)$/.test(f)), ...fs.readdirSync(path.join(dir, 'shared')).map((f) => `shared/${f}`)];
+    const types = ['plcwire-connection', ...SHOWN_BY];
+    let checked = 0;
+    for (const file of sources) {
+      const text = fs.readFileSync(path.join(dir, file), 'utf8');
+      for (const [, key] of text.matchAll(/\b(plcwire(?:-[a-z]+)?(?:\.[A-Za-z][\w-]*){2,})\b/g)) {
+        const [prefix] = key!.split('.');
+        // The shared "plcwire" section is in every node file's catalog: a shared key can be rendered by any node.
+        for (const type of prefix === 'plcwire' ? types : [prefix!]) {
+          expect(valueAt(rawCatalog('en-US', type), key!), `${file}: ${key} in ${type}`).to.be.a('string');
+          checked++;
+        }
+      }
+    }
+    expect(checked).to.be.greaterThan(50);
+  });
+});
+
+describe('nodes: status texts as Node-RED renders them', function () {
+  this.timeout(20000);
+  let catalogs: Catalogs;
+
+  before(async () => {
+    catalogs = await loadCatalogs();
+  });
+
+  for (const locale of LOCALES) {
+    it(`${locale}: every status text is translated, shows its number and stays under 20 characters`, () => {
+      for (const type of SHOWN_BY) {
+        const t = catalogs.translator(locale, type);
+        for (const { what, status: s, numbers } of everyStatus(t)) {
+          const text = isKey(s.text) ? t(s.text) : s.text;
+          const label = `${locale} ${type} ${what}: "${text}"`;
+          expect(text, label).not.to.match(/\{\{|\}\}|__|^plcwire/);
+          for (const n of numbers) expect(text, label).to.include(String(n));
+          expect([...text].length, label).to.be.lessThan(20);
+        }
+      }
+    });
+  }
+
+  it('the README lists exactly the status texts the nodes show in en-US', () => {
+    const readme = fs.readFileSync(path.join(ROOT, 'README.md'), 'utf8');
+    const section = readme.slice(readme.indexOf('## Node-RED'), readme.indexOf('\n## ', readme.indexOf('## Node-RED') + 1));
+    const documented = new Set([...section.matchAll(/^\| (\w+ (?:dot|ring)) \*([^*]+)\* \|/gm)].map((m) => `${m[1]} ${m[2]}`));
+    const shown = new Set<string>();
+    for (const type of SHOWN_BY) {
+      const t = catalogs.translator('en-US', type);
+      for (const { status: s } of everyStatus(t)) shown.add(`${s.fill} ${s.shape} ${(isKey(s.text) ? t(s.text) : s.text).replace(/\d+/g, 'N')}`);
+    }
+    expect([...documented].sort()).to.deep.equal([...shown].sort());
+  });
+});
+
+describe('nodes: status texts on Status nodes, with the real catalogs', function () {
+  this.timeout(20000);
+  let sim: Sim;
+  let catalogs: Catalogs;
+
+  before(async () => {
+    catalogs = await loadCatalogs();
+  });
+
+  beforeEach(async () => {
+    sim = await s7Sim();
+    await helper.startServer();
+  });
+
+  afterEach(async () => {
+    await helper.unload();
+    await helper.stopServer();
+    await sim.close();
+  });
+
+  /** The catalog text of `key` as a pattern: each placeholder (either syntax) stands for a number. */
+  function rendered(locale: Locale, type: string, key: string): RegExp {
+    const template = String(valueAt(rawCatalog(locale, type), key));
+    const parts = template.split(/__\w+__|\{\{\w+\}\}/).map((p) => p.replace(/[.*+?^${}()|[\]\\]/g, '\\$&'));
+    return new RegExp(`^${parts.join('\\d+')}$`);
+  }
+
+  for (const locale of LOCALES) {
+    it(`${locale}: heartbeat, read and a retrying link show their numbers`, async () => {
+      const off = await freePort();
+      const modules = [
+        withCatalog(nodes.connection, catalogs.translator(locale, 'plcwire-connection')),
+        withCatalog(nodes.read, catalogs.translator(locale, 'plcwire-read')),
+        withCatalog(nodes.heartbeat, catalogs.translator(locale, 'plcwire-heartbeat')),
+        nodes.status,
+      ];
+      const at = { z: 'tab', x: 100, y: 100 };
+      await helper.load(modules, [
+        { id: 'tab', type: 'tab', label: 'i18n' },
+        { id: 'conn', type: 'plcwire-connection', url: sim.url },
+        { id: 'down', type: 'plcwire-connection', url: `s7://127.0.0.1:${off}?rack=0&slot=1&timeout=500` },
+        { id: 'alive', type: 'plcwire-heartbeat', ...at, connection: 'conn', writeAddress: sim.addr(5), writeMode: 'counter', interval: 100, watchAddress: sim.addr(5), timeout: 1000, wires: [[]] },
+        { id: 'sent', type: 'plcwire-heartbeat', ...at, connection: 'conn', writeAddress: sim.addr(4), writeMode: 'counter', interval: 100, watchAddress: '', timeout: 1000, wires: [[]] },
+        { id: 'read', type: 'plcwire-read', ...at, connection: 'conn', interval: 100, output: 'object', tags: [{ name: 'ok', address: sim.addr(0) }, { name: 'gone', address: sim.missing }], wires: [[]] },
+        { id: 'retry', type: 'plcwire-read', ...at, connection: 'down', interval: 100, output: 'object', tags: [{ name: 'a', address: sim.addr(0) }], wires: [[]] },
+        { id: 'watcher', type: 'status', ...at, scope: null, wires: [['statuses']] },
+        { id: 'statuses', type: 'helper', ...at },
+      ]);
+      const statuses = new Recorder(helper.getNode('statuses'));
+      const expectations: [string, string, string][] = [
+        ['alive', 'plcwire-heartbeat', 'plcwire.status.alive'],
+        ['sent', 'plcwire-heartbeat', 'plcwire.status.sent'],
+        ['read', 'plcwire-read', 'plcwire.status.tagErrors'],
+        ['retry', 'plcwire-read', 'plcwire.status.retryIn'],
+      ];
+      for (const [id, type, key] of expectations) {
+        const pattern = rendered(locale, type, key);
+        const seen = (m: any) => m.status.source.id === id && m.status.text !== undefined && !isKey(m.status.text);
+        const msg = await statuses.next(seen, 6000, `a rendered status of "${id}"`);
+        expect(msg.status.text, `${id} in ${locale}`).to.match(pattern);
+        statuses.skip();
+      }
+    });
+  }
+});
