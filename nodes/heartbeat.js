@@ -43,7 +43,7 @@ module.exports = function (RED) {
       } else if (watch.state === 'alive' && node.linkState === 'connected') {
         node.status(aliveStatus(RED._, watch.changes));
       } else if (node.linkState === 'connected') {
-        node.status(waitingStatus());
+        node.status(waitingStatus(RED._));
       }
     }
 

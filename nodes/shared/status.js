@@ -1,9 +1,9 @@
 'use strict';
 /**
- * Every node status the nodes show. A text without a number is an i18n key of
- * the node's catalog (the editor translates it); a text with a number is
- * translated here with the runtime's `RED._`. Every text stays under 20
- * characters in every locale.
+ * Every node status the nodes show, translated here with the runtime's `RED._`
+ * (numbers filled in), so the editor, Status nodes and dashboards built on
+ * them all receive the same words, never an i18n key. Every text stays under
+ * 20 characters in every locale.
  */
 
 /** @typedef {(key: string, params?: object) => string} Translate  RED._ of the node's module */
@@ -12,18 +12,18 @@
 function linkStatus(t, status) {
   switch (status.state) {
     case 'connected':
-      return { fill: 'green', shape: 'dot', text: 'plcwire.status.connected' };
+      return { fill: 'green', shape: 'dot', text: t('plcwire.status.connected') };
     case 'connecting':
-      return { fill: 'yellow', shape: 'ring', text: 'plcwire.status.connecting' };
+      return { fill: 'yellow', shape: 'ring', text: t('plcwire.status.connecting') };
     case 'reconnecting':
       return { fill: 'red', shape: 'ring', text: t('plcwire.status.retryIn', { s: Math.max(1, Math.round((status.delay ?? 0) / 1000)) }) };
     case 'closed':
-      return { fill: 'grey', shape: 'ring', text: 'plcwire.status.closed' };
+      return { fill: 'grey', shape: 'ring', text: t('plcwire.status.closed') };
     case 'invalid':
-      return { fill: 'red', shape: 'dot', text: 'plcwire.status.badConfig' };
+      return { fill: 'red', shape: 'dot', text: t('plcwire.status.badConfig') };
     case 'unconfigured':
     default:
-      return { fill: 'red', shape: 'ring', text: 'plcwire.status.noConnection' };
+      return { fill: 'red', shape: 'ring', text: t('plcwire.status.noConnection') };
   }
 }
 
@@ -48,8 +48,8 @@ function lostStatus(t, ms) {
 }
 
 /** Heartbeat: connected, waiting for the PLC's life sign to change the first time. */
-function waitingStatus() {
-  return { fill: 'yellow', shape: 'ring', text: 'plcwire.status.waiting' };
+function waitingStatus(t) {
+  return { fill: 'yellow', shape: 'ring', text: t('plcwire.status.waiting') };
 }
 
 module.exports = { linkStatus, tagErrorsStatus, sentStatus, aliveStatus, lostStatus, waitingStatus };
