@@ -8,12 +8,16 @@ import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
 import { FrameReader } from '../link/framer';
 import { PlcMemory } from '../sim/memory';
-import { S7Function, tpduBytes } from './constants';
+import { Rosctr, S7Function, tpduBytes } from './constants';
+import { isControlJob } from './codec/control';
+import type { DiagnosticEntry } from './diagnostics';
+import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './server-services';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from './codec';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
-import { PROFILES, toMemoryLayout, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
+import { IDENTITIES, PROFILES, toMemoryLayout, type CpuIdentity, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
 
-export { PROFILES, toMemoryLayout, type CpuProfile, type S7JsonLayout, type S7Layout, type S7Profile } from './server-profiles';
+export { IDENTITIES, PROFILES, toMemoryLayout, type CpuIdentity, type CpuProfile, type S7JsonLayout, type S7Layout, type S7Profile } from './server-profiles';
+export { STOP_CAUSES, type SimulatorMode, type StopCause } from './server-services';
 
 export interface S7ServerOptions {
   /** Default 127.0.0.1: a simulator is not exposed to the network unless asked. */
@@ -25,6 +29,8 @@ export interface S7ServerOptions {
   memory?: PlcMemory;
   /** Memory layout when no `memory` is given (MemoryLayout or the JSON form `{ dbs, areas }`). */
   layout?: S7Layout;
+  /** What the CPU says about itself (order code, firmware, names …); the profile's defaults for what is not given. */
+  identity?: Partial<CpuIdentity>;
 }
 
 /** Fault injection; every field can be changed at any time. */
@@ -77,6 +83,7 @@ interface Connection {
   /** The largest PDU this connection may negotiate (the TPDU size can lower it). */
   pduLimit: number;
   ctx: JobContext;
+  services: ServiceSession;
   maxJobs: number;
   running: number;
   queue: Buffer[];
@@ -85,7 +92,7 @@ interface Connection {
 }
 
 /**
- * Events: `listening` (port), `connection` (count), `disconnect` (count),
+ * Events: `listening` (port), `connection` (count), `disconnect` (count), `mode` (RUN/STOP),
  * `refused` (S7RefusedEvent), `request` (S7RequestEvent), `error` (only when
  * listened to). The memory emits `read` and `write` (MemoryAccess).
  */
@@ -93,6 +100,8 @@ export class S7Server extends EventEmitter {
   readonly memory: PlcMemory;
   readonly profile: CpuProfile;
   readonly faults: S7Faults;
+  /** The system side: mode, clock, diagnostic buffer, blocks, protection (also reached through the members below). */
+  readonly cpu: CpuServices;
   private readonly host: string;
   private readonly wantPort: number;
   private server: net.Server | undefined;
@@ -113,6 +122,9 @@ export class S7Server extends EventEmitter {
     if (!resolved) throw new TypeError(`unknown S7 profile "${String(profile)}" (s7-300, s7-400, s7-1200, s7-1500)`);
     this.profile = resolved;
     this.memory = options.memory ?? new PlcMemory(options.layout ? toMemoryLayout(options.layout) : undefined);
+    const identity = { ...(typeof profile === 'string' ? IDENTITIES[profile] : IDENTITIES['s7-1500']), ...options.identity };
+    this.cpu = new CpuServices(this.memory, Object.freeze(identity), { maxConnections: resolved.maxConnections, pduSize: resolved.pduSize });
+    this.cpu.on('mode', (mode: SimulatorMode) => this.emit('mode', mode));
     this.faults = {
       accessDenied: false,
       missingDb: undefined,
@@ -121,6 +133,44 @@ export class S7Server extends EventEmitter {
       silent: false,
       dropConnections: () => this.dropConnections(),
     };
+  }
+
+  /** RUN or STOP. A CPU in STOP still serves reads and writes of its memory (and every system service). */
+  get state(): SimulatorMode {
+    return this.cpu.mode;
+  }
+
+  /** Puts the CPU in STOP, logging the cause in the diagnostic buffer (default: a PLC stop command, 0x4304); false when it was in STOP. */
+  stop(cause: StopCause | number = 'command'): boolean {
+    return this.cpu.stop(cause);
+  }
+
+  /** Restarts the CPU (STOP → STARTUP → RUN, each step logged); false when it was in RUN. */
+  start(kind: 'warm' | 'cold' = 'warm'): boolean {
+    return this.cpu.start(kind);
+  }
+
+  /** Milliseconds the CPU clock runs ahead of the host clock (negative: behind). Settable; clients change it with setClock. */
+  get clockOffset(): number {
+    return this.cpu.clockOffset;
+  }
+
+  set clockOffset(ms: number) {
+    this.cpu.clockOffset = ms;
+  }
+
+  /** The diagnostic buffer, newest entry first. */
+  get diagnostics(): DiagnosticEntry[] {
+    return this.cpu.diagnostics;
+  }
+
+  /**
+   * Protection level 1 (none), 2 (writes, stop/start and setting the clock
+   * need the password) or 3 (reads of data and upload too). A connection
+   * that gave the password with the security function works at level 1.
+   */
+  setProtection(level: 1 | 2 | 3, password?: string): void {
+    this.cpu.setProtection(level, password);
   }
 
   /** The port listened on (after listen()). */
@@ -180,6 +230,7 @@ export class S7Server extends EventEmitter {
       stage: 'cotp',
       pduLimit: this.profile.pduSize,
       ctx: { memory: this.memory, pduSize: this.profile.pduSize, missingDb: undefined },
+      services: newServiceSession(),
       maxJobs: 1,
       running: 0,
       queue: [],
@@ -337,10 +388,17 @@ export class S7Server extends EventEmitter {
   private answer(conn: Connection, frame: Buffer): Buffer {
     const func = jobFunction(frame);
     const pduRef = jobPduRef(frame);
-    // Anything but Read/Write Var (userdata, block functions...): "function not supported".
-    if (func === 0) return refuseJob(pduRef, 0x81, 0x04);
+    if (func === 0) {
+      // System services: userdata (SZL, clock, blocks, password) and the control jobs (stop, start, upload).
+      if (frame[8] === Rosctr.UserData) return this.cpu.serveUserdata(frame, conn.services, conn.ctx.pduSize);
+      if (isControlJob(frame)) return this.cpu.serveControl(frame, conn.services, conn.ctx.pduSize);
+      // Any other job: "function not supported".
+      return refuseJob(pduRef, 0x81, 0x04);
+    }
     // S7-1200/1500 without PUT/GET: ack with header error 0x8104 (S7NetPlus/s7netplus#403 shows `32 02 … 81 04`).
     if (this.faults.accessDenied) return refuseJob(pduRef, 0x81, 0x04);
+    // Protection level 2 refuses writes, 3 reads too, until the connection gave the password.
+    if (this.cpu.refusesData(conn.services, func)) return refuseJob(pduRef, 0xd2, 0x41);
     return func === S7Function.ReadVar ? serveRead(frame, conn.ctx) : serveWrite(frame, conn.ctx);
   }
 }
