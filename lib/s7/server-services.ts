@@ -171,9 +171,11 @@ export class CpuServices extends EventEmitter {
 
   /** RUN → STOP, logging the cause; false when already in STOP. */
   stop(cause: StopCause | number = 'command'): boolean {
-    if (this.modeNow === 'STOP') return false;
     const eventId = typeof cause === 'number' ? cause : STOP_CAUSES[cause];
-    if (eventId === undefined) throw new TypeError(`unknown stop cause "${String(cause)}" (${Object.keys(STOP_CAUSES).join(', ')})`);
+    if (eventId === undefined || !Number.isInteger(eventId) || eventId < 0 || eventId > 0xffff) {
+      throw new TypeError(`unknown stop cause "${String(cause)}" (${Object.keys(STOP_CAUSES).join(', ')}, or an event ID)`);
+    }
+    if (this.modeNow === 'STOP') return false;
     this.modeNow = 'STOP';
     this.record(eventId);
     this.lastTransition = { eventId, time: this.now() };

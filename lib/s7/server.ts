@@ -50,9 +50,10 @@ export interface S7Faults {
 }
 
 export interface S7RequestEvent {
-  kind: 'read' | 'write';
+  /** Read/Write Var, or a system service: userdata (SZL, clock, blocks, password) or a control job (stop, start, upload). */
+  kind: 'read' | 'write' | 'userdata' | 'control';
   pduRef: number;
-  /** Number of items in the job. */
+  /** Number of items in the job (0 for system services). */
   items: number;
   /** Bytes of the request frame on the wire. */
   bytes: number;
@@ -296,6 +297,10 @@ export class S7Server extends EventEmitter {
       // Anything else must still be well-formed S7 (decodeS7 throws otherwise); it is refused in order with the jobs.
       const message = decodeS7(frame);
       if (message.kind === 'setup-request') throw new Error('setup communication sent twice');
+      if (this.listenerCount('request') > 0 && (frame[8] === Rosctr.UserData || isControlJob(frame))) {
+        const kind = frame[8] === Rosctr.UserData ? 'userdata' : 'control';
+        this.emit('request', { kind, pduRef: message.pduRef, items: 0, bytes: frame.length } satisfies S7RequestEvent);
+      }
       return this.enqueue(conn, frame);
     }
     if (conn.stage === 'cotp') return this.onConnectionRequest(conn, frame);
