@@ -95,8 +95,9 @@ function text(b: Buffer, start: number, end: number): string {
   return (nul < 0 ? field : field.subarray(0, nul)).toString('latin1').replace(/\s+$/, '');
 }
 
-function putText(b: Buffer, start: number, width: number, value: string): void {
-  b.fill(0x20, start, start + width);
+/** Text into a fixed-width field, padded with `pad` (module identification pads with spaces, component identification with NULs, as CPUs send them). */
+function putText(b: Buffer, start: number, width: number, value: string, pad = 0x20): void {
+  b.fill(pad, start, start + width);
   b.write(value.slice(0, width), start, 'latin1');
 }
 
@@ -241,7 +242,7 @@ export function encodeComponentIdentification(c: Partial<ComponentIdentification
     r.writeUInt16BE(i, 0);
     // Names are 24 characters followed by reserved bytes; the module type name and plant ID use all 32.
     const width = key === 'moduleTypeName' || key === 'plantId' ? 32 : key === 'copyright' ? 26 : 24;
-    putText(r, 2, width, value);
+    putText(r, 2, width, value, 0x00);
     records.push(r);
   }
   return { id: index === 0 ? SZL.COMPONENT_ID : 0x011c, index, recordLength: COMPONENT_RECORD, records };
