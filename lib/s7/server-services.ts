@@ -15,6 +15,7 @@ import type { PlcMemory } from '../sim/memory';
 import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
 import { encodeBlockCounts, encodeBlockInfo, encodeBlockListEntries, encodeLoadBlock, decodeBlockInfoRequest, loadSizeOf, type BlockSpec } from './blocks';
 import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from './codec/control';
+import { encodeErrorAck } from './codec/pdu';
 import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from './codec/userdata';
 import {
   BLOCK_TYPES,
@@ -94,6 +95,9 @@ const E = Object.freeze({
 });
 
 const DIAGNOSTIC_CAPACITY = 100;
+/** The range of a DATE_AND_TIME, with a day's margin at the end so the running clock stays inside. */
+const CLOCK_MIN = Date.UTC(1990, 0, 1);
+const CLOCK_MAX = Date.UTC(2089, 11, 30);
 const FIXED_BLOCKS: Readonly<Partial<Record<BlockType, readonly number[]>>> = Object.freeze({
   OB: [1, 35, 80, 82, 86, 100, 121, 122],
   FB: [1],
@@ -146,8 +150,11 @@ export class CpuServices extends EventEmitter {
     return this.offset;
   }
 
+  /** The offset is checked: the CPU clock (a DATE_AND_TIME) stays within 1990..2089. */
   set clockOffset(ms: number) {
     if (!Number.isFinite(ms)) throw new TypeError(`clock offset must be a number of milliseconds, got ${String(ms)}`);
+    const at = Date.now() + Math.round(ms);
+    if (at < CLOCK_MIN || at > CLOCK_MAX) throw new RangeError(`the CPU clock runs from 1990 to 2089; ${new Date(at).toISOString()} is outside`);
     this.offset = Math.round(ms);
   }
 
@@ -250,7 +257,7 @@ export class CpuServices extends EventEmitter {
         if (params.subfunction === TimeSubfunction.SetClock) {
           if (this.levelFor(s) >= 2) return answer({ errorCode: E.NEED_PASSWORD });
           const d = u.data.length === 10 ? decodeDateAndTime(u.data, 2) : new Date(Number.NaN);
-          if (Number.isNaN(d.getTime())) return answer({ errorCode: E.BAD_TIME });
+          if (Number.isNaN(d.getTime()) || d.getTime() > CLOCK_MAX) return answer({ errorCode: E.BAD_TIME });
           this.setClock(d);
           return answer({});
         }
@@ -455,12 +462,13 @@ export class CpuServices extends EventEmitter {
         if (!this.start(m.cold ? 'cold' : 'warm')) return encodeControlAck(ref, ControlFunction.PiService, 0x03, E.STATE);
         return encodeControlAck(ref, ControlFunction.PiService);
       case 'start-upload': {
-        if (!this.identity.blockFunctions) return encodeControlAck(ref, ControlFunction.StartUpload, 0, E.NOT_IMPLEMENTED);
-        if (this.levelFor(s) >= 3) return encodeControlAck(ref, ControlFunction.StartUpload, 0, E.NEED_PASSWORD);
+        // Upload refusals: an ack without parameters carrying the error (an ack-data would need the whole answer).
+        if (!this.identity.blockFunctions) return refusal(ref, E.NOT_IMPLEMENTED);
+        if (this.levelFor(s) >= 3) return refusal(ref, E.NEED_PASSWORD);
         const type = blockTypeName(m.blockType);
         const block = type ? this.blockSpec(type, m.number) : undefined;
-        if (!block) return encodeControlAck(ref, ControlFunction.StartUpload, 0, E.BLOCK_NOT_FOUND);
-        if (s.uploads.size >= 4) return encodeControlAck(ref, ControlFunction.StartUpload, 0, 0x8304);
+        if (!block) return refusal(ref, E.BLOCK_NOT_FOUND);
+        if (s.uploads.size >= 4) return refusal(ref, 0x8304);
         const id = this.nextSequence(s);
         // The block as it is now: later writes to the DB do not change an upload under way.
         s.uploads.set(id, { bytes: encodeLoadBlock(block.spec, Buffer.from(block.code)), offset: 0 });
@@ -468,7 +476,7 @@ export class CpuServices extends EventEmitter {
       }
       case 'upload': {
         const up = s.uploads.get(m.uploadId);
-        if (!up) return encodeControlAck(ref, ControlFunction.Upload, 0, E.STATE);
+        if (!up) return refusal(ref, E.STATE);
         // TPKT/COTP aside: header 12, parameters 2, data header 4.
         const room = pduSize - 18;
         const chunk = up.bytes.subarray(up.offset, up.offset + room);
@@ -482,4 +490,9 @@ export class CpuServices extends EventEmitter {
         throw new ProtocolError(`a control answer (${m.kind}) sent to a CPU`);
     }
   }
+}
+
+/** An ack (ROSCTR 2) without parameters carrying a service error as its header error. */
+function refusal(pduRef: number, code: number): Buffer {
+  return encodeErrorAck(pduRef, code >> 8, code & 0xff);
 }
