@@ -126,7 +126,7 @@ export class CpuServices extends EventEmitter {
   constructor(
     private readonly memory: PlcMemory,
     readonly identity: Readonly<CpuIdentity>,
-    private readonly limits: { maxConnections: number; pduSize: number },
+    private readonly limits: { maxConnections: number },
   ) {
     super();
     this.created = new Date(Math.floor(Date.now() / 1000) * 1000);
@@ -221,10 +221,7 @@ export class CpuServices extends EventEmitter {
     return s.authorized ? 1 : this.level;
   }
 
-  /**
-   * The answer that refuses a Read/Write Var job under the protection
-   * level, or undefined when it may be served.
-   */
+  /** True when the protection level refuses a Read Var (level 3) or Write Var (level 2) job of this connection. */
   refusesData(s: ServiceSession, func: number): boolean {
     const level = this.levelFor(s);
     return func === S7Function.WriteVar ? level >= 2 : level >= 3;

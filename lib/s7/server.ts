@@ -29,7 +29,7 @@ export interface S7ServerOptions {
   memory?: PlcMemory;
   /** Memory layout when no `memory` is given (MemoryLayout or the JSON form `{ dbs, areas }`). */
   layout?: S7Layout;
-  /** What the CPU says about itself (order code, firmware, names …); the profile's defaults for what is not given. */
+  /** What the CPU says about itself (order code, firmware, names …); the profile's defaults (S7-1500's for a custom CpuProfile) for what is not given. */
   identity?: Partial<CpuIdentity>;
 }
 
@@ -124,7 +124,7 @@ export class S7Server extends EventEmitter {
     this.profile = resolved;
     this.memory = options.memory ?? new PlcMemory(options.layout ? toMemoryLayout(options.layout) : undefined);
     const identity = { ...(typeof profile === 'string' ? IDENTITIES[profile] : IDENTITIES['s7-1500']), ...options.identity };
-    this.cpu = new CpuServices(this.memory, Object.freeze(identity), { maxConnections: resolved.maxConnections, pduSize: resolved.pduSize });
+    this.cpu = new CpuServices(this.memory, Object.freeze(identity), { maxConnections: resolved.maxConnections });
     this.cpu.on('mode', (mode: SimulatorMode) => this.emit('mode', mode));
     this.faults = {
       accessDenied: false,

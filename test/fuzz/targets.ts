@@ -85,7 +85,7 @@ export function extraTargets(): FuzzTarget[] {
     encodeReply({ data: Buffer.from('E627A1C3', 'hex') }),
   ];
   const services = serviceSeeds();
-  const cpu = new CpuServices(new PlcMemory(), IDENTITIES['s7-300'], { maxConnections: 16, pduSize: 240 });
+  const cpu = new CpuServices(new PlcMemory(), IDENTITIES['s7-300'], { maxConnections: 16 });
   return [
     { name: 'S7 decodeUserdata', seeds: services, run: (b) => void decodeUserdata(b) },
     { name: 'S7 decodeControl', seeds: services, run: (b) => void decodeControl(b) },
