@@ -27,6 +27,10 @@ export type PlcErrorCode =
   | 'OBJECT_DOES_NOT_EXIST'
   | 'PDU_TOO_LARGE'
   | 'TYPE_NOT_SUPPORTED'
+  /** The CPU has no such SZL list (ID or index). */
+  | 'SZL_NOT_AVAILABLE'
+  /** The CPU family does not offer the service at all. */
+  | 'NOT_SUPPORTED'
   // one or more tags of a multi-tag request failed
   | 'TAG_ERRORS';
 

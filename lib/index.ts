@@ -24,6 +24,34 @@ export { S7Client, type ItemLimitEvent, type S7Stats } from './s7/client';
 export type { S7Session } from './s7/client-session';
 export { planRead, planWrite, lowerBoundPdus, ReadPlanCache, type ReadPlan, type WritePlan } from './s7/planner';
 export { S7Server, PROFILES as S7_PROFILES, type S7ServerOptions, type S7Faults, type S7Profile, type CpuProfile, type S7RequestEvent } from './s7/server';
+export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
+export type { CpuServices, ServiceSession } from './s7/server-services';
+export { type PlcInfo, type ClockOptions } from './s7/services';
+export {
+  SZL,
+  parseSzl,
+  decodeSzlIds,
+  decodeModuleIdentification,
+  decodeComponentIdentification,
+  decodeCommunication,
+  decodeProtection,
+  decodeCpuState,
+  decodeLeds,
+  cpuModeOf,
+  type SzlList,
+  type ModuleIdentification,
+  type ModuleIdRecord,
+  type ComponentIdentification,
+  type CommunicationCapabilities,
+  type Protection,
+  type KeySwitch,
+  type CpuState,
+  type CpuMode,
+  type Led,
+} from './s7/szl';
+export { decodeDiagnosticBuffer, describeEvent, EVENT_DESCRIPTIONS, type DiagnosticEntry, type DiagnosticEvent } from './s7/diagnostics';
+export { decodeBlockInfo, decodeBlockCounts, decodeLoadBlock, type BlockInfo, type BlockCounts, type UploadedBlock } from './s7/blocks';
+export { BLOCK_TYPES, BLOCK_LANGUAGES, SERVICE_ERRORS, type BlockType } from './s7/constants';
 export * as fetchwrite from './fetchwrite/codec';
 export { FetchWriteClient } from './fetchwrite/client';
 export { FetchWriteServer, type FetchWriteServerOptions, type FetchWriteFaults, type FetchWriteRequestEvent } from './fetchwrite/server';

@@ -4,6 +4,7 @@
  *
  *   s7://host[:102]?rack=0&slot=1&type=pg|op|basic&pdu=960&timeout=5000&maxItems=20
  *   s7://host?localTsap=1000&remoteTsap=2000            (hex; S7-200/LOGO)
+ *   s7://host?control=true                               (allow stop/start of the CPU)
  *   fetchwrite://host?fetchPort=2000&writePort=2001&dbUnit=word|byte&timeout=5000
  *   fetchwrite://host?port=2000                          (one port serves both)
  *   freeport:///dev/ttyUSB0?baud=9600&parity=none&databits=8&stopbits=1&timeout=1000&retries=2&gap=10
@@ -47,6 +48,8 @@ export interface S7Endpoint extends SafetyOptions {
    * lower limit (the `itemLimit` event).
    */
   maxItems?: number;
+  /** `control=true`: allow stop(), hotStart() and coldStart() of the CPU (refused otherwise, and always with readOnly). */
+  control?: boolean;
 }
 
 export interface FetchWriteEndpoint extends SafetyOptions {
@@ -132,7 +135,7 @@ export const FREEPORT_BAUD_RATES: readonly number[] = [1200, 2400, 4800, 9600, 1
 const SAFETY_PARAMS = ['readOnly', 'allow'];
 const FETCHWRITE_PORTS = 'give the ports as ?fetchPort=…&writePort=… (or ?port=… when one port serves both)';
 const KNOWN_PARAMS: Record<string, readonly string[]> = {
-  s7: ['rack', 'slot', 'localTsap', 'remoteTsap', 'type', 'pdu', 'timeout', 'maxItems', ...SAFETY_PARAMS],
+  s7: ['rack', 'slot', 'localTsap', 'remoteTsap', 'type', 'pdu', 'timeout', 'maxItems', 'control', ...SAFETY_PARAMS],
   fetchwrite: ['fetchPort', 'writePort', 'port', 'dbUnit', 'timeout', ...SAFETY_PARAMS],
   freeport: ['baud', 'parity', 'databits', 'stopbits', 'timeout', 'retries', 'gap', ...SAFETY_PARAMS],
   'freeport+tcp': ['timeout', 'retries', 'gap', ...SAFETY_PARAMS],
@@ -186,6 +189,7 @@ function parseS7(text: string, url: URL, p: Params): Omit<S7Endpoint, 'protocol'
     endpoint.localTsap = local;
     endpoint.remoteTsap = remote;
   }
+  if (p.has('control') && p.bool('control')) endpoint.control = true;
   return endpoint;
 }
 
@@ -259,6 +263,7 @@ export function formatUrl(e: Endpoint): string {
     if (e.pduSize !== DEFAULTS.pduSize) q.set('pdu', String(e.pduSize));
     if (e.timeout !== DEFAULTS.timeout) q.set('timeout', String(e.timeout));
     if (e.maxItems !== undefined) q.set('maxItems', String(e.maxItems));
+    if (e.control) q.set('control', 'true');
   } else if (e.protocol === 'fetchwrite') {
     base = `fetchwrite://${hostPart(e.host)}`;
     if (e.fetchPort === e.writePort) q.set('port', String(e.fetchPort));

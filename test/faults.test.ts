@@ -16,6 +16,7 @@ import { FreeportClient } from '../lib/freeport/client';
 import { backoffDelay } from '../lib/link/backoff';
 import { FrameReader } from '../lib/link/framer';
 import { checkTpkt } from '../lib/s7/codec';
+import type { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
 import { parseUrl, type FreeportEndpoint } from '../lib/url';
@@ -712,6 +713,111 @@ describe('fault matrix (issue #8)', function () {
       await reconnected(c, BACKOFF.maxDelay + MARGIN);
       expectOnSchedule(c);
       await expectFreshValues(c, rig);
+    });
+
+    describe('userdata (system services)', () => {
+      /** A client with the services (S7Client) through the proxy; `transform` sees every userdata answer (ROSCTR 7). */
+      async function servicesRig(transform: (frame: Buffer, pair: ProxyPair, n: number) => void, profile: 's7-1200' | 's7-1500' = 's7-1200') {
+        const rig = await open(() => s7Rig(profile));
+        const url = await rig.proxied();
+        let n = 0;
+        onResponse(rig.proxies[0]!, (frame, pair) => (frame[8] === 7 ? transform(frame, pair, n++) : pair.toClient(frame)));
+        const c = track(client(url)) as S7Client & { delays: { attempt: number; delay: number }[] };
+        await c.connect();
+        return { rig, c };
+      }
+
+      /** A frame with its S7 data part replaced (every length field kept consistent unless `lengths` is false). */
+      function withData(frame: Buffer, data: Buffer, lengths = true): Buffer {
+        const plen = frame.readUInt16BE(13);
+        const head = frame.subarray(0, 17 + plen);
+        const out = Buffer.concat([head, data]);
+        if (lengths) {
+          out.writeUInt16BE(out.length, 2);
+          out.writeUInt16BE(data.length, 15);
+        }
+        return out;
+      }
+
+      const HOSTILE: [string, (f: Buffer) => Buffer][] = [
+        ['its S7 data length one byte longer than the frame', (f) => (f.writeUInt16BE(f.readUInt16BE(15) + 1, 15), f)],
+        ['its item announcing more bytes than follow', (f) => (f.writeUInt16BE(f.readUInt16BE(f.readUInt16BE(13) + 19) + 9, f.readUInt16BE(13) + 19), f)],
+        ['an 8-byte parameter part (no error field)', (f) => {
+          const p = Buffer.from(f.subarray(17, 25));
+          p[3] = 4;
+          const out = Buffer.concat([f.subarray(0, 17), p, f.subarray(29)]);
+          out.writeUInt16BE(out.length, 2);
+          out.writeUInt16BE(8, 13);
+          return out;
+        }],
+        ['the answer of another function group', (f) => ((f[22] = 0x87), f)],
+        // The SZL header (N_DR at byte 39 of the frame) announcing one record more than the answer carries.
+        ['an SZL header counting one record more than it carries', (f) => (f.writeUInt16BE(f.readUInt16BE(39) + 1, 39), f)],
+        ['its data part cut to the item header (lengths kept consistent)', (f) => withData(f, Buffer.from(f.subarray(29, 33)).fill(0, 2))],
+        ['a truncated parameter head (00 01 13)', (f) => ((f[19] = 0x13), f)],
+      ];
+
+      for (const [what, corrupt] of HOSTILE) {
+        it(`a userdata answer with ${what}: PROTOCOL_ERROR, writes settled, the link comes back and serves again`, async () => {
+          const { rig, c } = await servicesRig((frame, pair, n) => pair.toClient(n === 0 ? corrupt(Buffer.from(frame)) : frame));
+          const info = c.readSzl(0x0011, 0);
+          const b = burst(c, rig, 0, BURST, (i) => 300 + i, 0);
+          await typedWithin(info, rig.timeout, ['PROTOCOL_ERROR']);
+          await b.settled(rig.timeout * 2 + 1000);
+          await reconnected(c, rig.timeout + BACKOFF.maxDelay + MARGIN);
+          expectAckedInMemory(rig, b, (i) => 300 + i);
+          expect((await c.info()).orderCode).to.equal('6ES7 214-1AG40-0XB0');
+          await expectFreshValues(c, rig);
+        });
+      }
+
+      it('a multi-part answer whose connection drops between parts: CONNECTION_LOST, and the next read of it is whole', async () => {
+        const rig0 = await open(() => s7Rig());
+        for (let i = 0; i < 20; i++) {
+          rig0.server().stop();
+          rig0.server().start();
+        }
+        const url = await rig0.proxied();
+        let parts = 0;
+        let cut = false;
+        onResponse(rig0.proxies[0]!, (frame, pair) => {
+          if (frame[8] === 7 && !cut && ++parts === 2) {
+            cut = true;
+            return pair.reset();
+          }
+          pair.toClient(frame);
+        });
+        const c = track(client(`${url}&pdu=240`)) as S7Client & { delays: { attempt: number; delay: number }[] };
+        await c.connect();
+        await typedWithin(c.diagnosticBuffer(), rig0.timeout, ['CONNECTION_LOST']);
+        await reconnected(c, BACKOFF.maxDelay + MARGIN);
+        expect((await c.diagnosticBuffer()).length).to.equal(3 + 20 * 4);
+      });
+
+      it('a userdata answer dripped one byte at a time: every service answers right', async () => {
+        const { c } = await servicesRig((frame, pair) => {
+          for (const byte of frame) pair.toClient(Buffer.of(byte));
+        });
+        expect(await c.info()).to.deep.include({ orderCode: '6ES7 214-1AG40-0XB0', state: 'RUN' });
+        expect((await c.diagnosticBuffer()).length).to.equal(3);
+      });
+
+      it('a userdata answer that never comes: TIMEOUT within the timeout, the link comes back', async () => {
+        const { rig, c } = await servicesRig((frame, pair, n) => (n === 0 ? undefined : pair.toClient(frame)));
+        await typedWithin(c.readClock(), rig.timeout, ['TIMEOUT']);
+        await reconnected(c, rig.timeout + BACKOFF.maxDelay + MARGIN);
+        expect((await c.cpuState()).mode).to.equal('RUN');
+      });
+
+      it('an unknown userdata function: the CPU error answer (NOT_SUPPORTED), the link stays up', async () => {
+        const { rig, c } = await servicesRig((frame, pair) => pair.toClient(frame), 's7-1500');
+        let drops = 0;
+        c.on('disconnected', () => drops++);
+        expect((await failure(c.listBlocks())).code).to.equal('NOT_SUPPORTED');
+        expect((await failure(c.setPassword('abc'))).code).to.equal('NOT_SUPPORTED');
+        await expectFreshValues(c, rig);
+        expect(drops).to.equal(0);
+      });
     });
 
     it('access denied (PUT/GET off): every write rejected with ACCESS_DENIED, the link stays up', async () => {

@@ -16,6 +16,7 @@ import {
 } from '../lib/s7/codec';
 import { PlcError } from '../lib/errors';
 import { S7Client } from '../lib/s7/client';
+import { decodeUserdata } from '../lib/s7/codec/userdata';
 import { headerError, remoteTsapFor } from '../lib/s7/constants';
 import { PROFILES, S7Server, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
 import type { MemoryAccess } from '../lib/sim/memory';
@@ -676,12 +677,15 @@ describe('S7Server', () => {
       expect(ok.cc.type).to.equal('CC');
     });
 
-    it('answers userdata and unknown functions with 0x8104, as a CPU without them', async () => {
+    it('answers a userdata function it does not have with the CPU error 0x8104 in the parameters, and keeps the connection', async () => {
       const server = await start('s7-1500');
       const { peer } = await open(server);
-      // userdata (ROSCTR 7) with 8 parameter bytes: e.g. an SZL read header
-      peer.send(hex('03 00 00 1D | 02 F0 80 | 32 07 00 00 00 05 00 08 00 04 | 00 01 12 04 11 44 01 00 | FF 09 00 00'));
-      expect(await peer.nextS7()).to.deep.include({ kind: 'error', pduRef: 5, errorClass: 0x81, errorCode: 0x04 });
+      // userdata (ROSCTR 7), group 1 (programmer commands), which the simulator does not offer
+      peer.send(hex('03 00 00 1D | 02 F0 80 | 32 07 00 00 00 05 00 08 00 04 | 00 01 12 04 11 41 01 00 | 0A 00 00 00'));
+      const answer = decodeUserdata(await peer.next());
+      expect(answer.params).to.deep.include({ type: 8, group: 1, subfunction: 1, errorCode: 0x8104 });
+      peer.send(DOC.read);
+      expect(await peer.nextS7()).to.deep.include({ kind: 'read-ack', pduRef: 1 });
     });
   });
 

@@ -81,6 +81,9 @@ describe('url: parseUrl', () => {
 
   it('reads the safety options on every protocol', () => {
     expect(parseUrl('s7://h?readOnly=true')).to.include({ readOnly: true });
+    expect(parseUrl('s7://h?control=true')).to.include({ control: true });
+    expect(parseUrl('s7://h?control=false')).to.not.have.property('control');
+    expect(parseUrl('s7://h')).to.not.have.property('control');
     expect(parseUrl('fetchwrite://h?allow=DB10,M&allow=DB1.DBW2')).to.deep.include({ allow: ['DB10', 'M', 'DB1.DBW2'] });
   });
 
@@ -93,6 +96,8 @@ describe('url: parseUrl', () => {
     expect(urlError('s7://h?localTsap=1000').message).to.include('go together');
     expect(urlError('s7://h?localTsap=zz&remoteTsap=1').message).to.include('not a hex TSAP');
     expect(urlError('s7://?rack=0').message).to.include('no host');
+    expect(urlError('s7://h?control=maybe').message).to.include('control=maybe must be true or false');
+    expect(urlError('fetchwrite://h?control=true').message).to.include('unknown parameter "control"');
     expect(urlError('freeport:///dev/ttyS0?baud=14400').message).to.include('baud=14400 is not a rate');
     expect(urlError('freeport:///dev/ttyS0?parity=mark').message).to.include('parity=mark must be one of none, even, odd');
     expect(urlError('freeport+tcp://gw').message).to.include('needs a port');
@@ -120,6 +125,7 @@ describe('url: formatUrl and endpointKey', () => {
     's7://192.168.0.2?rack=0&slot=1',
     's7://plc:1102?localTsap=1000&remoteTsap=2000&type=basic&pdu=240&timeout=100',
     's7://plc?rack=0&slot=1&maxItems=60',
+    's7://192.168.0.2?rack=0&slot=2&control=true&readOnly=true',
     'fetchwrite://10.0.0.5?fetchPort=2000&writePort=2001',
     'fetchwrite://10.0.0.5?port=2000&dbUnit=byte&readOnly=true',
     'freeport:///dev/ttyUSB0?baud=9600',

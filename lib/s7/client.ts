@@ -19,13 +19,18 @@
 import { formatAddress, parseAddress } from '../address';
 import { ConnectionError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
 import { BaseClient, toResults, type ClientOptions, type ReadValues } from '../link/client-base';
-import type { PlcValue, Protocol, Tag } from '../types';
+import type { PlcValue, Protocol, RequestOptions, Tag } from '../types';
 import { endpointName, type S7Endpoint } from '../url';
 import { decodeTag, tagDecoder, type TagDecoder } from '../values';
 import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadAck, type ReadItemTable, type S7Message } from './codec';
 import { CotpType, DEFAULT_MAX_ITEMS, describeReturnCode, headerError } from './constants';
 import { openS7Session, S7Session } from './client-session';
 import { planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './planner';
+import type { BlockCounts, BlockInfo, UploadedBlock } from './blocks';
+import type { BlockType } from './constants';
+import type { DiagnosticEntry } from './diagnostics';
+import { S7Services, type ClockOptions, type PlcInfo } from './services';
+import type { CpuState, SzlList } from './szl';
 
 export { S7Session, localTsapFor } from './client-session';
 
@@ -75,6 +80,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   /** Items per job: the URL's maxItems or 20, lowered when the PLC serves fewer (learnItemLimit). */
   private itemLimit: number;
   private planOptions: PlanOptions;
+  private readonly services: S7Services;
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
     super({
@@ -87,6 +93,24 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     this.endpoint = endpoint;
     this.itemLimit = endpoint.maxItems ?? DEFAULT_MAX_ITEMS;
     this.planOptions = { maxItems: this.itemLimit };
+    const client = this;
+    this.services = new S7Services({
+      name: this.name,
+      endpoint,
+      get pduSize() {
+        return client.pduSize;
+      },
+      get maxJobs() {
+        return client.maxJobs;
+      },
+      exchange: (frame, what, signal) => this.exchange(frame, what, signal),
+      malformed: (err) => this.malformed(err),
+      readBytes: async (db, length, options) => {
+        const address = `DB${db},B0.${length}`;
+        const values = await this.read([address], options);
+        return Buffer.from(values[address] as number[]);
+      },
+    });
   }
 
   /** The most items this client puts into one job (the PDU size may allow fewer). */
@@ -191,6 +215,120 @@ export class S7Client extends BaseClient<S7Session, Tag> {
       session.lose?.(e);
       throw e;
     }
+  }
+
+  /** One request frame as a job on the live session; resolves the raw answer frame. */
+  private exchange(frame: Buffer, what: string, signal?: AbortSignal): Promise<Buffer> {
+    const session = this.session;
+    if (!session) return Promise.reject(new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (the link is ${this.state})`));
+    return new Promise((resolve, reject) => session.send(frame, what, (err, answer) => (err ? reject(err) : resolve(answer!)), signal));
+  }
+
+  /** A malformed answer to a system service: the link drops, as for any frame the client cannot make sense of. */
+  private malformed(err: unknown): PlcError {
+    const e = linkError(this.name, err);
+    if (e.code === 'PROTOCOL_ERROR') this.session?.lose?.(e);
+    return e;
+  }
+
+  // ---------------------------------------------------------------- system services
+
+  /**
+   * Reads one SZL (system status list) by ID and index, every part of a
+   * multi-part answer included. Decoders for the common lists are exported
+   * (`decodeModuleIdentification`, `decodeDiagnosticBuffer` …).
+   * Rejects with SZL_NOT_AVAILABLE when the CPU has no such list.
+   */
+  readSzl(id: number, index = 0, options?: RequestOptions): Promise<SzlList> {
+    return this.services.readSzl(id, index, options);
+  }
+
+  /**
+   * Identity and state in one object: order code, firmware, module type,
+   * serial number, AS and module names, mode, protection, the negotiated
+   * PDU size and AmQ, and the clock. Lists the CPU does not offer leave
+   * their fields undefined.
+   */
+  info(options?: RequestOptions): Promise<PlcInfo> {
+    return this.services.info(options);
+  }
+
+  /** The diagnostic buffer, newest entry first; `max` limits it to the most recent entries. */
+  diagnosticBuffer(options?: RequestOptions & { max?: number }): Promise<DiagnosticEntry[]> {
+    return this.services.diagnosticBuffer(options);
+  }
+
+  /**
+   * The PLC clock. A PLC clock has no time zone: its fields are read as UTC
+   * by default (S7-1200/1500 keep UTC), or as this host's local time with
+   * `{ timeZone: 'local' }` (an S7-300/400 set to local time).
+   */
+  readClock(options?: ClockOptions): Promise<Date> {
+    return this.services.readClock(options);
+  }
+
+  /** Sets the PLC clock (UTC fields by default, local with `{ timeZone: 'local' }`). Refused with WRITE_NOT_ALLOWED on a read-only connection. */
+  setClock(date: Date, options?: ClockOptions): Promise<void> {
+    return this.services.setClock(date, options);
+  }
+
+  /** Mode (RUN, STOP …) and the last mode transition (SZL 0x0424). */
+  cpuState(options?: RequestOptions): Promise<CpuState> {
+    return this.services.cpuState(options);
+  }
+
+  /**
+   * Puts the CPU in STOP. Refused with WRITE_NOT_ALLOWED before anything is
+   * sent unless the URL says `control=true` (and never on a read-only
+   * connection). A CPU already in STOP is not an error.
+   */
+  stop(options?: RequestOptions): Promise<void> {
+    return this.services.stop(options);
+  }
+
+  /** Starts the CPU program without the cold-start argument (a warm/hot restart). Needs `control=true`, like stop(). */
+  hotStart(options?: RequestOptions): Promise<void> {
+    return this.services.hotStart(options);
+  }
+
+  /** Starts the CPU with a cold restart (data blocks back to their initial values). Needs `control=true`, like stop(). */
+  coldStart(options?: RequestOptions): Promise<void> {
+    return this.services.coldStart(options);
+  }
+
+  /** How many blocks of each type the CPU holds. */
+  listBlocks(options?: RequestOptions): Promise<BlockCounts> {
+    return this.services.listBlocks(options);
+  }
+
+  /** The numbers of the blocks of one type, ascending as the CPU lists them (an empty list when there are none). */
+  listBlocksOfType(type: BlockType, options?: RequestOptions): Promise<number[]> {
+    return this.services.listBlocksOfType(type, options);
+  }
+
+  /** Block info: sizes (a DB's data length), author, family, name, version, time stamps, checksum, language. */
+  blockInfo(type: BlockType, number: number, options?: RequestOptions): Promise<BlockInfo> {
+    return this.services.blockInfo(type, number, options);
+  }
+
+  /** Uploads a block in its load-memory form (header, MC7 code — a DB's data —, footer). */
+  uploadBlock(type: BlockType, number: number, options?: RequestOptions): Promise<UploadedBlock> {
+    return this.services.uploadBlock(type, number, options);
+  }
+
+  /** The data of a whole DB: its length from block info, its bytes by Read Var. */
+  readDb(number: number, options?: RequestOptions): Promise<Buffer> {
+    return this.services.readDb(number, options);
+  }
+
+  /** Gives the CPU's password (protection levels 2 and 3): this connection then works unprotected. */
+  setPassword(password: string, options?: RequestOptions): Promise<void> {
+    return this.services.setPassword(password, options);
+  }
+
+  /** Withdraws the password given on this connection. */
+  clearPassword(options?: RequestOptions): Promise<void> {
+    return this.services.clearPassword(options);
   }
 
   // ---------------------------------------------------------------- reads

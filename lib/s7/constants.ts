@@ -180,6 +180,7 @@ const HEADER_ERRORS: Readonly<Record<number, [PlcErrorCode, string]>> = Object.f
   0x8500: ['PDU_TOO_LARGE', 'PDU too large for the negotiated size'],
   0x8702: ['PLC_ERROR', 'the PLC is not in a state to serve the request'],
   0xd209: ['OBJECT_DOES_NOT_EXIST', 'block not found'],
+  0xd241: ['ACCESS_DENIED', 'the protection level forbids it (enter the password)'],
   0xd401: ['PLC_ERROR', 'invalid parameter'],
 });
 
@@ -206,3 +207,118 @@ export function remoteTsapFor(type: 'pg' | 'op' | 'basic', rack: number, slot: n
 
 /** Local TSAP 0x1000 of circulated S7 examples (docs/protocols.md, corrections); the client sends connection type << 8 (localTsapFor). */
 export const LOCAL_TSAP = 0x1000;
+
+// ---------------------------------------------------------------- userdata (ROSCTR 7) and CPU services
+
+/** Parameter head of every userdata PDU. */
+export const USERDATA_HEAD = 0x000112;
+/** Method byte: a request, or a response (also sent by a client to ask for the next part of a multi-part answer). */
+export const enum UserdataMethod {
+  Request = 0x11,
+  Response = 0x12,
+}
+/** High nibble of the type/group byte. */
+export const enum UserdataType {
+  Push = 0x0,
+  Request = 0x4,
+  Response = 0x8,
+}
+/** Low nibble of the type/group byte: the function group. */
+export const enum UserdataGroup {
+  Programmer = 0x1,
+  Cyclic = 0x2,
+  Block = 0x3,
+  /** CPU functions: read SZL. */
+  Cpu = 0x4,
+  Security = 0x5,
+  Time = 0x7,
+}
+export const enum BlockSubfunction {
+  ListAll = 0x01,
+  ListType = 0x02,
+  BlockInfo = 0x03,
+}
+export const enum CpuSubfunction {
+  ReadSzl = 0x01,
+}
+export const enum SecuritySubfunction {
+  SetPassword = 0x01,
+  ClearPassword = 0x02,
+}
+export const enum TimeSubfunction {
+  ReadClock = 0x01,
+  SetClock = 0x02,
+}
+/** "Last data unit" byte of a 12-byte userdata parameter part. */
+export const LAST_DATA_UNIT = 0x00;
+export const MORE_DATA_UNITS = 0x01;
+
+/** Job (ROSCTR 1) functions of the CPU services: PLC control and block upload. */
+export const enum ControlFunction {
+  StartUpload = 0x1d,
+  Upload = 0x1e,
+  EndUpload = 0x1f,
+  PiService = 0x28,
+  PlcStop = 0x29,
+}
+
+/** Block types as the block functions name them (ASCII characters). */
+export const BLOCK_TYPES = Object.freeze({ OB: 0x38, DB: 0x41, SDB: 0x42, FC: 0x43, SFC: 0x44, FB: 0x45, SFB: 0x46 } as const);
+export type BlockType = keyof typeof BLOCK_TYPES;
+/** The code of a block type name ("DB" → 0x41); undefined for anything else. */
+export function blockTypeCode(name: string): number | undefined {
+  return Object.prototype.hasOwnProperty.call(BLOCK_TYPES, name) ? BLOCK_TYPES[name as BlockType] : undefined;
+}
+/** The name of a block type code (0x41 → "DB"); undefined for an unknown code. */
+export function blockTypeName(code: number): BlockType | undefined {
+  return (Object.keys(BLOCK_TYPES) as BlockType[]).find((k) => BLOCK_TYPES[k] === code);
+}
+/** Sub-block type byte of block info and of a block's header (OB 0x08, DB 0x0A …), by block type. */
+export const SUBBLOCK_TYPES: Readonly<Record<BlockType, number>> = Object.freeze({ OB: 0x08, DB: 0x0a, SDB: 0x0b, FC: 0x0c, SFC: 0x0d, FB: 0x0e, SFB: 0x0f });
+/** Programming languages of a block (block info byte "language"). */
+export const BLOCK_LANGUAGES: Readonly<Record<number, string>> = Object.freeze({
+  0x00: 'undefined',
+  0x01: 'STL',
+  0x02: 'LAD',
+  0x03: 'FBD',
+  0x04: 'SCL',
+  0x05: 'DB',
+  0x06: 'GRAPH',
+  0x07: 'SDB',
+  0x08: 'CPU-DB',
+  0x11: 'SDB (after overall reset)',
+  0x12: 'SDB (routing)',
+  0x29: 'encrypted',
+});
+
+/**
+ * Error codes of CPU services: the 2-byte error field of a userdata
+ * response's parameters, and the header error (class << 8 | code) of a
+ * refused control or upload job. One table for the simulator (which picks
+ * codes from it) and the client (which turns them into words).
+ */
+export const SERVICE_ERRORS: Readonly<Record<number, readonly [PlcErrorCode, string]>> = Object.freeze({
+  0x8104: ['NOT_SUPPORTED', 'this CPU does not offer the service (function not implemented)'],
+  0x8304: ['PLC_ERROR', 'no resources for another upload'],
+  0x8402: ['PLC_ERROR', 'the CPU is not in a state to perform the service'],
+  0x8500: ['PDU_TOO_LARGE', 'the request does not fit the negotiated PDU'],
+  0xd0a1: ['ACCESS_DENIED', 'the protection level forbids it (enter the password)'],
+  0xd209: ['OBJECT_DOES_NOT_EXIST', 'block not found'],
+  0xd20e: ['OBJECT_DOES_NOT_EXIST', 'no (further) block of that type'],
+  0xd241: ['ACCESS_DENIED', 'the protection level forbids it (enter the password)'],
+  0xd401: ['SZL_NOT_AVAILABLE', 'the SZL ID is not available on this CPU'],
+  0xd402: ['SZL_NOT_AVAILABLE', 'the SZL index is not available on this CPU'],
+  0xd405: ['NOT_SUPPORTED', 'service not supported, or a syntax error in its parameters'],
+  0xd602: ['ACCESS_DENIED', 'wrong password'],
+  0xd604: ['PLC_ERROR', 'the connection is already enabled'],
+  0xd605: ['PLC_ERROR', 'the CPU has no password set'],
+  0xdc01: ['INVALID_VALUE', 'date and/or time invalid'],
+});
+
+/** A CPU service error as a typed PlcError: `${context}: the PLC answered 0xd401: the SZL ID is not available on this CPU`. */
+export function serviceError(code: number, context: string): PlcError {
+  const hex = `0x${code.toString(16).padStart(4, '0')}`;
+  const known = SERVICE_ERRORS[code];
+  if (known) return new PlcError(known[0], `${context}: the PLC answered ${hex}: ${known[1]}`, { plcCode: code });
+  return headerError(code >> 8, code & 0xff, context);
+}

@@ -169,3 +169,42 @@ export function toMemoryLayout(layout: S7Layout): MemoryLayout {
   }
   return out;
 }
+
+/**
+ * What the simulated CPU says about itself (SZL 0x0011, 0x001C) and which
+ * service families it offers. S7-1200 and S7-1500 CPUs do not serve the
+ * classic block functions (list, block info, upload) nor the connection
+ * password over S7comm: the simulator refuses them as those CPUs do.
+ */
+export interface CpuIdentity {
+  /** Order code (MLFB), e.g. "6ES7 315-2EH14-0AB0". */
+  orderCode: string;
+  /** Firmware version, "V3.2.6". */
+  firmware: string;
+  hardwareVersion: number;
+  moduleTypeName: string;
+  serialNumber: string;
+  asName: string;
+  moduleName: string;
+  plantId: string;
+  copyright: string;
+  /** Block list, block info and upload over S7comm. */
+  blockFunctions: boolean;
+  /** Connection password (userdata group 5). */
+  passwordFunctions: boolean;
+}
+
+const COPYRIGHT = 'Original Siemens Equipment';
+
+/** Identity defaults per profile: catalogue CPUs of each family; serial numbers are made up. */
+export const IDENTITIES: Readonly<Record<S7Profile, Readonly<CpuIdentity>>> = Object.freeze({
+  's7-300': Object.freeze({ orderCode: '6ES7 315-2EH14-0AB0', firmware: 'V3.2.6', hardwareVersion: 4, moduleTypeName: 'CPU 315-2 PN/DP', serialNumber: 'S C-PW0000012019', asName: 'PLCWIRE-SIM', moduleName: 'CPU 315-2 PN/DP', plantId: '', copyright: COPYRIGHT, blockFunctions: true, passwordFunctions: true }),
+  's7-400': Object.freeze({ orderCode: '6ES7 416-3ES07-0AB0', firmware: 'V7.0.1', hardwareVersion: 3, moduleTypeName: 'CPU 416-3 PN/DP', serialNumber: 'S Q-PW0000022019', asName: 'PLCWIRE-SIM', moduleName: 'CPU 416-3 PN/DP', plantId: '', copyright: COPYRIGHT, blockFunctions: true, passwordFunctions: true }),
+  's7-1200': Object.freeze({ orderCode: '6ES7 214-1AG40-0XB0', firmware: 'V4.4.0', hardwareVersion: 5, moduleTypeName: 'CPU 1214C DC/DC/DC', serialNumber: 'S V-PW0000032019', asName: 'PLCWIRE-SIM', moduleName: 'PLC_1', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
+  's7-1500': Object.freeze({ orderCode: '6ES7 516-3AN02-0AB0', firmware: 'V2.9.2', hardwareVersion: 2, moduleTypeName: 'CPU 1516-3 PN/DP', serialNumber: 'S V-PW0000042019', asName: 'PLCWIRE-SIM', moduleName: 'PLC_1', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
+  // S7-200 (through a CP 243-1) and LOGO!: public descriptions cover their data
+  // access only; they get no block or password functions here, and SZL, clock
+  // and state are answered as the S7-1200 model answers them.
+  's7-200': Object.freeze({ orderCode: '6ES7 214-2BD23-0XB0', firmware: 'V2.2.0', hardwareVersion: 1, moduleTypeName: 'CPU 224XP', serialNumber: 'S C-PW0000052019', asName: 'PLCWIRE-SIM', moduleName: 'CPU 224XP', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
+  logo: Object.freeze({ orderCode: '6ED1052-1MD08-0BA1', firmware: 'V1.83.1', hardwareVersion: 1, moduleTypeName: 'LOGO! 12/24RCE', serialNumber: 'S L-PW0000062019', asName: 'PLCWIRE-SIM', moduleName: 'LOGO!', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
+});

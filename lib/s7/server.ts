@@ -8,13 +8,17 @@ import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
 import { FrameReader } from '../link/framer';
 import { PlcMemory } from '../sim/memory';
-import { S7Function, tpduBytes } from './constants';
+import { Rosctr, S7Function, tpduBytes } from './constants';
+import { isControlJob } from './codec/control';
+import type { DiagnosticEntry } from './diagnostics';
+import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './server-services';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from './codec';
 import { firstItems } from './server-items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
-import { PROFILES, toMemoryLayout, tsapRefusal, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
+import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuIdentity, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
 
-export { PROFILES, toMemoryLayout, type CpuProfile, type S7JsonLayout, type S7Layout, type S7Profile } from './server-profiles';
+export { IDENTITIES, PROFILES, toMemoryLayout, type CpuIdentity, type CpuProfile, type S7JsonLayout, type S7Layout, type S7Profile } from './server-profiles';
+export { STOP_CAUSES, type SimulatorMode, type StopCause } from './server-services';
 
 export interface S7ServerOptions {
   /** Default 127.0.0.1: a simulator is not exposed to the network unless asked. */
@@ -33,6 +37,8 @@ export interface S7ServerOptions {
    * the PDU's, as Siemens CPUs.
    */
   maxItems?: number;
+  /** What the CPU says about itself (order code, firmware, names …); the profile's defaults (S7-1500's for a custom CpuProfile) for what is not given. */
+  identity?: Partial<CpuIdentity>;
 }
 
 /** Fault injection; every field can be changed at any time. */
@@ -52,9 +58,10 @@ export interface S7Faults {
 }
 
 export interface S7RequestEvent {
-  kind: 'read' | 'write';
+  /** Read/Write Var, or a system service: userdata (SZL, clock, blocks, password) or a control job (stop, start, upload). */
+  kind: 'read' | 'write' | 'userdata' | 'control';
   pduRef: number;
-  /** Number of items in the job. */
+  /** Number of items in the job (0 for system services). */
   items: number;
   /** Bytes of the request frame on the wire. */
   bytes: number;
@@ -85,6 +92,7 @@ interface Connection {
   /** The largest PDU this connection may negotiate (the TPDU size can lower it). */
   pduLimit: number;
   ctx: JobContext;
+  services: ServiceSession;
   maxJobs: number;
   running: number;
   queue: Buffer[];
@@ -93,7 +101,7 @@ interface Connection {
 }
 
 /**
- * Events: `listening` (port), `connection` (count), `disconnect` (count),
+ * Events: `listening` (port), `connection` (count), `disconnect` (count), `mode` (RUN/STOP),
  * `refused` (S7RefusedEvent), `request` (S7RequestEvent), `error` (only when
  * listened to). The memory emits `read` and `write` (MemoryAccess).
  */
@@ -103,6 +111,8 @@ export class S7Server extends EventEmitter {
   readonly faults: S7Faults;
   /** Items served per job (S7ServerOptions.maxItems); may be changed at any time. */
   maxItems: number | undefined;
+  /** The system side: mode, clock, diagnostic buffer, blocks, protection (also reached through the members below). */
+  readonly cpu: CpuServices;
   private readonly host: string;
   private readonly wantPort: number;
   private server: net.Server | undefined;
@@ -127,6 +137,9 @@ export class S7Server extends EventEmitter {
       throw new TypeError(`maxItems must be a whole number 1..255, got ${String(options.maxItems)}`);
     }
     this.maxItems = options.maxItems;
+    const identity = { ...(typeof profile === 'string' ? IDENTITIES[profile] : IDENTITIES['s7-1500']), ...options.identity };
+    this.cpu = new CpuServices(this.memory, Object.freeze(identity), { maxConnections: resolved.maxConnections });
+    this.cpu.on('mode', (mode: SimulatorMode) => this.emit('mode', mode));
     this.faults = {
       accessDenied: false,
       missingDb: undefined,
@@ -135,6 +148,44 @@ export class S7Server extends EventEmitter {
       silent: false,
       dropConnections: () => this.dropConnections(),
     };
+  }
+
+  /** RUN or STOP. A CPU in STOP still serves reads and writes of its memory (and every system service). */
+  get state(): SimulatorMode {
+    return this.cpu.mode;
+  }
+
+  /** Puts the CPU in STOP, logging the cause in the diagnostic buffer (default: a PLC stop command, 0x4304); false when it was in STOP. */
+  stop(cause: StopCause | number = 'command'): boolean {
+    return this.cpu.stop(cause);
+  }
+
+  /** Restarts the CPU (STOP → STARTUP → RUN, each step logged); false when it was in RUN. */
+  start(kind: 'warm' | 'cold' = 'warm'): boolean {
+    return this.cpu.start(kind);
+  }
+
+  /** Milliseconds the CPU clock runs ahead of the host clock (negative: behind). Settable; clients change it with setClock. */
+  get clockOffset(): number {
+    return this.cpu.clockOffset;
+  }
+
+  set clockOffset(ms: number) {
+    this.cpu.clockOffset = ms;
+  }
+
+  /** The diagnostic buffer, newest entry first. */
+  get diagnostics(): DiagnosticEntry[] {
+    return this.cpu.diagnostics;
+  }
+
+  /**
+   * Protection level 1 (none), 2 (writes, stop/start and setting the clock
+   * need the password) or 3 (reads of data and upload too). A connection
+   * that gave the password with the security function works at level 1.
+   */
+  setProtection(level: 1 | 2 | 3, password?: string): void {
+    this.cpu.setProtection(level, password);
   }
 
   /** The port listened on (after listen()). */
@@ -194,6 +245,7 @@ export class S7Server extends EventEmitter {
       stage: 'cotp',
       pduLimit: this.profile.pduSize,
       ctx: { memory: this.memory, pduSize: this.profile.pduSize, missingDb: undefined, s5CountersTimers: this.profile.s5CountersTimers !== false },
+      services: newServiceSession(),
       maxJobs: 1,
       running: 0,
       queue: [],
@@ -259,6 +311,10 @@ export class S7Server extends EventEmitter {
       // Anything else must still be well-formed S7 (decodeS7 throws otherwise); it is refused in order with the jobs.
       const message = decodeS7(frame);
       if (message.kind === 'setup-request') throw new Error('setup communication sent twice');
+      if (this.listenerCount('request') > 0 && (frame[8] === Rosctr.UserData || isControlJob(frame))) {
+        const kind = frame[8] === Rosctr.UserData ? 'userdata' : 'control';
+        this.emit('request', { kind, pduRef: message.pduRef, items: 0, bytes: frame.length } satisfies S7RequestEvent);
+      }
       return this.enqueue(conn, frame);
     }
     if (conn.stage === 'cotp') return this.onConnectionRequest(conn, frame);
@@ -344,10 +400,17 @@ export class S7Server extends EventEmitter {
   private answer(conn: Connection, frame: Buffer): Buffer {
     const func = jobFunction(frame);
     const pduRef = jobPduRef(frame);
-    // Anything but Read/Write Var (userdata, block functions...): "function not supported".
-    if (func === 0) return refuseJob(pduRef, 0x81, 0x04);
+    if (func === 0) {
+      // System services: userdata (SZL, clock, blocks, password) and the control jobs (stop, start, upload).
+      if (frame[8] === Rosctr.UserData) return this.cpu.serveUserdata(frame, conn.services, conn.ctx.pduSize);
+      if (isControlJob(frame)) return this.cpu.serveControl(frame, conn.services, conn.ctx.pduSize);
+      // Any other job: "function not supported".
+      return refuseJob(pduRef, 0x81, 0x04);
+    }
     // S7-1200/1500 without PUT/GET: ack with header error 0x8104 (S7NetPlus/s7netplus#403 shows `32 02 … 81 04`).
     if (this.faults.accessDenied) return refuseJob(pduRef, 0x81, 0x04);
+    // Protection level 2 refuses writes, 3 reads too, until the connection gave the password.
+    if (this.cpu.refusesData(conn.services, func)) return refuseJob(pduRef, 0xd2, 0x41);
     const job = this.maxItems === undefined ? frame : firstItems(frame, this.maxItems);
     return func === S7Function.ReadVar ? serveRead(job, conn.ctx) : serveWrite(job, conn.ctx);
   }

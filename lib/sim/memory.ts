@@ -88,6 +88,11 @@ export class PlcMemory extends EventEmitter {
     this.dataBlocks.delete(dbNumber);
   }
 
+  /** The numbers of the data blocks that exist, ascending (the simulator's block list). */
+  dataBlockNumbers(): number[] {
+    return [...this.dataBlocks.keys()].sort((a, b) => a - b);
+  }
+
   /** Checks an access; returns the fault or undefined when it is allowed. */
   check(area: AreaName, dbNumber: number, offset: number, length: number): MemoryFault | undefined {
     const buf = this.area(area, dbNumber);

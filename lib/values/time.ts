@@ -47,7 +47,8 @@ function dateInRange(type: 'DATE_AND_TIME' | 'DTL', value: unknown, min: number,
   return d;
 }
 
-function encodeDateAndTime(value: unknown, b: Buffer, o: number): void {
+/** Writes a Date as 8 BCD DATE_AND_TIME bytes (its UTC fields); throws a ValueProblem outside 1990..2089. */
+export function encodeDateAndTime(value: unknown, b: Buffer, o: number): void {
   const d = dateInRange('DATE_AND_TIME', value, EPOCH_1990, Date.UTC(2089, 11, 31, 23, 59, 59, 999), '1990-01-01..2089-12-31');
   const ms = d.getUTCMilliseconds();
   b[o] = toBcd2(d.getUTCFullYear() % 100);
@@ -60,7 +61,8 @@ function encodeDateAndTime(value: unknown, b: Buffer, o: number): void {
   b[o + 7] = ((ms % 10) << 4) | (d.getUTCDay() + 1);
 }
 
-function decodeDateAndTime(b: Buffer, o: number): Date {
+/** 8 BCD DATE_AND_TIME bytes as a Date of those UTC fields; an Invalid Date when a field is not a date (never throws). */
+export function decodeDateAndTime(b: Buffer, o: number): Date {
   const yy = fromBcd2(b[o]!);
   const msDigit = b[o + 7]! >> 4;
   const ms = fromBcd2(b[o + 6]!) * 10 + (msDigit > 9 ? Number.NaN : msDigit);

@@ -39,3 +39,31 @@ export {
   type SetupParams,
   type WriteItem,
 } from './pdu';
+export {
+  decodePassword,
+  decodeUserdata,
+  decodeUserdataParts,
+  encodePassword,
+  encodeUserdata,
+  encodeUserdataNext,
+  encodeUserdataRequest,
+  encodeUserdataResponse,
+  USERDATA_OVERHEAD,
+  type UserdataAnswer,
+  type UserdataParams,
+  type UserdataPdu,
+} from './userdata';
+export {
+  COLD_START_ARG,
+  decodeControl,
+  encodeControlAck,
+  encodeEndUpload,
+  encodePlcStart,
+  encodePlcStop,
+  encodeStartUpload,
+  encodeStartUploadAck,
+  encodeUpload,
+  encodeUploadAck,
+  isControlJob,
+  type ControlMessage,
+} from './control';

@@ -1,0 +1,307 @@
+import { expect } from 'chai';
+import fc from 'fast-check';
+import { PlcError, ProtocolError } from '../lib/errors';
+import { decodeBlockCounts, decodeBlockInfo, decodeLoadBlock, encodeBlockCounts, encodeBlockInfo, encodeLoadBlock, type BlockSpec } from '../lib/s7/blocks';
+import {
+  decodeControl,
+  decodeUserdata,
+  encodeControlAck,
+  encodePlcStart,
+  encodePlcStop,
+  encodeStartUpload,
+  encodeStartUploadAck,
+  encodeUploadAck,
+  encodeUserdata,
+  encodeUserdataNext,
+  encodeUserdataRequest,
+  encodeUserdataResponse,
+  COLD_START_ARG,
+  decodePassword,
+  encodePassword,
+} from '../lib/s7/codec';
+import { SERVICE_ERRORS, serviceError } from '../lib/s7/constants';
+import { decodeDiagnosticBuffer, describeEvent, encodeDiagnosticBuffer } from '../lib/s7/diagnostics';
+import {
+  decodeComponentIdentification,
+  decodeCpuState,
+  decodeModuleIdentification,
+  decodeProtection,
+  encodeComponentIdentification,
+  encodeCpuState,
+  encodeModuleIdentification,
+  encodeSzl,
+  parseSzl,
+} from '../lib/s7/szl';
+import { show } from './fixtures/s7';
+import { CONTROL, CPU315, UD } from './fixtures/s7-userdata';
+
+const list = (id: number, index: number, recordLength: number, bytes: Buffer) => ({
+  id,
+  index,
+  recordLength,
+  records: Array.from({ length: bytes.length / recordLength }, (_, i) => bytes.subarray(i * recordLength, (i + 1) * recordLength)),
+});
+
+describe('S7 userdata codec', () => {
+  describe('frames of the protocol layout', () => {
+    it('encodes a read SZL request byte for byte and decodes its parameter head', () => {
+      expect(show(encodeUserdata(5, { method: 0x11, type: 4, group: 4, subfunction: 1, sequence: 0 }, Buffer.of(0x00, 0x11, 0x00, 0x00)))).to.equal(show(UD.szlRequest));
+      const u = decodeUserdata(UD.szlRequest);
+      expect(u).to.deep.include({ pduRef: 5, returnCode: 0xff, transportSize: 0x09 });
+      expect(u.params).to.deep.equal({ method: 0x11, type: 4, group: 4, subfunction: 1, sequence: 0 });
+      expect(show(u.data)).to.equal('00110000');
+    });
+
+    it('decodes the first part of a multi-part answer: sequence, data unit reference, "more follows"', () => {
+      const u = decodeUserdata(UD.szlFirstOfTwo);
+      expect(u.params).to.deep.equal({ method: 0x12, type: 8, group: 4, subfunction: 1, sequence: 3, dataUnitRef: 3, lastDataUnit: false, errorCode: 0 });
+      expect(u.data.length).to.equal(12);
+    });
+
+    it('encodes the request for the next part with the CPU sequence and data unit reference echoed', () => {
+      const next = encodeUserdataNext(4, 1, 3, 3);
+      next.writeUInt16BE(6, 11);
+      expect(show(next)).to.equal(show(UD.szlNext));
+      expect(decodeUserdata(UD.szlNext).params).to.deep.equal({ method: 0x12, type: 4, group: 4, subfunction: 1, sequence: 3, dataUnitRef: 3, lastDataUnit: true, errorCode: 0 });
+    });
+
+    it('joins a two-part diagnostic buffer answer into its list and reads both entries with their time stamps', () => {
+      const first = decodeUserdata(UD.szlFirstOfTwo);
+      const last = decodeUserdata(UD.szlLastOfTwo);
+      expect(last.params.lastDataUnit).to.equal(true);
+      const szl = parseSzl(Buffer.concat([first.data, last.data]));
+      expect(szl).to.deep.include({ id: 0x00a0, index: 0, recordLength: 20 });
+      expect(szl.records.map(show)).to.deep.equal([show(CPU315.diagnostics.subarray(0, 20)), show(CPU315.diagnostics.subarray(20))]);
+    });
+
+    it('encodes a CPU answer of each kind: data, more parts, an error with the empty item', () => {
+      const err = encodeUserdataResponse(7, 4, 1, { errorCode: 0xd401 });
+      expect(show(err)).to.equal(show(UD.szlNotAvailable));
+      const first = encodeUserdataResponse(5, 4, 1, { sequence: 3, dataUnitRef: 3, last: false, data: Buffer.concat([Buffer.from('00A0000000140002', 'hex'), CPU315.diagnostics.subarray(0, 4)]) });
+      expect(show(first)).to.equal(show(UD.szlFirstOfTwo));
+      const clock = encodeUserdataResponse(8, 7, 1, { data: UD.clockAnswer.subarray(33) });
+      expect(show(clock)).to.equal(show(UD.clockAnswer));
+    });
+
+    it('encodes read clock, set clock, block info and password requests byte for byte', () => {
+      const at = (f: Buffer, ref: number) => (f.writeUInt16BE(ref, 11), f);
+      expect(show(at(encodeUserdataRequest(7, 1), 8))).to.equal(show(UD.clockRequest));
+      expect(show(at(encodeUserdataRequest(7, 2, UD.setClock.subarray(29)), 9))).to.equal(show(UD.setClock));
+      expect(show(at(encodeUserdataRequest(3, 3, Buffer.from('0A00007A', 'latin1')), 10))).to.equal(show(UD.blockInfoRequest));
+      expect(show(at(encodeUserdataRequest(5, 1, encodePassword('secret')), 11))).to.equal(show(UD.setPassword));
+      expect(decodePassword(encodePassword('secret'))).to.equal('secret  ');
+    });
+  });
+
+  describe('every length checked', () => {
+    const frames = Object.entries(UD);
+
+    it('every truncation of every frame (TPKT length adjusted) is a ProtocolError', () => {
+      for (const [name, frame] of frames) {
+        for (let cut = 4; cut < frame.length; cut++) {
+          const short = Buffer.from(frame.subarray(0, cut));
+          short.writeUInt16BE(cut, 2);
+          expect(() => decodeUserdata(short), `${name} cut at ${cut}`).to.throw(ProtocolError);
+        }
+      }
+    });
+
+    it('every wrong parameter length, data length, item length and parameter length byte is a ProtocolError', () => {
+      for (const [name, frame] of frames) {
+        for (const [at, width] of [[13, 2], [15, 2], [20, 1], [17 + frame.readUInt16BE(13) + 2, 2]] as const) {
+          const base = width === 2 ? frame.readUInt16BE(at) : frame[at]!;
+          for (const delta of [-4, -1, 1, 4, 0x100]) {
+            const bad = Buffer.from(frame);
+            const v = base + delta;
+            if (v < 0 || v > (width === 2 ? 0xffff : 0xff)) continue;
+            if (width === 2) bad.writeUInt16BE(v, at);
+            else bad[at] = v;
+            expect(() => decodeUserdata(bad), `${name}: byte ${at} ${base} → ${v}`).to.throw(ProtocolError);
+          }
+        }
+      }
+    });
+
+    it('a wrong parameter head, a "last data unit" byte other than 00/01 and a non-userdata PDU are ProtocolErrors', () => {
+      const head = Buffer.from(UD.szlRequest);
+      head[18] = 0x02;
+      expect(() => decodeUserdata(head)).to.throw(ProtocolError, /head/);
+      const last = Buffer.from(UD.szlFirstOfTwo);
+      last[26] = 0x05;
+      expect(() => decodeUserdata(last)).to.throw(ProtocolError, /last data unit/);
+      const job = Buffer.from(UD.szlRequest);
+      job[8] = 1;
+      expect(() => decodeUserdata(job)).to.throw(ProtocolError, /ROSCTR/);
+    });
+
+    it('property: any bytes decode to a userdata PDU or a ProtocolError, never anything else', () => {
+      fc.assert(
+        fc.property(fc.constantFrom(...frames.map(([, f]) => f)), fc.array(fc.tuple(fc.nat(80), fc.integer({ min: 0, max: 255 })), { maxLength: 6 }), (frame, edits) => {
+          const b = Buffer.from(frame);
+          for (const [at, v] of edits) if (at < b.length) b[at] = v;
+          try {
+            decodeUserdata(b);
+          } catch (err) {
+            if (!(err instanceof ProtocolError)) throw err;
+          }
+        }),
+        { numRuns: 3000 },
+      );
+    });
+  });
+
+  describe('SZL lists', () => {
+    it('a list whose record bytes do not add up to N_DR × LENTHDR is a ProtocolError naming it', () => {
+      const szl = Buffer.concat([Buffer.from('00A0000000140002', 'hex'), CPU315.diagnostics.subarray(0, 30)]);
+      expect(() => parseSzl(szl)).to.throw(ProtocolError, /SZL 0x00a0 index 0x0000 announces 2 records of 20 bytes, 30 bytes arrived/);
+      expect(() => parseSzl(Buffer.from('0011', 'hex'))).to.throw(ProtocolError, /header/);
+    });
+
+    it('a header-only extract (0x0Fxx) announces records and carries none', () => {
+      expect(parseSzl(Buffer.from('0F1100000' + '01C0004', 'hex'))).to.deep.equal({ id: 0x0f11, index: 0, recordLength: 28, records: [] });
+    });
+
+    it('reads module identification of a CPU 315-2 PN/DP: order code, hardware 4, firmware V3.2.6', () => {
+      const m = decodeModuleIdentification(list(0x0011, 0, 28, CPU315.moduleId));
+      expect(m).to.deep.include({ orderCode: '6ES7 315-2EH14-0AB0', hardwareVersion: 4, firmware: 'V3.2.6' });
+      const back = encodeModuleIdentification('6ES7 315-2EH14-0AB0', 4, 'V3.2.6');
+      expect(decodeModuleIdentification(back)).to.deep.include({ orderCode: '6ES7 315-2EH14-0AB0', hardwareVersion: 4, firmware: 'V3.2.6' });
+      expect(show(back.records[2]!)).to.equal(show(CPU315.moduleId.subarray(28)));
+    });
+
+    it('reads the protection record: level 1, mode selector RUN-P', () => {
+      expect(decodeProtection(list(0x0232, 4, 40, CPU315.protection))).to.deep.equal({ level: 1, switchLevel: 1, configuredLevel: 0, keySwitch: 'RUN-P', startupSwitch: undefined });
+    });
+
+    it('reads the CPU state record: RUN (code 8), the transition event and its BCD time', () => {
+      const s = decodeCpuState(list(0x0424, 0, 20, CPU315.cpuState));
+      expect(s).to.deep.include({ mode: 'RUN', modeCode: 8, previousCode: 0, eventId: 0x5144 });
+      expect(s.time.toISOString()).to.equal('1994-02-05T02:01:55.906Z');
+      const stop = decodeCpuState(encodeCpuState(4, 0x4304, new Date('2026-01-02T03:04:05.060Z'), 8));
+      expect(stop).to.deep.include({ mode: 'STOP', modeCode: 4, previousCode: 8, eventId: 0x4304 });
+    });
+
+    it('component identification keeps the record order 1, 2, 3, 4, 5, 7 (clients read fixed offsets) and trims the padding', () => {
+      const c = { asName: 'LINE 4', moduleName: 'PLC_1', plantId: 'PLANT-A', copyright: 'Original Siemens Equipment', serialNumber: 'S C-X1234', moduleTypeName: 'CPU 1516-3 PN/DP' };
+      const l = encodeComponentIdentification(c);
+      expect(l.records.map((r) => r.readUInt16BE(0))).to.deep.equal([1, 2, 3, 4, 5, 7]);
+      const bytes = encodeSzl(l).subarray(4);
+      expect(bytes.subarray(2 + 140, 2 + 140 + 9).toString('latin1')).to.equal('S C-X1234');
+      expect(decodeComponentIdentification(l)).to.deep.include(c);
+    });
+  });
+
+  describe('diagnostic buffer', () => {
+    it('takes the time stamp from the last 8 bytes of each 20-byte entry (BCD), not from the info fields', () => {
+      const [a, b] = decodeDiagnosticBuffer(list(0x00a0, 0, 20, CPU315.diagnostics));
+      expect(a).to.deep.include({ eventId: 0x4302, priority: 0xff, ob: 0x68, dataId: 0xc700, info1: 0, info2: 0x0814, info3: 0x7714, description: 'Mode transition STARTUP to RUN' });
+      expect(a!.time.toISOString()).to.equal('1994-02-04T23:52:16.388Z');
+      expect(b).to.deep.include({ eventId: 0x1381, priority: 0xfe, ob: 100, description: 'Manual warm restart requested' });
+      expect(b!.time.toISOString()).to.equal('1994-02-04T23:52:16.387Z');
+    });
+
+    it('keeps the number of an event it does not describe, and encodes entries back byte for byte', () => {
+      expect(describeEvent(0x4711)).to.equal('event 0x4711');
+      const entries = decodeDiagnosticBuffer(list(0x00a0, 0, 20, CPU315.diagnostics));
+      expect(show(encodeSzl(encodeDiagnosticBuffer(entries)).subarray(8))).to.equal(show(CPU315.diagnostics));
+      expect(encodeDiagnosticBuffer(entries, 1)).to.deep.include({ id: 0x01a0, index: 1 });
+    });
+
+    it('entries of another size are a ProtocolError', () => {
+      expect(() => decodeDiagnosticBuffer(list(0x00a0, 0, 10, CPU315.diagnostics))).to.throw(ProtocolError, /20/);
+    });
+  });
+
+  describe('blocks', () => {
+    const spec: BlockSpec = {
+      type: 'DB', number: 7, languageCode: 5, mc7Size: 10, author: 'PLCWIRE', family: 'SIM', name: 'DB7', version: 0x12, checksum: 0xbeef,
+      codeTime: new Date('2019-11-18T10:11:12.345Z'), interfaceTime: new Date('1999-11-18T00:00:00.000Z'),
+    };
+
+    it('block info round-trips every field; time stamps count days from 1984 and ms of the day', () => {
+      const b = encodeBlockInfo(spec);
+      expect(b.length).to.equal(78);
+      // 1999-11-18 is day 5800 after 1984-01-01.
+      expect(b.readUInt16BE(28 + 4)).to.equal(5800);
+      expect(decodeBlockInfo(b)).to.deep.include({ type: 'DB', number: 7, language: 'DB', mc7Size: 10, dataLength: 10, loadSize: 102, author: 'PLCWIRE', family: 'SIM', name: 'DB7', version: '1.2', checksum: 0xbeef, protected: false });
+      expect(decodeBlockInfo(b).codeTime.toISOString()).to.equal('2019-11-18T10:11:12.345Z');
+      expect(() => decodeBlockInfo(b.subarray(0, 40))).to.throw(ProtocolError, /78/);
+    });
+
+    it('the block list of all types comes as 7 entries of 4 bytes, in the CPU order OB FB FC DB SDB SFC SFB', () => {
+      const bytes = encodeBlockCounts({ OB: 3, DB: 100, FC: 2 });
+      expect(show(bytes)).to.equal('30380003' + '30450000' + '30430002' + '30410064' + '30420000' + '30440000' + '30460000');
+      expect(decodeBlockCounts(bytes)).to.deep.equal({ OB: 3, FB: 0, FC: 2, DB: 100, SDB: 0, SFC: 0, SFB: 0 });
+      expect(() => decodeBlockCounts(bytes.subarray(0, 6))).to.throw(ProtocolError);
+    });
+
+    it('the load-memory form: 36-byte header, the code, 56-byte footer; a header that announces more code than arrived is a ProtocolError', () => {
+      const code = Buffer.from('0102030405060708090a', 'hex');
+      const block = encodeLoadBlock(spec, code);
+      expect(block.length).to.equal(102);
+      expect(decodeLoadBlock(block)).to.deep.include({ type: 'DB', number: 7 });
+      expect(show(decodeLoadBlock(block).code)).to.equal(show(code));
+      expect(() => decodeLoadBlock(block.subarray(0, 40))).to.throw(ProtocolError, /announces 10 bytes/);
+    });
+  });
+
+  describe('control jobs', () => {
+    const at = (f: Buffer, ref: number) => (f.writeUInt16BE(ref, 11), f);
+
+    it('encodes PLC stop, hot start and cold start byte for byte and decodes them', () => {
+      expect(show(at(encodePlcStop(), 12))).to.equal(show(CONTROL.stop));
+      expect(show(at(encodePlcStart(), 13))).to.equal(show(CONTROL.hotStart));
+      expect(show(at(encodePlcStart(COLD_START_ARG), 14))).to.equal(show(CONTROL.coldStart));
+      expect(decodeControl(CONTROL.stop)).to.deep.equal({ kind: 'stop', pduRef: 12 });
+      expect(decodeControl(CONTROL.hotStart)).to.deep.equal({ kind: 'start', pduRef: 13, cold: false, service: 'P_PROGRAM' });
+      expect(decodeControl(CONTROL.coldStart)).to.deep.equal({ kind: 'start', pduRef: 14, cold: true, service: 'P_PROGRAM' });
+    });
+
+    it('decodes a refused stop: the header error and the status parameter 07 (already in STOP)', () => {
+      expect(decodeControl(CONTROL.stopRefused)).to.deep.equal({ kind: 'control-ack', pduRef: 12, func: 0x29, status: 7, error: 0x8402 });
+      expect(show(encodeControlAck(12, 0x29, 7, 0x8402))).to.equal(show(CONTROL.stopRefused));
+    });
+
+    it('encodes and decodes the upload sequence: start (file name "_0A00001A"), its answer, a part', () => {
+      expect(show(at(encodeStartUpload(0x41, 1), 15))).to.equal(show(CONTROL.startUpload));
+      expect(decodeControl(CONTROL.startUpload)).to.deep.equal({ kind: 'start-upload', pduRef: 15, blockType: 0x41, number: 1 });
+      expect(show(encodeStartUploadAck(15, 7, 102))).to.equal(show(CONTROL.startUploadAck));
+      expect(decodeControl(CONTROL.startUploadAck)).to.deep.equal({ kind: 'start-upload-ack', pduRef: 15, uploadId: 7, loadLength: 102 });
+      expect(show(encodeUploadAck(16, Buffer.from('70700101', 'hex'), true))).to.equal(show(CONTROL.uploadAck));
+      const part = decodeControl(CONTROL.uploadAck);
+      expect(part).to.deep.include({ kind: 'upload-ack', more: true });
+    });
+
+    it('every truncation and every wrong length of a control frame is a ProtocolError', () => {
+      for (const [name, frame] of Object.entries(CONTROL)) {
+        for (let cut = 4; cut < frame.length; cut++) {
+          const short = Buffer.from(frame.subarray(0, cut));
+          short.writeUInt16BE(cut, 2);
+          expect(() => decodeControl(short), `${name} cut at ${cut}`).to.throw(ProtocolError);
+        }
+      }
+      const len = Buffer.from(CONTROL.uploadAck);
+      len.writeUInt16BE(5, 19 + 2);
+      expect(() => decodeControl(len)).to.throw(ProtocolError, /announces 5 bytes/);
+      const name = Buffer.from(CONTROL.startUploadAck);
+      name[29] = 0x41;
+      expect(() => decodeControl(name)).to.throw(ProtocolError, /not a number/);
+    });
+  });
+
+  describe('error codes', () => {
+    it('maps every service error code to its typed code and words, naming the request', () => {
+      for (const [key, [code, words]] of Object.entries(SERVICE_ERRORS)) {
+        const err = serviceError(Number(key), 's7://plc read SZL 0x0011');
+        expect(err).to.be.instanceOf(PlcError);
+        expect(err.code, key).to.equal(code);
+        expect(err.plcCode).to.equal(Number(key));
+        expect(err.message).to.equal(`s7://plc read SZL 0x0011: the PLC answered 0x${Number(key).toString(16).padStart(4, '0')}: ${words}`);
+      }
+      expect(serviceError(0xd401, 'x').code).to.equal('SZL_NOT_AVAILABLE');
+      expect(serviceError(0xd241, 'x').code).to.equal('ACCESS_DENIED');
+      expect(serviceError(0x8104, 'x').code).to.equal('NOT_SUPPORTED');
+      expect(serviceError(0xe201, 'x')).to.deep.include({ code: 'PLC_ERROR', plcCode: 0xe201 });
+    });
+  });
+});
