@@ -54,11 +54,12 @@ export const MOTOR = Object.freeze({ fullSpeed: 1450, rampUp: 600, rampDown: 900
  * The tank's heat balance, per second: the heater adds `heaterRate` °C, the
  * motor at full speed `motorRate` °C (in proportion to its speed), and the tank
  * loses `loss` of its excess over `ambient`. The thermostat switches the heater
- * on below `heaterOnBelow` and off above `heaterOffAbove`; with the motor
- * stopped the temperature swings between the two (a cycle of about 30 s),
- * with the motor running it climbs on to about 50 °C.
+ * on below `heaterOnBelow` and off above `heaterOffAbove`, so the temperature
+ * swings between the two: a cycle of about 30 s with the motor stopped; the
+ * running motor's heat shortens the heating and slows the cooling, to a cycle
+ * of about 75 s with the heater on for a tenth of it.
  */
-export const THERMAL = Object.freeze({ ambient: 20, heaterOnBelow: 40, heaterOffAbove: 45, heaterRate: 0.8, motorRate: 0.3, loss: 0.01 });
+export const THERMAL = Object.freeze({ ambient: 20, heaterOnBelow: 40, heaterOffAbove: 45, heaterRate: 0.8, motorRate: 0.15, loss: 0.01 });
 
 export class DemoProcess {
   private timer: NodeJS.Timeout | undefined;
