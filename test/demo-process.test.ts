@@ -33,22 +33,22 @@ describe('demo process: the simulated plant behind npm start', () => {
     const first = process.step();
     expect(first.heater).to.equal(true);
     const later = run(process, 10).at(-1)!;
-    // 10 s of 0.8 °C/s less the small loss near ambient: about 7.6 °C warmer.
-    expect(later.temperature).to.be.within(THERMAL.ambient + 7, THERMAL.ambient + 8);
+    // 10 s of 1 °C/s less the loss near ambient: about 9.2 °C warmer.
+    expect(later.temperature).to.be.within(THERMAL.ambient + 8.7, THERMAL.ambient + 9.7);
     expect(later.heater).to.equal(true);
   });
 
   it('holds the temperature between the thermostat limits, switching the heater on and off, with the motor stopped', () => {
     const { process } = fresh();
-    run(process, 60); // warm-up to the lower limit (about 30 s)
-    const cycle = run(process, 120);
+    run(process, 60); // warm-up to the lower limit (about 17 s)
+    const cycle = run(process, 180);
     const temps = cycle.map((s) => s.temperature);
     // The step of one cycle (< 0.1 °C) is all it may overshoot a limit by.
     expect(Math.min(...temps)).to.be.within(THERMAL.heaterOnBelow - 0.1, THERMAL.heaterOnBelow + 0.5);
     expect(Math.max(...temps)).to.be.within(THERMAL.heaterOffAbove - 0.5, THERMAL.heaterOffAbove + 0.1);
     const switches = cycle.filter((s, i) => i > 0 && s.heater !== cycle[i - 1]!.heater);
-    // About 30 s a cycle: at least three on/off pairs in two minutes.
-    expect(switches.length).to.be.at.least(6);
+    // About 63 s a cycle: at least two on/off pairs in three minutes.
+    expect(switches.length).to.be.at.least(5);
     // The heater is on exactly while the temperature rises.
     for (let i = 1; i < cycle.length; i++) {
       const rising = cycle[i]!.temperature > cycle[i - 1]!.temperature;
@@ -61,16 +61,18 @@ describe('demo process: the simulated plant behind npm start', () => {
     const heated = (cycle: ProcessSnapshot[]) => cycle.filter((s) => s.heater).length / cycle.length;
     const stopped = fresh();
     run(stopped.process, 60);
-    const idle = run(stopped.process, 300);
+    const idle = run(stopped.process, 600);
     const running = fresh();
     run(running.process, 60);
     setRun(running.db, true);
-    run(running.process, 60); // full speed, and one thermostat cycle to settle
-    const busy = run(running.process, 300);
+    run(running.process, 60); // full speed, and the heat of the speed-up settled
+    const busy = run(running.process, 600);
     expect(busy.every((s) => s.speed === MOTOR.fullSpeed)).to.equal(true);
-    // Heating about 9 s of a 31 s cycle stopped, 7 s of a 74 s cycle running (THERMAL's heat balance at 42.5 °C).
-    expect(heated(idle)).to.be.within(0.25, 0.33);
-    expect(heated(busy)).to.be.within(0.07, 0.12);
+    // THERMAL's heat balance: on 28 s of a 63 s cycle stopped, 22 s of a 77 s cycle running
+    // (ten minutes are not a whole number of cycles: a few per cent either way).
+    expect(heated(idle)).to.be.within(0.38, 0.52);
+    expect(heated(busy)).to.be.within(0.22, 0.35);
+    expect(heated(busy)).to.be.below(heated(idle) - 0.1);
     for (const cycle of [idle, busy]) {
       const temps = cycle.map((s) => s.temperature);
       expect(Math.min(...temps)).to.be.within(THERMAL.heaterOnBelow - 0.1, THERMAL.heaterOnBelow + 0.5);

@@ -55,11 +55,11 @@ export const MOTOR = Object.freeze({ fullSpeed: 1450, rampUp: 600, rampDown: 900
  * motor at full speed `motorRate` °C (in proportion to its speed), and the tank
  * loses `loss` of its excess over `ambient`. The thermostat switches the heater
  * on below `heaterOnBelow` and off above `heaterOffAbove`, so the temperature
- * swings between the two: a cycle of about 30 s with the motor stopped; the
- * running motor's heat shortens the heating and slows the cooling, to a cycle
- * of about 75 s with the heater on for a tenth of it.
+ * swings between the two: a cycle of about 63 s with the motor stopped, the
+ * heater on for 45 % of it; the running motor's heat shortens the heating and
+ * slows the cooling, to a cycle of about 77 s with the heater on for 28 %.
  */
-export const THERMAL = Object.freeze({ ambient: 20, heaterOnBelow: 40, heaterOffAbove: 45, heaterRate: 0.8, motorRate: 0.15, loss: 0.01 });
+export const THERMAL = Object.freeze({ ambient: 20, heaterOnBelow: 35, heaterOffAbove: 50, heaterRate: 1, motorRate: 0.15, loss: 0.02 });
 
 export class DemoProcess {
   private timer: NodeJS.Timeout | undefined;
