@@ -325,7 +325,9 @@ describe('browser: the npm start demo in headless Chromium', function () {
       await page.waitForTimeout(Number(process.env.PLCWIRE_SCREENSHOT_WAIT_MS ?? 0));
       const notice = page.getByRole('button', { name: 'Close' });
       if (await notice.isVisible()) await notice.click();
-      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, fullPage: true });
+      // The page down to the tallest group and its margin.
+      const bottom = await page.evaluate(() => Math.max(...[...(globalThis as any).document.querySelectorAll('.nrdb-ui-group')].map((g: any) => g.getBoundingClientRect().bottom)));
+      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 } });
     }
     try {
       for (const width of [1280, 800, 390]) {
