@@ -1,17 +1,52 @@
 'use strict';
 /**
  * The demo flow deployed by `npm start`: for each protocol a connection, a
- * poll feeding a Dashboard 2.0 page, and for S7 a switch that writes back and
- * a heartbeat. Generated here (not a JSON blob) so the URLs follow the ports.
+ * poll feeding a Dashboard 2.0 page, and for S7 a motor switch that writes the
+ * run command and shows the PLC's copy of it, and a heartbeat. Generated here
+ * (not a JSON blob) so the URLs follow the ports.
+ *
+ * What the page shows is what the PLC holds: BOOLs are lamps, the switch moves
+ * when the bit changes in the PLC, and when a link delivers nothing for a few
+ * polls (link down, PLC hung) a watchdog greys that link's widgets out
+ * (Dashboard 2's `msg.class`) until values flow again.
  */
+
+/**
+ * Editor columns (node centres): sources (polls, status, heartbeat), routing
+ * and watchdogs, shaping (rounding, stale marks, the switch), dashboard widgets.
+ * The flow fits the editor's workspace of a 1280 px wide browser window.
+ */
+const X = Object.freeze({ source: 90, route: 285, shape: 470, widget: 660 });
+/** Vertical pitch of a column: a 30 px node and 10 px of air (nodes with a status get more, for its text). */
+const PITCH = 40;
+/** The class a watchdog puts on the widgets of a link that went quiet, and the one it restores. */
+const STALE = 'plcwire-stale';
+const LIVE = 'plcwire-live';
+
+/** Dashboard CSS for the lamps and for stale values (a site-wide ui-template style). */
+const STYLE = `/* plcwire demo: lamps for BOOLs and states, greyed-out widgets of a link that went quiet */
+.plcwire-lamp-row { display: flex; align-items: center; justify-content: space-between; gap: 12px; width: 100%; min-height: 100%; font-size: 16px; }
+.plcwire-lamp-text { margin-left: auto; font-weight: 600; }
+.plcwire-lamp { flex: none; width: 20px; height: 20px; border-radius: 50%; border: 1px solid rgba(0, 0, 0, 0.35);
+  background: radial-gradient(circle at 35% 30%, #f4f4f4, #a3a3a3 70%); box-shadow: inset 0 -2px 3px rgba(0, 0, 0, 0.2); }
+.plcwire-lamp-on, .plcwire-lamp-green { background: radial-gradient(circle at 35% 30%, #c8f7c5, #1f9d2a 65%); box-shadow: 0 0 8px 2px rgba(31, 157, 42, 0.55); }
+.plcwire-lamp-yellow { background: radial-gradient(circle at 35% 30%, #fff1b8, #e0a100 65%); box-shadow: 0 0 8px 2px rgba(224, 161, 0, 0.55); }
+.plcwire-lamp-red { background: radial-gradient(circle at 35% 30%, #ffc9c9, #d32f2f 65%); box-shadow: 0 0 8px 2px rgba(211, 47, 47, 0.55); }
+.plcwire-stale { position: relative; opacity: 0.45; filter: grayscale(1); }
+.plcwire-stale::after { content: 'stale'; position: absolute; top: -9px; right: 0; padding: 0 6px; border-radius: 8px;
+  font-size: 11px; line-height: 16px; color: #fff; background: #6b6b6b; pointer-events: none; }
+`;
+
+/** Escapes text for a Vue template. */
+function html(text) {
+  return String(text).replace(/&/g, '&amp;').replace(/</g, '&lt;').replace(/>/g, '&gt;');
+}
 
 /** @param {{ s7: string, fetchwrite: string, freeport: string }} urls */
 function demoFlow(urls) {
   const tab = 'demo.tab';
   const nodes = [];
-  let y = 60;
-  const at = (x) => ({ x, y, z: tab });
-  const row = () => (y += 70);
+  const at = (x, y) => ({ x, y, z: tab });
 
   nodes.push({ id: tab, type: 'tab', label: 'plcwire demo', info: 'Simulated PLCs started by `npm start`.' });
   nodes.push({
@@ -19,116 +54,143 @@ function demoFlow(urls) {
     type: 'comment',
     name: 'Simulators: started by npm start (S7 10102, FETCH/WRITE 12000/12001, freeport tcp 14001)',
     info: 'Run `npx plcwire demo` to start the same simulated plant without Node-RED.',
-    ...at(330),
+    ...at(380, 40),
   });
   nodes.push({
     id: 'demo.comment.dashboard',
     type: 'comment',
     name: 'Needs @flowfuse/node-red-dashboard (Dashboard 2.0); page at /dashboard/plant',
-    info: 'Install Dashboard 2.0 from the palette manager: @flowfuse/node-red-dashboard.',
-    ...at(330),
-    y: 100,
+    info: 'Install Dashboard 2.0 from the palette manager: @flowfuse/node-red-dashboard.\n\nBOOLs are lamps (ui-template); a watchdog (trigger) per link greys out that link\'s widgets through `msg.class` when no value arrived for a few polls.',
+    ...at(340, 90),
   });
 
-  // Dashboard 2.0 skeleton.
-  nodes.push({ id: 'ui.base', type: 'ui-base', name: 'plcwire', path: '/dashboard', includeClientData: true, acceptsClientConfig: ['ui-notification', 'ui-control'], showPathInSidebar: false, navigationStyle: 'default', titleBarStyle: 'default' });
+  // Dashboard 2.0 skeleton: one page of 12 columns, a group per PLC.
+  nodes.push({ id: 'ui.base', type: 'ui-base', name: 'plcwire', path: '/dashboard', includeClientData: true, acceptsClientConfig: ['ui-notification', 'ui-control'], showPathInSidebar: false, navigationStyle: 'none', titleBarStyle: 'default' });
   nodes.push({ id: 'ui.theme', type: 'ui-theme', name: 'plcwire', colors: { surface: '#1f3a5f', primary: '#0d74ce', bgPage: '#f9f9fb', groupBg: '#ffffff', groupOutline: '#d9d9e0' }, sizes: { density: 'default', pagePadding: '12px', groupGap: '12px', groupBorderRadius: '4px', widgetGap: '12px' } });
   nodes.push({ id: 'ui.page', type: 'ui-page', name: 'Plant', ui: 'ui.base', path: '/plant', icon: 'factory', layout: 'grid', theme: 'ui.theme', order: 1, visible: 'true', disabled: 'false', breakpoints: [{ name: 'Default', px: 0, cols: 3 }, { name: 'Tablet', px: 576, cols: 6 }, { name: 'Small Desktop', px: 768, cols: 9 }, { name: 'Desktop', px: 1024, cols: 12 }] });
-  const group = (id, name, order) => nodes.push({ id, type: 'ui-group', name, page: 'ui.page', width: 6, height: 1, order, showTitle: true, visible: 'true', disabled: 'false', groupType: 'default' });
-  group('ui.g.s7', 'S7-1200 (S7comm)', 1);
-  group('ui.g.other', 'CP (FETCH/WRITE) and S7-200 (freeport)', 2);
-  const text = (id, g, label, order, wires = []) =>
-    nodes.push({ id, type: 'ui-text', group: g, order, width: 0, height: 0, name: label, label, format: '{{msg.payload}}', layout: 'row-spread', style: false, value: 'payload', valueType: 'msg', className: `plcwire-${id.replace(/\W/g, '-')}`, ...at(1050), wires });
+  const group = (id, name, order, width) => nodes.push({ id, type: 'ui-group', name, page: 'ui.page', width, height: 1, order, showTitle: true, visible: 'true', disabled: 'false', groupType: 'default' });
+  group('ui.g.s7', 'S7-1200 (S7comm)', 1, 6);
+  group('ui.g.fw', 'CP (FETCH/WRITE)', 2, 3);
+  group('ui.g.fp', 'S7-200 (freeport)', 3, 3);
+  const cls = (id) => `plcwire-${id.replace(/\W/g, '-')}`;
+  const text = (id, g, label, order, width, y) =>
+    nodes.push({ id, type: 'ui-text', group: g, order, width, height: 1, name: label, label, format: '{{msg.payload}}', layout: 'row-spread', style: false, value: 'payload', valueType: 'msg', className: cls(id), ...at(X.widget, y), wires: [] });
+  const template = (id, g, label, order, width, y, format) =>
+    nodes.push({ id, type: 'ui-template', group: g, page: '', ui: '', name: label, order, width, height: 1, head: '', format, storeOutMessages: true, passthru: false, resendOnRefresh: true, templateScope: 'local', className: cls(id), ...at(X.widget, y), wires: [[]] });
+  // A BOOL from the PLC: the lamp lights while msg.payload is true.
+  const boolLamp = (id, g, label, order, width, y) =>
+    template(id, g, label, order, width, y, `<div class="plcwire-lamp-row">
+  <span>${html(label)}</span>
+  <span class="plcwire-lamp" :class="msg.payload === true ? 'plcwire-lamp-on' : 'plcwire-lamp-off'" :title="msg.payload === true ? 'on' : 'off'"></span>
+</div>`);
+  // A state: msg.lamp names the colour (green, yellow, red, grey), msg.payload the text beside it.
+  const stateLamp = (id, g, label, order, width, y) =>
+    template(id, g, label, order, width, y, `<div class="plcwire-lamp-row">
+  <span>${html(label)}</span>
+  <span class="plcwire-lamp-text">{{ msg.payload }}</span>
+  <span class="plcwire-lamp" :class="'plcwire-lamp-' + (msg.lamp || 'grey')"></span>
+</div>`);
+  const round = (id, y, wires) => nodes.push({ id, type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(X.shape, y), wires: [wires] });
+  const route = (id, names, y, wires) =>
+    nodes.push({ id, type: 'switch', name: 'by tag', property: 'topic', propertyType: 'msg', checkall: 'false', outputs: names.length, rules: names.map((v) => ({ t: 'eq', v, vt: 'str' })), ...at(X.route, y), wires });
+  // A link's watchdog: 'live' with the first value, 'stale' when none came for `seconds`; the mark
+  // turns that into a class for the link's widgets (a message with only `class` keeps their value).
+  const watchdog = (prefix, seconds, y, widgets) => {
+    nodes.push({ id: `${prefix}.watch`, type: 'trigger', name: `watchdog ${seconds} s`, op1: 'live', op2: 'stale', op1type: 'str', op2type: 'str', duration: String(seconds), extend: true, overrideDelay: false, units: 's', reset: '', bytopic: 'all', topic: 'topic', outputs: 1, ...at(X.route, y), wires: [[`${prefix}.mark`]] });
+    nodes.push({ id: `${prefix}.mark`, type: 'function', name: 'mark stale', func: `return { class: msg.payload === 'stale' ? '${STALE}' : '${LIVE}' };`, outputs: 1, timeout: 0, noerr: 0, initialize: '', finalize: '', libs: [], ...at(X.shape, y), wires: [widgets] });
+  };
+  // A link's state from its read node's status: the lamp's colour is the status fill.
+  const linkState = (prefix, name, readId, y, widget) => {
+    nodes.push({ id: `st.${prefix}`, type: 'status', name, scope: [readId], ...at(X.source, y), wires: [[`st.text.${prefix}`]] });
+    nodes.push({
+      id: `st.text.${prefix}`, type: 'change', name: 'status to lamp',
+      rules: [
+        { t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' },
+        { t: 'set', p: 'lamp', pt: 'msg', to: 'status.fill', tot: 'msg' },
+      ],
+      ...at(X.route, y), wires: [[widget]],
+    });
+  };
 
   // Connections: one per PLC, shared by every node below.
   nodes.push({ id: 'conn.s7', type: 'plcwire-connection', name: 'S7-1200 sim', url: urls.s7 });
   nodes.push({ id: 'conn.fw', type: 'plcwire-connection', name: 'CP fetch/write sim', url: urls.fetchwrite });
   nodes.push({ id: 'conn.fp', type: 'plcwire-connection', name: 'S7-200 freeport sim', url: urls.freeport });
 
-  // S7: poll the process, one message per tag, routed by topic.
-  row();
-  nodes.push({
-    id: 's7.read', type: 'plcwire-read', name: 'poll S7', connection: 'conn.s7', interval: 500, output: 'per-tag', deadband: 0,
-    tags: [
-      { name: 'level', address: 'DB1.DBD0:REAL' },
-      { name: 'running', address: 'DB1.DBX4.1' },
-      { name: 'speed', address: 'DB1.DBW6:INT' },
-      { name: 'parts', address: 'DB1.DBD8:DINT' },
-      { name: 'temperature', address: 'DB1.DBD16:REAL' },
-    ],
-    ...at(160), wires: [['s7.route']],
-  });
-  nodes.push({
-    id: 's7.route', type: 'switch', name: 'by tag', property: 'topic', propertyType: 'msg', checkall: 'false', outputs: 5,
-    rules: ['level', 'running', 'speed', 'parts', 'temperature'].map((v) => ({ t: 'eq', v, vt: 'str' })),
-    ...at(360), wires: [['s7.round.level'], ['ui.running'], ['ui.speed'], ['ui.parts'], ['s7.round']],
-  });
-  nodes.push({ id: 's7.round.level', type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(560), y: y - 40, wires: [['ui.level', 'ui.chart']] });
-  nodes.push({ id: 's7.round', type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(560), wires: [['ui.temp', 'ui.chart']] });
-  nodes.push({ id: 'ui.level', type: 'ui-gauge', name: 'Tank level', group: 'ui.g.s7', order: 1, width: 3, height: 3, gtype: 'gauge-half', gstyle: 'needle', title: 'Tank level', units: '%', min: 0, max: 100, segments: [{ from: 0, color: '#5cd65c' }, { from: 80, color: '#ffc800' }, { from: 90, color: '#ea5353' }], sizeThickness: 16, sizeGap: 4, sizeKeyThickness: 8, styleRounded: true, styleGlow: false, className: 'plcwire-level', ...at(800), wires: [] });
-  nodes.push({ id: 'ui.chart', type: 'ui-chart', name: 'Level and temperature', group: 'ui.g.s7', order: 2, width: 6, height: 6, label: 'Level % and temperature °C', chartType: 'line', category: 'topic', categoryType: 'msg', xAxisType: 'time', xAxisPropertyType: 'timestamp', yAxisProperty: 'payload', yAxisPropertyType: 'msg', action: 'append', removeOlder: 2, removeOlderUnit: '60', removeOlderPoints: '', showLegend: true, pointShape: 'circle', pointRadius: 2, interpolation: 'linear', colors: ['#0095FF', '#FF7F0E'], className: 'plcwire-chart', ...at(820), wires: [] });
-  text('ui.running', 'ui.g.s7', 'Motor running', 4);
-  text('ui.speed', 'ui.g.s7', 'Speed (rpm)', 5);
-  text('ui.parts', 'ui.g.s7', 'Parts', 6);
-  text('ui.temp', 'ui.g.s7', 'Temperature (°C)', 7);
-
-  // S7: the operator's switch writes the motor command back to the PLC.
-  row();
-  nodes.push({ id: 'ui.motor', type: 'ui-switch', name: 'Motor', label: 'Motor run', group: 'ui.g.s7', order: 3, width: 0, height: 0, passthru: false, decouple: false, topic: 'DB1.DBX4.0', topicType: 'str', onvalue: true, onvalueType: 'bool', offvalue: false, offvalueType: 'bool', layout: 'row-spread', clickableArea: 'switch', className: 'plcwire-motor', ...at(160), wires: [['s7.write']] });
-  nodes.push({ id: 's7.write', type: 'plcwire-write', name: 'write motor', connection: 'conn.s7', tags: [], ...at(360), wires: [[]] });
+  // S7: poll the process, one message per tag, routed by topic; widgets one under the other.
+  let y = 140;
+  const row = (i) => y + i * PITCH;
+  const s7Tags = [
+    { name: 'level', address: 'DB1.DBD0:REAL' },
+    { name: 'temperature', address: 'DB1.DBD16:REAL' },
+    { name: 'run', address: 'DB1.DBX4.0' },
+    { name: 'running', address: 'DB1.DBX4.1' },
+    { name: 'speed', address: 'DB1.DBW6:INT' },
+    { name: 'parts', address: 'DB1.DBD8:DINT' },
+    { name: 'heater', address: 'DB1.DBX4.2' },
+  ];
+  const s7Widgets = ['ui.level', 'ui.chart', 'ui.temp', 'ui.motor', 'ui.running', 'ui.speed', 'ui.parts', 'ui.heater'];
+  nodes.push({ id: 's7.read', type: 'plcwire-read', name: 'poll S7', connection: 'conn.s7', interval: 500, output: 'per-tag', deadband: 0, tags: s7Tags, ...at(X.source, row(3)), wires: [['s7.route', 's7.watch']] });
+  route('s7.route', s7Tags.map((t) => t.name), row(3), [['s7.round.level'], ['s7.round.temp'], ['ui.motor'], ['ui.running'], ['ui.speed'], ['ui.parts'], ['ui.heater']]);
+  round('s7.round.level', row(0), ['ui.level', 'ui.chart']);
+  round('s7.round.temp', row(2), ['ui.temp', 'ui.chart']);
+  nodes.push({ id: 'ui.level', type: 'ui-gauge', name: 'Tank level', group: 'ui.g.s7', order: 1, width: 3, height: 3, gtype: 'gauge-half', gstyle: 'needle', title: 'Tank level', units: '%', min: 0, max: 100, segments: [{ from: 0, color: '#5cd65c' }, { from: 80, color: '#ffc800' }, { from: 90, color: '#ea5353' }], sizeThickness: 16, sizeGap: 4, sizeKeyThickness: 8, styleRounded: true, styleGlow: false, className: 'plcwire-level', ...at(X.widget, row(0)), wires: [] });
+  nodes.push({ id: 'ui.chart', type: 'ui-chart', name: 'Level and temp', group: 'ui.g.s7', order: 3, width: 6, height: 4, label: 'Level % and temperature °C (last 2 min)', chartType: 'line', category: 'topic', categoryType: 'msg', xAxisType: 'time', xAxisPropertyType: 'timestamp', yAxisProperty: 'payload', yAxisPropertyType: 'msg', action: 'append', removeOlder: 2, removeOlderUnit: '60', removeOlderPoints: '', showLegend: true, pointShape: 'circle', pointRadius: 2, interpolation: 'linear', colors: ['#0095FF', '#FF7F0E'], className: 'plcwire-chart', ...at(X.widget, row(1)), wires: [] });
+  nodes.push({ id: 'ui.temp', type: 'ui-gauge', name: 'Temperature', group: 'ui.g.s7', order: 2, width: 3, height: 3, gtype: 'gauge-half', gstyle: 'needle', title: 'Temperature', units: '°C', min: 0, max: 80, segments: [{ from: 0, color: '#4a90d9' }, { from: 30, color: '#5cd65c' }, { from: 55, color: '#ffc800' }, { from: 65, color: '#ea5353' }], sizeThickness: 16, sizeGap: 4, sizeKeyThickness: 8, styleRounded: true, styleGlow: false, className: 'plcwire-temp', ...at(X.widget, row(2)), wires: [] });
+  // The operator's switch: a click sends the run command to the PLC (passthru off, so the polled
+  // bit coming in is not written back), and the switch shows the bit as polled (decouple: the
+  // indicator follows the input), so it moves when anything else sets or clears DB1.DBX4.0.
+  nodes.push({ id: 'ui.motor', type: 'ui-switch', name: 'Motor run', label: 'Motor run', group: 'ui.g.s7', order: 4, width: 3, height: 1, passthru: false, decouple: true, topic: 'DB1.DBX4.0', topicType: 'str', style: '', className: 'plcwire-motor', layout: 'row-spread', clickableArea: 'switch', onvalue: true, onvalueType: 'bool', onicon: '', oncolor: '', offvalue: false, offvalueType: 'bool', officon: '', offcolor: '', ...at(X.shape, row(3)), wires: [['s7.write']] });
+  nodes.push({ id: 's7.write', type: 'plcwire-write', name: 'write motor', connection: 'conn.s7', tags: [], ...at(X.widget, row(3)), wires: [[]] });
+  // Half a row more below the write node, for its status.
+  boolLamp('ui.running', 'ui.g.s7', 'Motor running', 5, 3, row(4.5));
+  text('ui.speed', 'ui.g.s7', 'Speed (rpm)', 6, 3, row(5.5));
+  text('ui.parts', 'ui.g.s7', 'Parts', 7, 3, row(6.5));
+  boolLamp('ui.heater', 'ui.g.s7', 'Heater on', 8, 6, row(7.5));
+  linkState('s7', 'S7 link', 's7.read', row(8.5), 'ui.link.s7');
+  stateLamp('ui.link.s7', 'ui.g.s7', 'S7 link', 9, 3, row(8.5));
 
   // S7: heartbeat — our counter to DB1.DBW14, the PLC's counter in DB1.DBW12 must keep changing.
-  row();
-  nodes.push({ id: 's7.heartbeat', type: 'plcwire-heartbeat', name: 'S7 life sign', connection: 'conn.s7', writeAddress: 'DB1.DBW14:INT', writeMode: 'counter', interval: 1000, watchAddress: 'DB1.DBW12:INT', timeout: 3000, ...at(160), wires: [['s7.hbtext']] });
-  nodes.push({ id: 's7.hbtext', type: 'change', name: 'event name', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: 'payload.event', tot: 'msg' }], ...at(360), wires: [['ui.heartbeat']] });
-  text('ui.heartbeat', 'ui.g.s7', 'PLC heartbeat', 8);
-
-  // Link states of the three connections, from the read nodes' status.
-  row();
-  nodes.push({ id: 'st.s7', type: 'status', name: 'S7 link', scope: ['s7.read'], ...at(160), wires: [['st.text.s7']] });
-  nodes.push({ id: 'st.text.s7', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' }], ...at(360), wires: [['ui.link.s7']] });
-  text('ui.link.s7', 'ui.g.s7', 'S7 link', 9);
+  nodes.push({ id: 's7.heartbeat', type: 'plcwire-heartbeat', name: 'S7 life sign', connection: 'conn.s7', writeAddress: 'DB1.DBW14:INT', writeMode: 'counter', interval: 1000, watchAddress: 'DB1.DBW12:INT', timeout: 3000, ...at(X.source, row(9.5)), wires: [['s7.hbtext']] });
+  nodes.push({
+    id: 's7.hbtext', type: 'change', name: 'event to lamp',
+    rules: [
+      { t: 'set', p: 'lamp', pt: 'msg', to: "payload.state = 'alive' ? 'green' : 'red'", tot: 'jsonata' },
+      { t: 'set', p: 'payload', pt: 'msg', to: 'payload.event', tot: 'msg' },
+    ],
+    ...at(X.route, row(9.5)), wires: [['ui.heartbeat']],
+  });
+  stateLamp('ui.heartbeat', 'ui.g.s7', 'PLC heartbeat', 10, 3, row(9.5));
+  // Below the rows the widgets are wired from, so its marks fan out upwards across no node.
+  watchdog('s7', 2, row(11), s7Widgets);
 
   // FETCH/WRITE: the same DB1 through the CP.
-  row();
-  nodes.push({
-    id: 'fw.read', type: 'plcwire-read', name: 'poll CP', connection: 'conn.fw', interval: 1000, output: 'per-tag', deadband: 0,
-    tags: [
-      { name: 'level', address: 'DB1,REAL0' },
-      { name: 'parts', address: 'DB1,DINT8' },
-    ],
-    ...at(160), wires: [['fw.route']],
-  });
-  nodes.push({ id: 'fw.route', type: 'switch', name: 'by tag', property: 'topic', propertyType: 'msg', checkall: 'false', outputs: 2, rules: [{ t: 'eq', v: 'level', vt: 'str' }, { t: 'eq', v: 'parts', vt: 'str' }], ...at(360), wires: [['fw.round'], ['ui.fw.parts']] });
-  nodes.push({ id: 'fw.round', type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(560), wires: [['ui.fw.level']] });
-  text('ui.fw.level', 'ui.g.other', 'CP: tank level (%)', 1);
-  text('ui.fw.parts', 'ui.g.other', 'CP: parts', 2);
-  nodes.push({ id: 'st.fw', type: 'status', name: 'CP link', scope: ['fw.read'], ...at(160), wires: [['st.text.fw']] });
-  nodes.push({ id: 'st.text.fw', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' }], ...at(360), wires: [['ui.link.fw']] });
-  text('ui.link.fw', 'ui.g.other', 'CP link', 3);
+  y = row(13);
+  nodes.push({ id: 'fw.read', type: 'plcwire-read', name: 'poll CP', connection: 'conn.fw', interval: 1000, output: 'per-tag', deadband: 0, tags: [{ name: 'level', address: 'DB1,REAL0' }, { name: 'parts', address: 'DB1,DINT8' }], ...at(X.source, row(0)), wires: [['fw.route', 'fw.watch']] });
+  route('fw.route', ['level', 'parts'], row(0), [['fw.round'], ['ui.fw.parts']]);
+  round('fw.round', row(0), ['ui.fw.level']);
+  text('ui.fw.level', 'ui.g.fw', 'Tank level (%)', 1, 3, row(0));
+  text('ui.fw.parts', 'ui.g.fw', 'Parts', 2, 3, row(1));
+  linkState('fw', 'CP link', 'fw.read', row(2), 'ui.link.fw');
+  stateLamp('ui.link.fw', 'ui.g.fw', 'CP link', 3, 3, row(2));
+  watchdog('fw', 3, row(3), ['ui.fw.level', 'ui.fw.parts']);
 
   // Freeport: stations 5 (level, REAL) and 6 (parts, DINT) on the RS-485 bus, through a serial device server.
-  row();
-  nodes.push({
-    id: 'fp.read', type: 'plcwire-read', name: 'poll S7-200', connection: 'conn.fp', interval: 1000, output: 'per-tag', deadband: 0,
-    tags: [
-      { name: 'level', address: 'ST5,REAL0' },
-      { name: 'parts', address: 'ST6,DINT0' },
-    ],
-    ...at(160), wires: [['fp.route']],
-  });
-  nodes.push({ id: 'fp.route', type: 'switch', name: 'by tag', property: 'topic', propertyType: 'msg', checkall: 'false', outputs: 2, rules: [{ t: 'eq', v: 'level', vt: 'str' }, { t: 'eq', v: 'parts', vt: 'str' }], ...at(360), wires: [['fp.round'], ['ui.fp.parts']] });
-  nodes.push({ id: 'fp.round', type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(560), wires: [['ui.fp.level']] });
-  text('ui.fp.level', 'ui.g.other', 'S7-200: tank level (%)', 4);
-  text('ui.fp.parts', 'ui.g.other', 'S7-200: parts', 5);
-  nodes.push({ id: 'st.fp', type: 'status', name: 'S7-200 link', scope: ['fp.read'], ...at(160), wires: [['st.text.fp']] });
-  nodes.push({ id: 'st.text.fp', type: 'change', name: 'status text', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' }], ...at(360), wires: [['ui.link.fp']] });
-  text('ui.link.fp', 'ui.g.other', 'S7-200 link', 6);
+  y = row(5);
+  nodes.push({ id: 'fp.read', type: 'plcwire-read', name: 'poll S7-200', connection: 'conn.fp', interval: 1000, output: 'per-tag', deadband: 0, tags: [{ name: 'level', address: 'ST5,REAL0' }, { name: 'parts', address: 'ST6,DINT0' }], ...at(X.source, row(0)), wires: [['fp.route', 'fp.watch']] });
+  route('fp.route', ['level', 'parts'], row(0), [['fp.round'], ['ui.fp.parts']]);
+  round('fp.round', row(0), ['ui.fp.level']);
+  text('ui.fp.level', 'ui.g.fp', 'Tank level (%)', 1, 3, row(0));
+  text('ui.fp.parts', 'ui.g.fp', 'Parts', 2, 3, row(1));
+  linkState('fp', 'S7-200 link', 'fp.read', row(2), 'ui.link.fp');
+  stateLamp('ui.link.fp', 'ui.g.fp', 'S7-200 link', 3, 3, row(2));
+  watchdog('fp', 3, row(3), ['ui.fp.level', 'ui.fp.parts']);
 
-  // Errors from any plcwire node.
-  row();
-  nodes.push({ id: 'catch', type: 'catch', name: 'plcwire errors', scope: null, uncaught: false, ...at(160), wires: [['debug']] });
-  nodes.push({ id: 'debug', type: 'debug', name: 'errors', active: true, tosidebar: true, console: false, complete: 'error', targetType: 'msg', ...at(360), wires: [] });
+  // Errors from any plcwire node, and the dashboard's CSS.
+  y = row(5);
+  nodes.push({ id: 'catch', type: 'catch', name: 'plcwire errors', scope: null, uncaught: false, ...at(X.source, row(0)), wires: [['debug']] });
+  nodes.push({ id: 'debug', type: 'debug', name: 'errors', active: true, tosidebar: true, console: false, complete: 'error', targetType: 'msg', ...at(X.route, row(0)), wires: [] });
+  nodes.push({ id: 'ui.style', type: 'ui-template', group: '', page: '', ui: 'ui.base', name: 'CSS: lamps, stale', order: 0, width: 0, height: 0, head: '', format: STYLE, storeOutMessages: true, passthru: true, resendOnRefresh: true, templateScope: 'site:style', className: '', ...at(X.shape, row(0)), wires: [[]] });
 
   return nodes;
 }
@@ -140,7 +202,7 @@ const DEMO_URLS = Object.freeze({
   freeport: 'freeport+tcp://127.0.0.1:14001',
 });
 
-module.exports = { demoFlow, DEMO_URLS };
+module.exports = { demoFlow, DEMO_URLS, STALE, LIVE };
 
 // `node demo/flows.js` regenerates the Dashboard 2 example from this flow.
 if (require.main === module) {

@@ -1,8 +1,13 @@
 /**
  * The first five minutes of a new user, in a real browser: `npm start`'s
- * Node-RED with the demo flow, the editor's palette, and the Dashboard 2.0
- * page showing live values and writing back to the simulated PLC.
+ * Node-RED with the demo flow, the editor's palette and the flows as it
+ * draws them, and the Dashboard 2.0 page showing live values, BOOLs as
+ * lamps, the motor switch following the PLC and writing back to it, and the
+ * widgets of a link that went down greyed out as stale.
  * Headless Chromium driven by playwright-core (test/support/browser.ts).
+ * PLCWIRE_SCREENSHOT=<file.png> saves the dashboard with the motor running,
+ * after PLCWIRE_SCREENSHOT_WAIT_MS more of chart history (docs/dashboard.png:
+ * PLCWIRE_SCREENSHOT=docs/dashboard.png PLCWIRE_SCREENSHOT_WAIT_MS=60000).
  */
 import { expect } from 'chai';
 import * as fs from 'node:fs';
@@ -10,17 +15,122 @@ import * as os from 'node:os';
 import * as path from 'node:path';
 import type { Browser, Page } from 'playwright-core';
 import { launchChromium } from './support/browser';
+import { createClient } from '../lib/connect';
+import { estimatedSize, overlap, placementOf, type Box, type FlowNode } from './support/flow-layout';
 import { freePort } from './support/net';
 import { until } from './support/wait';
 
 const ROOT = path.resolve(__dirname, '../..');
+const EXAMPLES = path.join(ROOT, 'examples');
+/** The class the demo's watchdogs put on the widgets of a quiet link (demo/flows.js). */
+const STALE = 'plcwire-stale';
 
 interface Demo {
   editor: string;
   dashboard: string;
-  plant: { memory: { area(a: string, db?: number): Buffer | undefined } };
+  plant: {
+    memory: { area(a: string, db?: number): Buffer | undefined };
+    urls: { s7: string };
+    s7: { faults: { refuseConnections: boolean; dropConnections(): void } };
+    fetchwrite: { faults: { silent: boolean; dropConnections(): void } };
+  };
   stop(): Promise<void>;
 }
+
+/** A node as the editor drew it: centre, size, label, and the box of all it draws (ports and status included). */
+interface Drawn {
+  id: string;
+  type: string;
+  x: number;
+  y: number;
+  w: number;
+  h: number;
+  label: string;
+  /** In page coordinates. */
+  box: { left: number; top: number; right: number; bottom: number };
+  /** How far the shown status reaches below the node's body. */
+  below: number;
+}
+
+/** The nodes the editor has drawn on workspace `z`, once every one of them has its size. */
+async function drawnNodes(page: Page, z: string): Promise<Drawn[]> {
+  await page.waitForFunction(
+    (tab) => {
+      const RED = (globalThis as any).RED;
+      let ready = true;
+      RED.nodes.eachNode((n: any) => {
+        if (n.z === tab && !(n.w > 0 && n.h > 0 && !n.resize && (globalThis as any).document.getElementById(n.id))) ready = false;
+      });
+      return ready;
+    },
+    z,
+    { timeout: 15_000 },
+  );
+  return page.evaluate((tab) => {
+    const RED = (globalThis as any).RED;
+    const doc = (globalThis as any).document;
+    const out: Drawn[] = [];
+    RED.nodes.eachNode((n: any) => {
+      if (n.z !== tab) return;
+      // What the node draws: its body, its ports and a status that is shown, in page coordinates
+      // (the corner badges for "changed" and "has a description" are left out).
+      const g = doc.getElementById(n.id);
+      const parts = [...g.querySelectorAll(':scope > rect.red-ui-flow-node, .red-ui-flow-port, .red-ui-flow-node-status-group')].filter(
+        (e: any) => (globalThis as any).getComputedStyle(e).display !== 'none',
+      );
+      const rects = parts.map((e: any) => e.getBoundingClientRect());
+      const box = {
+        left: Math.min(...rects.map((r: any) => r.left)),
+        top: Math.min(...rects.map((r: any) => r.top)),
+        right: Math.max(...rects.map((r: any) => r.right)),
+        bottom: Math.max(...rects.map((r: any) => r.bottom)),
+      };
+      const body = g.querySelector(':scope > rect.red-ui-flow-node').getBoundingClientRect();
+      out.push({ id: n.id, type: n.type, x: n.x, y: n.y, w: n.w, h: n.h, label: RED.utils.getNodeLabel(n, n.type), box, below: box.bottom - body.bottom });
+    });
+    return out;
+  }, z);
+}
+
+/** Pairs of drawn nodes (with their ports and status) closer than `gap` px. */
+function overlapsOf(nodes: Drawn[], gap: number): string[] {
+  const box = (n: Drawn): Box => ({ id: n.id, label: n.label, ...n.box });
+  const found: string[] = [];
+  for (let i = 0; i < nodes.length; i++) {
+    for (let j = i + 1; j < nodes.length; j++) {
+      if (overlap(box(nodes[i]!), box(nodes[j]!), gap)) found.push(`"${nodes[i]!.label}" and "${nodes[j]!.label}"`);
+    }
+  }
+  return found;
+}
+
+/** Nodes the editor drew larger, or with a status reaching further down, than test/support/flow-layout.ts estimates (it must be an upper bound). */
+function underestimated(drawn: Drawn[], source: (id: string) => FlowNode | undefined): string[] {
+  return drawn.flatMap((d) => {
+    const n = source(d.id);
+    if (!n) return [`${d.id} not in the flow`];
+    const e = estimatedSize(n);
+    return e.w >= d.w && e.h >= d.h && e.below >= d.below ? [] : [`"${d.label}" drawn ${d.w}x${d.h} +${d.below} below, estimated ${e.w}x${e.h} +${e.below}`];
+  });
+}
+
+/** Whether the widget with class `cls` carries the stale mark. */
+function staleOf(page: Page, cls: string): Promise<boolean> {
+  return page.evaluate(([c, stale]) => (globalThis as any).document.querySelector(`.${c}`)?.classList.contains(stale) ?? false, [cls, STALE]);
+}
+
+function waitForStale(page: Page, classes: string[], stale: boolean, ms: number): Promise<unknown> {
+  return page.waitForFunction(
+    ([list, mark, want]) => (list as string[]).every((c) => (globalThis as any).document.querySelector(`.${c}`)?.classList.contains(mark) === want),
+    [classes, STALE, stale] as const,
+    { timeout: ms },
+  );
+}
+
+/** Widgets of each link (their classes, demo/flows.js). */
+const S7_WIDGETS = ['plcwire-level', 'plcwire-temp', 'plcwire-chart', 'plcwire-motor', 'plcwire-ui-running', 'plcwire-ui-heater', 'plcwire-ui-speed', 'plcwire-ui-parts'];
+const CP_WIDGETS = ['plcwire-ui-fw-level', 'plcwire-ui-fw-parts'];
+const S7_200_WIDGETS = ['plcwire-ui-fp-level', 'plcwire-ui-fp-parts'];
 
 describe('browser: the npm start demo in headless Chromium', function () {
   this.timeout(120_000);
@@ -35,7 +145,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     demo = await startDemo({ port, plantPorts: { s7, fetch, write, freeport }, quiet: true, log: () => undefined });
     profile = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-chromium-'));
     browser = await launchChromium();
-    page = await browser.newPage();
+    page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
   });
 
   after(async () => {
@@ -54,6 +164,71 @@ describe('browser: the npm start demo in headless Chromium', function () {
     expect(registered).to.equal(true);
   });
 
+  it('the editor draws the demo flow with no node over another, none larger than the layout test estimates, all within a 1280 px window', async () => {
+    const { demoFlow, DEMO_URLS } = require(path.join(ROOT, 'demo/flows.js')) as { demoFlow(u: unknown): FlowNode[]; DEMO_URLS: unknown };
+    const flow = demoFlow(DEMO_URLS);
+    const source = (id: string) => flow.find((n) => n.id === id);
+    // The nodes' status shows once the flow runs: the polls' "connected", the switch's "off".
+    await page.waitForFunction(
+      () => [...(globalThis as any).document.querySelectorAll('.red-ui-flow-node-status-group')].filter((g: any) => (globalThis as any).getComputedStyle(g).display !== 'none').length >= 5,
+      undefined,
+      { timeout: 15_000 },
+    );
+    const drawn = await drawnNodes(page, 'demo.tab');
+    expect(drawn.length).to.equal(flow.filter((n) => n.z === 'demo.tab').length);
+    expect(underestimated(drawn, source)).to.deep.equal([]);
+    expect(overlapsOf(drawn, 5)).to.deep.equal([]);
+    // Drawn where the flow says: a deployed flow's x, y are the nodes' centres.
+    for (const d of drawn) expect([d.x, d.y], d.label).to.deep.equal([source(d.id)!.x, source(d.id)!.y]);
+    // Nothing off to the right of the workspace (palette and sidebar open): no scrolling sideways to find a widget.
+    const visible = await page.evaluate(() => {
+      const chart = (globalThis as any).document.getElementById('red-ui-workspace-chart');
+      return { left: chart.getBoundingClientRect().left, right: chart.getBoundingClientRect().left + chart.clientWidth, scrolled: chart.scrollLeft };
+    });
+    expect(visible.scrolled).to.equal(0);
+    expect(drawn.filter((d) => d.box.left < visible.left || d.box.right > visible.right).map((d) => `"${d.label}" at ${d.box.left}..${d.box.right}`), `workspace ${visible.left}..${visible.right}`).to.deep.equal([]);
+  });
+
+  it('the editor draws every example, imported as a new flow, with no node over another, none larger than estimated', async () => {
+    // A page of its own: the imports are not deployed, and the editor asks before leaving a page with changes.
+    const editor = await browser.newPage({ viewport: { width: 1280, height: 900 } });
+    try {
+      await editor.goto(demo.editor, { waitUntil: 'domcontentloaded' });
+      await editor.waitForFunction(() => (globalThis as any).RED?.nodes?.getType?.('plcwire-read') !== undefined, undefined, { timeout: 30_000 });
+      const files = fs.readdirSync(EXAMPLES, { recursive: true, encoding: 'utf8' }).filter((f) => f.endsWith('.json'));
+      expect(files.length).to.be.at.least(5);
+      for (const file of files) {
+        const flow = JSON.parse(fs.readFileSync(path.join(EXAMPLES, file), 'utf8')) as FlowNode[];
+        const imported = await editor.evaluate((nodes) => {
+          const RED = (globalThis as any).RED;
+          const { nodeMap } = RED.view.importNodes(nodes, { generateIds: true, addFlow: true });
+          const ids: Record<string, string> = {};
+          let z = '';
+          // The map holds old id -> new node, and new id -> itself.
+          for (const [old, n] of Object.entries(nodeMap as Record<string, any>)) {
+            if (old !== n.id) ids[n.id] = old;
+            if (n.z) z = n.z;
+          }
+          RED.workspaces.show(z);
+          return { ids, z };
+        }, flow);
+        const drawn = await drawnNodes(editor, imported.z);
+        expect(drawn.length, file).to.equal(flow.filter((n) => typeof n.x === 'number').length);
+        expect(underestimated(drawn, (id) => flow.find((n) => n.id === imported.ids[id])), file).to.deep.equal([]);
+        // Ports may touch (they stick out 5 px), nodes may not overlap.
+        expect(overlapsOf(drawn, 0), file).to.deep.equal([]);
+        // Placed the way flow-layout.ts's placementOf says, up to one shift of the whole flow:
+        // centred on x, y (a flow with its own tab), or left edges where x - 50 puts them.
+        const centred = placementOf(flow, false) === 'centred';
+        const source = (d: Drawn) => flow.find((n) => n.id === imported.ids[d.id])!;
+        const shifts = new Set(drawn.map((d) => `${d.x - (centred ? 0 : d.w / 2 - 50) - source(d).x!},${d.y - source(d).y!}`));
+        expect(shifts.size, `${file}: ${[...shifts]}`).to.equal(1);
+      }
+    } finally {
+      await editor.close({ runBeforeUnload: false });
+    }
+  });
+
   it('the dashboard shows the tank level changing live', async () => {
     await page.goto(demo.dashboard, { waitUntil: 'domcontentloaded' });
     const selector = '.plcwire-ui-fw-level';
@@ -70,15 +245,138 @@ describe('browser: the npm start demo in headless Chromium', function () {
     );
   });
 
-  it('clicking the motor switch writes the run command to the simulated PLC', async () => {
+  it('the temperature moves on the dashboard (the heater warms the tank with the motor stopped)', async () => {
+    // The gauge's text: title, scale ends, value and unit ("Temperature 0 80 26.2 °C").
+    const shown = () => page.locator('.plcwire-temp').innerText().then((t) => Number(/(\d+(?:\.\d+)?)\s*°C/.exec(t)?.[1]));
+    await page.waitForFunction(() => /\d\s*°C/.test((globalThis as any).document.querySelector('.plcwire-temp')?.innerText ?? ''), undefined, { timeout: 15_000 });
+    const first = await shown();
+    expect(first).to.be.within(15, 60);
+    await page.waitForFunction(
+      (before) => {
+        const m = /(\d+(?:\.\d+)?)\s*°C/.exec((globalThis as any).document.querySelector('.plcwire-temp')?.innerText ?? '');
+        return m !== null && Number(m[1]) !== before;
+      },
+      first,
+      { timeout: 15_000 },
+    );
+  });
+
+  it('the motor switch follows the PLC: set or cleared by another client, it moves', async () => {
+    const db1 = demo.plant.memory.area('DB', 1)!;
+    const input = page.locator('.plcwire-motor input[type=checkbox]');
+    await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]') !== null, undefined, { timeout: 15_000 });
+    expect(db1[4]! & 0x01).to.equal(0);
+    expect(await input.isChecked()).to.equal(false);
+    const other = createClient(demo.plant.urls.s7);
+    try {
+      await other.connect();
+      await other.write({ 'DB1.DBX4.0': true });
+      await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true, undefined, { timeout: 10_000 });
+      await other.write({ 'DB1.DBX4.0': false });
+      await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === false, undefined, { timeout: 10_000 });
+    } finally {
+      await other.close();
+    }
+    // Nothing was written back by the switch showing the polled bit.
+    await until(() => db1.readInt16BE(6) === 0, 10_000, 'motor stopped again');
+    expect(db1[4]! & 0x01).to.equal(0);
+  });
+
+  it('clicking the motor switch writes the run command to the simulated PLC, and the switch shows the PLC\'s bit', async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
     expect(db1[4]! & 0x01).to.equal(0);
     // The switch's own control (Vuetify draws the thumb over a hidden checkbox).
     await page.locator('.plcwire-motor .v-selection-control__input').click();
     await until(() => (db1[4]! & 0x01) === 1, 10_000, 'DB1.DBX4.0 set by the dashboard');
+    await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true, undefined, { timeout: 10_000 });
     // The process reacts: the motor ramps up and the dashboard shows its speed.
     await until(() => db1.readInt16BE(6) > 0, 10_000, 'motor speed rising');
     await page.waitForFunction(() => /[1-9]/.test((globalThis as any).document.querySelector('.plcwire-ui-speed')?.textContent ?? ''), undefined, { timeout: 15_000 });
-    if (process.env.PLCWIRE_SCREENSHOT) await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, fullPage: true });
+  });
+
+  it('BOOLs are lamps: Motor running lights while DB1.DBX4.1 is set, Heater on shows DB1.DBX4.2, and no true/false text', async () => {
+    const db1 = demo.plant.memory.area('DB', 1)!;
+    const lit = (cls: string) => page.evaluate((c) => (globalThis as any).document.querySelector(`.${c} .plcwire-lamp`)?.classList.contains('plcwire-lamp-on') ?? null, cls);
+    // The motor was started by the previous test.
+    await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-ui-running .plcwire-lamp')?.classList.contains('plcwire-lamp-on'), undefined, { timeout: 10_000 });
+    expect(db1[4]! & 0x02).to.equal(0x02);
+    // The heater lamp shows the thermostat's bit as last polled: it agrees with memory within a poll or two.
+    const deadline = Date.now() + 10_000;
+    let agree = false;
+    while (!agree && Date.now() < deadline) {
+      const bit = (db1[4]! & 0x04) !== 0;
+      agree = (await lit('plcwire-ui-heater')) === bit && bit === ((db1[4]! & 0x04) !== 0);
+      if (!agree) await page.waitForTimeout(100);
+    }
+    expect(agree, 'heater lamp agrees with DB1.DBX4.2').to.equal(true);
+    const text = await page.locator('.nrdb-ui-group').allInnerTexts();
+    expect(text.join('\n')).not.to.match(/\b(true|false)\b/);
+  });
+
+  it('every widget sits inside its group and on screen, at desktop, tablet and phone widths', async () => {
+    if (process.env.PLCWIRE_SCREENSHOT) {
+      // Let the chart gather some history, and close the "offline ready" notice of Dashboard 2's service worker.
+      await page.waitForTimeout(Number(process.env.PLCWIRE_SCREENSHOT_WAIT_MS ?? 0));
+      const notice = page.getByRole('button', { name: 'Close' });
+      if (await notice.isVisible()) await notice.click();
+      // The page down to the tallest group and its margin.
+      const bottom = await page.evaluate(() => Math.max(...[...(globalThis as any).document.querySelectorAll('.nrdb-ui-group')].map((g: any) => g.getBoundingClientRect().bottom)));
+      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 } });
+    }
+    try {
+      for (const width of [1280, 800, 390]) {
+        await page.setViewportSize({ width, height: 900 });
+        await page.waitForTimeout(300); // one layout pass after the resize
+        const outside = await page.evaluate(() => {
+          const doc = (globalThis as any).document;
+          const view = { left: 0, right: doc.documentElement.clientWidth };
+          const problems: string[] = [];
+          for (const group of doc.querySelectorAll('.nrdb-ui-group')) {
+            const g = group.getBoundingClientRect();
+            if (g.left < view.left - 0.5 || g.right > view.right + 0.5) problems.push(`group ${group.id} ${g.left}..${g.right} off screen`);
+            for (const widget of group.querySelectorAll('.nrdb-ui-widget')) {
+              const w = widget.getBoundingClientRect();
+              if (w.left < g.left - 0.5 || w.right > g.right + 0.5 || w.top < g.top - 0.5 || w.bottom > g.bottom + 0.5) problems.push(`${widget.id} ${w.left}..${w.right} outside ${group.id} ${g.left}..${g.right}`);
+            }
+          }
+          return problems;
+        });
+        expect(outside, `at ${width} px`).to.deep.equal([]);
+      }
+    } finally {
+      await page.setViewportSize({ width: 1280, height: 900 });
+    }
+  });
+
+  it('an S7 link that goes down greys out its widgets as stale within seconds, the other links\' stay live, and all recover', async () => {
+    for (const c of [...S7_WIDGETS, ...CP_WIDGETS, ...S7_200_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
+    const faults = demo.plant.s7.faults;
+    faults.refuseConnections = true;
+    faults.dropConnections();
+    try {
+      // The watchdog fires 2 s after the last value (S7 polls every 500 ms).
+      await waitForStale(page, S7_WIDGETS, true, 8_000);
+      for (const c of [...CP_WIDGETS, ...S7_200_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
+      const link = await page.evaluate(() => (globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? '');
+      expect(link).to.match(/plcwire-lamp-(red|yellow)/);
+    } finally {
+      faults.refuseConnections = false;
+    }
+    // Reconnected on the backoff schedule, the first values clear the mark.
+    await waitForStale(page, S7_WIDGETS, false, 30_000);
+    await page.waitForFunction(() => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? ''), undefined, { timeout: 10_000 });
+  });
+
+  it('a hung CP (connected, answering nothing) greys out the FETCH/WRITE widgets too, and they recover when it answers again', async () => {
+    const faults = demo.plant.fetchwrite.faults;
+    faults.silent = true;
+    try {
+      // The watchdog fires 3 s after the last value (the CP is polled every second).
+      await waitForStale(page, CP_WIDGETS, true, 15_000);
+      for (const c of S7_WIDGETS) expect(await staleOf(page, c), c).to.equal(false);
+    } finally {
+      faults.silent = false;
+    }
+    await waitForStale(page, CP_WIDGETS, false, 30_000);
   });
 });

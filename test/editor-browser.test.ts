@@ -2,7 +2,7 @@
  * The edit dialogs and deploy-time validation in a real browser: a real
  * Node-RED (a child process with this package linked into its user
  * directory, the way `npm install <folder>` does), a real S7 simulator, and
- * headless Debian Chromium driven by playwright-core (installed by .ci/run).
+ * headless Chromium driven by playwright-core (test/support/browser.ts).
  */
 import { expect } from 'chai';
 import { spawn, type ChildProcess } from 'node:child_process';
@@ -11,10 +11,10 @@ import * as http from 'node:http';
 import * as os from 'node:os';
 import * as path from 'node:path';
 import type { Browser, BrowserContext, Page } from 'playwright-core';
+import { launchChromium } from './support/browser';
 import { freePort } from './support/net';
 
 const ROOT = path.resolve(__dirname, '../..');
-const CHROMIUM = process.env.CHROMIUM_PATH ?? '/usr/bin/chromium';
 const LOCALES = { 'en-US': 'en-US', de: 'de-DE', 'zh-CN': 'zh-CN' } as const;
 type Locale = keyof typeof LOCALES;
 
@@ -119,16 +119,10 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
   let browser: Browser;
 
   before(async () => {
-    if (!fs.existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} not found: install Debian's chromium (done by .ci/run)`);
     s7 = new lib.S7Server({ port: 0, memory: new lib.PlcMemory(), profile: 's7-1500' });
     const port: number = await s7.listen();
     red = await startNodeRed(testFlow(port));
-    const { chromium } = await import('playwright-core');
-    browser = await chromium.launch({
-      executablePath: CHROMIUM,
-      headless: true,
-      args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-quic', '--no-first-run', '--disable-component-update', '--disable-sync'],
-    });
+    browser = await launchChromium();
   });
 
   after(async () => {

@@ -1,13 +1,17 @@
 /**
  * A small simulated process for the demo and for users' flow tests: a tank
  * whose level rises and falls, a motor with run/stop, a parts counter, a
- * temperature and the PLC's heartbeat. It runs on PlcMemory (S7 and
+ * heated tank whose temperature a thermostat holds (the running motor warms
+ * it further) and the PLC's heartbeat. Every cycle is a pure function of the
+ * memory and the cycle count, so a test that calls `step()` sees the same
+ * values every time. It runs on PlcMemory (S7 and
  * FETCH/WRITE simulators) with the memory map below; the same values are
  * mirrored into freeport stations by the demo.
  *
  *   DB1.DBD0:REAL   tank level, %            (process)
  *   DB1.DBX4.0      motor run command        (written by the operator)
  *   DB1.DBX4.1      motor running            (process)
+ *   DB1.DBX4.2      heater on                (process, thermostat)
  *   DB1.DBW6:INT    motor speed, rpm         (process, ramps)
  *   DB1.DBD8:DINT   parts counter            (process, while running)
  *   DB1.DBW12:INT   PLC heartbeat counter    (process, every 500 ms)
@@ -20,6 +24,7 @@ export const DEMO_TAGS = Object.freeze({
   level: 'DB1.DBD0:REAL',
   run: 'DB1.DBX4.0',
   running: 'DB1.DBX4.1',
+  heater: 'DB1.DBX4.2',
   speed: 'DB1.DBW6:INT',
   parts: 'DB1.DBD8:DINT',
   plcHeartbeat: 'DB1.DBW12:INT',
@@ -30,11 +35,31 @@ export const DEMO_TAGS = Object.freeze({
 export interface ProcessSnapshot {
   level: number;
   running: boolean;
+  heater: boolean;
   speed: number;
   parts: number;
   heartbeat: number;
   temperature: number;
 }
+
+/** DB1.DBB4's bits. */
+const RUN = 0x01;
+const RUNNING = 0x02;
+const HEATER = 0x04;
+
+/** The motor: full speed, and how fast it ramps up and down (rpm per second). */
+export const MOTOR = Object.freeze({ fullSpeed: 1450, rampUp: 600, rampDown: 900 });
+
+/**
+ * The tank's heat balance, per second: the heater adds `heaterRate` °C, the
+ * motor at full speed `motorRate` °C (in proportion to its speed), and the tank
+ * loses `loss` of its excess over `ambient`. The thermostat switches the heater
+ * on below `heaterOnBelow` and off above `heaterOffAbove`, so the temperature
+ * swings between the two: a cycle of about 63 s with the motor stopped, the
+ * heater on for 45 % of it; the running motor's heat shortens the heating and
+ * slows the cooling, to a cycle of about 77 s with the heater on for 28 %.
+ */
+export const THERMAL = Object.freeze({ ambient: 20, heaterOnBelow: 35, heaterOffAbove: 50, heaterRate: 1, motorRate: 0.15, loss: 0.02 });
 
 export class DemoProcess {
   private timer: NodeJS.Timeout | undefined;
@@ -50,7 +75,7 @@ export class DemoProcess {
     if (!this.timer) {
       const db = this.db();
       if (db.readFloatBE(0) === 0) db.writeFloatBE(20, 0);
-      if (db.readFloatBE(16) === 0) db.writeFloatBE(20, 16);
+      if (db.readFloatBE(16) === 0) db.writeFloatBE(THERMAL.ambient, 16);
       this.timer = setInterval(() => this.step(), this.periodMs);
       this.timer.unref();
     }
@@ -74,19 +99,23 @@ export class DemoProcess {
     level = Math.min(100, Math.max(0, level));
     db.writeFloatBE(level, 0);
 
-    const run = (db[4]! & 0x01) !== 0;
+    const run = (db[4]! & RUN) !== 0;
     let speed = db.readInt16BE(6);
-    speed = run ? Math.min(1450, speed + Math.round(600 * dt)) : Math.max(0, speed - Math.round(900 * dt));
+    speed = run ? Math.min(MOTOR.fullSpeed, speed + Math.round(MOTOR.rampUp * dt)) : Math.max(0, speed - Math.round(MOTOR.rampDown * dt));
     db.writeInt16BE(speed, 6);
     const running = speed > 0;
-    db[4] = (db[4]! & ~0x02) | (running ? 0x02 : 0);
     if (running && this.ticks % Math.max(1, Math.round(0.5 / dt)) === 0) db.writeInt32BE((db.readInt32BE(8) + 1) | 0, 8);
 
     if (this.ticks % Math.max(1, Math.round(0.5 / dt)) === 0) db.writeInt16BE((db.readInt16BE(12) + 1) & 0x7fff, 12);
 
-    const target = 20 + speed / 50;
-    const temperature = db.readFloatBE(16);
-    db.writeFloatBE(temperature + (target - temperature) * 0.05, 16);
+    let temperature = db.readFloatBE(16);
+    let heater = (db[4]! & HEATER) !== 0;
+    if (temperature < THERMAL.heaterOnBelow) heater = true;
+    else if (temperature > THERMAL.heaterOffAbove) heater = false;
+    const rise = (heater ? THERMAL.heaterRate : 0) + (THERMAL.motorRate * speed) / MOTOR.fullSpeed - THERMAL.loss * (temperature - THERMAL.ambient);
+    temperature += rise * dt;
+    db.writeFloatBE(temperature, 16);
+    db[4] = (db[4]! & ~(RUNNING | HEATER)) | (running ? RUNNING : 0) | (heater ? HEATER : 0);
     return this.snapshot();
   }
 
@@ -94,7 +123,8 @@ export class DemoProcess {
     const db = this.db();
     return {
       level: db.readFloatBE(0),
-      running: (db[4]! & 0x02) !== 0,
+      running: (db[4]! & RUNNING) !== 0,
+      heater: (db[4]! & HEATER) !== 0,
       speed: db.readInt16BE(6),
       parts: db.readInt32BE(8),
       heartbeat: db.readInt16BE(12),

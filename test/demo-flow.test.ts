@@ -1,0 +1,143 @@
+/**
+ * The demo flow (`npm start`) and the example flows, as a person opening
+ * them sees them: in the editor no node drawn over another or off the
+ * canvas (comments included), on the dashboard every widget inside its
+ * group and every group inside the page. The demo's wiring is checked where
+ * a mistake would show a value that is not the PLC's: the motor switch
+ * shows the polled run bit and never writes it back, and every widget fed
+ * by a link is marked stale by that link's watchdog.
+ */
+import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+import { dashboardProblems, drawnBoxes, layoutProblems, placementOf, type FlowNode } from './support/flow-layout';
+
+const ROOT = path.resolve(__dirname, '../..');
+const { demoFlow, DEMO_URLS, STALE, LIVE } = require(path.join(ROOT, 'demo/flows.js')) as {
+  demoFlow(urls: unknown): FlowNode[];
+  DEMO_URLS: unknown;
+  STALE: string;
+  LIVE: string;
+};
+
+
+function exampleFiles(dir = path.join(ROOT, 'examples')): string[] {
+  return fs.readdirSync(dir, { withFileTypes: true }).flatMap((e) => {
+    const p = path.join(dir, e.name);
+    return e.isDirectory() ? exampleFiles(p) : e.name.endsWith('.json') ? [p] : [];
+  });
+}
+
+/** The demo flow is deployed as it is (and must stay on the canvas); the examples are imported. */
+const flows: [string, FlowNode[], boolean][] = [
+  ['the npm start demo flow', demoFlow(DEMO_URLS), true],
+  ...exampleFiles().map((f): [string, FlowNode[], boolean] => [path.relative(ROOT, f), JSON.parse(fs.readFileSync(f, 'utf8')), false]),
+];
+
+describe('demo flow: tidy in the editor and on the dashboard', () => {
+  for (const [name, flow, deployed] of flows) {
+    const placement = placementOf(flow, deployed);
+    it(`${name} (${deployed ? 'deployed' : 'imported'}, ${placement}): no two nodes overlap on a tab${deployed ? ' and none reaches off the canvas' : ''}`, () => {
+      expect(layoutProblems(drawnBoxes(flow, placement), { canvas: deployed })).to.deep.equal([]);
+    });
+  }
+
+  for (const [name, flow] of flows.filter(([, f]) => f.some((n) => n.type === 'ui-page'))) {
+    it(`${name}: every widget fits its group and every group the page`, () => {
+      expect(dashboardProblems(flow)).to.deep.equal([]);
+    });
+  }
+
+  it('finds what it is there to find: nodes on top of each other, a long comment or a status over a node, a widget wider than its group', () => {
+    const tab = 't';
+    const flow: FlowNode[] = [
+      { id: 'read', type: 'plcwire-read', name: 'poll CP', x: 160, y: 100, z: tab, wires: [[]] },
+      { id: 'status', type: 'status', name: 'CP link', x: 160, y: 100, z: tab, wires: [[]] },
+      { id: 'note', type: 'comment', name: 'A comment long enough to reach the switch to its right', x: 330, y: 200, z: tab },
+      { id: 'route', type: 'switch', name: 'by tag', outputs: 5, x: 560, y: 240, z: tab, wires: [[], [], [], [], []] },
+      { id: 'edge', type: 'debug', name: 'cut off', x: 40, y: 400, z: tab },
+      // A heartbeat's status text ("alive") under it reaches the node one row (40 px) below.
+      { id: 'hb', type: 'plcwire-heartbeat', name: 'life sign', x: 160, y: 500, z: tab, wires: [[]] },
+      { id: 'below', type: 'status', name: 'link', x: 160, y: 540, z: tab, wires: [[]] },
+    ];
+    expect(layoutProblems(drawnBoxes(flow, 'centred'), { canvas: true })).to.deep.equal([
+      '"poll CP" (read) and "CP link" (status) overlap',
+      '"A comment long enough to reach the switch to its right" (note) and "by tag" (route) overlap',
+      '"cut off" (edge) reaches off the canvas (left -30, top 385)',
+      '"life sign" (hb) and "link" (below) overlap',
+    ]);
+    // Imported without a tab, a node grows to the right of x - 50: a long label runs into its neighbour.
+    const row: FlowNode[] = [
+      { id: 'inject', type: 'inject', name: 'write {"setpoint": 1500, "motor": true}', x: 250, y: 100, z: tab, wires: [[]] },
+      { id: 'write', type: 'plcwire-write', name: 'write setpoint', x: 540, y: 100, z: tab, wires: [[]] },
+    ];
+    expect(layoutProblems(drawnBoxes(row, 'centred'))).to.deep.equal([]);
+    expect(layoutProblems(drawnBoxes(row, 'dropped'))).to.deep.equal(['"write {"setpoint": 1500, "motor": true}" (inject) and "write setpoint" (write) overlap']);
+    const dashboard: FlowNode[] = [
+      { id: 'page', type: 'ui-page', breakpoints: [{ cols: 3 }, { cols: 12 }] },
+      { id: 'g', type: 'ui-group', name: 'narrow', page: 'page', width: 3 },
+      { id: 'wide', type: 'ui-group', name: 'too wide', page: 'page', width: 14 },
+      { id: 'chart', type: 'ui-chart', name: 'chart', group: 'g', width: 6 },
+      { id: 'lost', type: 'ui-text', name: 'lost', group: 'nowhere', width: 1 },
+    ];
+    expect(dashboardProblems(dashboard)).to.deep.equal([
+      'group "too wide" is 14 wide on a page of 12 columns',
+      'widget "chart" (chart) is 6 wide in group "narrow" of 3',
+      'widget "lost" (lost) is in no group',
+    ]);
+  });
+});
+
+describe('demo flow: the dashboard shows what the PLC holds', () => {
+  const flow = demoFlow(DEMO_URLS);
+  const node = (id: string) => flow.find((n) => n.id === id)!;
+  const feeding = (id: string) => flow.filter((n) => (n.wires as string[][] | undefined)?.some((port) => port.includes(id))).map((n) => n.id);
+
+  it('the motor switch is fed the polled run bit, shows it, and a click writes DB1.DBX4.0 without echoing the polled bit back', () => {
+    const motor = node('ui.motor');
+    expect(motor).to.include({ type: 'ui-switch', passthru: false, decouple: true, topic: 'DB1.DBX4.0', topicType: 'str' });
+    const route = node('s7.route');
+    const run = (route.rules as { v: string }[]).findIndex((r) => r.v === 'run');
+    expect((route.wires as string[][])[run]).to.deep.equal(['ui.motor']);
+    const tags = node('s7.read').tags as { name: string; address: string }[];
+    expect(tags.find((t) => t.name === 'run')?.address).to.equal('DB1.DBX4.0');
+    expect(motor.wires).to.deep.equal([['s7.write']]);
+  });
+
+  it('BOOLs from the PLC are lamps, not true/false texts', () => {
+    for (const id of ['ui.running', 'ui.heater']) {
+      expect(node(id).type, id).to.equal('ui-template');
+      expect(String(node(id).format), id).to.match(/class="plcwire-lamp"/);
+    }
+    const tags = node('s7.read').tags as { name: string; address: string }[];
+    const bools = tags.filter((t) => /X\d+\.\d$/.test(t.address)).map((t) => t.name);
+    expect(bools).to.have.members(['run', 'running', 'heater']);
+  });
+
+  it('every widget fed by a link is marked stale by that link\'s watchdog, and only by it', () => {
+    const links = { s7: 's7.read', fw: 'fw.read', fp: 'fp.read' };
+    const widgetsOf = (read: string): Set<string> => {
+      // Everything downstream of the read node, through routing and shaping nodes.
+      const seen = new Set<string>();
+      const walk = (id: string) => {
+        for (const port of (node(id).wires as string[][] | undefined) ?? []) {
+          for (const next of port) {
+            if (seen.has(next) || next.endsWith('.watch')) continue;
+            seen.add(next);
+            walk(next);
+          }
+        }
+      };
+      walk(read);
+      return new Set([...seen].filter((id) => node(id).type.startsWith('ui-')));
+    };
+    for (const [prefix, read] of Object.entries(links)) {
+      const watch = node(`${prefix}.watch`);
+      expect(watch).to.include({ type: 'trigger', op1: 'live', op2: 'stale', extend: true });
+      expect(feeding(`${prefix}.watch`)).to.deep.equal([read]);
+      const marked = new Set((node(`${prefix}.mark`).wires as string[][])[0]);
+      expect([...marked].sort(), prefix).to.deep.equal([...widgetsOf(read)].sort());
+      expect(String(node(`${prefix}.mark`).func)).to.include(STALE).and.include(LIVE);
+    }
+  });
+});

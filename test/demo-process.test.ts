@@ -1,0 +1,124 @@
+/**
+ * The demo plant's process (lib/demo/process.ts), stepped by hand: every
+ * cycle is deterministic, so these tests see exactly what the dashboard's
+ * visitors see over time, without waiting for a timer.
+ */
+import { expect } from 'chai';
+import { DemoProcess, MOTOR, THERMAL, type ProcessSnapshot } from '../lib/demo/process';
+import { PlcMemory } from '../lib/sim/memory';
+
+const PERIOD_MS = 100;
+const STEPS_PER_S = 1000 / PERIOD_MS;
+
+/** A process on fresh memory with the start values `start()` sets, not yet running its timer. */
+function fresh(): { process: DemoProcess; db: Buffer } {
+  const memory = new PlcMemory();
+  const process = new DemoProcess(memory, PERIOD_MS);
+  process.start().stop();
+  return { process, db: memory.area('DB', 1)! };
+}
+
+function run(process: DemoProcess, seconds: number): ProcessSnapshot[] {
+  return Array.from({ length: seconds * STEPS_PER_S }, () => process.step());
+}
+
+function setRun(db: Buffer, on: boolean): void {
+  db[4] = on ? db[4]! | 0x01 : db[4]! & ~0x01;
+}
+
+describe('demo process: the simulated plant behind npm start', () => {
+  it('starts at ambient temperature with the heater on, and warms up by itself', () => {
+    const { process } = fresh();
+    expect(process.snapshot().temperature).to.equal(THERMAL.ambient);
+    const first = process.step();
+    expect(first.heater).to.equal(true);
+    const later = run(process, 10).at(-1)!;
+    // 10 s of 1 °C/s less the loss near ambient: about 9.2 °C warmer.
+    expect(later.temperature).to.be.within(THERMAL.ambient + 8.7, THERMAL.ambient + 9.7);
+    expect(later.heater).to.equal(true);
+  });
+
+  it('holds the temperature between the thermostat limits, switching the heater on and off, with the motor stopped', () => {
+    const { process } = fresh();
+    run(process, 60); // warm-up to the lower limit (about 17 s)
+    const cycle = run(process, 180);
+    const temps = cycle.map((s) => s.temperature);
+    // The step of one cycle (< 0.1 °C) is all it may overshoot a limit by.
+    expect(Math.min(...temps)).to.be.within(THERMAL.heaterOnBelow - 0.1, THERMAL.heaterOnBelow + 0.5);
+    expect(Math.max(...temps)).to.be.within(THERMAL.heaterOffAbove - 0.5, THERMAL.heaterOffAbove + 0.1);
+    const switches = cycle.filter((s, i) => i > 0 && s.heater !== cycle[i - 1]!.heater);
+    // About 63 s a cycle: at least two on/off pairs in three minutes.
+    expect(switches.length).to.be.at.least(5);
+    // The heater is on exactly while the temperature rises.
+    for (let i = 1; i < cycle.length; i++) {
+      const rising = cycle[i]!.temperature > cycle[i - 1]!.temperature;
+      expect(rising, `step ${i}`).to.equal(cycle[i]!.heater);
+    }
+    expect(cycle.every((s) => !s.running && s.speed === 0)).to.equal(true);
+  });
+
+  it('the running motor warms the tank: the heater is needed for less of the time, and the band holds', () => {
+    const heated = (cycle: ProcessSnapshot[]) => cycle.filter((s) => s.heater).length / cycle.length;
+    const stopped = fresh();
+    run(stopped.process, 60);
+    const idle = run(stopped.process, 600);
+    const running = fresh();
+    run(running.process, 60);
+    setRun(running.db, true);
+    run(running.process, 60); // full speed, and the heat of the speed-up settled
+    const busy = run(running.process, 600);
+    expect(busy.every((s) => s.speed === MOTOR.fullSpeed)).to.equal(true);
+    // THERMAL's heat balance: on 28 s of a 63 s cycle stopped, 22 s of a 77 s cycle running
+    // (ten minutes are not a whole number of cycles: a few per cent either way).
+    expect(heated(idle)).to.be.within(0.38, 0.52);
+    expect(heated(busy)).to.be.within(0.22, 0.35);
+    expect(heated(busy)).to.be.below(heated(idle) - 0.1);
+    for (const cycle of [idle, busy]) {
+      const temps = cycle.map((s) => s.temperature);
+      expect(Math.min(...temps)).to.be.within(THERMAL.heaterOnBelow - 0.1, THERMAL.heaterOnBelow + 0.5);
+      expect(Math.max(...temps)).to.be.within(THERMAL.heaterOffAbove - 0.5, THERMAL.heaterOffAbove + 0.1);
+    }
+    // Cooling (heater off) is slower with the motor's heat: fewer heater switch-ons in the same time.
+    const switchOns = (cycle: ProcessSnapshot[]) => cycle.filter((s, i) => i > 0 && s.heater && !cycle[i - 1]!.heater).length;
+    expect(switchOns(busy)).to.be.below(switchOns(idle));
+  });
+
+  it('ramps the motor up to full speed on the run command and counts parts only while it runs', () => {
+    const { process, db } = fresh();
+    run(process, 5);
+    expect(process.snapshot()).to.include({ running: false, speed: 0, parts: 0 });
+    setRun(db, true);
+    const up = run(process, 5);
+    expect(up[0]!.running).to.equal(true);
+    // 600 rpm/s: full speed (1450) after about 2.4 s.
+    expect(up[Math.round(2.3 * STEPS_PER_S)]!.speed).to.be.below(MOTOR.fullSpeed);
+    expect(up.at(-1)!.speed).to.equal(MOTOR.fullSpeed);
+    // One part every 500 ms while running.
+    expect(up.at(-1)!.parts).to.be.within(9, 11);
+    setRun(db, false);
+    const down = run(process, 3);
+    expect(down.at(-1)).to.include({ running: false, speed: 0 });
+    const parts = down.at(-1)!.parts;
+    run(process, 5);
+    expect(process.snapshot().parts).to.equal(parts);
+  });
+
+  it('fills and drains the tank between 10 % and 90 %, and the heartbeat counts every 500 ms', () => {
+    const { process } = fresh();
+    const levels = run(process, 120).map((s) => s.level);
+    expect(Math.max(...levels)).to.be.within(90, 90.5);
+    expect(Math.min(...levels.slice(30 * STEPS_PER_S))).to.be.within(9.5, 10);
+    expect(process.snapshot().heartbeat).to.equal(240);
+  });
+
+  it('is deterministic: two processes stepped alike show the same values', () => {
+    const a = fresh();
+    const b = fresh();
+    for (const { process, db } of [a, b]) {
+      run(process, 40);
+      setRun(db, true);
+      run(process, 20);
+    }
+    expect(a.process.snapshot()).to.deep.equal(b.process.snapshot());
+  });
+});
