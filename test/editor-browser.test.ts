@@ -297,11 +297,11 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
     });
 
     for (const locale of Object.keys(LOCALES) as Locale[]) {
-      it(`${locale}: the import message shows the number of tags and names a row whose type does not fit; key status texts are translated`, async () => {
+      it(`${locale}: the import message shows the number of tags and names a row whose type does not fit; status texts come rendered by the runtime`, async () => {
         const { context, page, errors } = await openEditor(locale);
         try {
-          // The canvas shows "connected" of a node of the working connection in the editor's language.
-          const connected = catalogText(locale, 'plcwire.status.connected');
+          // Node statuses are rendered by the runtime (en-US here), so Status nodes and dashboards get the same words as the canvas.
+          const connected = catalogText('en-US', 'plcwire.status.connected');
           await page.waitForFunction((text) => (globalThis as any).document.querySelector('[id="read-ok"] .red-ui-flow-node-status-label')?.textContent === text, connected, { timeout: 10_000 });
           await editTags(page, 'read-empty');
           await importCsv(page, 'a,MW2\nb,MW4\nc,MW6:INT,WORD\n');
