@@ -2,10 +2,12 @@
  * End to end over a real pseudo-terminal pair (test/support/pty.ts) with the
  * real serialport bindings: the master on one end, the simulated stations on the other.
  */
+import type { BindingInterface, BindingPortInterface } from '@serialport/bindings-interface';
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
+import { SerialPort } from 'serialport';
 import type { PlcError } from '../lib/errors';
 import { FreeportBus } from '../lib/freeport/bus';
 import { FreeportClient } from '../lib/freeport/client';
@@ -120,7 +122,93 @@ describe('freeport end to end over a real pseudo-terminal pair (real serialport 
       await client.close();
     }
   });
+
+  it('notices a device that vanished while a read was on its way, closes the port and stops reading it', async () => {
+    // A tty that has hung up answers every read with 0 bytes, and the bindings read again at once
+    // (https://github.com/serialport/bindings-cpp/issues/162): no error, no 'close', a core kept busy.
+    // It happens when the hangup falls between the poll saying "readable" and the read, which load
+    // makes likely. Here the real bindings' reads are held until the pair is gone: each runs after the hangup.
+    const held = heldReads(SerialPort.binding);
+    const client = new FreeportClient(endpoint(), { binding: held.binding, backoff: { initialDelay: 60_000, jitter: 0 } });
+    try {
+      await client.connect();
+      await bus.close();
+      await pty.stop();
+      const disconnected = waitFor<PlcError>(client, 'disconnected', 3000);
+      held.release();
+      const err = await disconnected;
+      expect(err.code).to.equal('CONNECTION_LOST');
+      expect(err.message).to.include(`${pty.master} disappeared`);
+      expect(held.ports.map((p) => p.isOpen)).to.deep.equal([false]); // its descriptor closed: nothing reads it any more
+      // A measuring window, not a wait: a read looping on the dead descriptor would take most of a core.
+      const cpu = await cpuShare(300);
+      expect(cpu, 'share of one core used by this process after the loss').to.be.below(0.3);
+    } finally {
+      held.release();
+      await client.close();
+    }
+  });
+
+  it('notices a device path that comes to name another device, and reconnects to the device it names', async () => {
+    // As a /dev/serial/by-id/… link does when the adapter is plugged back in and comes up as another ttyUSB.
+    const link = path.join(dir, 'adapter');
+    fs.symlinkSync(fs.realpathSync(pty.master), link);
+    const client = new FreeportClient(endpoint({ transport: { kind: 'serial', path: link, baudRate: 19200, parity: 'none', dataBits: 8, stopBits: 1 } }), {
+      backoff: { initialDelay: 50, maxDelay: 200, jitter: 0 },
+    });
+    const otherDir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-pty-'));
+    const other = await openPtyPair(otherDir);
+    const otherBus = new FreeportBus({ stations: { 5: Buffer.from([0, 0, 0, 9]) } });
+    try {
+      await otherBus.attachSerial(other.station, { baudRate: 19200 });
+      await client.connect();
+      expect(await client.read(['ST6,DWORD0'])).to.deep.equal({ 'ST6,DWORD0': 0x01020304 });
+      const disconnected = waitFor<PlcError>(client, 'disconnected', 3000);
+      fs.symlinkSync(fs.realpathSync(other.master), `${link}.new`);
+      fs.renameSync(`${link}.new`, link); // re-pointed in one step, as udev does
+      const err = await disconnected;
+      expect(err.code).to.equal('CONNECTION_LOST');
+      expect(err.message).to.include(`${link} now names another device`);
+      await until(() => client.state === 'connected', 5000, 'reconnected');
+      expect(await client.read(['ST5,DINT0'])).to.deep.equal({ 'ST5,DINT0': 9 });
+    } finally {
+      await client.close();
+      await otherBus.close();
+      await other.stop();
+      fs.rmSync(otherDir, { recursive: true, force: true });
+    }
+  });
 });
+
+/** Wraps the real bindings so that every read waits until release() (to put a hangup before a read). */
+function heldReads(base: BindingInterface): { binding: BindingInterface; ports: BindingPortInterface[]; release(): void } {
+  let release!: () => void;
+  const gate = new Promise<void>((resolve) => (release = resolve));
+  const ports: BindingPortInterface[] = [];
+  const binding: BindingInterface = {
+    list: () => base.list(),
+    async open(options) {
+      const port = await base.open(options);
+      const read = port.read.bind(port);
+      port.read = async (buffer, offset, length) => {
+        await gate;
+        return read(buffer, offset, length);
+      };
+      ports.push(port);
+      return port;
+    },
+  };
+  return { binding, ports, release };
+}
+
+/** CPU time of this process over `ms` of wall time, as a share of one core. */
+async function cpuShare(ms: number): Promise<number> {
+  const start = process.cpuUsage();
+  const t0 = process.hrtime.bigint();
+  await new Promise((resolve) => setTimeout(resolve, ms));
+  const { user, system } = process.cpuUsage(start);
+  return (user + system) / (Number(process.hrtime.bigint() - t0) / 1000);
+}
 
 describe('the pseudo-terminal pair under the real serialport bindings', function () {
   this.timeout(20000);

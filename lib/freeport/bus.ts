@@ -13,9 +13,9 @@
 import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
 import type { BindingInterface, BindingPortInterface } from '@serialport/bindings-interface';
-import { SerialPortStream } from '@serialport/stream';
-import { SerialPort } from 'serialport';
+import type { SerialPortStream } from '@serialport/stream';
 import { ConnectionError, PlcError } from '../errors';
+import { closeSerial, openSerial } from '../link/serial';
 import type { Parity } from '../url';
 import { encodeReply, type FreeportRequest } from './codec';
 import { FreeportParser } from './parser';
@@ -110,25 +110,16 @@ export class FreeportBus extends EventEmitter {
   /** Answers on a serial device (the real bindings unless `binding` is given). Resolves once the port is open. */
   async attachSerial(path: string, options: SerialAttachOptions): Promise<void> {
     this.assertOpen();
-    const settings = {
+    const port = await openSerial({
       path,
       baudRate: options.baudRate,
       parity: options.parity ?? 'none',
       dataBits: options.dataBits ?? 8,
       stopBits: options.stopBits ?? 1,
-      autoOpen: false,
-    } as const;
-    const port: SerialPortStream = options.binding
-      ? new SerialPortStream({ ...settings, binding: options.binding })
-      : new SerialPort(settings);
-    port.on('error', () => {}); // a vanished device is seen as 'close'
-    await new Promise<void>((resolve, reject) =>
-      port.open((err) =>
-        err ? reject(new ConnectionError('CONNECT_FAILED', `cannot open ${path}: ${err.message}`, { cause: err })) : resolve(),
-      ),
-    );
+      ...(options.binding ? { binding: options.binding } : {}),
+    });
     if (this.closed) {
-      await closePort(port);
+      await closeSerial(port);
       this.assertOpen();
     }
     this.serialPorts.add(port);
@@ -204,7 +195,7 @@ export class FreeportBus extends EventEmitter {
     const server = this.server;
     this.server = undefined;
     await Promise.all([
-      ...ports.map(closePort),
+      ...ports.map(closeSerial),
       server ? new Promise<void>((resolve) => server.close(() => resolve())) : Promise.resolve(),
     ]);
   }
@@ -309,11 +300,4 @@ export class FreeportBus extends EventEmitter {
   private assertOpen(): void {
     if (this.closed) throw new PlcError('CLOSED', 'this freeport bus was closed');
   }
-}
-
-function closePort(port: SerialPortStream): Promise<void> {
-  return new Promise((resolve) => {
-    if (!port.isOpen) return resolve();
-    port.close(() => resolve());
-  });
 }

@@ -13,10 +13,10 @@
  */
 import type { BindingInterface } from '@serialport/bindings-interface';
 import * as net from 'node:net';
-import { SerialPortStream } from '@serialport/stream';
-import { SerialPort } from 'serialport';
+import type { SerialPortStream } from '@serialport/stream';
 import { ConnectionError, PlcError, toPlcError, type TagResult } from '../errors';
 import { BaseClient, type ClientOptions } from '../link/client-base';
+import { closeSerial, openSerial } from '../link/serial';
 import { openTcp } from '../link/tcp';
 import type { PlcValue } from '../types';
 import { endpointName, type FreeportEndpoint } from '../url';
@@ -85,7 +85,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
       socket.once('close', () => this.lose(session, new ConnectionError('CONNECTION_LOST', `${this.name}: the serial device server closed the connection`)));
       return session;
     }
-    const port = await this.openSerial(signal);
+    const port = await openSerial({ ...t, ...(this.binding ? { binding: this.binding } : {}), signal });
     const session = new FreeportSession(serialTransport(port), this.profile, discipline);
     port.on('data', (chunk: Buffer) => session.receive(chunk));
     port.once('close', (err: Error | null) =>
@@ -183,25 +183,6 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
       );
     }
   }
-
-  private openSerial(signal: AbortSignal): Promise<SerialPortStream> {
-    const t = this.endpoint.transport;
-    if (t.kind !== 'serial') throw new Error('not a serial endpoint');
-    const settings = { path: t.path, baudRate: t.baudRate, parity: t.parity, dataBits: t.dataBits, stopBits: t.stopBits, autoOpen: false } as const;
-    const port: SerialPortStream = this.binding ? new SerialPortStream({ ...settings, binding: this.binding }) : new SerialPort(settings);
-    port.on('error', () => {}); // a write to a vanished device: 'close' follows and reports it
-    return new Promise((resolve, reject) => {
-      const onAbort = () => reject(toPlcError(signal.reason, 'ABORTED'));
-      if (signal.aborted) return onAbort();
-      signal.addEventListener('abort', onAbort, { once: true });
-      port.open((err) => {
-        signal.removeEventListener('abort', onAbort);
-        if (err) return reject(new ConnectionError('CONNECT_FAILED', `cannot open serial port ${t.path}: ${err.message}`, { cause: err }));
-        if (signal.aborted) return void port.close(() => {});
-        resolve(port);
-      });
-    });
-  }
 }
 
 /** A silent or garbling station fails its own tags; only a lost line fails the whole request. */
@@ -236,11 +217,7 @@ function socketTransport(socket: net.Socket): FreeportTransport {
 function serialTransport(port: SerialPortStream): FreeportTransport {
   return {
     write: (bytes) => void port.write(bytes),
-    destroy: () =>
-      new Promise<void>((resolve) => {
-        if (!port.isOpen) return resolve();
-        port.close(() => resolve());
-      }),
+    destroy: () => closeSerial(port),
   };
 }
 

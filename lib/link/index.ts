@@ -3,5 +3,6 @@ export * from './client-base';
 export * from './framer';
 export * from './jobs';
 export * from './pending';
+export * from './serial';
 export * from './supervisor';
 export * from './tcp';
