@@ -1,6 +1,6 @@
 /**
  * Simulated freeport stations on one RS-485 bus. The bus can be reached over
- * a serial device (e.g. one end of a socat pseudo-terminal pair), over TCP
+ * a serial device (e.g. one end of a pseudo-terminal pair), over TCP
  * (as through a serial device server), or in-process through a serialport
  * binding such as `@serialport/binding-mock`. Every station hears every frame
  * and answers only its own; frames with a bad checksum or framing get no
