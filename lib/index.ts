@@ -60,7 +60,7 @@ export { FreeportClient, type FreeportClientOptions } from './freeport/client';
 export type { FreeportSession } from './freeport/session';
 export { FreeportBus, type FreeportBusOptions, type FreeportBusFaults, type SerialAttachOptions } from './freeport/bus';
 export { FreeportStation } from './freeport/station';
-export { DOCUMENT_PROFILE, defineProfile, type FreeportProfile } from './freeport/profile';
+export { DEFAULT_FREEPORT_PROFILE, defineProfile, type FreeportProfile } from './freeport/profile';
 export { parseFreeportAddress, type FreeportTag } from './freeport/address';
 
 export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess, type MemoryFault } from './sim/memory';

@@ -11,7 +11,7 @@ import {
   writeRequest,
 } from '../lib/freeport/codec';
 import { FreeportParser } from '../lib/freeport/parser';
-import { defineProfile, DOCUMENT_PROFILE, replyLength, requestLength } from '../lib/freeport/profile';
+import { defineProfile, DEFAULT_FREEPORT_PROFILE, replyLength, requestLength } from '../lib/freeport/profile';
 
 const ascii = (s: string) => Buffer.from(s, 'latin1');
 const text = (b: Buffer) => b.toString('latin1');
@@ -21,7 +21,7 @@ describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
   describe('the default frame profile (docs/protocols.md)', () => {
     it('writes E6 27 A1 C3 to station 5 as exactly qR0504E627A1C325Q', () => {
       expect(text(encodeRequest(writeRequest(5, E627A1C3)))).to.equal('qR0504E627A1C325Q');
-      expect(requestLength(DOCUMENT_PROFILE)).to.equal(17);
+      expect(requestLength(DEFAULT_FREEPORT_PROFILE)).to.equal(17);
     });
 
     it('reads station 5 with DT W, LE 04 and a zero DU', () => {
@@ -45,7 +45,7 @@ describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
       expect(text(encodeReply({ data: E627A1C3 }))).to.equal('qE627A1C376Q');
       expect(decodeReply(ascii('qE627A1C376Q'))).to.deep.equal({ data: E627A1C3 });
       expect(decodeReply(ascii('qe627a1c3' + '56Q')).data).to.deep.equal(E627A1C3); // lower case hex, its own FC
-      expect(replyLength(DOCUMENT_PROFILE)).to.equal(12);
+      expect(replyLength(DEFAULT_FREEPORT_PROFILE)).to.equal(12);
     });
 
     it('rejects a reply with a bad checksum, bad framing or non-hex DU with ProtocolError', () => {
@@ -139,21 +139,21 @@ describe('freeport stream parser', () => {
   it('finds the frame whatever the split point', () => {
     const stream = Buffer.concat([reply, reply]);
     for (let cut = 0; cut <= stream.length; cut++) {
-      const parser = new FreeportParser(DOCUMENT_PROFILE, 'reply');
+      const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply');
       const frames = [...parser.push(stream.subarray(0, cut)), ...parser.push(stream.subarray(cut))];
       expect(frames.map((f) => f.kind), `cut at ${cut}`).to.deep.equal(['reply', 'reply']);
     }
   });
 
   it('feeds byte by byte', () => {
-    const parser = new FreeportParser(DOCUMENT_PROFILE, 'request');
+    const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'request');
     const frames = [...request].flatMap((b) => parser.push(Buffer.from([b])));
     expect(frames).to.have.length(1);
     expect(frames[0]).to.deep.include({ kind: 'request' });
   });
 
   it('resynchronises after noise, a truncated frame and garbage', () => {
-    const parser = new FreeportParser(DOCUMENT_PROFILE, 'reply');
+    const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply');
     const frames = parser.push(Buffer.concat([
       Buffer.from([0x00, 0xff, 0x71, 0x13]), // noise, a stray start character
       ascii('qE627A'), // a reply cut off by a station reset
@@ -167,16 +167,16 @@ describe('freeport stream parser', () => {
   });
 
   it('ignores the master\'s own echo and other stations\' traffic in the other direction', () => {
-    const replies = new FreeportParser(DOCUMENT_PROFILE, 'reply');
+    const replies = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply');
     expect(replies.push(Buffer.concat([request, reply]))).to.have.length(1);
-    const requests = new FreeportParser(DOCUMENT_PROFILE, 'request');
+    const requests = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'request');
     expect(requests.push(Buffer.concat([reply, request])).map((f) => f.kind)).to.deep.equal(['request']);
   });
 
   it('reports a frame with a flipped bit as corrupt instead of a value', () => {
     const bad = Buffer.from(reply);
     bad[3] ^= 0x01; // '2' → '3': still hex, so only the checksum can catch it
-    const frames = new FreeportParser(DOCUMENT_PROFILE, 'reply').push(bad);
+    const frames = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply').push(bad);
     expect(frames).to.have.length(1);
     expect(frames[0]!.kind).to.equal('corrupt');
     if (frames[0]!.kind === 'corrupt') expect(frames[0]!.error.message).to.match(/checksum mismatch/);
@@ -185,7 +185,7 @@ describe('freeport stream parser', () => {
   it('never throws on arbitrary bytes, in arbitrary chunks, and cuts only whole-length frames', () => {
     fc.assert(
       fc.property(fc.array(fc.uint8Array({ maxLength: 40 }), { maxLength: 10 }), fc.constantFrom('request', 'reply'), (chunks, dir) => {
-        const parser = new FreeportParser(DOCUMENT_PROFILE, dir as 'request' | 'reply');
+        const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, dir as 'request' | 'reply');
         const length = dir === 'request' ? 17 : 12;
         for (const c of chunks) for (const f of parser.push(Buffer.from(c))) expect(f.raw.length).to.equal(length);
         expect(parser.buffered).to.be.lessThan(length);
@@ -198,7 +198,7 @@ describe('freeport stream parser', () => {
     const alphabet = fc.constantFrom(...'qQWR0123456789ABCDEFabcdef\x00\xff\r\n'.split(''));
     fc.assert(
       fc.property(fc.array(alphabet, { maxLength: 60 }), fc.uint8Array({ minLength: 4, maxLength: 4 }), fc.integer({ min: 0, max: 255 }), (garbage, data, station) => {
-        const parser = new FreeportParser(DOCUMENT_PROFILE, 'request');
+        const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'request');
         const frame = encodeRequest(writeRequest(station, Buffer.from(data)));
         const frames = parser.push(Buffer.concat([ascii(garbage.join('')), frame]));
         const last = frames[frames.length - 1];

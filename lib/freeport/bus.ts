@@ -25,7 +25,7 @@ import { FreeportStation } from './station';
 export interface FreeportBusOptions {
   /** Station addresses, or addresses with their initial data areas. */
   stations: readonly number[] | Readonly<Record<number, Buffer>>;
-  /** The frame profile (default: DOCUMENT_PROFILE); a partial profile is completed with defaults. */
+  /** The frame profile (default: DEFAULT_FREEPORT_PROFILE); a partial profile is completed with defaults. */
   profile?: Partial<FreeportProfile>;
   /** Injected for noise faults. */
   random?: () => number;

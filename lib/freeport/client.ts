@@ -29,7 +29,7 @@ import { FreeportSession, type FreeportTransport } from './session';
 export interface FreeportClientOptions extends Partial<ClientOptions> {
   /** A serialport binding other than the platform's (tests: `@serialport/binding-mock`). */
   binding?: BindingInterface;
-  /** The frame profile of the stations' PLC program (default: DOCUMENT_PROFILE, docs/protocols.md). */
+  /** The frame profile of the stations' PLC program (default: DEFAULT_FREEPORT_PROFILE, docs/protocols.md). */
   profile?: Partial<FreeportProfile>;
 }
 

@@ -5,7 +5,7 @@
  * the stream parser (parser.ts) turns that into a 'corrupt' event instead.
  */
 import { PlcError, ProtocolError } from '../errors';
-import { checksumWidth, DOCUMENT_PROFILE, replyLength, requestLength, type ChecksumKind, type FreeportProfile } from './profile';
+import { checksumWidth, DEFAULT_FREEPORT_PROFILE, replyLength, requestLength, type ChecksumKind, type FreeportProfile } from './profile';
 
 export type FreeportCommand = 'read' | 'write';
 
@@ -49,12 +49,12 @@ export function computeChecksum(kind: ChecksumKind, covered: string, commandChar
 }
 
 /** A read of the station's whole data area: LE = dataBytes, DU zeros. */
-export function readRequest(station: number, profile: FreeportProfile = DOCUMENT_PROFILE): FreeportRequest {
+export function readRequest(station: number, profile: FreeportProfile = DEFAULT_FREEPORT_PROFILE): FreeportRequest {
   return { command: 'read', station, length: profile.dataBytes, data: Buffer.alloc(profile.dataBytes) };
 }
 
 /** A write of `data` to the first data.length bytes of the station's area; DU padded with zeros. */
-export function writeRequest(station: number, data: Buffer, profile: FreeportProfile = DOCUMENT_PROFILE): FreeportRequest {
+export function writeRequest(station: number, data: Buffer, profile: FreeportProfile = DEFAULT_FREEPORT_PROFILE): FreeportRequest {
   if (data.length < 1 || data.length > profile.dataBytes) {
     throw new PlcError('INVALID_VALUE', `a freeport write carries 1–${profile.dataBytes} bytes, not ${data.length}`);
   }
@@ -63,7 +63,7 @@ export function writeRequest(station: number, data: Buffer, profile: FreeportPro
   return { command: 'write', station, length: data.length, data: du };
 }
 
-export function encodeRequest(request: FreeportRequest, profile: FreeportProfile = DOCUMENT_PROFILE): Buffer {
+export function encodeRequest(request: FreeportRequest, profile: FreeportProfile = DEFAULT_FREEPORT_PROFILE): Buffer {
   const p = profile;
   const dt = request.command === 'read' ? p.readCommand : p.writeCommand;
   if (request.length < 0 || request.length > p.dataBytes) {
@@ -73,7 +73,7 @@ export function encodeRequest(request: FreeportRequest, profile: FreeportProfile
   return frame(p, body, 1);
 }
 
-export function encodeReply(reply: FreeportReply, profile: FreeportProfile = DOCUMENT_PROFILE): Buffer {
+export function encodeReply(reply: FreeportReply, profile: FreeportProfile = DEFAULT_FREEPORT_PROFILE): Buffer {
   const p = profile;
   let body = '';
   if (p.replyEchoesAddress) {
@@ -84,7 +84,7 @@ export function encodeReply(reply: FreeportReply, profile: FreeportProfile = DOC
 }
 
 /** Decodes one complete request frame (as cut by the parser). Throws ProtocolError. */
-export function decodeRequest(bytes: Buffer, profile: FreeportProfile = DOCUMENT_PROFILE): FreeportRequest {
+export function decodeRequest(bytes: Buffer, profile: FreeportProfile = DEFAULT_FREEPORT_PROFILE): FreeportRequest {
   const p = profile;
   const text = open(bytes, p, requestLength(p), 'request');
   let at = 1;
@@ -102,7 +102,7 @@ export function decodeRequest(bytes: Buffer, profile: FreeportProfile = DOCUMENT
 }
 
 /** Decodes one complete reply frame. Throws ProtocolError. */
-export function decodeReply(bytes: Buffer, profile: FreeportProfile = DOCUMENT_PROFILE): FreeportReply {
+export function decodeReply(bytes: Buffer, profile: FreeportProfile = DEFAULT_FREEPORT_PROFILE): FreeportReply {
   const p = profile;
   const text = open(bytes, p, replyLength(p), 'reply');
   let at = 1;

@@ -48,7 +48,7 @@ export interface FreeportProfile {
 }
 
 /** The default frame (docs/protocols.md; its station program sets SMB88 = 113 'q', SMB89 = 81 'Q'). */
-export const DOCUMENT_PROFILE: FreeportProfile = Object.freeze({
+export const DEFAULT_FREEPORT_PROFILE: FreeportProfile = Object.freeze({
   start: 'q',
   end: 'Q',
   readCommand: 'W',
@@ -83,9 +83,9 @@ export function maxStation(p: FreeportProfile): number {
 
 const HEX = /^[0-9A-Fa-f]$/;
 
-/** Fills in the defaults (DOCUMENT_PROFILE) and checks the result; throws PlcError INVALID_VALUE naming the field. */
+/** Fills in the defaults (DEFAULT_FREEPORT_PROFILE) and checks the result; throws PlcError INVALID_VALUE naming the field. */
 export function defineProfile(overrides: Partial<FreeportProfile> = {}): FreeportProfile {
-  const p: FreeportProfile = { ...DOCUMENT_PROFILE, ...overrides };
+  const p: FreeportProfile = { ...DEFAULT_FREEPORT_PROFILE, ...overrides };
   const bad = (field: string, why: string): never => {
     throw new PlcError('INVALID_VALUE', `invalid freeport profile: ${field} ${why}`);
   };

@@ -2,7 +2,7 @@
 import { OpCode, decodeRequest, decodeResponse, encodeRequest, encodeResponse } from '../../lib/fetchwrite/codec';
 import { decodeReply, decodeRequest as decodeFreeportRequest, encodeReply, encodeRequest as encodeFreeportRequest, readRequest, writeRequest } from '../../lib/freeport/codec';
 import { FreeportParser } from '../../lib/freeport/parser';
-import { DOCUMENT_PROFILE } from '../../lib/freeport/profile';
+import { DEFAULT_FREEPORT_PROFILE } from '../../lib/freeport/profile';
 import { decodeBlockCounts, decodeBlockInfo, decodeBlockListEntries, decodeLoadBlock, encodeBlockInfo } from '../../lib/s7/blocks';
 import {
   decodeControl,
@@ -109,8 +109,8 @@ export function extraTargets(): FuzzTarget[] {
       seeds: [Buffer.concat(fpSeeds)],
       run: (b) => {
         // The parser must never throw, whatever the line carries.
-        new FreeportParser(DOCUMENT_PROFILE, 'reply').push(b);
-        new FreeportParser(DOCUMENT_PROFILE, 'request').push(b);
+        new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply').push(b);
+        new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'request').push(b);
       },
     },
   ];
