@@ -16,7 +16,7 @@
  * silently falls back to a default.
  */
 import { PlcError } from './errors';
-import { MAX_ITEMS } from './s7/constants';
+import { DEFAULT_MAX_ITEMS, MAX_ITEMS, S7_PORT } from './s7/constants';
 
 export type S7ConnectionType = 'pg' | 'op' | 'basic';
 export type Parity = 'none' | 'even' | 'odd';
@@ -78,13 +78,13 @@ export interface FreeportEndpoint extends SafetyOptions {
 export type Endpoint = S7Endpoint | FetchWriteEndpoint | FreeportEndpoint;
 
 export const DEFAULTS = Object.freeze({
-  s7Port: 102,
+  s7Port: S7_PORT,
   rack: 0,
   slot: 1,
   pduSize: 960,
   timeout: 5000,
   /** Items per S7 job unless the URL says more (DEFAULT_MAX_ITEMS in lib/s7/constants.ts says why). */
-  maxItems: 20,
+  maxItems: DEFAULT_MAX_ITEMS,
   fetchPort: 2000,
   writePort: 2001,
   baudRate: 9600,

@@ -205,9 +205,6 @@ export function remoteTsapFor(type: 'pg' | 'op' | 'basic', rack: number, slot: n
   return (t << 8) | ((rack & 0x07) << 5) | (slot & 0x1f);
 }
 
-/** Local TSAP 0x1000 of circulated S7 examples (docs/protocols.md, corrections); the client sends connection type << 8 (localTsapFor). */
-export const LOCAL_TSAP = 0x1000;
-
 // ---------------------------------------------------------------- userdata (ROSCTR 7) and CPU services
 
 /** Parameter head of every userdata PDU. */
