@@ -478,8 +478,8 @@ class Doctor {
     const probe = 'MB0';
     try {
       const r = (await client.readDetailed([probe], { signal: this.signal }))[probe]!;
-      const needs = family === 'S7-1200' || family === 'S7-1500' ? '' : family ? ` (an ${family} needs no setting for it)` : '';
-      if (r.ok) return this.pass('putget', `the CPU serves Read Var (PUT/GET)${needs}: ${probe} = ${valueToText(r.value)}`);
+      const needs = family === 'S7-1200' || family === 'S7-1500' ? '' : family ? `; an ${family} needs no setting for it` : '';
+      if (r.ok) return this.pass('putget', `the CPU serves Read Var (PUT/GET${needs}): ${probe} = ${valueToText(r.value)}`);
       const e = r.error;
       if (e.plcCode !== undefined && PUT_GET_REFUSALS.includes(e.plcCode)) {
         this.fail('putget', `the CPU refuses Read Var as a whole: ${e.message}`, PUT_GET_HINT);
@@ -487,7 +487,7 @@ class Doctor {
       if (e.plcCode === PASSWORD_NEEDED) this.fail('putget', `the CPU refuses Read Var: ${e.message}`, 'The protection level forbids reads: give the password (S7Client.setPassword) or lower the protection.');
       if (e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'NOT_CONNECTED') this.fail('putget', e.message);
       // An answer per item (MB0 out of range on a CPU without flags) still means Read Var is served.
-      this.pass('putget', `the CPU serves Read Var (PUT/GET)${needs}; ${probe}: ${e.message}`);
+      this.pass('putget', `the CPU serves Read Var (PUT/GET${needs}); ${probe}: ${e.message}`);
     } catch (err) {
       return this.failed('putget', err, (p) => this.fail('putget', p.message));
     }
