@@ -514,6 +514,25 @@ class Doctor {
     }
   }
 
+  /** Waits until the client is connected again (it reconnects by itself after a dropped link), within the deadline. */
+  private async reconnected(): Promise<void> {
+    const client = this.client!;
+    if (client.state === 'connected') return;
+    await new Promise<void>((resolve, reject) => {
+      const done = (err?: Error) => {
+        client.removeListener('connected', onConnected);
+        this.signal.removeEventListener('abort', onAbort);
+        if (err) reject(err);
+        else resolve();
+      };
+      const onConnected = () => done();
+      const onAbort = () => done(new PlcError('ABORTED', 'aborted'));
+      if (this.signal.aborted) return onAbort();
+      client.on('connected', onConnected);
+      this.signal.addEventListener('abort', onAbort, { once: true });
+    });
+  }
+
   private async dbAddress(step: string, tag: Tag, family: Family | undefined): Promise<void> {
     const client = this.client!;
     const db = tag.dbNumber;
@@ -528,7 +547,9 @@ class Doctor {
       const e = toPlcError(err);
       if (e.code === 'OBJECT_DOES_NOT_EXIST') missing('block info: no such block');
       // S7-1200/1500 (and S7-200, LOGO!) offer no block info over S7comm: the reads below tell.
-      if (e.code !== 'NOT_SUPPORTED' && e.code !== 'ACCESS_DENIED') throw err;
+      // A malformed answer (snap7's server answers block info of a missing DB so) dropped the link: read once it is back.
+      if (e.code === 'PROTOCOL_ERROR') await this.reconnected();
+      else if (e.code !== 'NOT_SUPPORTED' && e.code !== 'ACCESS_DENIED') throw err;
     }
     if (length !== undefined && end > length) {
       this.fail(step, `DB${db} has ${length} bytes (block info); ${needs}`, `The address lies past the end of DB${db}: check the offset against the DB (the Offset column of the DB editor), or extend the DB and download it.`);
