@@ -88,6 +88,9 @@ export interface RequestOptions {
  *
  * Events (state changes only): `connecting`, `connected`, `disconnected` (err),
  * `reconnecting` ({ delay, attempt }), `error` (err), `state` (LinkState).
+ * S7Client also emits `itemLimit` (ItemLimitEvent `{ limit, was }`) once when
+ * the PLC answers fewer items than a job asked for: from then on it plans jobs
+ * of at most `limit` items (see S7Endpoint.maxItems).
  */
 export interface PlcClient extends EventEmitter {
   readonly protocol: Protocol;

@@ -6,7 +6,7 @@ import { PassThrough } from 'node:stream';
 import { parseAddress } from '../lib/address';
 import { EXIT, main } from '../lib/cli/main';
 import { toJson } from '../lib/cli/values';
-import { S7Server } from '../lib/s7/server';
+import { S7Server, type S7Profile } from '../lib/s7/server';
 import type { DataTypeName } from '../lib/types';
 import { encodeInto, JS_TYPES } from '../lib/values';
 import { freePort } from './support/net';
@@ -395,5 +395,173 @@ describe('plcwire CLI', function () {
       expect(await r.exit).to.equal(2);
       expect(r.output().out).to.match(/usage:/);
     });
+  });
+});
+
+describe('plcwire system commands (the installed binary against the simulator)', function () {
+  this.timeout(20000);
+  let server: S7Server;
+  let connections: number;
+  let requests: number;
+
+  async function start(profile: S7Profile, layout?: Record<string, number>): Promise<string> {
+    server = new S7Server({ port: 0, profile, ...(layout ? { layout: { dbs: layout } } : {}) });
+    const port = await server.listen();
+    connections = 0;
+    requests = 0;
+    server.on('connection', () => connections++);
+    server.on('request', () => requests++);
+    return `s7://127.0.0.1:${port}?rack=0&slot=${profile === 's7-300' ? 2 : 1}`;
+  }
+
+  async function plcwire(args: string[]): Promise<{ code: number; out: string; err: string }> {
+    const r = run(args);
+    const code = await r.exit;
+    return { code, ...r.output() };
+  }
+
+  afterEach(() => server.close());
+
+  it('info --json gives identity, state in lower case and the clock in ISO 8601', async () => {
+    const url = await start('s7-1500');
+    const r = await plcwire(['info', url, '--json']);
+    expect(r.code, r.err).to.equal(0);
+    const info = JSON.parse(r.out) as Record<string, unknown>;
+    expect(info).to.include({ orderCode: '6ES7 516-3AN02-0AB0', firmware: 'V2.9.2', moduleTypeName: 'CPU 1516-3 PN/DP', serialNumber: 'S V-PW0000042019', asName: 'PLCWIRE-SIM', moduleName: 'PLC_1', state: 'run', pduSize: 960 });
+    expect(info.clock).to.match(/^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z$/);
+    expect(Math.abs(Date.parse(info.clock as string) - Date.now())).to.be.below(10_000);
+    server.stop();
+    const text = await plcwire(['info', url]);
+    expect(text.out).to.match(/^orderCode: 6ES7 516-3AN02-0AB0$/m).and.match(/^state: stop$/m);
+  });
+
+  it('szl --json gives the records as hex and the decoded form; a list the CPU lacks exits 1, a bad ID 2', async () => {
+    const url = await start('s7-300');
+    let r = await plcwire(['szl', url, '0x0011', '--json']);
+    expect(r.code, r.err).to.equal(0);
+    const list = JSON.parse(r.out) as { id: string; index: string; recordLength: number; records: string[]; decoded: { orderCode: string } };
+    expect(list).to.include({ id: '0x0011', index: '0x0000', recordLength: 28 });
+    expect(list.records[0]).to.match(/^0001364553372033/); // index 1, "6ES7 3…"
+    expect(list.decoded.orderCode).to.equal('6ES7 315-2EH14-0AB0');
+    r = await plcwire(['szl', url, '0232', '4', '--json']);
+    expect((JSON.parse(r.out) as { decoded: { level: number } }).decoded.level).to.equal(1);
+    r = await plcwire(['szl', url, '0x0f99', '--json']);
+    expect(r.code).to.equal(EXIT.TAG_ERROR);
+    expect(r.err).to.contain('SZL');
+    r = await plcwire(['szl', url, 'xyz']);
+    expect(r.code).to.equal(EXIT.USAGE);
+  });
+
+  it('diag --max gives the most recent entries, newest first', async () => {
+    const url = await start('s7-300');
+    server.stop('programming-error');
+    const r = await plcwire(['diag', url, '--max', '2', '--json']);
+    expect(r.code, r.err).to.equal(0);
+    const entries = JSON.parse(r.out) as { eventId: string; description: string; time: string }[];
+    expect(entries).to.have.length(2);
+    expect(entries[0]!.eventId).to.equal('0x4562');
+    expect(entries[0]!.time).to.match(/^\d{4}-/);
+    const text = await plcwire(['diag', url, '--max', '1']);
+    expect(text.out.trim().split('\n')).to.have.length(1);
+    expect(text.out).to.contain('0x4562');
+  });
+
+  it('clock reads; clock --set needs control=true and --yes, and then sets', async () => {
+    const url = await start('s7-1500');
+    let r = await plcwire(['clock', url, '--json']);
+    expect(r.code, r.err).to.equal(0);
+    expect(Math.abs(Date.parse((JSON.parse(r.out) as { clock: string }).clock) - Date.now())).to.be.below(10_000);
+    connections = 0;
+    r = await plcwire(['clock', url, '--set', '2024-05-01T12:00:00Z', '--yes']);
+    expect(r.code).to.equal(EXIT.REFUSED);
+    expect(r.err).to.contain('control=true');
+    r = await plcwire(['clock', `${url}&control=true`, '--set', '2024-05-01T12:00:00Z']);
+    expect(r.code).to.equal(EXIT.REFUSED);
+    expect(r.err).to.contain('--yes');
+    expect(connections, 'refused before connecting').to.equal(0);
+    expect(Math.abs(server.clockOffset)).to.be.below(1000);
+    r = await plcwire(['clock', `${url}&control=true`, '--set', '2024-05-01T12:00:00Z', '--yes', '--json']);
+    expect(r.code, r.err).to.equal(0);
+    expect((JSON.parse(r.out) as { clock: string }).clock).to.match(/^2024-05-01T12:00:0/);
+    expect(server.clockOffset).to.be.below(-1e10);
+    r = await plcwire(['clock', url, '--set', 'yesterday']);
+    expect(r.code).to.equal(EXIT.USAGE);
+  });
+
+  it('blocks gives counts per type, the numbers of one type, one block\'s info; an S7-1500 has no block functions (exit 1)', async () => {
+    let url = await start('s7-300', { 1: 100, 5: 20 });
+    let r = await plcwire(['blocks', url, '--json']);
+    expect(r.code, r.err).to.equal(0);
+    expect(JSON.parse(r.out)).to.include({ DB: 2, OB: 8 });
+    r = await plcwire(['blocks', url, 'db', '--json']);
+    expect(JSON.parse(r.out)).to.deep.equal({ type: 'DB', numbers: [1, 5] });
+    r = await plcwire(['blocks', url, 'DB', '5', '--json']);
+    expect(JSON.parse(r.out)).to.include({ type: 'DB', number: 5, mc7Size: 20 });
+    r = await plcwire(['blocks', url, 'DB', '6']);
+    expect(r.code).to.equal(EXIT.TAG_ERROR);
+    r = await plcwire(['blocks', url, 'XB']);
+    expect(r.code).to.equal(EXIT.USAGE);
+    await server.close();
+    url = await start('s7-1500');
+    r = await plcwire(['blocks', url]);
+    expect(r.code).to.equal(EXIT.TAG_ERROR);
+    expect(r.err).to.contain('does not offer the service');
+  });
+
+  it('cpu stop/start: exit 4 and nothing sent without control=true or without --yes; with both, the CPU changes mode', async () => {
+    const url = await start('s7-300');
+    let r = await plcwire(['cpu', url, 'stop', '--yes']);
+    expect(r.code).to.equal(EXIT.REFUSED);
+    expect(r.err).to.contain('control=true');
+    r = await plcwire(['cpu', `${url}&control=true`, 'stop']);
+    expect(r.code).to.equal(EXIT.REFUSED);
+    expect(connections, 'nothing sent').to.equal(0);
+    expect(requests).to.equal(0);
+    expect(server.state).to.equal('RUN');
+    r = await plcwire(['cpu', `${url}&control=true`, 'stop', '--yes', '--json']);
+    expect(r.code, r.err).to.equal(0);
+    expect(JSON.parse(r.out)).to.deep.equal({ state: 'stop' });
+    expect(server.state).to.equal('STOP');
+    r = await plcwire(['cpu', `${url}&control=true`, 'cold-start', '--yes']);
+    expect(r.out.trim()).to.equal('the CPU is in RUN');
+    expect(server.diagnostics[2]!.description).to.equal('Manual cold restart requested');
+    r = await plcwire(['cpu', `${url}&control=true`, 'reboot', '--yes']);
+    expect(r.code).to.equal(EXIT.USAGE);
+  });
+
+  it('doctor exits 0 when every step passes, 3 at a failed connection step, 1 at a failed address, and prints { ok, steps } with --json', async () => {
+    const url = await start('s7-300', { 1: 100 });
+    let r = await plcwire(['doctor', url, 'DB1,INT0', '--json']);
+    expect(r.code, r.err).to.equal(0);
+    const report = JSON.parse(r.out) as { ok: boolean; steps: { step: string; ok: boolean; detail: string; hint?: string }[] };
+    expect(report.ok).to.equal(true);
+    expect(report.steps.map((s) => s.step)).to.deep.equal(['resolve', 'tcp', 'cotp', 'setup', 'identity', 'protection', 'putget', 'address DB1,INT0']);
+    r = await plcwire(['doctor', url, 'DB1,INT0', 'DB1,DINT98']);
+    expect(r.code).to.equal(EXIT.TAG_ERROR);
+    expect(r.out).to.match(/^FAIL address DB1,DINT98: DB1 has 100 bytes \(block info\); DB1,DINT98 needs bytes 98\.\.101$/m);
+    expect(r.out).to.match(/^ {5}fix: The address lies past the end of DB1/m);
+    r = await plcwire(['doctor', url.replace('slot=2', 'slot=1')]);
+    expect(r.code).to.equal(EXIT.CONNECTION);
+    expect(r.out).to.contain('use ?rack=0&slot=2 in the URL');
+    r = await plcwire(['doctor', 's7://127.0.0.1?slot=42']);
+    expect(r.code).to.equal(EXIT.USAGE);
+    await until(() => server.connectionCount === 0, 2000, 'no connection left');
+  });
+
+  it('serve s7 --max-items serves that many items per job, and the client learns it', async () => {
+    server = new S7Server({ port: 0 }); // for afterEach
+    const port = await freePort();
+    const srv = run(['serve', 's7', '--port', String(port), '--max-items', '3']);
+    try {
+      await until(() => /listening on 127\.0\.0\.1:\d+, at most 3 items per job/.test(srv.output().out), 10000, 'serve prints its limit');
+      const r = run(['read', `s7://127.0.0.1:${port}?slot=1`, 'MB0', 'MB2', 'MB4', 'MB6', 'MB8', '--json']);
+      expect(await r.exit, r.output().err).to.equal(0);
+      expect(JSON.parse(r.output().out)).to.deep.equal({ MB0: 0, MB2: 0, MB4: 0, MB6: 0, MB8: 0 });
+    } finally {
+      srv.child.kill('SIGINT');
+    }
+    expect(await srv.exit).to.equal(0);
+    const bad = run(['serve', 's7', '--port', '0', '--max-items', '0']);
+    expect(await bad.exit).to.equal(EXIT.USAGE);
   });
 });

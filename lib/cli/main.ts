@@ -11,6 +11,7 @@ import { validateValue, type TagShape } from '../values';
 import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
 import { parseArgs, UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
 import { serve, SERVE_FLAGS } from './serve';
+import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { toJson, valueFromText, valueToText, type TypedTag } from './values';
 
 export const EXIT = Object.freeze({
@@ -21,7 +22,7 @@ export const EXIT = Object.freeze({
   USAGE: 2,
   /** Could not connect, or the connection was lost. */
   CONNECTION: 3,
-  /** A write was refused for safety (read-only, allow-list, or a remote PLC without --yes). */
+  /** A write or a control command was refused for safety (read-only, allow-list, no control=true, or no --yes). */
   REFUSED: 4,
   /** Stopped by Ctrl-C before it finished. */
   INTERRUPTED: 130,
@@ -39,16 +40,23 @@ const USAGE = `usage:
   plcwire read  <url> <address>... [--json] [--timeout ms]
   plcwire write <url> <address>=<value>... [--yes] [--json] [--timeout ms]
   plcwire watch <url> <address>... [--interval ms] [--json]
-  plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json]
+  plcwire info  <url> [--json]
+  plcwire szl   <url> <id> [index] [--json]              (hex, e.g. 0x0011 0)
+  plcwire diag  <url> [--max N] [--json]
+  plcwire clock <url> [--set now|<ISO time>] [--yes] [--json]
+  plcwire blocks <url> [TYPE [NUMBER]] [--json]          (OB, FB, FC, DB, SDB, SFC, SFB)
+  plcwire cpu   <url> stop|start|cold-start [--yes] [--json]   (the URL needs control=true)
+  plcwire doctor <url> [address...] [--json] [--timeout ms]
+  plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json] [--max-items N]
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
   plcwire demo
 options: --debug prints stack traces; --help prints this text.
 urls: s7://host?rack=0&slot=1  fetchwrite://host?fetchPort=2000&writePort=2001
       freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
-exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write refused, 130 interrupted`;
+exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
-const VALUE_FLAGS = ['timeout', 'interval', ...SERVE_FLAGS];
+const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', ...SERVE_FLAGS];
 const BOOL_FLAGS = ['json', 'yes', 'debug', 'help'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
@@ -72,12 +80,26 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
         return await write(rest, args, io);
       case 'watch':
         return await watch(rest, args, io);
+      case 'info':
+        return await info(rest, args, io);
+      case 'szl':
+        return await szl(rest, args, io);
+      case 'diag':
+        return await diag(rest, args, io);
+      case 'clock':
+        return await clock(rest, args, io);
+      case 'blocks':
+        return await blocks(rest, args, io);
+      case 'cpu':
+        return await cpu(rest, args, io);
+      case 'doctor':
+        return await doctor(rest, args, io);
       case 'serve':
         return await serve(rest, args, io);
       case 'demo':
         return await (await import('../demo/run')).runDemo(io);
       default:
-        throw new UsageError(`unknown command "${command}" (read, write, watch, serve, demo)`);
+        throw new UsageError(`unknown command "${command}" (read, write, watch, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`);
     }
   } catch (err) {
     return fail(io, err, debug);
@@ -128,13 +150,13 @@ function endpointArg(rest: string[], what: string): { endpoint: Endpoint; addres
   return { endpoint: parseUrl(url), addresses };
 }
 
-function withTimeout(endpoint: Endpoint, args: ParsedArgs): Endpoint {
+export function withTimeout(endpoint: Endpoint, args: ParsedArgs): Endpoint {
   if (!args.flags.has('timeout')) return endpoint;
   return { ...endpoint, timeout: intFlag(args, 'timeout', endpoint.timeout, 1, 600_000) };
 }
 
 /** Connects `client`, runs `work`, always closes; Ctrl-C aborts the connect or the request. */
-async function withClient<R>(client: AnyClient, io: CliIo, work: (client: AnyClient) => Promise<R>): Promise<R> {
+export async function withClient<R>(client: AnyClient, io: CliIo, work: (client: AnyClient) => Promise<R>): Promise<R> {
   const onAbort = () => void client.close();
   io.signal.addEventListener('abort', onAbort, { once: true });
   try {
@@ -210,7 +232,7 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
 }
 
-function confirm(io: CliIo, question: string): Promise<boolean> {
+export function confirm(io: CliIo, question: string): Promise<boolean> {
   const rl = createInterface({ input: io.stdin, output: io.stderr });
   return new Promise((resolve) => {
     const onAbort = () => rl.close();

@@ -8,7 +8,7 @@ import { FREEPORT_BAUD_RATES } from '../url';
 import { UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
 import type { CliIo } from './main';
 
-export const SERVE_FLAGS = ['port', 'host', 'profile', 'layout', 'fetch-port', 'write-port', 'path', 'baud', 'tcp', 'stations'];
+export const SERVE_FLAGS = ['port', 'host', 'profile', 'layout', 'fetch-port', 'write-port', 'path', 'baud', 'tcp', 'stations', 'max-items'];
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
 
@@ -34,9 +34,11 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
       if (!PROFILES.includes(profile)) throw new UsageError(`--profile must be one of ${PROFILES.join(', ')}`);
       // Without --layout the profile's own memory (DB1 only for s7-200 and logo).
       const layout = loadLayout(stringFlag(args, 'layout'));
-      const server = new S7Server({ host, port: intFlag(args, 'port', 102, 0, 65535), profile, ...(layout ? { layout } : {}) });
+      // --max-items: serve at most N items per job, as snap7's server (20) and the devices built on it.
+      const maxItems = args.flags.has('max-items') ? intFlag(args, 'max-items', 20, 1, 255) : undefined;
+      const server = new S7Server({ host, port: intFlag(args, 'port', 102, 0, 65535), profile, ...(layout ? { layout } : {}), ...(maxItems !== undefined ? { maxItems } : {}) });
       const port = await listen(() => server.listen(), 'port');
-      say(`S7 simulator (${profile}) listening on ${host}:${port}`);
+      say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
       say(`try: plcwire read "s7://${urlHost(host)}:${port}?${REACH[profile].query}" ${REACH[profile].addresses}`);
       close = () => server.close();
       break;
