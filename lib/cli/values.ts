@@ -1,5 +1,6 @@
 import { ValueError } from '../errors';
 import type { DataTypeName, PlcScalar, PlcValue } from '../types';
+export { valueToText } from '../values/text';
 
 /** The part of a tag the CLI needs to turn text into a value. */
 export interface TypedTag {
@@ -61,13 +62,6 @@ function scalarFromText(tag: TypedTag, raw: string): PlcScalar {
   return n;
 }
 
-/** Text for humans: dates in ISO, bigints as digits, arrays bracketed. */
-export function valueToText(value: unknown): string {
-  if (Array.isArray(value)) return `[${value.map(valueToText).join(', ')}]`;
-  if (value instanceof Date) return value.toISOString();
-  if (typeof value === 'string') return JSON.stringify(value);
-  return String(value);
-}
 
 /**
  * JSON text where a bigint (LINT, ULINT, LWORD, LTIME) is written as its exact

@@ -14,7 +14,7 @@ import { FrameReader } from '../link/framer';
 import { openTcp } from '../link/tcp';
 import type { Tag } from '../types';
 import { S7_CPU_PRESETS, parseUrl, type S7CpuPreset, type S7Endpoint } from '../url';
-import { valueToText } from '../cli/values';
+import { valueToText } from '../values/text';
 import { S7Client } from './client';
 import { localTsapFor } from './client-session';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
