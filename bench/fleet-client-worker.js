@@ -91,6 +91,8 @@ async function run(job) {
     plcs: n,
     tags: job.tags,
     ...window,
+    /** Every poll started since connecting, the value checks included. */
+    allStarted: counts.started + n,
     seconds: elapsedMs / 1000,
     cpuPercent: (cpuUs / 1000 / elapsedMs) * 100,
     cpuUsPerTagPoll: cpuUs / (window.done * job.tags),

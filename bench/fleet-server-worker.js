@@ -2,7 +2,7 @@
 // Many S7 simulators in one process (each its own port and memory), so their
 // CPU never counts as the client's. Driven over IPC by bench/lib/fleet.js:
 //   { op: 'start', plcs: [{ db1, changing }] } → { ports }
-//   { op: 'stats' } → { connections: [..], reads, writes, cpuUs }
+//   { op: 'stats' } → { connections: [..], readsPerPlc: [..], reads, writes, cpuUs }
 //   { op: 'change', everyMs } → {}     { op: 'drop' } → {}     { op: 'stop' } → exits
 const { plcwire } = require('./lib/peers');
 
@@ -18,9 +18,15 @@ async function start(msg) {
     const memory = new PlcMemory({ dataBlocks: { 1: plc.db1.length } });
     Buffer.from(plc.db1).copy(memory.area('DB', 1));
     const server = new S7Server({ port: 0, memory, profile: 's7-1500' });
-    server.on('request', (r) => (r.kind === 'read' ? reads++ : writes++));
+    const entry = { server, db: memory.area('DB', 1), changing: plc.changing, next: 0, reads: 0 };
+    server.on('request', (r) => {
+      if (r.kind === 'read') {
+        reads++;
+        entry.reads++;
+      } else writes++;
+    });
     ports.push(await server.listen());
-    servers.push({ server, db: memory.area('DB', 1), changing: plc.changing, next: 0 });
+    servers.push(entry);
   }
   return { ports };
 }
@@ -42,7 +48,7 @@ process.on('message', async (msg) => {
     if (msg.op === 'start') process.send({ ok: true, ...(await start(msg)) });
     else if (msg.op === 'stats') {
       const cpu = process.cpuUsage();
-      process.send({ ok: true, connections: servers.map((s) => s.server.connectionCount), reads, writes, cpuUs: cpu.user + cpu.system });
+      process.send({ ok: true, connections: servers.map((s) => s.server.connectionCount), readsPerPlc: servers.map((s) => s.reads), reads, writes, cpuUs: cpu.user + cpu.system });
     } else if (msg.op === 'change') {
       change(msg.everyMs);
       process.send({ ok: true });

@@ -9,11 +9,9 @@
 // See bench/README.md ("Many PLCs from one process").
 //
 //   node bench/many-plcs.js [--quick] [--rows 10x100,20x1000] [--clients ours,st-one,nodes7] [--duration ms] [--interval ms] [--prof dir]
-const { fork } = require('node:child_process');
 const os = require('node:os');
-const path = require('node:path');
 const { CLIENT_NAMES } = require('./lib/clients');
-const { startFleet } = require('./lib/fleet');
+const { startFleet, runFleetClient, closedStats } = require('./lib/fleet');
 const { fmt, printTable, option } = require('./lib/print');
 
 const args = process.argv.slice(2);
@@ -33,26 +31,6 @@ const PDU = 960;
 // --prof DIR: every client process writes a V8 CPU profile there (summarize with bench/lib/cpuprofile.js).
 const PROF_DIR = option(args, 'prof');
 
-function runClient(job) {
-  const execArgv = PROF_DIR ? ['--cpu-prof', '--cpu-prof-dir', PROF_DIR, '--cpu-prof-name', `${job.client}-${job.ports.length}x${job.tags}.cpuprofile`] : [];
-  const child = fork(path.join(__dirname, 'fleet-client-worker.js'), [], { serialization: 'advanced', stdio: 'inherit', execArgv });
-  return new Promise((resolve) => {
-    const timer = setTimeout(() => {
-      child.kill();
-      resolve({ client: job.client, error: 'timed out' });
-    }, 120_000 + job.durationMs);
-    child.once('message', (m) => {
-      clearTimeout(timer);
-      resolve(m.ok ? m.result : { client: job.client, error: m.error });
-    });
-    child.once('exit', (code) => {
-      clearTimeout(timer);
-      resolve({ client: job.client, error: `exited with ${code}` });
-    });
-    child.send(job);
-  });
-}
-
 async function main() {
   const t0 = Date.now();
   console.log(`plcwire many-PLC benchmark — Node ${process.version}, ${os.cpus()[0].model}, ${os.cpus().length} CPUs, load ${os.loadavg()[0].toFixed(1)}`);
@@ -63,13 +41,10 @@ async function main() {
     const results = [];
     for (const client of CLIENTS) {
       const s0 = await fleet.stats();
-      const r = await runClient({ client, ports: fleet.ports, tags: row.tags, pdu: PDU, intervalMs: INTERVAL_MS, warmMs: WARM_MS, durationMs: DURATION_MS });
-      // Every connection closed: the client closed each one before its process exited (the simulators see the FIN a little later).
-      let s1 = await fleet.stats();
-      for (let wait = 0; wait < 30 && s1.connections.some((c) => c !== 0); wait++) {
-        await new Promise((resolve) => setTimeout(resolve, 100));
-        s1 = await fleet.stats();
-      }
+      const job = { client, ports: fleet.ports, tags: row.tags, pdu: PDU, intervalMs: INTERVAL_MS, warmMs: WARM_MS, durationMs: DURATION_MS };
+      const r = await runFleetClient(job, PROF_DIR ? ['--cpu-prof', '--cpu-prof-dir', PROF_DIR, '--cpu-prof-name', `${client}-${row.plcs}x${row.tags}.cpuprofile`] : []);
+      // Every connection closed: the client closed each one before its process exited.
+      const s1 = await closedStats(fleet);
       if (s1.connections.some((c) => c !== 0)) r.leftOpen = s1.connections.reduce((a, b) => a + b, 0);
       r.serverCpuPercent = r.seconds ? ((s1.cpuUs - s0.cpuUs) / 1e4 / (r.seconds + WARM_MS / 1000 + 1)) : undefined;
       results.push(r);

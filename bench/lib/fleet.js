@@ -62,7 +62,7 @@ function ask(child, msg) {
 /**
  * Starts `count` simulators (profile S7-1500) in a child process, PLC i's DB1
  * holding plcTable(tags, i). Returns { ports, stats(), change(everyMs), stop() };
- * stats() → { connections: [per PLC], reads, writes, cpuUs } (reads and writes
+ * stats() → { connections: [per PLC], readsPerPlc: [per PLC], reads, writes, cpuUs } (reads and writes
  * are jobs served since start; cpuUs the server process's own CPU time).
  */
 async function startFleet(count, tags) {
@@ -95,10 +95,41 @@ async function startFleet(count, tags) {
   };
 }
 
+/** Runs bench/fleet-client-worker.js with `job` in a fresh process (see its header); resolves its result or { client, error }. */
+function runFleetClient(job, execArgv = []) {
+  const child = fork(path.join(__dirname, '..', 'fleet-client-worker.js'), [], { serialization: 'advanced', stdio: 'inherit', execArgv });
+  return new Promise((resolve) => {
+    const timer = setTimeout(() => {
+      child.kill();
+      resolve({ client: job.client, error: 'timed out' });
+    }, 120_000 + job.durationMs);
+    child.once('message', (m) => {
+      clearTimeout(timer);
+      resolve(m.ok ? m.result : { client: job.client, error: m.error });
+    });
+    child.once('exit', (code) => {
+      clearTimeout(timer);
+      resolve({ client: job.client, error: `exited with ${code}` });
+    });
+    child.send(job);
+  });
+}
+
+/** Waits until every PLC of `fleet` has no connection left (a client's FIN arrives a little after its process ended); the stats then. */
+async function closedStats(fleet, ms = 3000) {
+  let s = await fleet.stats();
+  const until = Date.now() + ms;
+  while (s.connections.some((c) => c !== 0) && Date.now() < until) {
+    await new Promise((resolve) => setTimeout(resolve, 100));
+    s = await fleet.stats();
+  }
+  return s;
+}
+
 /** p-th percentile of a sorted array. */
 function percentile(sorted, p) {
   if (sorted.length === 0) return NaN;
   return sorted[Math.min(sorted.length - 1, Math.floor((p / 100) * sorted.length))];
 }
 
-module.exports = { plcTable, startFleet, percentile };
+module.exports = { plcTable, startFleet, runFleetClient, closedStats, percentile, ask };
