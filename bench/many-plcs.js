@@ -8,7 +8,7 @@
 // failed, client CPU % and µs per tag-poll, RSS, event-loop delay p99.
 // See bench/README.md ("Many PLCs from one process").
 //
-//   node bench/many-plcs.js [--quick] [--rows 10x100,20x1000] [--clients ours,st-one,nodes7] [--duration ms] [--interval ms] [--prof dir]
+//   node bench/many-plcs.js [--quick] [--rows 10x100,20x1000] [--clients ours,st-one,nodes7] [--duration ms] [--interval ms] [--rounds n] [--prof dir]
 const os = require('node:os');
 const { CLIENT_NAMES } = require('./lib/clients');
 const { startFleet, runFleetClient, closedStats } = require('./lib/fleet');
@@ -28,8 +28,22 @@ const ROWS = option(args, 'rows', '10x100,50x100,100x100,200x100,20x1000')
 // 'raw': the floor, prebuilt requests and no parsing (bench/lib/raw-poll.js); not an anchor.
 const CLIENTS = option(args, 'clients', [...['ours', 'st-one', 'nodes7'].filter((c) => CLIENT_NAMES.includes(c)), 'raw'].join(',')).split(',');
 const PDU = 960;
+const ROUNDS = Number(option(args, 'rounds', QUICK ? 1 : 2));
 // --prof DIR: every client process writes a V8 CPU profile there (summarize with bench/lib/cpuprofile.js).
 const PROF_DIR = option(args, 'prof');
+
+/**
+ * The better of two rounds of one client: one that kept up (under 1 % of its
+ * polls skipped or failed) over one that did not — a burst of load from
+ * elsewhere on the machine stalls a round — then the lower CPU per poll.
+ */
+function better(a, b) {
+  if (!a || a.error) return b;
+  if (b.error) return a;
+  const missed = (r) => (r.skipped + r.failed) / r.due > 0.01;
+  if (missed(a) !== missed(b)) return missed(a) ? b : a;
+  return b.cpuUsPerPoll < a.cpuUsPerPoll ? b : a;
+}
 
 async function main() {
   const t0 = Date.now();
@@ -38,16 +52,19 @@ async function main() {
   const ours = [];
   for (const row of ROWS) {
     const fleet = await startFleet(row.plcs, row.tags);
-    const results = [];
-    for (const client of CLIENTS) {
-      const s0 = await fleet.stats();
-      const job = { client, ports: fleet.ports, tags: row.tags, pdu: PDU, intervalMs: INTERVAL_MS, warmMs: WARM_MS, durationMs: DURATION_MS };
-      const r = await runFleetClient(job, PROF_DIR ? ['--cpu-prof', '--cpu-prof-dir', PROF_DIR, '--cpu-prof-name', `${client}-${row.plcs}x${row.tags}.cpuprofile`] : []);
-      // Every connection closed: the client closed each one before its process exited.
-      const s1 = await closedStats(fleet);
-      if (s1.connections.some((c) => c !== 0)) r.leftOpen = s1.connections.reduce((a, b) => a + b, 0);
-      r.serverCpuPercent = r.seconds ? ((s1.cpuUs - s0.cpuUs) / 1e4 / (r.seconds + WARM_MS / 1000 + 1)) : undefined;
-      results.push(r);
+    const results = CLIENTS.map(() => undefined);
+    for (let round = 0; round < ROUNDS; round++) {
+      const order = CLIENTS.map((c, i) => i);
+      if (round % 2) order.reverse();
+      for (const i of order) {
+        const client = CLIENTS[i];
+        const job = { client, ports: fleet.ports, tags: row.tags, pdu: PDU, intervalMs: INTERVAL_MS, warmMs: WARM_MS, durationMs: DURATION_MS };
+        const r = await runFleetClient(job, PROF_DIR ? ['--cpu-prof', '--cpu-prof-dir', PROF_DIR, '--cpu-prof-name', `${client}-${row.plcs}x${row.tags}-${round}.cpuprofile`] : []);
+        // Every connection closed: the client closed each one before its process exited.
+        const s1 = await closedStats(fleet);
+        if (s1.connections.some((c) => c !== 0)) r.leftOpen = s1.connections.reduce((a, b) => a + b, 0);
+        results[i] = better(results[i], r);
+      }
     }
     await fleet.stop();
     const label = `${row.plcs} × ${row.tags}`;
@@ -89,7 +106,7 @@ async function main() {
     }
   }
   printTable(
-    `Many PLCs from one process: every PLC polled every ${INTERVAL_MS} ms for ${DURATION_MS} ms (after ${WARM_MS} ms warm-up); simulators (S7-1500, PDU ${PDU}) in another process`,
+    `Many PLCs from one process: every PLC polled every ${INTERVAL_MS} ms for ${DURATION_MS} ms (after ${WARM_MS} ms warm-up), better of ${ROUNDS} rounds; simulators (S7-1500, PDU ${PDU}) in another process`,
     ['PLCs × tags', 'client', 'polls/s', 'due/s', 'done', 'skipped', 'failed', 'CPU', 'µs/tag-poll', 'µs/poll (user+sys)', 'RSS MiB', 'loop p99 ms', 'poll p99 ms'],
     rows,
   );
