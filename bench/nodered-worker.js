@@ -4,7 +4,7 @@
 // It loads our nodes, node-red-contrib-s7 (from test/interop) and the
 // bench-count node (bench/lib/nodered-count); the editor and admin API are
 // off. Driven over IPC by bench/nodered.js:
-//   { op: 'start' } → { version }
+//   { op: 'start', name? } → { version }     (name labels its log lines)
 //   { op: 'deploy', nodes, type } → { deployMs }       (a flow array, 'full' | 'nodes' | 'flows')
 //   { op: 'wait-topics', topics, ms } → { ms }          (until bench-count saw each topic once)
 //   { op: 'mark' } → { cpuUs, userUs, systemUs, messages, rss, loopP99Ms }
@@ -21,10 +21,13 @@ const { ROOT } = require('./lib/peers');
 const LOOP_RESOLUTION_MS = 10;
 let RED;
 let userDir;
+let name = 'node-red';
+let logging = false;
 const counter = (global.__plcwireBenchCount ??= { messages: 0, track: false, topics: new Set() });
 const loop = monitorEventLoopDelay({ resolution: LOOP_RESOLUTION_MS });
 
-async function start() {
+async function start(label) {
+  if (label) name = label;
   userDir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-nr-bench-'));
   const contrib = path.dirname(require.resolve('node-red-contrib-s7/package.json', { paths: [path.join(ROOT, 'test/interop')] }));
   RED = require(require.resolve('node-red', { paths: [ROOT] }));
@@ -38,7 +41,17 @@ async function start() {
     uiPort: 0,
     // Our package and node-red-contrib-s7 as a palette install would load them, and the counter.
     nodesDir: [ROOT, contrib, path.join(__dirname, 'lib/nodered-count')],
-    logging: { console: { level: 'warn', metrics: false, audit: false } },
+    // Warnings and errors while flows run; none from start-up (projects, credentials) or from stopping (contrib-s7 logs every disconnect).
+    logging: {
+      bench: {
+        level: 'warn',
+        metrics: false,
+        audit: false,
+        handler: () => (m) => {
+          if (logging) console.log(`[${name}] ${m.type ? `[${m.type}${m.name ? `:${m.name}` : ''}] ` : ''}${m.msg && m.msg.stack ? m.msg.stack : m.msg}`);
+        },
+      },
+    },
     editorTheme: { tours: false },
     telemetry: { enabled: false },
     externalModules: { autoInstall: false },
@@ -50,6 +63,7 @@ async function start() {
 }
 
 async function deploy(nodes, type) {
+  logging = true;
   const t0 = performance.now();
   await RED.runtime.flows.setFlows({ flows: { flows: nodes }, deploymentType: type || 'full' });
   return { deployMs: performance.now() - t0 };
@@ -107,12 +121,13 @@ async function profile(file) {
 
 process.on('message', async (msg) => {
   try {
-    if (msg.op === 'start') process.send({ ok: true, ...(await start()) });
+    if (msg.op === 'start') process.send({ ok: true, ...(await start(msg.name)) });
     else if (msg.op === 'deploy') process.send({ ok: true, ...(await deploy(msg.nodes, msg.type)) });
     else if (msg.op === 'wait-topics') process.send({ ok: true, ...(await waitTopics(msg.topics, msg.ms)) });
     else if (msg.op === 'mark') process.send({ ok: true, ...mark() });
     else if (msg.op === 'profile') process.send({ ok: true, ...(await profile(msg.file)) });
     else if (msg.op === 'stop') {
+      logging = false;
       await RED.stop().catch(() => undefined);
       fs.rmSync(userDir, { recursive: true, force: true });
       process.exit(0);

@@ -55,7 +55,7 @@ const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
 async function startRuntime(name) {
   const child = fork(path.join(__dirname, 'nodered-worker.js'), [], { serialization: 'advanced', stdio: 'inherit' });
-  const started = await ask(child, { op: 'start' });
+  const started = await ask(child, { op: 'start', name });
   return {
     version: started.version,
     ask: (msg) => ask(child, msg),
