@@ -4,7 +4,7 @@
 // by function and by file, so a profile of a benchmark process can be read
 // without a browser.
 //
-//   node bench/lib/cpuprofile.js FILE.cpuprofile [--top 30] [--files] [--match text]
+//   node bench/lib/cpuprofile.js FILE.cpuprofile [--top 30] [--match text]
 //
 // Only samples inside --match's window are counted when given: the samples
 // whose stack contains a frame whose function or URL includes the text
@@ -85,7 +85,7 @@ if (require.main === module) {
     const i = args.indexOf(`--${name}`);
     return i >= 0 ? args[i + 1] : undefined;
   };
-  const files = args.filter((a, i) => !a.startsWith('--') && !(i > 0 && args[i - 1].startsWith('--') && args[i - 1] !== '--files'));
+  const files = args.filter((a, i) => !a.startsWith('--') && !(i > 0 && args[i - 1].startsWith('--')));
   for (const f of files) summarize(f, { top: Number(opt('top') || 30), match: opt('match') });
 }
 
