@@ -3,7 +3,8 @@
 // Installs the test-only packages that live outside the package's own
 // dependencies when they are missing, so `npm install && npm test` works on a
 // fresh clone (and `npm run bench` finds its anchors):
-//   interop: node-snap7 (snap7 built from source), nodes7, @st-one-io/nodes7
+//   interop: node-snap7 (snap7 built from source), nodes7, @st-one-io/nodes7,
+//            node-red-contrib-s7 (the Node-RED benchmark's incumbent)
 //   nr5:     Node 22 and Node-RED 5
 // Usage: node test/support/install-peers.js interop [nr5]
 // Already installed: does nothing (no network). `.ci/run` installs them itself.
@@ -13,7 +14,7 @@ const path = require('node:path');
 
 const ROOT = path.resolve(__dirname, '../..');
 const PEERS = {
-  interop: { dir: 'test/interop', has: ['node-snap7', 'nodes7', '@st-one-io/nodes7'].map((p) => `node_modules/${p}/package.json`) },
+  interop: { dir: 'test/interop', has: ['node-snap7', 'nodes7', '@st-one-io/nodes7', 'node-red-contrib-s7'].map((p) => `node_modules/${p}/package.json`) },
   nr5: { dir: 'test/nr5', has: ['node_modules/node/bin/node', 'node_modules/node-red/package.json'] },
 };
 
