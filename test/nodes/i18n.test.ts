@@ -9,7 +9,7 @@ import * as path from 'node:path';
 import { freePort } from '../support/net';
 import { catalogFiles, LOCALES, loadCatalogs, rawCatalog, withCatalog, type Catalogs, type Locale } from './catalogs';
 import { s7Sim } from './sims';
-import { helper, nodes, Recorder, ROOT, type Sim } from './support';
+import { helper, nodes, Recorder, ROOT, until, type Sim } from './support';
 
 const status = require(path.join(ROOT, 'nodes/shared/status.js'));
 
@@ -174,12 +174,13 @@ describe('nodes: status texts on Status nodes, with the real catalogs', function
   }
 
   for (const locale of LOCALES) {
-    it(`${locale}: heartbeat, read and a retrying link show their numbers`, async () => {
+    it(`${locale}: heartbeat, read, control and a retrying link show their numbers`, async () => {
       const off = await freePort();
       const modules = [
         withCatalog(nodes.connection, catalogs.translator(locale, 'plcwire-connection')),
         withCatalog(nodes.read, catalogs.translator(locale, 'plcwire-read')),
         withCatalog(nodes.heartbeat, catalogs.translator(locale, 'plcwire-heartbeat')),
+        withCatalog(nodes.control, catalogs.translator(locale, 'plcwire-control')),
         nodes.status,
       ];
       const at = { z: 'tab', x: 100, y: 100 };
@@ -191,11 +192,15 @@ describe('nodes: status texts on Status nodes, with the real catalogs', function
         { id: 'sent', type: 'plcwire-heartbeat', ...at, connection: 'conn', writeAddress: sim.addr(4), writeMode: 'counter', interval: 100, watchAddress: '', timeout: 1000, wires: [[]] },
         { id: 'read', type: 'plcwire-read', ...at, connection: 'conn', interval: 100, output: 'object', tags: [{ name: 'ok', address: sim.addr(0) }, { name: 'gone', address: sim.missing }], wires: [[]] },
         { id: 'retry', type: 'plcwire-read', ...at, connection: 'down', interval: 100, output: 'object', tags: [{ name: 'a', address: sim.addr(0) }], wires: [[]] },
+        { id: 'ctl', type: 'plcwire-control', ...at, connection: 'conn', action: 'diagnostics', newOnly: false, wires: [[]] },
         { id: 'watcher', type: 'status', ...at, scope: null, wires: [['statuses']] },
         { id: 'statuses', type: 'helper', ...at },
       ]);
       const statuses = new Recorder(helper.getNode('statuses'));
+      await until(() => helper.getNode('ctl').linkState === 'connected', 4000, 'control node connected');
+      helper.getNode('ctl').receive({});
       const expectations: [string, string, string][] = [
+        ['ctl', 'plcwire-control', 'plcwire-control.status.entries'],
         ['alive', 'plcwire-heartbeat', 'plcwire.status.alive'],
         ['sent', 'plcwire-heartbeat', 'plcwire.status.sent'],
         ['read', 'plcwire-read', 'plcwire.status.tagErrors'],
