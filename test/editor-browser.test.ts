@@ -38,6 +38,7 @@ function testFlow(s7Port: number): object[] {
     { id: 'write-badtag', type: 'plcwire-write', name: 'bad write', ...at(400), connection: 'conn-ok', tags: [{ name: 'w', address: 'DB1.DBX0' }] },
     { id: 'hb-bad', type: 'plcwire-heartbeat', name: 'bad hb', ...at(460), connection: 'conn-ok', writeAddress: 'DB1.DBW2:REAL', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
     { id: 'hb-ok', type: 'plcwire-heartbeat', name: 'hb', ...at(520), connection: 'conn-ok', writeAddress: 'DB1.DBW2:INT', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
+    { id: 'ctl-stop', type: 'plcwire-control', name: 'stop', ...at(580), connection: 'conn-ok', action: 'stop', newOnly: false },
   ];
 }
 
@@ -311,6 +312,100 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
           const problem = catalogText(locale, 'plcwire.editor.line', { line: 3, message: '"MW6:INT" is INT, the type column says WORD' });
           await page.waitForFunction((text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification li')].some((n) => n.textContent === text), problem, { timeout: 10_000 });
           await closeDialog(page, 'cancel');
+          expect(errors).to.deep.equal([]);
+        } finally {
+          await context.close();
+        }
+      });
+    }
+  });
+
+  describe('the connection dialog and the control node', () => {
+    /** Opens the dialog of connection `id` and waits until the runtime's parser has filled its fields from the URL. */
+    async function editConnection(page: Page, id: string): Promise<void> {
+      await page.evaluate((nodeId) => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', nodeId), id);
+      await page.locator('#node-config-plcwire-slot').waitFor({ state: 'visible' });
+      await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-slot').value !== '');
+    }
+
+    async function doneConnection(page: Page): Promise<string> {
+      await page.click('#node-config-dialog-ok');
+      await page.waitForSelector('#node-config-plcwire-slot', { state: 'detached', timeout: 10_000 });
+      return page.evaluate(() => (globalThis as any).RED.nodes.node('conn-ok').url);
+    }
+
+    it('"Allow PLC control" writes control=true into the URL, and the dialog reads it back', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await editConnection(page, 'conn-ok');
+        expect(await page.isChecked('#node-config-plcwire-control')).to.equal(false);
+        await page.check('#node-config-plcwire-control');
+        const url = await doneConnection(page);
+        expect(url).to.match(/[?&]control=true(&|$)/);
+        expect(lib.parseUrl(url).control).to.equal(true);
+        await editConnection(page, 'conn-ok');
+        expect(await page.isChecked('#node-config-plcwire-control')).to.equal(true);
+        await page.uncheck('#node-config-plcwire-control');
+        expect(await doneConnection(page)).not.to.include('control');
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+
+    it('a CPU preset sets rack/slot or TSAPs and items per job as the library has them', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await editConnection(page, 'conn-ok');
+        await page.selectOption('#node-config-input-cpu', 's7-1200');
+        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-maxItems').value === '255', undefined, { timeout: 10_000 });
+        await page.selectOption('#node-config-input-cpu', 's7-200');
+        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-localTsap').value === '1000', undefined, { timeout: 10_000 });
+        expect(await page.inputValue('#node-config-plcwire-remoteTsap')).to.equal('1001');
+        expect(await page.inputValue('#node-config-plcwire-maxItems')).to.equal('');
+        await page.selectOption('#node-config-input-cpu', 's7-1500');
+        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-maxItems').value === '255', undefined, { timeout: 10_000 });
+        expect(await page.inputValue('#node-config-plcwire-addressing')).to.equal('rack');
+        const url = await doneConnection(page);
+        expect(lib.parseUrl(url)).to.include({ rack: 0, slot: 1, maxItems: 255 });
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+
+    /** The control node's warning as shown, or '' when it is hidden. */
+    const warning = (page: Page) => page.evaluate(() => {
+      const w = (globalThis as any).document.querySelector('#node-input-plcwire-control-warning');
+      return w && w.style.display !== 'none' ? String(w.textContent) : '';
+    });
+
+    for (const locale of Object.keys(LOCALES) as Locale[]) {
+      it(`${locale}: the control dialog warns while stop, start or clock-sync would be refused by the connection`, async () => {
+        const { context, page, errors } = await openEditor(locale);
+        try {
+          const catalog = JSON.parse(fs.readFileSync(path.join(ROOT, 'nodes/locales', locale, 'control.json'), 'utf8'));
+          const noControl = String(catalog['plcwire-control'].warning.noControl).replace('__name__', 'plc');
+          await page.evaluate(() => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node('ctl-stop')));
+          await page.waitForSelector('#node-input-action', { state: 'visible' });
+          await page.waitForFunction((text) => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.textContent === text, noControl, { timeout: 10_000 });
+          expect(await warning(page)).to.equal(noControl);
+          await page.selectOption('#node-input-action', 'state');
+          await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning').style.display === 'none');
+          await page.selectOption('#node-input-action', 'clock-sync');
+          await page.waitForFunction((text) => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.style.display !== 'none', noControl);
+          expect(await warning(page)).to.equal(noControl);
+          await page.click('#node-dialog-cancel');
+          await page.waitForSelector('#node-input-action', { state: 'detached', timeout: 10_000 });
+
+          // With control allowed on the connection, no warning.
+          await page.evaluate(() => { const c = (globalThis as any).RED.nodes.node('conn-ok'); c.url += '&control=true'; });
+          await page.evaluate(() => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node('ctl-stop')));
+          await page.waitForSelector('#node-input-action', { state: 'visible' });
+          await after300ms(page);
+          expect(await warning(page)).to.equal('');
+          await page.click('#node-dialog-cancel');
+          await page.waitForSelector('#node-input-action', { state: 'detached', timeout: 10_000 });
           expect(errors).to.deep.equal([]);
         } finally {
           await context.close();
