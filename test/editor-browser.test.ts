@@ -22,13 +22,15 @@ type Locale = keyof typeof LOCALES;
 const lib = require(path.join(ROOT, 'dist/lib/index.js'));
 
 /** The flow the editor opens: nodes with and without configuration errors. */
-function testFlow(s7Port: number): object[] {
+function testFlow(s7Port: number, doctorPort: number): object[] {
   const at = (y: number) => ({ z: 'tab', x: 200, y, wires: [[]] });
   const good = `s7://127.0.0.1:${s7Port}?rack=0&slot=1&timeout=1000`;
   return [
     { id: 'tab', type: 'tab', label: 'editor test' },
     { id: 'conn-ok', type: 'plcwire-connection', name: 'plc', url: good },
     { id: 'conn-bad', type: 'plcwire-connection', name: 'typo', url: 's7://127.0.0.1?rack=0&slott=1' },
+    // No node uses it: the runtime opens no link to its PLC, only Test connection does.
+    { id: 'conn-doctor', type: 'plcwire-connection', name: 'doctor', url: `s7://127.0.0.1:${doctorPort}?rack=0&slot=1&timeout=1000` },
     { id: 'read-ok', type: 'plcwire-read', name: 'ok', ...at(40), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
     { id: 'read-csv', type: 'plcwire-read', name: 'csv', ...at(100), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
     { id: 'read-empty', type: 'plcwire-read', name: 'empty', ...at(160), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [] },
@@ -106,6 +108,15 @@ async function startNodeRed(flow: object[]): Promise<NodeRed> {
   return { url, stop };
 }
 
+/** Polls a condition of this process (a simulator's connection count) until it holds, within 3 s. */
+async function waitFor(condition: () => boolean, what: string): Promise<void> {
+  const deadline = Date.now() + 3000;
+  while (!condition()) {
+    if (Date.now() > deadline) throw new Error(`${what}: did not hold within 3 s`);
+    await new Promise((r) => setTimeout(r, 20));
+  }
+}
+
 /** What a user should read for a catalog text of ours: its placeholders (in either syntax) filled in. */
 function catalogText(locale: Locale, key: string, params: Record<string, unknown> = {}): string {
   const catalog = JSON.parse(fs.readFileSync(path.join(ROOT, 'nodes/locales', locale, 'read.json'), 'utf8'));
@@ -116,13 +127,16 @@ function catalogText(locale: Locale, key: string, params: Record<string, unknown
 describe('editor: the plcwire dialogs in headless Chromium', function () {
   this.timeout(120_000);
   let s7: any;
+  let doctorSim: any;
   let red: NodeRed;
   let browser: Browser;
 
   before(async () => {
     s7 = new lib.S7Server({ port: 0, memory: new lib.PlcMemory(), profile: 's7-1500' });
     const port: number = await s7.listen();
-    red = await startNodeRed(testFlow(port));
+    doctorSim = new lib.S7Server({ port: 0, memory: new lib.PlcMemory(), profile: 's7-1200' });
+    const doctorPort: number = await doctorSim.listen();
+    red = await startNodeRed(testFlow(port, doctorPort));
     browser = await launchChromium();
   });
 
@@ -130,6 +144,7 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
     await browser?.close();
     await red?.stop();
     await s7?.close();
+    await doctorSim?.close();
   });
 
   /** The editor in `locale`, with every page error collected. */
@@ -368,6 +383,42 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         expect(await page.inputValue('#node-config-plcwire-addressing')).to.equal('rack');
         const url = await doneConnection(page);
         expect(lib.parseUrl(url)).to.include({ rack: 0, slot: 1, maxItems: 255 });
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+
+    it('Test connection lists the doctor\'s steps: all passing, then the failing one with its fix on a wrong slot; no connection stays open', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        const catalog = JSON.parse(fs.readFileSync(path.join(ROOT, 'nodes/locales/en-US/connection.json'), 'utf8'))['plcwire-connection'].editor;
+        const summary = () => page.textContent('#node-config-plcwire-test-summary');
+        const steps = () =>
+          page.$$eval('#node-config-plcwire-test-steps li', (list) => list.map((li) => ({ step: li.getAttribute('data-step'), ok: li.classList.contains('plcwire-step-ok'), text: li.textContent ?? '' })));
+        await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn-doctor'));
+        await page.locator('#node-config-plcwire-slot').waitFor({ state: 'visible' });
+        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-slot').value === '1');
+        await page.click('#node-config-plcwire-test');
+        await page.waitForFunction((texts) => texts.includes((globalThis as any).document.querySelector('#node-config-plcwire-test-summary').textContent), [catalog.testOk, catalog.testFailed], { timeout: 20_000 });
+        expect(await summary()).to.equal(catalog.testOk);
+        const passed = await steps();
+        expect(passed.map((s) => s.step)).to.include.members(['tcp', 'cotp']);
+        expect(passed.every((s) => s.ok), JSON.stringify(passed)).to.equal(true);
+        await waitFor(() => doctorSim.connectionCount === 0, 'no connection after the passing test');
+
+        // A field typed just before the click counts: the URL is built from the fields at once.
+        await page.fill('#node-config-plcwire-slot', '5');
+        await page.click('#node-config-plcwire-test');
+        await page.waitForFunction((text) => (globalThis as any).document.querySelector('#node-config-plcwire-test-summary').textContent === text, catalog.testFailed, { timeout: 20_000 });
+        const failed = await steps();
+        const last = failed[failed.length - 1]!;
+        expect(last.ok, JSON.stringify(failed)).to.equal(false);
+        expect(last.text).to.match(/slot/);
+        expect(await page.textContent('#node-config-plcwire-test-steps li:last-child .plcwire-step-hint')).to.match(/slot=1|slot 1/);
+        await waitFor(() => doctorSim.connectionCount === 0, 'no connection after the failing test');
+        await page.click('#node-config-dialog-cancel');
+        await page.waitForSelector('#node-config-plcwire-slot', { state: 'detached', timeout: 10_000 });
         expect(errors).to.deep.equal([]);
       } finally {
         await context.close();
