@@ -41,6 +41,8 @@ function testFlow(s7Port: number, doctorPort: number): object[] {
     { id: 'hb-bad', type: 'plcwire-heartbeat', name: 'bad hb', ...at(460), connection: 'conn-ok', writeAddress: 'DB1.DBW2:REAL', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
     { id: 'hb-ok', type: 'plcwire-heartbeat', name: 'hb', ...at(520), connection: 'conn-ok', writeAddress: 'DB1.DBW2:INT', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
     { id: 'ctl-stop', type: 'plcwire-control', name: 'stop', ...at(580), connection: 'conn-ok', action: 'stop', newOnly: false },
+    { id: 'conn-fw', type: 'plcwire-connection', name: 'fw', url: 'fetchwrite://127.0.0.1?port=1' },
+    { id: 'ctl-fw', type: 'plcwire-control', name: 'not s7', ...at(640), connection: 'conn-fw', action: 'state', newOnly: false },
   ];
 }
 
@@ -177,7 +179,7 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
   const tagsOf = (page: Page, id: string) => page.evaluate((nodeId) => (globalThis as any).RED.nodes.node(nodeId).tags, id);
 
   describe('deploy-time validation with the library\'s parser', () => {
-    const INVALID = ['conn-bad', 'read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad'];
+    const INVALID = ['conn-bad', 'read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad', 'ctl-fw'];
 
     it('gives nodes with a config error the red triangle, and says why', async () => {
       const { context, page, errors } = await openEditor();
@@ -192,15 +194,16 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
                 return [id, { valid: n.valid, errors: (n.validationErrors || []).join(' | '), triangle: badge ? !badge.classList.contains('hide') : null }];
               }),
             ),
-          [...INVALID, 'conn-ok', 'read-ok', 'read-csv', 'hb-ok'],
+          [...INVALID, 'conn-ok', 'read-ok', 'read-csv', 'hb-ok', 'ctl-stop'],
         );
         expect(state['conn-bad'].errors).to.include('unknown parameter "slott"');
         expect(state['read-badtag'].errors).to.include('XYZ%');
         expect(state['read-dup'].errors).to.include('"s"');
         expect(state['write-badtag'].errors).to.include('DB1.DBX0');
         expect(state['hb-bad'].errors).to.include('REAL');
-        for (const id of ['read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad']) expect(state[id].triangle, `${id} has the red triangle`).to.equal(true);
-        for (const id of ['conn-ok', 'read-ok', 'read-csv', 'hb-ok']) expect(state[id].valid, `${id}: ${state[id].errors}`).to.equal(true);
+        expect(state['ctl-fw'].errors).to.include('"fw" is not S7comm');
+        for (const id of ['read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad', 'ctl-fw']) expect(state[id].triangle, `${id} has the red triangle`).to.equal(true);
+        for (const id of ['conn-ok', 'read-ok', 'read-csv', 'hb-ok', 'ctl-stop']) expect(state[id].valid, `${id}: ${state[id].errors}`).to.equal(true);
         for (const id of ['read-ok', 'read-csv', 'hb-ok']) expect(state[id].triangle, `${id} has no red triangle`).to.equal(false);
 
         // Deploy asks first, listing them (nothing is deployed: the test cancels).
