@@ -179,6 +179,52 @@ module.exports = function (RED) {
     }
   });
 
+  /**
+   * The CPU presets of the dialog, from the library (lib/url.ts, S7_CPU_PRESETS):
+   * { preset: { rack?, slot?, localTsap?, remoteTsap?, maxItems? } }, TSAPs as numbers.
+   */
+  RED.httpAdmin.get('/plcwire/presets', canRead, function (req, res) {
+    res.json(plc.S7_CPU_PRESETS);
+  });
+
+  /** The longest a Test connection may take (the doctor's deadline; a request may ask for less). */
+  const DOCTOR_TIMEOUT_MS = 15000;
+
+  /**
+   * Test connection: POST { url, addresses?, timeout? } → the library's
+   * connection doctor, { ok, steps: [{ step, ok, detail, hint? }] }. It never
+   * outlives its request: when the editor closes it (dialog closed, page left),
+   * the walk is aborted, and the doctor closes every socket it opened on every
+   * path. Nothing is written to the PLC.
+   */
+  RED.httpAdmin.post('/plcwire/doctor', canRead, function (req, res) {
+    const body = req.body || {};
+    const url = String(body.url || '').trim();
+    const addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 100).map(String) : [];
+    const asked = Number(body.timeout);
+    const timeout = asked > 0 ? Math.min(asked, DOCTOR_TIMEOUT_MS) : DOCTOR_TIMEOUT_MS;
+    const stop = new AbortController();
+    const onClose = () => {
+      if (!res.writableEnded) stop.abort();
+    };
+    res.on('close', onClose);
+    plc
+      .diagnose(url, addresses, { timeout, signal: stop.signal })
+      .then(
+        (report) => report,
+        (err) => {
+          // ABORTED while the request is still there: the deadline ended the walk in the middle of a step.
+          const late = err && err.code === 'ABORTED' && !stop.signal.aborted;
+          const detail = late ? `no result within ${timeout} ms` : err && err.message ? err.message : String(err);
+          return { ok: false, steps: [{ step: 'doctor', ok: false, detail }], code: late ? 'TIMEOUT' : err && err.code };
+        },
+      )
+      .then((answer) => {
+        res.off('close', onClose);
+        if (!stop.signal.aborted && !res.writableEnded) res.json(answer);
+      });
+  });
+
   /** Serial ports for the freeport dialog. */
   RED.httpAdmin.get('/plcwire/serialports', canRead, function (req, res) {
     let SerialPort;
