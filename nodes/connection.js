@@ -179,6 +179,14 @@ module.exports = function (RED) {
     }
   });
 
+  /**
+   * The CPU presets of the dialog, from the library (lib/url.ts, S7_CPU_PRESETS):
+   * { preset: { rack?, slot?, localTsap?, remoteTsap?, maxItems? } }, TSAPs as numbers.
+   */
+  RED.httpAdmin.get('/plcwire/presets', canRead, function (req, res) {
+    res.json(plc.S7_CPU_PRESETS);
+  });
+
   /** Serial ports for the freeport dialog. */
   RED.httpAdmin.get('/plcwire/serialports', canRead, function (req, res) {
     let SerialPort;

@@ -10,8 +10,8 @@ const plc = require('../../dist/lib/index.js');
 /** @type {Map<string, Link>} */
 const links = new Map();
 
-/** Parameters that change what a write may do: two config nodes must agree on them to share a client. */
-const SAFETY = ['readOnly', 'allow'];
+/** Parameters that change what a client may do to the PLC: two config nodes must agree on them to share a client. */
+const SAFETY = ['readOnly', 'allow', 'control'];
 
 class Link extends EventEmitter {
   constructor(key, url, endpoint) {
@@ -59,7 +59,7 @@ function acquire(url, owner) {
   if (link && safetyOf(link.endpoint) !== safetyOf(endpoint)) {
     throw new plc.PlcError(
       'INVALID_URL',
-      `${url} reaches the same PLC as ${link.url} but with other readOnly/allow settings; give both connections the same ones`,
+      `${url} reaches the same PLC as ${link.url} but with other readOnly/allow/control settings; give both connections the same ones`,
     );
   }
   if (!link) {

@@ -52,4 +52,21 @@ function waitingStatus(t) {
   return { fill: 'yellow', shape: 'ring', text: t('plcwire.status.waiting') };
 }
 
-module.exports = { linkStatus, tagErrorsStatus, sentStatus, aliveStatus, lostStatus, waitingStatus };
+/** Control: the CPU's operating mode (RUN, STOP, STARTUP, HOLD, DEFECT, UNKNOWN), as the CPU names it in every language. */
+function cpuStatus(t, mode) {
+  const m = mode || 'UNKNOWN';
+  const fill = m === 'RUN' ? 'green' : m === 'STOP' || m === 'DEFECT' ? 'red' : m === 'UNKNOWN' ? 'grey' : 'yellow';
+  return { fill, shape: 'dot', text: t('plcwire-control.status.cpu', { mode: m }) };
+}
+
+/** Control: `n` diagnostic entries read (`onlyNew`: new since the last call). */
+function entriesStatus(t, n, onlyNew) {
+  return { fill: 'green', shape: 'dot', text: t(onlyNew ? 'plcwire-control.status.newEntries' : 'plcwire-control.status.entries', { n }) };
+}
+
+/** Control: `action` failed (the error, with its code, went to Catch). */
+function failedStatus(t, action) {
+  return { fill: 'red', shape: 'ring', text: t('plcwire-control.status.failed', { action }) };
+}
+
+module.exports = { linkStatus, tagErrorsStatus, sentStatus, aliveStatus, lostStatus, waitingStatus, cpuStatus, entriesStatus, failedStatus };

@@ -72,10 +72,19 @@ describe('nodes: editor endpoints', function () {
     expect(bad.body.tags).to.deep.equal([{ name: '', address: 'MW2' }]);
   });
 
+  it('serves the CPU presets of the library, TSAPs and items per job included', async () => {
+    await helper.load(ALL_NODES, []);
+    const lib = require(path.join(ROOT, 'dist/lib/index.js'));
+    const res = await helper.request().get('/plcwire/presets').expect(200);
+    expect(res.body).to.deep.equal(JSON.parse(JSON.stringify(lib.S7_CPU_PRESETS)));
+    expect(res.body['s7-1200']).to.deep.equal({ rack: 0, slot: 1, maxItems: 255 });
+    expect(res.body['s7-200']).to.deep.equal({ localTsap: 0x1000, remoteTsap: 0x1001 });
+  });
+
   it('asks for the plcwire.read permission', () => {
     const source = fs.readFileSync(path.join(ROOT, 'nodes/connection.js'), 'utf8');
     const routes = source.match(/RED\.httpAdmin\.(get|post)\([^)]*\)/g) ?? [];
-    expect(routes.length).to.equal(4);
+    expect(routes.length).to.equal(5);
     for (const r of routes) expect(r).to.include('canRead');
     expect(source).to.include("RED.auth.needsPermission('plcwire.read')");
   });
@@ -109,7 +118,7 @@ describe('nodes: examples', function () {
       const flow = JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8'));
       const tab = { id: 'ex.tab', type: 'tab', label: f };
       const wired = flow
-        .filter((n: any) => ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'comment'].includes(n.type) || n.type === 'catch' || n.type === 'status')
+        .filter((n: any) => ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'comment'].includes(n.type) || n.type === 'catch' || n.type === 'status')
         .map((n: any) => (n.type === 'plcwire-connection' ? n : { ...n, z: 'ex.tab', wires: (n.wires ?? []).map(() => []) }));
       await helper.load(ALL_NODES.concat(require(path.join(path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red'))] })), 'core/common/90-comment.js'))), [tab, ...wired]);
       for (const n of wired.filter((x: any) => x.type.startsWith('plcwire-'))) expect(helper.getNode(n.id), n.id).to.be.ok;

@@ -14,7 +14,7 @@ import { helper, nodes, Recorder, ROOT, type Sim } from './support';
 const status = require(path.join(ROOT, 'nodes/shared/status.js'));
 
 /** Types whose nodes show a status (the config node shows none). */
-const SHOWN_BY = ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat'];
+const SHOWN_BY = ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control'];
 
 /** Every key of a catalog, flattened: "plcwire.status.connected". */
 function keysOf(catalog: object, prefix = ''): string[] {
@@ -28,9 +28,17 @@ function valueAt(catalog: any, key: string): unknown {
 /** A status text is an i18n key when it has the shape of one; the editor translates those with the node's catalog. */
 const isKey = (text: string) => /^plcwire\.[\w.-]+$/.test(text);
 
-/** Every status the nodes show, built with `t`, and the numbers each must show. */
-function everyStatus(t: (key: string, params?: object) => string): { what: string; status: { fill: string; shape: string; text: string }; numbers: number[] }[] {
-  const list = [
+interface Shown {
+  what: string;
+  status: { fill: string; shape: string; text: string };
+  numbers: number[];
+  /** false: not a row of the README's table (a CPU mode it names in the text). */
+  readme?: false;
+}
+
+/** Every status the nodes of `type` show, built with `t`, and the numbers each must show. */
+function everyStatus(t: (key: string, params?: object) => string, type: string): Shown[] {
+  const list: Shown[] = [
     ...['connected', 'connecting', 'closed', 'invalid', 'unconfigured'].map((state) => ({ what: state, status: status.linkStatus(t, { state }), numbers: [] })),
     { what: 'reconnecting 0.5 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 500 }), numbers: [1] },
     { what: 'reconnecting 30 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 30_000 }), numbers: [30] },
@@ -43,13 +51,25 @@ function everyStatus(t: (key: string, params?: object) => string): { what: strin
     list.push({ what: `alive ${n}`, status: status.aliveStatus(t, n), numbers: [n] });
   }
   for (const ms of [3_000, 86_400_000]) list.push({ what: `lost ${ms} ms`, status: status.lostStatus(t, ms), numbers: [ms / 1000] });
+  if (type !== 'plcwire-control') return list;
+  // The README's table has a row for RUN, STOP and STARTUP, and names the rarer modes in the text.
+  for (const mode of ['RUN', 'STOP', 'STARTUP']) list.push({ what: `CPU ${mode}`, status: status.cpuStatus(t, mode), numbers: [] });
+  for (const mode of ['HOLD', 'DEFECT', 'UNKNOWN', undefined]) list.push({ what: `CPU ${mode}`, status: status.cpuStatus(t, mode), numbers: [], readme: false });
+  // An S7-1500 holds up to 3200 diagnostic entries.
+  for (const n of [1, 3200]) {
+    list.push({ what: `${n} entries`, status: status.entriesStatus(t, n, false), numbers: [n] });
+    list.push({ what: `${n} new entries`, status: status.entriesStatus(t, n, true), numbers: [n] });
+  }
+  // The README writes the action as ACTION; the longest action name must fit too.
+  list.push({ what: 'ACTION failed', status: status.failedStatus(t, 'ACTION'), numbers: [] });
+  for (const action of ['diagnostics', 'clock-sync']) list.push({ what: `${action} failed`, status: status.failedStatus(t, action), numbers: [], readme: false });
   return list;
 }
 
 describe('nodes: message catalogs', () => {
   it('no catalog writes a placeholder as {{name}}: Node-RED interpolates __name__ and shows {{name}} raw', () => {
     const files = catalogFiles().filter((f) => f.endsWith('.json'));
-    expect(files.length).to.equal(12);
+    expect(files.length).to.equal(15);
     for (const file of files) {
       const text = fs.readFileSync(path.join(ROOT, file), 'utf8');
       expect(text.match(/\{\{[^}]*\}\}/g), file).to.equal(null);
@@ -102,7 +122,7 @@ describe('nodes: status texts as Node-RED renders them', function () {
     it(`${locale}: every status text is translated, shows its number and stays under 20 characters`, () => {
       for (const type of SHOWN_BY) {
         const t = catalogs.translator(locale, type);
-        for (const { what, status: s, numbers } of everyStatus(t)) {
+        for (const { what, status: s, numbers } of everyStatus(t, type)) {
           const text = isKey(s.text) ? t(s.text) : s.text;
           const label = `${locale} ${type} ${what}: "${text}"`;
           expect(text, label).not.to.match(/\{\{|\}\}|__|^plcwire/);
@@ -120,7 +140,7 @@ describe('nodes: status texts as Node-RED renders them', function () {
     const shown = new Set<string>();
     for (const type of SHOWN_BY) {
       const t = catalogs.translator('en-US', type);
-      for (const { status: s } of everyStatus(t)) shown.add(`${s.fill} ${s.shape} ${(isKey(s.text) ? t(s.text) : s.text).replace(/\d+/g, 'N')}`);
+      for (const { status: s } of everyStatus(t, type).filter((x) => x.readme !== false)) shown.add(`${s.fill} ${s.shape} ${(isKey(s.text) ? t(s.text) : s.text).replace(/\d+/g, 'N')}`);
     }
     expect([...documented].sort()).to.deep.equal([...shown].sort());
   });
