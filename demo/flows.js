@@ -28,7 +28,7 @@ const PITCH = 40;
 const STALE = 'plcwire-stale';
 const LIVE = 'plcwire-live';
 
-/** Dashboard CSS for the lamps and for stale values (a site-wide ui-template style). */
+/** Dashboard CSS for the lamps, the CPU panel and stale values (a site-wide ui-template style). */
 const STYLE = `/* plcwire demo: lamps for BOOLs and states, greyed-out widgets of a link that went quiet */
 .plcwire-lamp-row { display: flex; align-items: center; justify-content: space-between; gap: 12px; width: 100%; min-height: 100%; font-size: 16px; }
 .plcwire-lamp-text { margin-left: auto; font-weight: 600; }
@@ -37,9 +37,12 @@ const STYLE = `/* plcwire demo: lamps for BOOLs and states, greyed-out widgets o
 .plcwire-lamp-on, .plcwire-lamp-green { background: radial-gradient(circle at 35% 30%, #c8f7c5, #1f9d2a 65%); box-shadow: 0 0 8px 2px rgba(31, 157, 42, 0.55); }
 .plcwire-lamp-yellow { background: radial-gradient(circle at 35% 30%, #fff1b8, #e0a100 65%); box-shadow: 0 0 8px 2px rgba(224, 161, 0, 0.55); }
 .plcwire-lamp-red { background: radial-gradient(circle at 35% 30%, #ffc9c9, #d32f2f 65%); box-shadow: 0 0 8px 2px rgba(211, 47, 47, 0.55); }
-.plcwire-cpu-identity { display: grid; grid-template-columns: 1fr 1fr; gap: 8px 24px; width: 100%; font-size: 16px; }
-.plcwire-cpu-identity > div { display: flex; justify-content: space-between; gap: 12px; }
-.plcwire-cpu-identity b { font-weight: 600; text-align: right; }
+.plcwire-cpu-identity { display: grid; grid-template-columns: 1fr 1fr; gap: 6px 24px; width: 100%; font-size: 15px; }
+.plcwire-cpu-identity > div { display: flex; justify-content: space-between; gap: 8px; white-space: nowrap; }
+.plcwire-cpu-identity b { min-width: 0; overflow: hidden; text-overflow: ellipsis; font-weight: 600; }
+.plcwire-cpu-diag th, .plcwire-cpu-diag td:nth-child(-n+2) { white-space: nowrap; }
+.plcwire-cpu-diag .v-table > .v-table__wrapper > table > tbody > tr > td { height: 36px; }
+.plcwire-cpu-diag .v-data-table-footer { display: none; }
 .plcwire-stale { position: relative; opacity: 0.45; filter: grayscale(1); }
 .plcwire-stale::after { content: 'stale'; position: absolute; top: -9px; right: 0; padding: 0 6px; border-radius: 8px;
   font-size: 11px; line-height: 16px; color: #fff; background: #6b6b6b; pointer-events: none; }
@@ -211,8 +214,8 @@ return msg;`,
   nodes.push({
     id: 'ui.cpu.diag', type: 'ui-table', group: 'ui.g.cpu', name: 'Diagnostic buffer', label: 'Diagnostic buffer (newest first)', order: 6, width: 6, height: 0, maxrows: 10, passthru: false, autocols: false, showSearch: false, deselect: true, selectionType: 'none',
     columns: [
-      { title: 'Time', key: 'time', keyType: 'key', type: 'text', width: '200', align: 'start' },
-      { title: 'Event', key: 'event', keyType: 'key', type: 'text', width: '80', align: 'start' },
+      { title: 'Time', key: 'time', keyType: 'key', type: 'text', width: '', align: 'start' },
+      { title: 'Event', key: 'event', keyType: 'key', type: 'text', width: '', align: 'start' },
       { title: 'Description', key: 'description', keyType: 'key', type: 'text', width: '', align: 'start' },
     ],
     mobileBreakpoint: 'sm', mobileBreakpointType: 'defaults', action: 'replace', className: 'plcwire-cpu-diag', ...at(X.widget, row(3)), wires: [[]],
@@ -264,7 +267,7 @@ return msg;`,
   y = row(5);
   nodes.push({ id: 'catch', type: 'catch', name: 'plcwire errors', scope: null, uncaught: false, ...at(X.source, row(0)), wires: [['debug']] });
   nodes.push({ id: 'debug', type: 'debug', name: 'errors', active: true, tosidebar: true, console: false, complete: 'error', targetType: 'msg', ...at(X.route, row(0)), wires: [] });
-  nodes.push({ id: 'ui.style', type: 'ui-template', group: '', page: '', ui: 'ui.base', name: 'CSS: lamps, stale', order: 0, width: 0, height: 0, head: '', format: STYLE, storeOutMessages: true, passthru: true, resendOnRefresh: true, templateScope: 'site:style', className: '', ...at(X.shape, row(0)), wires: [[]] });
+  nodes.push({ id: 'ui.style', type: 'ui-template', group: '', page: '', ui: 'ui.base', name: 'CSS: lamps, CPU, stale', order: 0, width: 0, height: 0, head: '', format: STYLE, storeOutMessages: true, passthru: true, resendOnRefresh: true, templateScope: 'site:style', className: '', ...at(X.shape, row(0)), wires: [[]] });
 
   return nodes;
 }

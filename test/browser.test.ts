@@ -7,7 +7,7 @@
  * the S7-1200's identity, state, clock and diagnostic buffer, its Stop button
  * freezing the process and its Start button setting it going again.
  * Headless Chromium driven by playwright-core (test/support/browser.ts).
- * PLCWIRE_SCREENSHOT=<file.png> saves the dashboard with the motor running,
+ * PLCWIRE_SCREENSHOT=<file.png> saves the dashboard with the motor running (after a CPU stop and restart),
  * after PLCWIRE_SCREENSHOT_WAIT_MS more of chart history (docs/dashboard.png:
  * PLCWIRE_SCREENSHOT=docs/dashboard.png PLCWIRE_SCREENSHOT_WAIT_MS=60000).
  */
@@ -454,9 +454,10 @@ describe('browser: the npm start demo in headless Chromium', function () {
       await page.waitForTimeout(Number(process.env.PLCWIRE_SCREENSHOT_WAIT_MS ?? 0));
       const notice = page.getByRole('button', { name: 'Close' });
       if (await notice.isVisible()) await notice.click();
-      // The page down to the tallest group and its margin.
+      // The page from its top down to the lowest group and its margin (the buttons clicked above may have scrolled it).
+      await page.evaluate(() => (globalThis as any).window.scrollTo(0, 0));
       const bottom = await page.evaluate(() => Math.max(...[...(globalThis as any).document.querySelectorAll('.nrdb-ui-group')].map((g: any) => g.getBoundingClientRect().bottom)));
-      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 } });
+      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, fullPage: true, clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 } });
     }
     try {
       for (const width of [1280, 800, 390]) {
