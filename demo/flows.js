@@ -267,7 +267,7 @@ return msg;`,
   y = row(5);
   nodes.push({ id: 'catch', type: 'catch', name: 'plcwire errors', scope: null, uncaught: false, ...at(X.source, row(0)), wires: [['debug']] });
   nodes.push({ id: 'debug', type: 'debug', name: 'errors', active: true, tosidebar: true, console: false, complete: 'error', targetType: 'msg', ...at(X.route, row(0)), wires: [] });
-  nodes.push({ id: 'ui.style', type: 'ui-template', group: '', page: '', ui: 'ui.base', name: 'CSS: lamps, CPU, stale', order: 0, width: 0, height: 0, head: '', format: STYLE, storeOutMessages: true, passthru: true, resendOnRefresh: true, templateScope: 'site:style', className: '', ...at(X.shape, row(0)), wires: [[]] });
+  nodes.push({ id: 'ui.style', type: 'ui-template', group: '', page: '', ui: 'ui.base', name: 'CSS: lamps, stale', order: 0, width: 0, height: 0, head: '', format: STYLE, storeOutMessages: true, passthru: true, resendOnRefresh: true, templateScope: 'site:style', className: '', ...at(X.shape, row(0)), wires: [[]] });
 
   return nodes;
 }
