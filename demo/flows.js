@@ -9,6 +9,11 @@
  * when the bit changes in the PLC, and when a link delivers nothing for a few
  * polls (link down, PLC hung) a watchdog greys that link's widgets out
  * (Dashboard 2's `msg.class`) until values flow again.
+ *
+ * The S7-1200's CPU panel shows what the CPU says about itself (identity,
+ * RUN/STOP, its clock, the diagnostic buffer) and has Stop and Start buttons:
+ * the demo's S7 connection has `control=true`. In STOP the CPU still answers
+ * reads but its program (the demo process) stands still, so the values freeze.
  */
 
 /**
@@ -23,7 +28,7 @@ const PITCH = 40;
 const STALE = 'plcwire-stale';
 const LIVE = 'plcwire-live';
 
-/** Dashboard CSS for the lamps and for stale values (a site-wide ui-template style). */
+/** Dashboard CSS for the lamps, the CPU panel and stale values (a site-wide ui-template style). */
 const STYLE = `/* plcwire demo: lamps for BOOLs and states, greyed-out widgets of a link that went quiet */
 .plcwire-lamp-row { display: flex; align-items: center; justify-content: space-between; gap: 12px; width: 100%; min-height: 100%; font-size: 16px; }
 .plcwire-lamp-text { margin-left: auto; font-weight: 600; }
@@ -32,6 +37,12 @@ const STYLE = `/* plcwire demo: lamps for BOOLs and states, greyed-out widgets o
 .plcwire-lamp-on, .plcwire-lamp-green { background: radial-gradient(circle at 35% 30%, #c8f7c5, #1f9d2a 65%); box-shadow: 0 0 8px 2px rgba(31, 157, 42, 0.55); }
 .plcwire-lamp-yellow { background: radial-gradient(circle at 35% 30%, #fff1b8, #e0a100 65%); box-shadow: 0 0 8px 2px rgba(224, 161, 0, 0.55); }
 .plcwire-lamp-red { background: radial-gradient(circle at 35% 30%, #ffc9c9, #d32f2f 65%); box-shadow: 0 0 8px 2px rgba(211, 47, 47, 0.55); }
+.plcwire-cpu-identity { display: grid; grid-template-columns: 1fr 1fr; gap: 6px 24px; width: 100%; font-size: 15px; }
+.plcwire-cpu-identity > div { display: flex; justify-content: space-between; gap: 8px; white-space: nowrap; }
+.plcwire-cpu-identity b { min-width: 0; overflow: hidden; text-overflow: ellipsis; font-weight: 600; }
+.plcwire-cpu-diag th, .plcwire-cpu-diag td:nth-child(-n+2) { white-space: nowrap; }
+.plcwire-cpu-diag .v-table > .v-table__wrapper > table > tbody > tr > td { height: 36px; }
+.plcwire-cpu-diag .v-data-table-footer { display: none; }
 .plcwire-stale { position: relative; opacity: 0.45; filter: grayscale(1); }
 .plcwire-stale::after { content: 'stale'; position: absolute; top: -9px; right: 0; padding: 0 6px; border-radius: 8px;
   font-size: 11px; line-height: 16px; color: #fff; background: #6b6b6b; pointer-events: none; }
@@ -70,13 +81,14 @@ function demoFlow(urls) {
   nodes.push({ id: 'ui.page', type: 'ui-page', name: 'Plant', ui: 'ui.base', path: '/plant', icon: 'factory', layout: 'grid', theme: 'ui.theme', order: 1, visible: 'true', disabled: 'false', breakpoints: [{ name: 'Default', px: 0, cols: 3 }, { name: 'Tablet', px: 576, cols: 6 }, { name: 'Small Desktop', px: 768, cols: 9 }, { name: 'Desktop', px: 1024, cols: 12 }] });
   const group = (id, name, order, width) => nodes.push({ id, type: 'ui-group', name, page: 'ui.page', width, height: 1, order, showTitle: true, visible: 'true', disabled: 'false', groupType: 'default' });
   group('ui.g.s7', 'S7-1200 (S7comm)', 1, 6);
-  group('ui.g.fw', 'CP (FETCH/WRITE)', 2, 3);
-  group('ui.g.fp', 'S7-200 (freeport)', 3, 3);
+  group('ui.g.cpu', 'S7-1200 CPU', 2, 6);
+  group('ui.g.fw', 'CP (FETCH/WRITE)', 3, 3);
+  group('ui.g.fp', 'S7-200 (freeport)', 4, 3);
   const cls = (id) => `plcwire-${id.replace(/\W/g, '-')}`;
   const text = (id, g, label, order, width, y) =>
     nodes.push({ id, type: 'ui-text', group: g, order, width, height: 1, name: label, label, format: '{{msg.payload}}', layout: 'row-spread', style: false, value: 'payload', valueType: 'msg', className: cls(id), ...at(X.widget, y), wires: [] });
-  const template = (id, g, label, order, width, y, format) =>
-    nodes.push({ id, type: 'ui-template', group: g, page: '', ui: '', name: label, order, width, height: 1, head: '', format, storeOutMessages: true, passthru: false, resendOnRefresh: true, templateScope: 'local', className: cls(id), ...at(X.widget, y), wires: [[]] });
+  const template = (id, g, label, order, width, y, format, height = 1) =>
+    nodes.push({ id, type: 'ui-template', group: g, page: '', ui: '', name: label, order, width, height, head: '', format, storeOutMessages: true, passthru: false, resendOnRefresh: true, templateScope: 'local', className: cls(id), ...at(X.widget, y), wires: [[]] });
   // A BOOL from the PLC: the lamp lights while msg.payload is true.
   const boolLamp = (id, g, label, order, width, y) =>
     template(id, g, label, order, width, y, `<div class="plcwire-lamp-row">
@@ -113,7 +125,8 @@ function demoFlow(urls) {
   };
 
   // Connections: one per PLC, shared by every node below.
-  nodes.push({ id: 'conn.s7', type: 'plcwire-connection', name: 'S7-1200 sim', url: urls.s7 });
+  // control=true: the CPU panel's Stop and Start buttons may stop and restart the CPU.
+  nodes.push({ id: 'conn.s7', type: 'plcwire-connection', name: 'S7-1200 sim', url: `${urls.s7}${urls.s7.includes('?') ? '&' : '?'}control=true` });
   nodes.push({ id: 'conn.fw', type: 'plcwire-connection', name: 'CP fetch/write sim', url: urls.fetchwrite });
   nodes.push({ id: 'conn.fp', type: 'plcwire-connection', name: 'S7-200 freeport sim', url: urls.freeport });
 
@@ -164,8 +177,72 @@ function demoFlow(urls) {
   // Below the rows the widgets are wired from, so its marks fan out upwards across no node.
   watchdog('s7', 2, row(11), s7Widgets);
 
-  // FETCH/WRITE: the same DB1 through the CP.
+  // The S7-1200's CPU: state, clock and diagnostic buffer every second, identity every 10 s,
+  // Stop and Start buttons; a watchdog greys the panel when the state stops coming.
   y = row(13);
+  const control = (id, name, action, r, wires) =>
+    nodes.push({ id, type: 'plcwire-control', name, connection: 'conn.s7', action, newOnly: false, ...at(X.route, row(r)), wires: [wires] });
+  const cpuWidgets = ['ui.cpu.state', 'ui.cpu.clock', 'ui.cpu.identity'];
+  nodes.push({ id: 'cpu.poll', type: 'inject', name: 'every second', props: [{ p: 'payload' }], repeat: '1', crontab: '', once: true, onceDelay: '1', topic: '', payload: '', payloadType: 'date', ...at(X.source, row(0)), wires: [['cpu.state', 'cpu.clock', 'cpu.diag']] });
+  control('cpu.state', 'CPU state', 'state', 0, ['cpu.lamp', 'cpu.watch']);
+  // state and stop/start answer { state: 'run' | 'stop' | … }.
+  nodes.push({
+    id: 'cpu.lamp', type: 'change', name: 'state to lamp',
+    rules: [
+      { t: 'set', p: 'lamp', pt: 'msg', to: "payload.state = 'run' ? 'green' : payload.state = 'stop' ? 'red' : 'yellow'", tot: 'jsonata' },
+      { t: 'set', p: 'payload', pt: 'msg', to: '$uppercase(payload.state)', tot: 'jsonata' },
+    ],
+    ...at(X.shape, row(0)), wires: [['ui.cpu.state']],
+  });
+  stateLamp('ui.cpu.state', 'ui.g.cpu', 'CPU', 2, 3, row(0));
+  control('cpu.clock', 'PLC clock', 'clock', 1.5, ['cpu.clocktext']);
+  nodes.push({ id: 'cpu.clocktext', type: 'change', name: 'date and time', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace($substring(payload, 0, 19), 'T', ' ')", tot: 'jsonata' }], ...at(X.shape, row(1.5)), wires: [['ui.cpu.clock']] });
+  text('ui.cpu.clock', 'ui.g.cpu', 'PLC clock', 3, 3, row(1.5));
+  control('cpu.diag', 'diagnostics', 'diagnostics', 3, ['cpu.rows']);
+  // The newest ten entries as table rows: the time to the millisecond, the event ID as the CPU's tools write it.
+  nodes.push({
+    id: 'cpu.rows', type: 'function', name: 'newest ten',
+    func: `const hex = (n) => '16#' + n.toString(16).toUpperCase().padStart(4, '0');
+msg.payload = msg.payload.slice(0, 10).map((e) => ({
+  time: e.time ? e.time.slice(0, 23).replace('T', ' ') : '',
+  event: hex(e.eventId),
+  description: e.description || '',
+}));
+return msg;`,
+    outputs: 1, timeout: 0, noerr: 0, initialize: '', finalize: '', libs: [], ...at(X.shape, row(3)), wires: [['ui.cpu.diag']],
+  });
+  nodes.push({
+    id: 'ui.cpu.diag', type: 'ui-table', group: 'ui.g.cpu', name: 'Diagnostic buffer', label: 'Diagnostic buffer (newest first)', order: 6, width: 6, height: 0, maxrows: 10, passthru: false, autocols: false, showSearch: false, deselect: true, selectionType: 'none',
+    columns: [
+      { title: 'Time', key: 'time', keyType: 'key', type: 'text', width: '', align: 'start' },
+      { title: 'Event', key: 'event', keyType: 'key', type: 'text', width: '', align: 'start' },
+      { title: 'Description', key: 'description', keyType: 'key', type: 'text', width: '', align: 'start' },
+    ],
+    mobileBreakpoint: 'sm', mobileBreakpointType: 'defaults', action: 'replace', className: 'plcwire-cpu-diag', ...at(X.widget, row(3)), wires: [[]],
+  });
+  nodes.push({ id: 'cpu.identify', type: 'inject', name: 'every 10 s', props: [{ p: 'payload' }], repeat: '10', crontab: '', once: true, onceDelay: '1', topic: '', payload: '', payloadType: 'date', ...at(X.source, row(4.5)), wires: [['cpu.info']] });
+  control('cpu.info', 'CPU identity', 'info', 4.5, ['ui.cpu.identity']);
+  const field = (label, expr) => `  <div><span>${html(label)}</span><b>{{ ${expr} }}</b></div>`;
+  template('ui.cpu.identity', 'ui.g.cpu', 'CPU identity', 1, 6, row(4.5), [
+    '<div class="plcwire-cpu-identity">',
+    field('Module', "(msg.payload || {}).moduleTypeName"),
+    field('Name', "(msg.payload || {}).moduleName"),
+    field('Order code', "(msg.payload || {}).orderCode"),
+    field('Firmware', "(msg.payload || {}).firmware"),
+    field('Serial number', "(msg.payload || {}).serialNumber"),
+    field('AS name', "(msg.payload || {}).asName"),
+    '</div>',
+  ].join('\n'), 2);
+  const cpuButton = (id, label, action, order, color, icon, r) =>
+    nodes.push({ id, type: 'ui-button', group: 'ui.g.cpu', name: label, label, order, width: 3, height: 1, emulateClick: false, tooltip: '', color: '', bgcolor: '', className: `plcwire-cpu-${action}`, icon, iconPosition: 'left', payload: '', payloadType: 'str', topic: action, topicType: 'str', buttonColor: color, textColor: '#ffffff', iconColor: '#ffffff', ...at(X.source, row(r)), wires: [[`cpu.${action}`]] });
+  cpuButton('ui.cpu.stop', 'Stop CPU', 'stop', 4, '#d32f2f', 'stop', 6);
+  control('cpu.stop', 'stop CPU', 'stop', 6, ['cpu.lamp']);
+  cpuButton('ui.cpu.start', 'Start CPU', 'start', 5, '#1f9d2a', 'play', 7.5);
+  control('cpu.start', 'start CPU', 'start', 7.5, ['cpu.lamp']);
+  watchdog('cpu', 3, row(9), cpuWidgets);
+
+  // FETCH/WRITE: the same DB1 through the CP.
+  y = row(11);
   nodes.push({ id: 'fw.read', type: 'plcwire-read', name: 'poll CP', connection: 'conn.fw', interval: 1000, output: 'per-tag', deadband: 0, tags: [{ name: 'level', address: 'DB1,REAL0' }, { name: 'parts', address: 'DB1,DINT8' }], ...at(X.source, row(0)), wires: [['fw.route', 'fw.watch']] });
   route('fw.route', ['level', 'parts'], row(0), [['fw.round'], ['ui.fw.parts']]);
   round('fw.round', row(0), ['ui.fw.level']);

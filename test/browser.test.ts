@@ -3,9 +3,11 @@
  * Node-RED with the demo flow, the editor's palette and the flows as it
  * draws them, and the Dashboard 2.0 page showing live values, BOOLs as
  * lamps, the motor switch following the PLC and writing back to it, and the
- * widgets of a link that went down greyed out as stale.
+ * widgets of a link that went down greyed out as stale, and the CPU panel:
+ * the S7-1200's identity, state, clock and diagnostic buffer, its Stop button
+ * freezing the process and its Start button setting it going again.
  * Headless Chromium driven by playwright-core (test/support/browser.ts).
- * PLCWIRE_SCREENSHOT=<file.png> saves the dashboard with the motor running,
+ * PLCWIRE_SCREENSHOT=<file.png> saves the dashboard with the motor running (after a CPU stop and restart),
  * after PLCWIRE_SCREENSHOT_WAIT_MS more of chart history (docs/dashboard.png:
  * PLCWIRE_SCREENSHOT=docs/dashboard.png PLCWIRE_SCREENSHOT_WAIT_MS=60000).
  */
@@ -31,7 +33,14 @@ interface Demo {
   plant: {
     memory: { area(a: string, db?: number): Buffer | undefined };
     urls: { s7: string };
-    s7: { faults: { refuseConnections: boolean; dropConnections(): void } };
+    s7: {
+      faults: { refuseConnections: boolean; dropConnections(): void };
+      state: string;
+      cpu: { identity: { orderCode: string; firmware: string; serialNumber: string; moduleTypeName: string } };
+      diagnostics: { eventId: number; description?: string }[];
+      on(event: 'request', listener: (e: { kind: string }) => void): unknown;
+      off(event: 'request', listener: (e: { kind: string }) => void): unknown;
+    };
     fetchwrite: { faults: { silent: boolean; dropConnections(): void } };
   };
   stop(): Promise<void>;
@@ -154,9 +163,9 @@ describe('browser: the npm start demo in headless Chromium', function () {
     if (profile) fs.rmSync(profile, { recursive: true, force: true });
   });
 
-  it('the editor lists our four nodes in the palette', async () => {
+  it('the editor lists our five nodes in the palette', async () => {
     await page.goto(demo.editor, { waitUntil: 'domcontentloaded' });
-    for (const type of ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat']) {
+    for (const type of ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control']) {
       if (type === 'plcwire-connection') continue; // config nodes are not in the palette
       await page.waitForSelector(`.red-ui-palette-node[data-palette-type="${type}"]`, { timeout: 30_000 });
     }
@@ -313,15 +322,142 @@ describe('browser: the npm start demo in headless Chromium', function () {
     expect(text.join('\n')).not.to.match(/\b(true|false)\b/);
   });
 
+  /** The CPU panel's state lamp: its text and colour. */
+  const cpuLamp = () =>
+    page.evaluate(() => {
+      const w = (globalThis as any).document.querySelector('.plcwire-ui-cpu-state');
+      return { text: (w?.querySelector('.plcwire-lamp-text')?.textContent ?? '').trim(), lamp: w?.querySelector('.plcwire-lamp')?.className ?? '' };
+    });
+  const waitForCpu = (text: string, colour: string) =>
+    page.waitForFunction(
+      ([t, c]) => {
+        const w = (globalThis as any).document.querySelector('.plcwire-ui-cpu-state');
+        return (w?.querySelector('.plcwire-lamp-text')?.textContent ?? '').trim() === t && (w?.querySelector('.plcwire-lamp')?.classList.contains(`plcwire-lamp-${c}`) ?? false);
+      },
+      [text, colour] as const,
+      { timeout: 10_000 },
+    );
+  /** The diagnostic table's rows as the page shows them, cell texts joined by " | ". */
+  const diagnosticRows = () =>
+    page.evaluate(() => [...(globalThis as any).document.querySelectorAll('.plcwire-cpu-diag tbody tr')].map((tr: any) => [...tr.querySelectorAll('td')].map((td: any) => td.innerText.trim()).join(' | ')));
+  const waitForTopRow = (pattern: RegExp) =>
+    page.waitForFunction(
+      ([source, flags]) => new RegExp(source!, flags).test((globalThis as any).document.querySelector('.plcwire-cpu-diag tbody tr')?.innerText ?? ''),
+      [pattern.source, pattern.flags] as const,
+      { timeout: 10_000 },
+    );
+  /** Resolves once the S7 simulator served `n` more read jobs (the dashboard's poll, twice a second, and the heartbeat's watch read, once a second). */
+  const readsServed = (n: number, ms = 15_000) =>
+    new Promise<void>((resolve, reject) => {
+      let seen = 0;
+      const timer = setTimeout(() => {
+        demo.plant.s7.off('request', on);
+        reject(new Error(`only ${seen} of ${n} read jobs served within ${ms} ms`));
+      }, ms);
+      function on(e: { kind: string }) {
+        if (e.kind !== 'read' || ++seen < n) return;
+        clearTimeout(timer);
+        demo.plant.s7.off('request', on);
+        resolve();
+      }
+      demo.plant.s7.on('request', on);
+    });
+  const levelShown = async () => Number(/(\d+(?:\.\d+)?)\s*%/.exec(await page.locator('.plcwire-level').innerText())?.[1]);
+  const partsShown = async () => Number((await page.locator('.plcwire-ui-parts').innerText()).replace(/\D+/g, ' ').trim().split(' ').at(-1));
+  const hex = (id: number) => `16#${id.toString(16).toUpperCase().padStart(4, '0')}`;
+
+  it('the CPU panel shows the simulated S7-1200: its identity, RUN on a green lamp, its clock running, and the diagnostic buffer newest first', async () => {
+    const id = demo.plant.s7.cpu.identity;
+    await page.waitForFunction((code) => ((globalThis as any).document.querySelector('.plcwire-ui-cpu-identity')?.innerText ?? '').includes(code), id.orderCode, { timeout: 15_000 });
+    const identity = await page.locator('.plcwire-ui-cpu-identity').innerText();
+    for (const value of [id.moduleTypeName, id.orderCode, id.firmware, id.serialNumber]) expect(identity).to.include(value);
+    await waitForCpu('RUN', 'green');
+    // The clock as the CPU gives it, and it runs.
+    const clock = () => page.locator('.plcwire-ui-cpu-clock').innerText().then((t) => /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.exec(t)?.[0] ?? '');
+    await page.waitForFunction(() => /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.test((globalThis as any).document.querySelector('.plcwire-ui-cpu-clock')?.innerText ?? ''), undefined, { timeout: 10_000 });
+    const first = await clock();
+    expect(Math.abs(Date.parse(`${first.replace(' ', 'T')}Z`) - Date.now())).to.be.below(10_000);
+    await page.waitForFunction(
+      (before) => {
+        const now = /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.exec((globalThis as any).document.querySelector('.plcwire-ui-cpu-clock')?.innerText ?? '')?.[0];
+        return now !== undefined && now > before;
+      },
+      first,
+      { timeout: 10_000 },
+    );
+    // The simulator's buffer, newest first: power on, STOP to STARTUP, STARTUP to RUN.
+    const log = demo.plant.s7.diagnostics;
+    await page.waitForFunction((n) => (globalThis as any).document.querySelectorAll('.plcwire-cpu-diag tbody tr').length === n, Math.min(10, log.length), { timeout: 10_000 });
+    const rows = await diagnosticRows();
+    expect(rows.map((r) => r.split(' | ')[1])).to.deep.equal(log.slice(0, 10).map((e) => hex(e.eventId)));
+    expect(rows[0]).to.match(/^\d{4}-\d\d-\d\d \d\d:\d\d:\d\d\.\d{3} \| 16#4302 \| Mode transition STARTUP to RUN$/);
+  });
+
+  it('Stop CPU on the dashboard stops the simulated CPU: STOP on a red lamp, the cause on top of the diagnostic buffer, the values held while the link stays live', async () => {
+    const db1 = demo.plant.memory.area('DB', 1)!;
+    // The motor runs (started above): the parts counter and the level both move while the CPU is in RUN.
+    expect(db1.readInt16BE(6)).to.be.above(0);
+    await page.locator('.plcwire-cpu-stop').locator('xpath=descendant-or-self::button').first().click();
+    await until(() => demo.plant.s7.state === 'STOP', 10_000, 'the simulated CPU in STOP');
+    expect(demo.plant.s7.diagnostics[0]).to.include({ eventId: 0x4304 });
+    await waitForCpu('STOP', 'red');
+    await waitForTopRow(/16#4304\s*(\|\s*)?STOP by a programming device/);
+    const held = { level: Math.round(db1.readFloatBE(0) * 10) / 10, parts: db1.readInt32BE(8) };
+    // Polls served after the stop deliver the held values, and go on delivering them.
+    await readsServed(3);
+    await page.waitForFunction(
+      ([level, parts]) => {
+        const doc = (globalThis as any).document;
+        const m = /(\d+(?:\.\d+)?)\s*%/.exec(doc.querySelector('.plcwire-level')?.innerText ?? '');
+        return m !== null && Number(m[1]) === level && (doc.querySelector('.plcwire-ui-parts')?.innerText ?? '').includes(String(parts));
+      },
+      [held.level, held.parts] as const,
+      { timeout: 10_000 },
+    );
+    // Six more read jobs: at least three more polls of the dashboard's values, all showing the same.
+    await readsServed(6);
+    expect(await levelShown()).to.equal(held.level);
+    expect(await partsShown()).to.equal(held.parts);
+    expect(Math.round(db1.readFloatBE(0) * 10) / 10).to.equal(held.level);
+    // The link itself is fine: the values still arrive, nothing is greyed out.
+    for (const c of S7_WIDGETS) expect(await staleOf(page, c), c).to.equal(false);
+    // The PLC's heartbeat counter is part of the program: it stands still, and the heartbeat node says so.
+    await page.waitForFunction(() => /plcwire-lamp-red/.test((globalThis as any).document.querySelector('.plcwire-ui-heartbeat .plcwire-lamp')?.className ?? ''), undefined, { timeout: 10_000 });
+  });
+
+  it('Start CPU restarts it: RUN on a green lamp, the restart on top of the diagnostic buffer, and the values move again', async () => {
+    const stopped = { level: await levelShown(), parts: await partsShown() };
+    await page.locator('.plcwire-cpu-start').locator('xpath=descendant-or-self::button').first().click();
+    await until(() => demo.plant.s7.state === 'RUN', 10_000, 'the simulated CPU in RUN');
+    await waitForCpu('RUN', 'green');
+    // A warm restart logs: manual warm restart, STOP to STARTUP, STARTUP to RUN (newest first).
+    await waitForTopRow(/16#4302/);
+    const rows = await diagnosticRows();
+    expect(rows.slice(0, 4).map((r) => r.split(' | ')[1])).to.deep.equal(['16#4302', '16#4301', '16#1381', '16#4304']);
+    await page.waitForFunction(
+      ([level, parts]) => {
+        const doc = (globalThis as any).document;
+        const m = /(\d+(?:\.\d+)?)\s*%/.exec(doc.querySelector('.plcwire-level')?.innerText ?? '');
+        const p = Number((doc.querySelector('.plcwire-ui-parts')?.innerText ?? '').replace(/\D+/g, ' ').trim().split(' ').at(-1));
+        return m !== null && Number(m[1]) !== level && p > parts!;
+      },
+      [stopped.level, stopped.parts] as const,
+      { timeout: 10_000 },
+    );
+    await page.waitForFunction(() => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-heartbeat .plcwire-lamp')?.className ?? ''), undefined, { timeout: 10_000 });
+    expect((await cpuLamp()).text).to.equal('RUN');
+  });
+
   it('every widget sits inside its group and on screen, at desktop, tablet and phone widths', async () => {
     if (process.env.PLCWIRE_SCREENSHOT) {
       // Let the chart gather some history, and close the "offline ready" notice of Dashboard 2's service worker.
       await page.waitForTimeout(Number(process.env.PLCWIRE_SCREENSHOT_WAIT_MS ?? 0));
       const notice = page.getByRole('button', { name: 'Close' });
       if (await notice.isVisible()) await notice.click();
-      // The page down to the tallest group and its margin.
+      // The page from its top down to the lowest group and its margin (the buttons clicked above may have scrolled it).
+      await page.evaluate(() => (globalThis as any).window.scrollTo(0, 0));
       const bottom = await page.evaluate(() => Math.max(...[...(globalThis as any).document.querySelectorAll('.nrdb-ui-group')].map((g: any) => g.getBoundingClientRect().bottom)));
-      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 } });
+      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, fullPage: true, clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 } });
     }
     try {
       for (const width of [1280, 800, 390]) {

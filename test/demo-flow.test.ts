@@ -140,4 +140,21 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
       expect(String(node(`${prefix}.mark`).func)).to.include(STALE).and.include(LIVE);
     }
   });
+
+  it('the CPU panel: state, clock and diagnostic buffer polled from the S7-1200, and the Stop and Start buttons run those actions on a connection that allows them', () => {
+    expect(node('conn.s7').url).to.match(/[?&]control=true(&|$)/);
+    const actionOf = (id: string) => node(id).action;
+    expect((node('cpu.poll').wires as string[][])[0].map(actionOf).sort()).to.deep.equal(['clock', 'diagnostics', 'state']);
+    expect(node('cpu.poll')).to.include({ type: 'inject', repeat: '1', topic: '' });
+    for (const [button, action] of [['ui.cpu.stop', 'stop'], ['ui.cpu.start', 'start']]) {
+      // The button's topic names the action too, so the node does that and nothing else.
+      expect(node(button!)).to.include({ type: 'ui-button', group: 'ui.g.cpu', topic: action, topicType: 'str' });
+      const [target] = (node(button!).wires as string[][])[0]!;
+      expect(node(target!)).to.include({ type: 'plcwire-control', action, connection: 'conn.s7' });
+      // Its answer ({ state }) goes to the lamp, never on to another control node (msg.topic would name the action again).
+      expect((node(target!).wires as string[][])[0]).to.deep.equal(['cpu.lamp']);
+    }
+    for (const n of flow.filter((f) => f.type === 'plcwire-control')) expect(n.connection, n.id).to.equal('conn.s7');
+    expect(node('ui.cpu.diag')).to.include({ type: 'ui-table', action: 'replace', autocols: false });
+  });
 });

@@ -4,8 +4,13 @@
  * visitors see over time, without waiting for a timer.
  */
 import { expect } from 'chai';
+import { startPlant, type Plant } from '../lib/demo/plant';
 import { DemoProcess, MOTOR, THERMAL, type ProcessSnapshot } from '../lib/demo/process';
+import { S7Client } from '../lib/s7/client';
+import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
+import { parseUrl, type S7Endpoint } from '../lib/url';
+import { until } from './support/wait';
 
 const PERIOD_MS = 100;
 const STEPS_PER_S = 1000 / PERIOD_MS;
@@ -16,6 +21,15 @@ function fresh(): { process: DemoProcess; db: Buffer } {
   const process = new DemoProcess(memory, PERIOD_MS);
   process.start().stop();
   return { process, db: memory.area('DB', 1)! };
+}
+
+/** A process that is the program of a simulated S7-1200 (not listening: its mode is all that is used). */
+function onCpu(): { process: DemoProcess; db: Buffer; cpu: S7Server } {
+  const memory = new PlcMemory();
+  const cpu = new S7Server({ profile: 's7-1200', memory });
+  const process = new DemoProcess(memory, PERIOD_MS, cpu.cpu);
+  process.start().stop();
+  return { process, db: memory.area('DB', 1)!, cpu };
 }
 
 function run(process: DemoProcess, seconds: number): ProcessSnapshot[] {
@@ -120,5 +134,85 @@ describe('demo process: the simulated plant behind npm start', () => {
       run(process, 20);
     }
     expect(a.process.snapshot()).to.deep.equal(b.process.snapshot());
+  });
+});
+
+describe('demo process: the program of the simulated CPU, it runs only in RUN', () => {
+  it('holds every value while the CPU is in STOP, reacts to nothing written meanwhile, and continues from the held values after a restart', () => {
+    const { process, db, cpu } = onCpu();
+    run(process, 20);
+    setRun(db, true);
+    run(process, 5);
+    const held = process.snapshot();
+    expect(held).to.include({ running: true, speed: MOTOR.fullSpeed });
+    expect(cpu.stop()).to.equal(true);
+    expect(process.programRunning).to.equal(false);
+    // A minute of cycles in STOP: nothing moves, not the tank, the thermostat, the counters, the heartbeat.
+    expect(run(process, 60).every((s) => JSON.stringify(s) === JSON.stringify(held))).to.equal(true);
+    // The CPU in STOP still takes writes; its program does not react to them.
+    setRun(db, false);
+    run(process, 5);
+    expect(process.snapshot()).to.deep.equal(held);
+    expect(cpu.start()).to.equal(true);
+    expect(process.programRunning).to.equal(true);
+    const after = process.step();
+    // One cycle on from where it stopped: the level moves by one step, the motor starts ramping down.
+    expect(Math.abs(after.level - held.level)).to.be.within(0.29, 0.41);
+    expect(after.speed).to.equal(MOTOR.fullSpeed - MOTOR.rampDown / STEPS_PER_S);
+    expect(after.parts).to.equal(held.parts);
+  });
+
+  it('a stop and restart shift the process in time and change nothing else', () => {
+    const plain = fresh();
+    const stopped = onCpu();
+    run(plain.process, 30);
+    run(stopped.process, 30);
+    stopped.cpu.stop();
+    run(stopped.process, 45);
+    stopped.cpu.start();
+    run(plain.process, 30);
+    run(stopped.process, 30);
+    expect(stopped.process.snapshot()).to.deep.equal(plain.process.snapshot());
+  });
+
+  describe('the demo plant', () => {
+    let plant: Plant;
+    let client: S7Client;
+    before(async () => {
+      plant = await startPlant({ ports: { s7: 0, fetch: 0, write: 0, freeport: 0 } });
+      client = new S7Client(parseUrl(`${plant.urls.s7}&control=true`) as S7Endpoint);
+      await client.connect();
+    });
+    after(async () => {
+      await client?.close();
+      await plant?.close();
+    });
+
+    const level = async () => (await client.read(['DB1.DBD0:REAL']))['DB1.DBD0:REAL'] as number;
+
+    it('a PLC stop from a client freezes the values it serves, a warm restart sets them moving again', async () => {
+      // Running: the tank level changes within a few cycles.
+      const before = await level();
+      await until(() => plant.process.snapshot().level !== before, 3000, 'the level moving');
+      await client.stop();
+      expect(plant.s7.state).to.equal('STOP');
+      expect(plant.s7.diagnostics[0]).to.include({ eventId: 0x4304 });
+      // Read over the socket for ten cycles of the process: always the same value.
+      const held = await level();
+      const start = Date.now();
+      let reads = 0;
+      while (Date.now() - start < 10 * 100) {
+        expect(await level()).to.equal(held);
+        reads++;
+      }
+      expect(reads).to.be.at.least(5);
+      expect(plant.process.snapshot().level).to.equal(held);
+      await client.hotStart();
+      expect(plant.s7.state).to.equal('RUN');
+      const deadline = Date.now() + 3000;
+      let now = held;
+      while (now === held && Date.now() < deadline) now = await level();
+      expect(now).to.not.equal(held);
+    });
   });
 });

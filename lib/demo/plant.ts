@@ -36,8 +36,9 @@ export async function startPlant(options: { host?: string; ports?: Partial<Plant
   const host = options.host ?? '127.0.0.1';
   const want = { ...DEMO_PORTS, ...options.ports };
   const memory = new PlcMemory();
-  const process = new DemoProcess(memory, options.periodMs ?? 100);
   const s7 = new S7Server({ host, port: want.s7, profile: 's7-1200', memory });
+  // The process is the S7-1200's program: it stops with the CPU (the other links see the same memory held).
+  const process = new DemoProcess(memory, options.periodMs ?? 100, s7.cpu);
   const fetchwrite = new FetchWriteServer({ host, fetchPort: want.fetch, writePort: want.write, memory });
   const freeport = new FreeportBus({ stations: [DEMO_STATIONS.level, DEMO_STATIONS.parts] });
   const closeAll = async () => {

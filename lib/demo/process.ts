@@ -8,6 +8,12 @@
  * FETCH/WRITE simulators) with the memory map below; the same values are
  * mirrored into freeport stations by the demo.
  *
+ * The process plays the PLC's program (and the plant it controls), so it
+ * runs only while the CPU it is given is in RUN: in STOP the CPU still
+ * answers reads and writes, but nothing in DB1 changes (the heartbeat stops
+ * counting too), and a restart continues from the values held, as with a
+ * retentive DB.
+ *
  *   DB1.DBD0:REAL   tank level, %            (process)
  *   DB1.DBX4.0      motor run command        (written by the operator)
  *   DB1.DBX4.1      motor running            (process)
@@ -19,6 +25,11 @@
  *   DB1.DBD16:REAL  temperature, °C          (process)
  */
 import type { PlcMemory } from '../sim/memory';
+
+/** The CPU the program runs on: S7Server#cpu (or anything with its RUN/STOP mode). */
+export interface ProgramCpu {
+  readonly mode: string;
+}
 
 export const DEMO_TAGS = Object.freeze({
   level: 'DB1.DBD0:REAL',
@@ -69,6 +80,7 @@ export class DemoProcess {
   constructor(
     private readonly memory: PlcMemory,
     private readonly periodMs = 100,
+    private readonly cpu?: ProgramCpu,
   ) {}
 
   start(): this {
@@ -87,8 +99,17 @@ export class DemoProcess {
     this.timer = undefined;
   }
 
-  /** One cycle of the process; public so tests can step it deterministically. */
+  /** Whether the program runs: always without a CPU, else while the CPU is in RUN. */
+  get programRunning(): boolean {
+    return this.cpu === undefined || this.cpu.mode === 'RUN';
+  }
+
+  /**
+   * One cycle of the process; public so tests can step it deterministically.
+   * With the CPU in STOP there is no cycle: the values are returned as held.
+   */
   step(): ProcessSnapshot {
+    if (!this.programRunning) return this.snapshot();
     const db = this.db();
     const dt = this.periodMs / 1000;
     this.ticks++;

@@ -41,7 +41,7 @@ export const NODE_HEIGHT = 30;
 /** How far a node's status (dot and text) reaches below its box: drawn 3 px under it, 14 px high. */
 export const STATUS_BELOW = 20;
 /** Types that show a status under the node while the flow runs. */
-const SHOWS_STATUS = new Set(['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'ui-switch', 'trigger']);
+const SHOWS_STATUS = new Set(['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'ui-switch', 'trigger']);
 
 /** Types with no input port (the editor draws them 7 px narrower). */
 const NO_INPUT = new Set(['comment', 'inject', 'catch', 'status', 'complete', 'link in', 'plcwire-heartbeat', 'http in', 'tab', 'group']);
