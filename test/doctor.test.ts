@@ -169,6 +169,28 @@ describe('connection doctor', function () {
       }
     });
 
+    it('a deadline that runs out anywhere in the handshake is a failed step, never a rejection, and leaves no socket', async () => {
+      const sockets = new Set<net.Socket>();
+      const mute = net.createServer((s) => {
+        sockets.add(s);
+        s.resume();
+        s.on('close', () => sockets.delete(s));
+      });
+      mute.listen(0, '127.0.0.1');
+      await once(mute, 'listening');
+      try {
+        const port = (mute.address() as net.AddressInfo).port;
+        for (const timeout of [1, 3, 10, 30, 100]) {
+          const r = await diagnose(`s7://127.0.0.1:${port}?slot=1&timeout=5000`, [], { timeout });
+          expect(r.ok, `${timeout} ms`).to.equal(false);
+          expect(last(r).detail, `${timeout} ms`).to.match(/deadline|nothing answered/);
+          await until(() => sockets.size === 0, 2000, 'the doctor closed its socket');
+        }
+      } finally {
+        await new Promise((r) => mute.close(r));
+      }
+    });
+
     it('stops when another protocol answers', async () => {
       const http = net.createServer((s) => s.resume().end('HTTP/1.1 400 Bad Request\r\n\r\n'));
       http.listen(0, '127.0.0.1');

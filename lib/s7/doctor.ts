@@ -233,8 +233,18 @@ class Doctor {
       for (const a of addresses) await this.address(a, family);
     } catch (err) {
       if (err instanceof Stop) return;
-      if (err instanceof PlcError && err.code === 'ABORTED') throw err;
       if (this.options.signal?.aborted) throw new PlcError('ABORTED', 'the connection doctor was aborted', { cause: err });
+      // The deadline ran out where no step caught it (between steps, or inside one's own retries): a failed step, not a rejection.
+      if (this.signal.aborted) {
+        const after = this.steps.at(-1)?.step;
+        this.record({
+          step: 'deadline',
+          ok: false,
+          detail: `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms${after ? ` (after the ${after} step)` : ''}`,
+          hint: 'Give the doctor more time (the timeout option, or --timeout), or raise the URL\'s timeout on a slow link.',
+        });
+        return;
+      }
       throw err;
     }
   }
