@@ -14,9 +14,10 @@
  * the tag's result is an error.
  */
 import type * as net from 'node:net';
-import { parseAddress } from '../address';
-import { AddressError, ConnectionError, PlcError, TimeoutError, toPlcError, type TagResult } from '../errors';
+import { S7_TAG_SYNTAX } from '../address';
+import { AddressError, ConnectionError, isLinkError, PlcError, TimeoutError, toPlcError, type TagResult } from '../errors';
 import { BaseClient, type ClientOptions } from '../link/client-base';
+import type { Driver } from '../link/driver';
 import { FrameReader } from '../link/framer';
 import { JobQueue } from '../link/jobs';
 import { PendingRequests } from '../link/pending';
@@ -79,6 +80,13 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   readonly endpoint: FetchWriteEndpoint;
   /** Jobs sent, for diagnostics and tests. */
   readonly stats = { fetches: 0, writes: 0 };
+  protected readonly driver: Driver<FwSession, Tag> = {
+    syntax: { ...S7_TAG_SYNTAX, parse: (address) => this.parseTag(address) },
+    openSession: (signal) => this.openSession(signal),
+    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
+    writeTags: (session, items, signal) => this.writeTags(session, items, signal),
+    isLinkError: endsRequest,
+  };
 
   constructor(endpoint: FetchWriteEndpoint, options: Partial<ClientOptions> = {}) {
     super({
@@ -92,8 +100,8 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   }
 
   /** S7 address syntax, limited to what FETCH/WRITE can reach (the ORG table: docs/protocols.md, "ORG areas and units"). */
-  protected parseTag(address: string): Tag {
-    const tag = parseAddress(address);
+  private parseTag(address: string): Tag {
+    const tag = S7_TAG_SYNTAX.parse(address);
     const org = ORG_BY_AREA[tag.area];
     const range = ORG_RANGES[org]!;
     if (org === Org.DB && (tag.dbNumber < 1 || tag.dbNumber > 255)) {
@@ -134,7 +142,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return Math.min(bytes, MAX_DATA - (MAX_DATA % 2));
   }
 
-  protected async openSession(signal: AbortSignal): Promise<FwSession> {
+  private async openSession(signal: AbortSignal): Promise<FwSession> {
     const e = this.endpoint;
     const open = (port: number) => openTcp({ host: e.host, port, timeout: this.timeout, signal });
     const fetchSocket = await open(e.fetchPort);
@@ -214,7 +222,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return response.data;
   }
 
-  protected async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+  private async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
     const results: TagResult<PlcValue>[] = new Array(tags.length);
     const readable: number[] = [];
     tags.forEach((tag, i) => {
@@ -230,7 +238,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
           data = await this.fetchRange(session, range.org, range.dbNumber, range.start, range.length, signal);
         } catch (err) {
           const e = toPlcError(err);
-          if (isLinkError(e)) throw e;
+          if (endsRequest(e)) throw e;
           error = e;
         }
         if (error && range.tags.length > 1) {
@@ -255,7 +263,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
       return this.decode(tag, data, range!.start);
     } catch (err) {
       const e = toPlcError(err);
-      if (isLinkError(e)) throw e;
+      if (endsRequest(e)) throw e;
       return { ok: false, error: tagError(tag, e) };
     }
   }
@@ -306,7 +314,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return ranges;
   }
 
-  protected async writeTags(session: FwSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
+  private async writeTags(session: FwSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
     const results: TagResult<void>[] = new Array(items.length);
     const valid: number[] = [];
     items.forEach((it, i) => {
@@ -331,7 +339,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
           const e = toPlcError(err);
           results[i] = { ok: false, error: tagError(tag, e) };
           // The link is gone: the remaining writes fail with the same error, never silently.
-          if (isLinkError(e)) {
+          if (endsRequest(e)) {
             for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
             return;
           }
@@ -395,9 +403,15 @@ function wrongDirection(tag: Tag, op: 'read' | 'write'): PlcError {
   );
 }
 
-/** Errors of the link rather than of a tag: the whole request failed. */
-function isLinkError(e: PlcError): boolean {
-  return e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'CLOSED' || e.code === 'ABORTED' || e.code === 'PROTOCOL_ERROR' || e.code === 'QUEUE_FULL';
+/**
+ * Errors that fail the whole request rather than a tag: the link's, and
+ * those that drop a FETCH/WRITE link. Answers carry no request id, so a
+ * job that timed out or was aborted, or a frame that does not parse, leaves
+ * the connection unusable (FetchWriteClient.job); QUEUE_FULL refuses the
+ * request before any job.
+ */
+function endsRequest(e: PlcError): boolean {
+  return isLinkError(e) || e.code === 'TIMEOUT' || e.code === 'ABORTED' || e.code === 'PROTOCOL_ERROR' || e.code === 'QUEUE_FULL';
 }
 
 function tagError(tag: Tag, err: PlcError): PlcError {

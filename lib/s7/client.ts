@@ -16,9 +16,10 @@
  * `itemLimit` ({ limit, was }), and reads again with a plan for that limit,
  * or sends the items of a write the answer left out again.
  */
-import { formatAddress, parseAddress } from '../address';
-import { ConnectionError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, toResults, type ClientOptions, type ReadValues } from '../link/client-base';
+import { formatAddress, S7_TAG_SYNTAX } from '../address';
+import { ConnectionError, isLinkError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, toResults, type ClientOptions } from '../link/client-base';
+import type { Driver, ReadValues } from '../link/driver';
 import type { PlcValue, Protocol, RequestOptions, Tag } from '../types';
 import { endpointName, type S7Endpoint } from '../url';
 import { decodeTag, tagDecoder, type TagDecoder } from '../values';
@@ -81,6 +82,14 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   private itemLimit: number;
   private planOptions: PlanOptions;
   private readonly services: S7Services;
+  protected readonly driver: Driver<S7Session, Tag> = {
+    syntax: S7_TAG_SYNTAX,
+    openSession: (signal) => this.openSession(signal),
+    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
+    readValues: (session, tags, signal) => this.readValues(session, tags, signal),
+    writeTags: (session, items, signal) => this.writeTags(session, items, signal),
+    isLinkError,
+  };
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
     super({
@@ -135,11 +144,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     return this.plans.get(addresses.map((a) => this.tag(a)), pduSize, this.planOptions);
   }
 
-  protected parseTag(address: string): Tag {
-    return parseAddress(address);
-  }
-
-  protected openSession(signal: AbortSignal): Promise<S7Session> {
+  private openSession(signal: AbortSignal): Promise<S7Session> {
     return openS7Session(this.endpoint, {
       name: this.name,
       timeout: this.timeout,
@@ -333,12 +338,12 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   // ---------------------------------------------------------------- reads
 
-  protected async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+  private async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
     const { values, errors } = await this.readValues(session, tags, signal);
     return toResults(values, errors);
   }
 
-  protected override async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
+  private async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
     this.stats.requests++;
     const read = await this.readServed(session, tags, true, signal);
     if (read.retry.length > 0) {
@@ -555,7 +560,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   // ---------------------------------------------------------------- writes
 
-  protected async writeTags(session: S7Session, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
+  private async writeTags(session: S7Session, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
     this.stats.requests++;
     const plan = planWrite(items, session.pduSize, this.planOptions);
     const errors: (PlcError | undefined)[] = plan.errors.slice();
