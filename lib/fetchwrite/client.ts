@@ -15,8 +15,8 @@
  */
 import type * as net from 'node:net';
 import { S7_TAG_SYNTAX } from '../address';
-import { AddressError, ConnectionError, isLinkError, PlcError, TimeoutError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, type ClientOptions } from '../link/client-base';
+import { AddressError, ConnectionError, isLinkError, PlcError, tagError, TimeoutError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
 import type { Driver } from '../link/driver';
 import { FrameReader } from '../link/framer';
 import { JobQueue } from '../link/jobs';
@@ -89,13 +89,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   };
 
   constructor(endpoint: FetchWriteEndpoint, options: Partial<ClientOptions> = {}) {
-    super({
-      name: endpointName(endpoint),
-      timeout: endpoint.timeout,
-      ...(endpoint.readOnly ? { readOnly: true } : {}),
-      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
-      ...options,
-    });
+    super(endpointOptions(endpointName(endpoint), endpoint, options));
     this.endpoint = endpoint;
   }
 
@@ -161,15 +155,13 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   }
 
   private attach(session: FwSession, channel: Channel): void {
-    const fail = (cause: PlcError) => {
-      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+    const fail = this.attachStream(session, channel.socket, (err) => {
       session.lost ??= err;
       session.fetch.pending.rejectAll(err);
       session.write.pending.rejectAll(err);
       session.jobs.rejectAll(err);
       session.destroy();
-      this.sessionLost(session, err);
-    };
+    });
     channel.socket.on('data', (chunk: Buffer) => {
       let frames: Buffer[];
       try {
@@ -187,8 +179,6 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
         channel.pending.resolve(1, response);
       }
     });
-    channel.socket.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
-    channel.socket.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
   }
 
   /** One job on one channel (the caller holds the session's job queue). */
@@ -248,7 +238,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
         }
         for (const i of range.tags) {
           const tag = tags[i]!;
-          if (error) results[i] = { ok: false, error: tagError(tag, error) };
+          if (error) results[i] = { ok: false, error: tagError(tag.address, error) };
           else results[i] = this.decode(tag, data!, range.start);
         }
       }
@@ -264,7 +254,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     } catch (err) {
       const e = toPlcError(err);
       if (endsRequest(e)) throw e;
-      return { ok: false, error: tagError(tag, e) };
+      return { ok: false, error: tagError(tag.address, e) };
     }
   }
 
@@ -272,7 +262,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     try {
       return { ok: true, value: decodeTag(tag, data, this.byteSpan(tag)[0] - rangeStart) };
     } catch (err) {
-      return { ok: false, error: tagError(tag, toPlcError(err, 'PROTOCOL_ERROR')) };
+      return { ok: false, error: tagError(tag.address, toPlcError(err, 'PROTOCOL_ERROR')) };
     }
   }
 
@@ -337,17 +327,17 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
           results[i] = { ok: true, value: undefined };
         } catch (err) {
           const e = toPlcError(err);
-          results[i] = { ok: false, error: tagError(tag, e) };
+          results[i] = { ok: false, error: tagError(tag.address, e) };
           // The link is gone: the remaining writes fail with the same error, never silently.
           if (endsRequest(e)) {
-            for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
+            for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
             return;
           }
         }
       }
     }, signal).catch((err: unknown) => {
       const e = toPlcError(err);
-      for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
+      for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
     });
     return results;
   }
@@ -414,7 +404,3 @@ function endsRequest(e: PlcError): boolean {
   return isLinkError(e) || e.code === 'TIMEOUT' || e.code === 'ABORTED' || e.code === 'PROTOCOL_ERROR' || e.code === 'QUEUE_FULL';
 }
 
-function tagError(tag: Tag, err: PlcError): PlcError {
-  if (err.tag === tag.address) return err;
-  return new PlcError(err.code, `${tag.address}: ${err.message}`, { tag: tag.address, ...(err.plcCode === undefined ? {} : { plcCode: err.plcCode }), cause: err });
-}

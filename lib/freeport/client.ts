@@ -16,7 +16,7 @@ import * as net from 'node:net';
 import type { SerialPortStream } from '@serialport/stream';
 import { spanContains } from '../address/syntax';
 import { ConnectionError, isLinkError, PlcError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, type ClientOptions } from '../link/client-base';
+import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
 import type { Driver, TagSyntax } from '../link/driver';
 import { closeSerial, openSerial } from '../link/serial';
 import { openTcp } from '../link/tcp';
@@ -54,13 +54,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
 
   constructor(endpoint: FreeportEndpoint, options: FreeportClientOptions = {}) {
     const { binding, profile, ...common } = options;
-    super({
-      name: endpointName(endpoint),
-      timeout: endpoint.timeout,
-      ...(endpoint.readOnly !== undefined ? { readOnly: endpoint.readOnly } : {}),
-      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
-      ...common,
-    });
+    super(endpointOptions(endpointName(endpoint), endpoint, common));
     this.endpoint = endpoint;
     this.profile = defineProfile(profile);
     this.binding = binding;

@@ -1,4 +1,5 @@
 import { EventEmitter } from 'node:events';
+import type { Duplex } from 'node:stream';
 import { ConnectionError, PlcError, TagErrors, toPlcError, type TagResult } from '../errors';
 import type { LinkState, PlcClient, PlcValue, Protocol, RequestOptions } from '../types';
 import type { BackoffOptions } from './backoff';
@@ -24,6 +25,24 @@ export interface ClientOptions {
 }
 
 export const DEFAULT_TIMEOUT = 5000;
+
+/** What every endpoint carries for its client: the request timeout and the write safety. */
+export interface EndpointOptions {
+  timeout: number;
+  readOnly?: boolean;
+  allow?: readonly string[];
+}
+
+/** A client's options from its endpoint (`name` for messages), overridden by the caller's. */
+export function endpointOptions(name: string, endpoint: EndpointOptions, options: Partial<ClientOptions>): ClientOptions {
+  return {
+    name,
+    timeout: endpoint.timeout,
+    ...(endpoint.readOnly ? { readOnly: true } : {}),
+    ...(endpoint.allow ? { allow: endpoint.allow } : {}),
+    ...options,
+  };
+}
 
 interface PreparedRead<T> {
   /** A copy of the list, to notice a caller that changed its array between polls. */
@@ -138,6 +157,26 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
   /** A driver calls this when a live session dies; the supervisor reconnects. */
   protected sessionLost(session: S, err: PlcError): void {
     this.supervisor.lost(session, err);
+  }
+
+  /**
+   * How a session over a stream dies, once: the returned `fail(cause)` on
+   * its first call runs `teardown` with the error (CLOSED, with the cause,
+   * when close() ended it) and tells the supervisor; later calls do nothing.
+   * The stream's 'error' and 'close' call it.
+   */
+  protected attachStream(session: S, stream: Duplex, teardown: (err: PlcError) => void): (cause: PlcError) => void {
+    let lost = false;
+    const fail = (cause: PlcError) => {
+      if (lost) return;
+      lost = true;
+      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+      teardown(err);
+      this.sessionLost(session, err);
+    };
+    stream.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
+    stream.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
+    return fail;
   }
 
   /** Starts and waits for the first connection; rejects with the first attempt's error and stops. */

@@ -4,10 +4,9 @@
  * handshake (COTP CR/CC, setup communication) is `openS7Session`.
  */
 import type * as net from 'node:net';
-import { ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
+import { abortError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
 import { Fifo } from '../link/fifo';
 import { FrameReader } from '../link/framer';
-import { abortError } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { S7Endpoint } from '../url';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';

@@ -17,8 +17,8 @@
  * or sends the items of a write the answer left out again.
  */
 import { formatAddress, S7_TAG_SYNTAX } from '../address';
-import { ConnectionError, isLinkError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, toResults, type ClientOptions } from '../link/client-base';
+import { ConnectionError, isLinkError, PlcError, ProtocolError, tagError as namedTagError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../link/client-base';
 import type { Driver, ReadValues } from '../link/driver';
 import type { PlcValue, Protocol, RequestOptions, Tag } from '../types';
 import { endpointName, type S7Endpoint } from '../url';
@@ -92,13 +92,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   };
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
-    super({
-      name: endpointName(endpoint),
-      timeout: endpoint.timeout,
-      ...(endpoint.readOnly ? { readOnly: true } : {}),
-      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
-      ...options,
-    });
+    super(endpointOptions(endpointName(endpoint), endpoint, options));
     this.endpoint = endpoint;
     this.itemLimit = endpoint.maxItems ?? DEFAULT_MAX_ITEMS;
     this.planOptions = { maxItems: this.itemLimit };
@@ -157,15 +151,10 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   private attach(session: S7Session): void {
     const { socket } = session;
-    let lost = false;
-    const fail = (cause: PlcError) => {
-      if (lost) return;
-      lost = true;
-      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+    const fail = this.attachStream(session, socket, (err) => {
       session.rejectAll(err);
       socket.destroy();
-      this.sessionLost(session, err);
-    };
+    });
     socket.on('data', (chunk: Buffer) => {
       this.stats.bytesReceived += chunk.length;
       let frames: Buffer[];
@@ -191,8 +180,6 @@ export class S7Client extends BaseClient<S7Session, Tag> {
         if (!session.answer(ref, frame)) this.stats.ignoredReplies++;
       }
     });
-    socket.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
-    socket.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
     session.lose = fail;
     session.onSend = (frame) => {
       this.stats.pdusSent++;
@@ -568,7 +555,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     return items.map(({ tag }, i) => {
       const err = errors[i];
       if (!err) return { ok: true, value: undefined };
-      return { ok: false, error: err.tag === tag.address ? err : tagError(tag, err) };
+      return { ok: false, error: tagError(tag, err) };
     });
   }
 
@@ -680,15 +667,10 @@ function returnCodeError(rc: number): PlcError {
   return new PlcError(code, `the PLC answered return code 0x${rc.toString(16).padStart(2, '0').toUpperCase()}: ${text}`, { plcCode: rc });
 }
 
-/** The same error for one tag: names the tag, where it is, and keeps the code and the PLC's return code. */
+/** The same error for one tag, naming where it lies when the address was written another way (DB1,INT2 → DB1.DBW2). */
 function tagError(tag: Tag, err: PlcError): PlcError {
   const canonical = formatAddress(tag);
-  const where = canonical === tag.address ? '' : ` (${canonical})`;
-  return new PlcError(err.code, `${tag.address}${where}: ${err.message}`, {
-    tag: tag.address,
-    ...(err.plcCode === undefined ? {} : { plcCode: err.plcCode }),
-    cause: err,
-  });
+  return namedTagError(tag.address, err, canonical === tag.address ? undefined : canonical);
 }
 
 function linkError(name: string, err: unknown): PlcError {
