@@ -10,7 +10,8 @@
  *   UrlScheme       its URL scheme(s) and parameters (lib/url.ts registers them)
  */
 import type { PlcError, TagResult } from '../errors';
-import type { PlcValue } from '../types';
+import type { PlcValue, Protocol } from '../types';
+import type { UrlParams } from './url-params';
 
 /** A parsed address of any driver. */
 export interface DriverTag {
@@ -101,4 +102,41 @@ export interface Driver<S extends DriverSession, T extends DriverTag> {
    * is the common part.
    */
   isLinkError(err: PlcError): boolean;
+}
+
+/**
+ * A driver's URLs: its scheme(s) and parameters, parsed to its endpoint and
+ * formatted back. lib/url.ts looks schemes up in a registry of these; the
+ * parameters every scheme takes (readOnly, allow) are parsed there.
+ */
+export interface UrlScheme<E extends { readonly protocol: Protocol }> {
+  readonly protocol: E['protocol'];
+
+  /** Each URL scheme of this driver ("freeport", "freeport+tcp") and the query parameters it takes. */
+  readonly schemes: Readonly<Record<string, readonly string[]>>;
+
+  /** What a URL that leaves a parameter out gets (part of the exported DEFAULTS). */
+  readonly defaults: Readonly<Record<string, number>>;
+
+  /** Said when the authority of a URL that does not parse has a port: for a scheme that takes its ports as parameters. */
+  readonly portHint?: string;
+
+  /**
+   * The endpoint, without `protocol` and the common parameters, from a URL
+   * of one of `schemes`. Throws INVALID_URL (urlError) naming the part that
+   * is wrong.
+   */
+  parse(scheme: string, text: string, url: URL, params: UrlParams): Omit<E, 'protocol' | 'readOnly' | 'allow'>;
+
+  /** The URL without its query; sets the query parameters that differ from the defaults on `query`. */
+  format(endpoint: E, query: URLSearchParams): string;
+
+  /** Identity of the physical endpoint: URLs with the same key reach the same connection(s). */
+  key(endpoint: E): string;
+
+  /** A short name for messages: "s7://10.0.0.2:102". */
+  name(endpoint: E): string;
+
+  /** The host the endpoint reaches over the network; '' when it reaches none (a serial port). */
+  host(endpoint: E): string;
 }
