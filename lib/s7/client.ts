@@ -33,7 +33,8 @@ import type { DiagnosticEntry } from './diagnostics';
 import { S7Services, type ClockOptions, type PlcInfo } from './services';
 import type { CpuState, SzlList } from './szl';
 
-export { S7Session, localTsapFor } from './client-session';
+export { S7Session } from './client-session';
+export { localTsapFor } from './tsap';
 
 /** Counters for diagnostics and the benchmark (cumulative over reconnects). */
 export interface S7Stats {
