@@ -109,6 +109,37 @@ export class TagErrors<T = unknown> extends PlcError {
 
 export type TagResult<T = unknown> = { ok: true; value: T } | { ok: false; error: PlcError };
 
+/** The error of a request (or connection attempt) given up because `signal` was aborted. */
+export function abortError(description: string, signal: AbortSignal): PlcError {
+  return new PlcError('ABORTED', `${description} was aborted`, { cause: signal.reason });
+}
+
+/**
+ * The same error for one tag: names the tag (and `where` it lies, when that
+ * says more than the address as written), keeps the code and the PLC's
+ * return code. An error that names the tag already is returned as it is.
+ */
+export function tagError(address: string, err: PlcError, where?: string): PlcError {
+  if (err.tag === address) return err;
+  return new PlcError(err.code, `${address}${where ? ` (${where})` : ''}: ${err.message}`, {
+    tag: address,
+    ...(err.plcCode === undefined ? {} : { plcCode: err.plcCode }),
+    cause: err,
+  });
+}
+
+/**
+ * True for an error of the link rather than of a tag or a request: the
+ * client is not connected, could not connect, lost the connection or was
+ * closed. The request never reached a PLC, or its answer can no longer come;
+ * the supervisor reconnects (unless closed) and the state events tell it.
+ */
+export function isLinkError(err: unknown): boolean {
+  // By code, not instanceof: an error from another copy of this package counts as well.
+  const code = typeof err === 'object' && err !== null ? (err as { code?: unknown }).code : undefined;
+  return code === 'NOT_CONNECTED' || code === 'CONNECT_FAILED' || code === 'CONNECTION_LOST' || code === 'CLOSED';
+}
+
 /** Wraps anything thrown into a PlcError, keeping PlcErrors as they are. */
 export function toPlcError(err: unknown, fallback: PlcErrorCode = 'CONNECTION_LOST'): PlcError {
   if (err instanceof PlcError) return err;

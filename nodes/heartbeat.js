@@ -2,6 +2,7 @@
 const { attach, settleWithin } = require('./shared/user');
 const { LifeSignWatch, nextLifeSign } = require('./shared/lifesign');
 const { linkStatus, sentStatus, aliveStatus, lostStatus, waitingStatus } = require('./shared/status');
+const { isLinkError } = require('../dist/lib/index.js');
 
 /**
  * plcwire-heartbeat: every `interval` ms writes the PC's life sign
@@ -86,7 +87,7 @@ module.exports = function (RED) {
       const work = client && node.linkState === 'connected' ? exchange(client) : Promise.resolve();
       work
         .catch((err) => {
-          if (!closing && !['NOT_CONNECTED', 'CONNECTION_LOST', 'CLOSED'].includes(err.code)) problem(err);
+          if (!closing && !isLinkError(err)) problem(err);
         })
         .then(() => {
           if (closing) return;

@@ -2,6 +2,7 @@
 const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
 const { tagTable, tagsOfMessage, outcomes, ChangeFilter, codeError } = require('./shared/tags');
 const { tagErrorsStatus } = require('./shared/status');
+const { isLinkError } = require('../dist/lib/index.js');
 
 /** Reads waiting behind the running one at most; more is an error, not memory growth. */
 const MAX_WAITING_READS = 100;
@@ -149,7 +150,7 @@ module.exports = function (RED) {
         },
         (err) => {
           // A lost link shows on the status and reaches Catch through the connection; anything else is reported here.
-          if (!closing && err.code !== 'NOT_CONNECTED' && err.code !== 'CONNECTION_LOST' && err.code !== 'CLOSED') {
+          if (!closing && !isLinkError(err)) {
             node.error(err, { topic: node.name || 'plcwire', payload: {} });
           }
         },

@@ -5,3 +5,4 @@
 export { parseAddress } from './parse';
 export { parseTypeSpec, type TypeSpec } from './type-spec';
 export { formatAddress, type TagLocation } from './format';
+export { S7_TAG_SYNTAX } from './syntax';

@@ -5,7 +5,7 @@
  */
 import { createInterface } from 'node:readline';
 import { createClient, type AnyClient } from '../connect';
-import { PlcError, TagErrors } from '../errors';
+import { isLinkError, PlcError, TagErrors } from '../errors';
 import type { PlcValue } from '../types';
 import { validateValue, type TagShape } from '../values';
 import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
@@ -122,6 +122,7 @@ export function exitCode(err: unknown): number {
     return codes.includes(EXIT.USAGE) ? EXIT.USAGE : codes.includes(EXIT.REFUSED) ? EXIT.REFUSED : codes.includes(EXIT.CONNECTION) ? EXIT.CONNECTION : EXIT.TAG_ERROR;
   }
   if (!(err instanceof PlcError)) return EXIT.TAG_ERROR;
+  if (isLinkError(err)) return EXIT.CONNECTION;
   switch (err.code) {
     case 'INVALID_ADDRESS':
     case 'INVALID_VALUE':
@@ -131,10 +132,6 @@ export function exitCode(err: unknown): number {
       return EXIT.REFUSED;
     case 'ABORTED':
       return EXIT.INTERRUPTED;
-    case 'NOT_CONNECTED':
-    case 'CONNECTION_LOST':
-    case 'CONNECT_FAILED':
-    case 'CLOSED':
     case 'TIMEOUT':
     case 'PROTOCOL_ERROR':
       return EXIT.CONNECTION;

@@ -14,9 +14,10 @@
  * the tag's result is an error.
  */
 import type * as net from 'node:net';
-import { parseAddress } from '../address';
-import { AddressError, ConnectionError, PlcError, TimeoutError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, type ClientOptions } from '../link/client-base';
+import { S7_TAG_SYNTAX } from '../address';
+import { AddressError, ConnectionError, isLinkError, PlcError, tagError, TimeoutError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
+import type { Driver } from '../link/driver';
 import { FrameReader } from '../link/framer';
 import { JobQueue } from '../link/jobs';
 import { PendingRequests } from '../link/pending';
@@ -79,21 +80,22 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   readonly endpoint: FetchWriteEndpoint;
   /** Jobs sent, for diagnostics and tests. */
   readonly stats = { fetches: 0, writes: 0 };
+  protected readonly driver: Driver<FwSession, Tag> = {
+    syntax: { ...S7_TAG_SYNTAX, parse: (address) => this.parseTag(address) },
+    openSession: (signal) => this.openSession(signal),
+    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
+    writeTags: (session, items, signal) => this.writeTags(session, items, signal),
+    isLinkError: endsRequest,
+  };
 
   constructor(endpoint: FetchWriteEndpoint, options: Partial<ClientOptions> = {}) {
-    super({
-      name: endpointName(endpoint),
-      timeout: endpoint.timeout,
-      ...(endpoint.readOnly ? { readOnly: true } : {}),
-      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
-      ...options,
-    });
+    super(endpointOptions(endpointName(endpoint), endpoint, options));
     this.endpoint = endpoint;
   }
 
   /** S7 address syntax, limited to what FETCH/WRITE can reach (the ORG table: docs/protocols.md, "ORG areas and units"). */
-  protected parseTag(address: string): Tag {
-    const tag = parseAddress(address);
+  private parseTag(address: string): Tag {
+    const tag = S7_TAG_SYNTAX.parse(address);
     const org = ORG_BY_AREA[tag.area];
     const range = ORG_RANGES[org]!;
     if (org === Org.DB && (tag.dbNumber < 1 || tag.dbNumber > 255)) {
@@ -134,7 +136,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return Math.min(bytes, MAX_DATA - (MAX_DATA % 2));
   }
 
-  protected async openSession(signal: AbortSignal): Promise<FwSession> {
+  private async openSession(signal: AbortSignal): Promise<FwSession> {
     const e = this.endpoint;
     const open = (port: number) => openTcp({ host: e.host, port, timeout: this.timeout, signal });
     const fetchSocket = await open(e.fetchPort);
@@ -153,15 +155,13 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   }
 
   private attach(session: FwSession, channel: Channel): void {
-    const fail = (cause: PlcError) => {
-      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+    const fail = this.attachStream(session, channel.socket, (err) => {
       session.lost ??= err;
       session.fetch.pending.rejectAll(err);
       session.write.pending.rejectAll(err);
       session.jobs.rejectAll(err);
       session.destroy();
-      this.sessionLost(session, err);
-    };
+    });
     channel.socket.on('data', (chunk: Buffer) => {
       let frames: Buffer[];
       try {
@@ -179,8 +179,6 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
         channel.pending.resolve(1, response);
       }
     });
-    channel.socket.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
-    channel.socket.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
   }
 
   /** One job on one channel (the caller holds the session's job queue). */
@@ -214,7 +212,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return response.data;
   }
 
-  protected async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+  private async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
     const results: TagResult<PlcValue>[] = new Array(tags.length);
     const readable: number[] = [];
     tags.forEach((tag, i) => {
@@ -230,7 +228,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
           data = await this.fetchRange(session, range.org, range.dbNumber, range.start, range.length, signal);
         } catch (err) {
           const e = toPlcError(err);
-          if (isLinkError(e)) throw e;
+          if (endsRequest(e)) throw e;
           error = e;
         }
         if (error && range.tags.length > 1) {
@@ -240,7 +238,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
         }
         for (const i of range.tags) {
           const tag = tags[i]!;
-          if (error) results[i] = { ok: false, error: tagError(tag, error) };
+          if (error) results[i] = { ok: false, error: tagError(tag.address, error) };
           else results[i] = this.decode(tag, data!, range.start);
         }
       }
@@ -255,8 +253,8 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
       return this.decode(tag, data, range!.start);
     } catch (err) {
       const e = toPlcError(err);
-      if (isLinkError(e)) throw e;
-      return { ok: false, error: tagError(tag, e) };
+      if (endsRequest(e)) throw e;
+      return { ok: false, error: tagError(tag.address, e) };
     }
   }
 
@@ -264,7 +262,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     try {
       return { ok: true, value: decodeTag(tag, data, this.byteSpan(tag)[0] - rangeStart) };
     } catch (err) {
-      return { ok: false, error: tagError(tag, toPlcError(err, 'PROTOCOL_ERROR')) };
+      return { ok: false, error: tagError(tag.address, toPlcError(err, 'PROTOCOL_ERROR')) };
     }
   }
 
@@ -306,7 +304,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return ranges;
   }
 
-  protected async writeTags(session: FwSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
+  private async writeTags(session: FwSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
     const results: TagResult<void>[] = new Array(items.length);
     const valid: number[] = [];
     items.forEach((it, i) => {
@@ -329,17 +327,17 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
           results[i] = { ok: true, value: undefined };
         } catch (err) {
           const e = toPlcError(err);
-          results[i] = { ok: false, error: tagError(tag, e) };
+          results[i] = { ok: false, error: tagError(tag.address, e) };
           // The link is gone: the remaining writes fail with the same error, never silently.
-          if (isLinkError(e)) {
-            for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
+          if (endsRequest(e)) {
+            for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
             return;
           }
         }
       }
     }, signal).catch((err: unknown) => {
       const e = toPlcError(err);
-      for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag, e) };
+      for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
     });
     return results;
   }
@@ -395,12 +393,14 @@ function wrongDirection(tag: Tag, op: 'read' | 'write'): PlcError {
   );
 }
 
-/** Errors of the link rather than of a tag: the whole request failed. */
-function isLinkError(e: PlcError): boolean {
-  return e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'CLOSED' || e.code === 'ABORTED' || e.code === 'PROTOCOL_ERROR' || e.code === 'QUEUE_FULL';
+/**
+ * Errors that fail the whole request rather than a tag: the link's, and
+ * those that drop a FETCH/WRITE link. Answers carry no request id, so a
+ * job that timed out or was aborted, or a frame that does not parse, leaves
+ * the connection unusable (FetchWriteClient.job); QUEUE_FULL refuses the
+ * request before any job.
+ */
+function endsRequest(e: PlcError): boolean {
+  return isLinkError(e) || e.code === 'TIMEOUT' || e.code === 'ABORTED' || e.code === 'PROTOCOL_ERROR' || e.code === 'QUEUE_FULL';
 }
 
-function tagError(tag: Tag, err: PlcError): PlcError {
-  if (err.tag === tag.address) return err;
-  return new PlcError(err.code, `${tag.address}: ${err.message}`, { tag: tag.address, ...(err.plcCode === undefined ? {} : { plcCode: err.plcCode }), cause: err });
-}

@@ -11,9 +11,8 @@ import { tagByteLength, type TagShape } from '../values';
 
 export interface FreeportTag extends TagShape {
   readonly station: number;
-  /** For allow-lists and messages: the station's area, "ST5". */
+  /** The station's data area ("ST" of "ST5"); allow-lists name it with the station, "ST5". */
   readonly area: 'ST';
-  readonly dbNumber: 0;
   readonly byteOffset: number;
   readonly byteLength: number;
 }
@@ -76,5 +75,5 @@ export function parseFreeportAddress(address: string, limits: FreeportAddressLim
       `${type}${isArray ? `[${count}]` : ''} at byte ${byteOffset} ends at byte ${byteOffset + byteLength - 1}, past the station's ${dataBytes}-byte data area`,
     );
   }
-  return Object.freeze({ address, station, area: 'ST', dbNumber: 0, byteOffset, bitOffset, type, count, isArray, stringLength: 0, byteLength });
+  return Object.freeze({ address, station, area: 'ST', byteOffset, bitOffset, type, count, isArray, stringLength: 0, byteLength });
 }

@@ -14,8 +14,10 @@
 import type { BindingInterface } from '@serialport/bindings-interface';
 import * as net from 'node:net';
 import type { SerialPortStream } from '@serialport/stream';
-import { ConnectionError, PlcError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, type ClientOptions } from '../link/client-base';
+import { spanContains } from '../address/syntax';
+import { ConnectionError, isLinkError, PlcError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
+import type { Driver, TagSyntax } from '../link/driver';
 import { closeSerial, openSerial } from '../link/serial';
 import { openTcp } from '../link/tcp';
 import type { PlcValue } from '../types';
@@ -38,16 +40,21 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
   readonly endpoint: FreeportEndpoint;
   readonly profile: FreeportProfile;
   private readonly binding: BindingInterface | undefined;
+  protected readonly driver: Driver<FreeportSession, FreeportTag> = {
+    syntax: {
+      parse: (address) => parseFreeportAddress(address, { maxStation: maxStation(this.profile), dataBytes: this.profile.dataBytes }),
+      ...STATION_AREAS,
+    },
+    openSession: (signal) => this.openSession(signal),
+    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
+    writeTags: (session, items, signal) => this.writeTags(session, items, signal),
+    // A silent or garbling station fails its own tags; only a lost line fails the whole request.
+    isLinkError,
+  };
 
   constructor(endpoint: FreeportEndpoint, options: FreeportClientOptions = {}) {
     const { binding, profile, ...common } = options;
-    super({
-      name: endpointName(endpoint),
-      timeout: endpoint.timeout,
-      ...(endpoint.readOnly !== undefined ? { readOnly: endpoint.readOnly } : {}),
-      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
-      ...common,
-    });
+    super(endpointOptions(endpointName(endpoint), endpoint, common));
     this.endpoint = endpoint;
     this.profile = defineProfile(profile);
     this.binding = binding;
@@ -60,15 +67,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
     await session?.closed();
   }
 
-  protected override areaOf(tag: FreeportTag): string {
-    return `ST${tag.station}`;
-  }
-
-  protected parseTag(address: string): FreeportTag {
-    return parseFreeportAddress(address, { maxStation: maxStation(this.profile), dataBytes: this.profile.dataBytes });
-  }
-
-  protected async openSession(signal: AbortSignal): Promise<FreeportSession> {
+  private async openSession(signal: AbortSignal): Promise<FreeportSession> {
     const t = this.endpoint.transport;
     const discipline = {
       name: this.name,
@@ -103,7 +102,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
     this.sessionLost(session, err);
   }
 
-  protected async readTags(session: FreeportSession, tags: readonly FreeportTag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+  private async readTags(session: FreeportSession, tags: readonly FreeportTag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
     const results: TagResult<PlcValue>[] = new Array(tags.length);
     await Promise.all(
       [...groupByStation(tags.map((tag, i) => ({ tag, i })))].map(async ([station, group]) => {
@@ -127,7 +126,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
     return results;
   }
 
-  protected async writeTags(
+  private async writeTags(
     session: FreeportSession,
     items: readonly { tag: FreeportTag; value: unknown }[],
     signal?: AbortSignal,
@@ -185,12 +184,19 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
   }
 }
 
-/** A silent or garbling station fails its own tags; only a lost line fails the whole request. */
+/** A station's failure is its tags' result; a link error is thrown (the whole request failed). */
 function stationFailure(err: unknown): PlcError {
   const error = toPlcError(err);
-  if (error.code === 'CONNECTION_LOST' || error.code === 'CLOSED') throw error;
+  if (isLinkError(error)) throw error;
   return error;
 }
+
+/** A station's data area is the area an allow-list names: "ST5". */
+const STATION_AREAS: Omit<TagSyntax<FreeportTag>, 'parse'> = Object.freeze({
+  areaOf: (tag: FreeportTag) => `ST${tag.station}`,
+  allowArea: (entry: string) => (/^ST\d+$/.test(entry) ? entry.replace(/^ST0+(?=\d)/, 'ST') : undefined),
+  contains: (outer: FreeportTag, inner: FreeportTag) => outer.station === inner.station && spanContains(outer, inner),
+});
 
 function groupByStation<I extends { tag: FreeportTag }>(items: readonly I[]): Map<number, I[]> {
   const groups = new Map<number, I[]>();

@@ -1,10 +1,12 @@
 import { EventEmitter } from 'node:events';
+import type { Duplex } from 'node:stream';
 import { ConnectionError, PlcError, TagErrors, toPlcError, type TagResult } from '../errors';
-import type { LinkState, PlcClient, PlcValue, Protocol, RequestOptions, Tag } from '../types';
+import type { LinkState, PlcClient, PlcValue, Protocol, RequestOptions } from '../types';
 import type { BackoffOptions } from './backoff';
-import { LinkSupervisor, type DriverSession } from './supervisor';
+import type { Driver, DriverSession, DriverTag, ReadValues } from './driver';
+import { LinkSupervisor } from './supervisor';
 
-export type { DriverSession };
+export type { Driver, DriverSession, DriverTag, ReadValues, TagSyntax } from './driver';
 
 export interface ClientOptions {
   /** For messages, e.g. "s7://127.0.0.1:102". */
@@ -24,6 +26,24 @@ export interface ClientOptions {
 
 export const DEFAULT_TIMEOUT = 5000;
 
+/** What every endpoint carries for its client: the request timeout and the write safety. */
+export interface EndpointOptions {
+  timeout: number;
+  readOnly?: boolean;
+  allow?: readonly string[];
+}
+
+/** A client's options from its endpoint (`name` for messages), overridden by the caller's. */
+export function endpointOptions(name: string, endpoint: EndpointOptions, options: Partial<ClientOptions>): ClientOptions {
+  return {
+    name,
+    timeout: endpoint.timeout,
+    ...(endpoint.readOnly ? { readOnly: true } : {}),
+    ...(endpoint.allow ? { allow: endpoint.allow } : {}),
+    ...options,
+  };
+}
+
 interface PreparedRead<T> {
   /** A copy of the list, to notice a caller that changed its array between polls. */
   addresses: readonly string[];
@@ -36,16 +56,6 @@ interface PreparedRead<T> {
 }
 
 type RecordBuilder = (read: readonly unknown[]) => Record<string, unknown>;
-
-/**
- * What read() needs from a driver: a value per tag and, only when some tag
- * failed, an error at its index (its value is then undefined). No result
- * object per tag: that is readDetailed's shape, built from readTags.
- */
-export interface ReadValues {
-  values: PlcValue[];
-  errors: (PlcError | undefined)[] | undefined;
-}
 
 const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) as ReadValues;
 
@@ -93,13 +103,14 @@ const MAX_CACHED_TAGS = 10_000;
 
 /**
  * What every driver's client shares: the supervisor (connect, reconnect,
- * state events, close), address parsing with a cache, per-tag results and
- * TagErrors. A driver implements only its protocol.
+ * state events, close), address parsing with a cache, per-tag results,
+ * TagErrors and the write safety (read-only, allow-list). It knows no
+ * protocol: a client supplies its `driver` (lib/link/driver.ts).
  *
  * Requests made while not connected fail fast with NOT_CONNECTED: a stale
  * write executed minutes later, when the link comes back, is worse than an error.
  */
-export abstract class BaseClient<S extends DriverSession, T extends { readonly address: string }>
+export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
   extends EventEmitter
   implements PlcClient
 {
@@ -124,61 +135,15 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     this.supervisor = new LinkSupervisor<S>({
       name: options.name,
       connectTimeout: this.timeout,
-      open: (signal) => this.openSession(signal),
+      open: (signal) => this.driver.openSession(signal),
       events: this,
       ...(options.backoff ? { backoff: options.backoff } : {}),
       ...(options.random ? { random: options.random } : {}),
     });
   }
 
-  /** Transport and handshakes. Honour `signal`; reject with a PlcError. */
-  protected abstract openSession(signal: AbortSignal): Promise<S>;
-  /** Parses an address; throws AddressError. Results are cached per address string. */
-  protected abstract parseTag(address: string): T;
-  /** One result per tag, in order. Throw only when the whole request failed. */
-  protected abstract readTags(session: S, tags: readonly T[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]>;
-
-  /**
-   * read()'s path: the same outcome as readTags without a result object per
-   * tag. This default derives it from readTags; a driver whose poll is hot
-   * overrides it (and then derives readTags from it).
-   */
-  protected async readValues(session: S, tags: readonly T[], signal?: AbortSignal): Promise<ReadValues> {
-    const results = await this.readTags(session, tags, signal);
-    const values = new Array<PlcValue>(results.length);
-    let errors: (PlcError | undefined)[] | undefined;
-    for (let i = 0; i < results.length; i++) {
-      const r = results[i]!;
-      if (r.ok) values[i] = r.value;
-      else (errors ??= new Array<PlcError | undefined>(results.length))[i] = r.error;
-    }
-    return { values, errors };
-  }
-  /** One result per item, in order. Encode values here: a ValueError is that tag's result. */
-  protected abstract writeTags(
-    session: S,
-    items: readonly { tag: T; value: unknown }[],
-    signal?: AbortSignal,
-  ): Promise<TagResult<void>[]>;
-
-  /**
-   * The area a tag lies in, as written in an allow-list ("DB10", "M", "ST5").
-   * The default suits the S7 Tag model; drivers with other tags override it.
-   */
-  protected areaOf(tag: T): string {
-    const t = tag as unknown as Partial<Tag>;
-    return t.area === 'DB' ? `DB${t.dbNumber}` : String(t.area);
-  }
-
-  /** True when `inner` lies wholly inside `outer` (for allow-list addresses). */
-  protected contains(outer: T, inner: T): boolean {
-    const o = outer as unknown as Tag;
-    const i = inner as unknown as Tag;
-    if (this.areaOf(outer) !== this.areaOf(inner)) return false;
-    const bit = (t: Tag) => t.byteOffset * 8 + (t.type === 'BOOL' ? t.bitOffset : 0);
-    const bits = (t: Tag) => (t.type === 'BOOL' ? t.count : t.byteLength * 8);
-    return bit(i) >= bit(o) && bit(i) + bits(i) <= bit(o) + bits(o);
-  }
+  /** The protocol's part (lib/link/driver.ts); used from connect() on, so a field initialiser may set it. */
+  protected abstract readonly driver: Driver<S, T>;
 
   get state(): LinkState {
     return this.supervisor.state;
@@ -192,6 +157,26 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
   /** A driver calls this when a live session dies; the supervisor reconnects. */
   protected sessionLost(session: S, err: PlcError): void {
     this.supervisor.lost(session, err);
+  }
+
+  /**
+   * How a session over a stream dies, once: the returned `fail(cause)` on
+   * its first call runs `teardown` with the error (CLOSED, with the cause,
+   * when close() ended it) and tells the supervisor; later calls do nothing.
+   * The stream's 'error' and 'close' call it.
+   */
+  protected attachStream(session: S, stream: Duplex, teardown: (err: PlcError) => void): (cause: PlcError) => void {
+    let lost = false;
+    const fail = (cause: PlcError) => {
+      if (lost) return;
+      lost = true;
+      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+      teardown(err);
+      this.sessionLost(session, err);
+    };
+    stream.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
+    stream.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
+    return fail;
   }
 
   /** Starts and waits for the first connection; rejects with the first attempt's error and stops. */
@@ -226,13 +211,28 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     }
     const session = this.liveSession();
     const { tags } = prepared;
-    const { values, errors } = tags.length > 0 ? await this.readValues(session, tags, options?.signal) : NO_VALUES;
+    const { values, errors } = tags.length > 0 ? await this.valuesOf(session, tags, options?.signal) : NO_VALUES;
     if (errors) return this.valuesOrThrow(this.byAddress(prepared, toResults(values, errors)));
     const build = recordBuilder(prepared, 'values');
     if (build) return build(values) as Record<string, PlcValue>;
     const record: Record<string, PlcValue> = {};
     for (let i = 0; i < tags.length; i++) record[tags[i]!.address] = values[i]!;
     return record;
+  }
+
+  /** The driver's readValues, or the same outcome derived from its readTags. */
+  private async valuesOf(session: S, tags: readonly T[], signal?: AbortSignal): Promise<ReadValues> {
+    const { driver } = this;
+    if (driver.readValues) return driver.readValues(session, tags, signal);
+    const results = await driver.readTags(session, tags, signal);
+    const values = new Array<PlcValue>(results.length);
+    let errors: (PlcError | undefined)[] | undefined;
+    for (let i = 0; i < results.length; i++) {
+      const r = results[i]!;
+      if (r.ok) values[i] = r.value;
+      else (errors ??= new Array<PlcError | undefined>(results.length))[i] = r.error;
+    }
+    return { values, errors };
   }
 
   private valuesOrThrow(results: Record<string, TagResult<PlcValue>>): Record<string, PlcValue> {
@@ -251,7 +251,7 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
   ): Promise<Record<string, TagResult<PlcValue>>> {
     const session = this.liveSession();
     const prepared = this.prepare(addresses);
-    const read = prepared.tags.length > 0 ? await this.readTags(session, prepared.tags, options.signal) : [];
+    const read = prepared.tags.length > 0 ? await this.driver.readTags(session, prepared.tags, options.signal) : [];
     return this.byAddress(prepared, read);
   }
 
@@ -309,7 +309,7 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
       else items.push({ tag: tag as T, value: values[address] });
     }
     if (items.length > 0) {
-      const written = await this.writeTags(session, items, options.signal);
+      const written = await this.driver.writeTags(session, items, options.signal);
       for (let i = 0; i < items.length; i++) results[items[i]!.tag.address] = written[i]!;
     }
     return results;
@@ -322,7 +322,8 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     if (!this.allow) return undefined;
     this.allowed ??= this.compileAllowList(this.allow);
     const { areas, tags } = this.allowed;
-    if (areas.has(this.areaOf(tag)) || tags.some((outer) => this.contains(outer, tag))) return undefined;
+    const { syntax } = this.driver;
+    if (areas.has(syntax.areaOf(tag)) || tags.some((outer) => syntax.contains(outer, tag))) return undefined;
     return new PlcError(
       'WRITE_NOT_ALLOWED',
       `write to "${tag.address}" refused: not in the connection's write allow-list (${this.allow.join(', ')})`,
@@ -339,8 +340,8 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     const areas = new Set<string>();
     const tags: T[] = [];
     for (const entry of entries) {
-      const area = entry.trim().toUpperCase().replace(/^%/, '');
-      if (/^(DB\d+|[IQMCT]|PE|PA|ST\d+)$/.test(area)) areas.add(area.replace(/^(DB|ST)0+(?=\d)/, '$1'));
+      const area = this.driver.syntax.allowArea(entry.trim().toUpperCase().replace(/^%/, ''));
+      if (area !== undefined) areas.add(area);
       else tags.push(this.tag(entry));
     }
     return { areas, tags };
@@ -357,7 +358,7 @@ export abstract class BaseClient<S extends DriverSession, T extends { readonly a
     let tag = this.tags.get(address);
     if (tag === undefined) {
       try {
-        tag = this.parseTag(address);
+        tag = this.driver.syntax.parse(address);
       } catch (err) {
         tag = toPlcError(err, 'INVALID_ADDRESS');
       }

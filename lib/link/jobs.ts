@@ -1,6 +1,5 @@
-import { PlcError } from '../errors';
+import { abortError, PlcError } from '../errors';
 import { Fifo } from './fifo';
-import { abortError } from './pending';
 
 interface Queued {
   job: () => Promise<unknown>;

@@ -1,4 +1,4 @@
-import { PlcError, TimeoutError } from '../errors';
+import { abortError, PlcError, TimeoutError } from '../errors';
 
 interface Entry<T> {
   resolve(value: T): void;
@@ -70,8 +70,4 @@ export class PendingRequests<T> {
     if (entry.onAbort) entry.signal!.removeEventListener('abort', entry.onAbort);
     return entry;
   }
-}
-
-export function abortError(description: string, signal: AbortSignal): PlcError {
-  return new PlcError('ABORTED', `${description} was aborted`, { cause: signal.reason });
 }

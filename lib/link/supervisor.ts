@@ -2,12 +2,9 @@ import type { EventEmitter } from 'node:events';
 import { PlcError, TimeoutError, toPlcError } from '../errors';
 import type { LinkState } from '../types';
 import { backoffDelay, type BackoffOptions } from './backoff';
+import type { DriverSession } from './driver';
 
-/** A live connection of a driver (sockets, handshakes done). */
-export interface DriverSession {
-  /** Closes the transport now and rejects everything pending on it. Must not throw. */
-  destroy(): void;
-}
+export type { DriverSession };
 
 export interface SupervisorOptions<S extends DriverSession> {
   /** Opens a session: transport and handshakes. Must honour `signal`. */

@@ -1,5 +1,5 @@
 import * as net from 'node:net';
-import { ConnectionError, PlcError, TimeoutError } from '../errors';
+import { abortError, ConnectionError, PlcError, TimeoutError } from '../errors';
 
 export interface TcpConnectOptions {
   host: string;
@@ -21,10 +21,10 @@ export function openTcp(options: TcpConnectOptions): Promise<net.Socket> {
   const { host, port, timeout, signal } = options;
   const where = `${host}:${port}`;
   return new Promise((resolve, reject) => {
-    if (signal?.aborted) return reject(abortError(where, signal));
+    if (signal?.aborted) return reject(abortError(`connecting to ${where}`, signal));
     const socket = net.connect({ host, port, noDelay: true });
     const timer = setTimeout(() => fail(new TimeoutError(`connecting to ${where} timed out after ${timeout} ms`)), timeout);
-    const onAbort = () => fail(abortError(where, signal!));
+    const onAbort = () => fail(abortError(`connecting to ${where}`, signal!));
     const onError = (err: NodeJS.ErrnoException) => fail(new ConnectionError('CONNECT_FAILED', connectFailure(host, port, err), { cause: err }));
     const cleanup = () => {
       clearTimeout(timer);
@@ -70,8 +70,4 @@ function connectFailure(host: string, port: number, err: NodeJS.ErrnoException):
     default:
       return `cannot connect to ${where}: ${err.code ?? err.message}`;
   }
-}
-
-function abortError(where: string, signal: AbortSignal): PlcError {
-  return new PlcError('ABORTED', `connecting to ${where} was aborted`, { cause: signal.reason });
 }

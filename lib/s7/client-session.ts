@@ -4,14 +4,14 @@
  * handshake (COTP CR/CC, setup communication) is `openS7Session`.
  */
 import type * as net from 'node:net';
-import { ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
+import { abortError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
 import { Fifo } from '../link/fifo';
 import { FrameReader } from '../link/framer';
-import { abortError } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { S7Endpoint } from '../url';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
-import { headerError, remoteTsapFor } from './constants';
+import { headerError } from './constants';
+import { localTsapFor, remoteTsapFor } from './tsap';
 
 /** The largest TPKT frame we accept (the biggest S7 PDU is 65535 anyway; the PLC cannot make us buffer more). */
 const MAX_FRAME = 0x10000 + 16;
@@ -19,7 +19,6 @@ const MAX_FRAME = 0x10000 + 16;
 const REQUESTED_AMQ = 8;
 /** TPDU size code asked in the COTP CR: 0x0A = 1024 bytes (S7-1500 offers PDU 960 only with it). */
 const TPDU_SIZE_CODE = 0x0a;
-const CONNECTION_TYPES = { pg: 1, op: 2, basic: 3 } as const;
 
 /** Called once per job: with the PLC's answer frame (headers checked by the caller of answer()), or with the error that ended the wait. */
 export type JobDone = (err: PlcError | undefined, answer: Buffer | undefined) => void;
@@ -258,11 +257,6 @@ export class S7Session {
     job.done?.(err, undefined);
     this.lose?.(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
   };
-}
-
-/** Local TSAP for rack/slot addressing: the connection type in the high byte (PG 0x0100, OP 0x0200, basic 0x0300). */
-export function localTsapFor(type: S7Endpoint['connectionType']): number {
-  return CONNECTION_TYPES[type] << 8;
 }
 
 export interface OpenOptions {

@@ -16,9 +16,10 @@
  * `itemLimit` ({ limit, was }), and reads again with a plan for that limit,
  * or sends the items of a write the answer left out again.
  */
-import { formatAddress, parseAddress } from '../address';
-import { ConnectionError, PlcError, ProtocolError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, toResults, type ClientOptions, type ReadValues } from '../link/client-base';
+import { formatAddress, S7_TAG_SYNTAX } from '../address';
+import { ConnectionError, isLinkError, PlcError, ProtocolError, tagError as namedTagError, toPlcError, type TagResult } from '../errors';
+import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../link/client-base';
+import type { Driver, ReadValues } from '../link/driver';
 import type { PlcValue, Protocol, RequestOptions, Tag } from '../types';
 import { endpointName, type S7Endpoint } from '../url';
 import { decodeTag, tagDecoder, type TagDecoder } from '../values';
@@ -32,7 +33,8 @@ import type { DiagnosticEntry } from './diagnostics';
 import { S7Services, type ClockOptions, type PlcInfo } from './services';
 import type { CpuState, SzlList } from './szl';
 
-export { S7Session, localTsapFor } from './client-session';
+export { S7Session } from './client-session';
+export { localTsapFor } from './tsap';
 
 /** Counters for diagnostics and the benchmark (cumulative over reconnects). */
 export interface S7Stats {
@@ -81,15 +83,17 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   private itemLimit: number;
   private planOptions: PlanOptions;
   private readonly services: S7Services;
+  protected readonly driver: Driver<S7Session, Tag> = {
+    syntax: S7_TAG_SYNTAX,
+    openSession: (signal) => this.openSession(signal),
+    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
+    readValues: (session, tags, signal) => this.readValues(session, tags, signal),
+    writeTags: (session, items, signal) => this.writeTags(session, items, signal),
+    isLinkError,
+  };
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
-    super({
-      name: endpointName(endpoint),
-      timeout: endpoint.timeout,
-      ...(endpoint.readOnly ? { readOnly: true } : {}),
-      ...(endpoint.allow ? { allow: endpoint.allow } : {}),
-      ...options,
-    });
+    super(endpointOptions(endpointName(endpoint), endpoint, options));
     this.endpoint = endpoint;
     this.itemLimit = endpoint.maxItems ?? DEFAULT_MAX_ITEMS;
     this.planOptions = { maxItems: this.itemLimit };
@@ -135,11 +139,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     return this.plans.get(addresses.map((a) => this.tag(a)), pduSize, this.planOptions);
   }
 
-  protected parseTag(address: string): Tag {
-    return parseAddress(address);
-  }
-
-  protected openSession(signal: AbortSignal): Promise<S7Session> {
+  private openSession(signal: AbortSignal): Promise<S7Session> {
     return openS7Session(this.endpoint, {
       name: this.name,
       timeout: this.timeout,
@@ -152,15 +152,10 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   private attach(session: S7Session): void {
     const { socket } = session;
-    let lost = false;
-    const fail = (cause: PlcError) => {
-      if (lost) return;
-      lost = true;
-      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+    const fail = this.attachStream(session, socket, (err) => {
       session.rejectAll(err);
       socket.destroy();
-      this.sessionLost(session, err);
-    };
+    });
     socket.on('data', (chunk: Buffer) => {
       this.stats.bytesReceived += chunk.length;
       let frames: Buffer[];
@@ -186,8 +181,6 @@ export class S7Client extends BaseClient<S7Session, Tag> {
         if (!session.answer(ref, frame)) this.stats.ignoredReplies++;
       }
     });
-    socket.on('error', (err) => fail(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
-    socket.on('close', () => fail(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
     session.lose = fail;
     session.onSend = (frame) => {
       this.stats.pdusSent++;
@@ -333,12 +326,12 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   // ---------------------------------------------------------------- reads
 
-  protected async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+  private async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
     const { values, errors } = await this.readValues(session, tags, signal);
     return toResults(values, errors);
   }
 
-  protected override async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
+  private async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
     this.stats.requests++;
     const read = await this.readServed(session, tags, true, signal);
     if (read.retry.length > 0) {
@@ -555,7 +548,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   // ---------------------------------------------------------------- writes
 
-  protected async writeTags(session: S7Session, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
+  private async writeTags(session: S7Session, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
     this.stats.requests++;
     const plan = planWrite(items, session.pduSize, this.planOptions);
     const errors: (PlcError | undefined)[] = plan.errors.slice();
@@ -563,7 +556,7 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     return items.map(({ tag }, i) => {
       const err = errors[i];
       if (!err) return { ok: true, value: undefined };
-      return { ok: false, error: err.tag === tag.address ? err : tagError(tag, err) };
+      return { ok: false, error: tagError(tag, err) };
     });
   }
 
@@ -675,15 +668,10 @@ function returnCodeError(rc: number): PlcError {
   return new PlcError(code, `the PLC answered return code 0x${rc.toString(16).padStart(2, '0').toUpperCase()}: ${text}`, { plcCode: rc });
 }
 
-/** The same error for one tag: names the tag, where it is, and keeps the code and the PLC's return code. */
+/** The same error for one tag, naming where it lies when the address was written another way (DB1,INT2 → DB1.DBW2). */
 function tagError(tag: Tag, err: PlcError): PlcError {
   const canonical = formatAddress(tag);
-  const where = canonical === tag.address ? '' : ` (${canonical})`;
-  return new PlcError(err.code, `${tag.address}${where}: ${err.message}`, {
-    tag: tag.address,
-    ...(err.plcCode === undefined ? {} : { plcCode: err.plcCode }),
-    cause: err,
-  });
+  return namedTagError(tag.address, err, canonical === tag.address ? undefined : canonical);
 }
 
 function linkError(name: string, err: unknown): PlcError {

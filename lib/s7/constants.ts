@@ -199,11 +199,7 @@ export function tpduBytes(code: number): number {
   return code >= 0x07 && code <= 0x0d ? 1 << code : 0;
 }
 
-/** Remote TSAP for a rack/slot: (connection type << 8) | (rack << 5 | slot). PG 1, OP 2, basic 3. */
-export function remoteTsapFor(type: 'pg' | 'op' | 'basic', rack: number, slot: number): number {
-  const t = type === 'pg' ? 1 : type === 'op' ? 2 : 3;
-  return (t << 8) | ((rack & 0x07) << 5) | (slot & 0x1f);
-}
+export { remoteTsapFor } from './tsap';
 
 // ---------------------------------------------------------------- userdata (ROSCTR 7) and CPU services
 

@@ -1,5 +1,6 @@
 /** CPU profiles and memory layouts of the S7 simulator. */
 import type { MemoryLayout } from '../sim/memory';
+import { rackSlotOf } from './tsap';
 
 export type S7Profile = 's7-300' | 's7-400' | 's7-1200' | 's7-1500' | 's7-200' | 'logo';
 
@@ -96,10 +97,9 @@ export function tsapRefusal(profile: CpuProfile, callingTsap: number, calledTsap
     if ((callingTsap & own.calling.mask) !== own.calling.value) return `calling TSAP ${hex4(callingTsap)} is not the configured partner's`;
     return undefined;
   }
-  const type = calledTsap >> 8;
-  if (type < 1 || type > 3) return undefined;
-  const rack = (calledTsap >> 5) & 0x07;
-  const slot = calledTsap & 0x1f;
+  const at = rackSlotOf(calledTsap);
+  if (!at) return undefined;
+  const { rack, slot } = at;
   if (rack !== 0 || !profile.slots.includes(slot)) return `no CPU at rack ${rack} slot ${slot} (called TSAP ${hex4(calledTsap)})`;
   return undefined;
 }
