@@ -16,9 +16,9 @@ import type { Tag } from '../types';
 import { S7_CPU_PRESETS, parseUrl, type S7CpuPreset, type S7Endpoint } from '../url';
 import { valueToText } from '../values/text';
 import { S7Client } from './client';
-import { localTsapFor } from './client-session';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
-import { headerError, remoteTsapFor } from './constants';
+import { headerError } from './constants';
+import { localTsapFor, remoteTsapFor } from './tsap';
 import type { PlcInfo } from './services';
 
 /** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
