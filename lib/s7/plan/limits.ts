@@ -1,0 +1,45 @@
+/**
+ * Sizes and limits of Read Var / Write Var jobs at a negotiated PDU size.
+ *
+ * Sizes (S7 header 10 + function and item count 2; docs/protocols.md, "Sizes and limits"):
+ *   read request   12 + 12·items                       ≤ PDU
+ *   read response  14 + Σ(4 + len + fill)              ≤ PDU
+ *   write request  12 + 12·items + Σ(4 + len + fill)   ≤ PDU
+ *   write response 14 + items                          ≤ PDU
+ * where fill is one byte after odd-length data, except after the last item.
+ */
+import { PlcError } from '../../errors';
+import { MAX_ITEMS } from '../constants';
+
+export const REQUEST_BASE = 12;
+export const RESPONSE_BASE = 14;
+export const REQUEST_ITEM = 12;
+export const DATA_HEADER = 4;
+
+export interface PlanOptions {
+  /** false: every tag is its own item (used to isolate a failing tag from good neighbours). Default true. */
+  merge?: boolean;
+  /** At most this many items per PDU (the peer's limit, e.g. 20 for snap7's server). Default 255, the protocol's. */
+  maxItems?: number;
+}
+
+/** Bytes one read item can return in a PDU of `pduSize`. */
+export function maxReadItemData(pduSize: number): number {
+  return pduSize - RESPONSE_BASE - DATA_HEADER;
+}
+
+/** Bytes one write item can carry in a PDU of `pduSize`. */
+export function maxWriteItemData(pduSize: number): number {
+  return pduSize - REQUEST_BASE - REQUEST_ITEM - DATA_HEADER;
+}
+
+/** Items one read request can carry. */
+export function maxReadItems(pduSize: number, maxItems = MAX_ITEMS): number {
+  return Math.max(1, Math.min(maxItems, MAX_ITEMS, Math.floor((pduSize - REQUEST_BASE) / REQUEST_ITEM)));
+}
+
+export function checkPduSize(pduSize: number): void {
+  if (!Number.isInteger(pduSize) || pduSize < 64 || pduSize > 0xffff) {
+    throw new PlcError('INVALID_VALUE', `unusable S7 PDU size ${pduSize} (expected 64..65535)`);
+  }
+}
