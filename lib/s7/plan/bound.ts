@@ -4,8 +4,9 @@
  * (lib/index.ts); import it from here.
  */
 import type { Tag } from '../../types';
+import { READ_RESPONSE_ITEM_HEADER, VAR_RESPONSE_BASE } from '../constants';
 import { atomsOf, spansOf, type Atom, type Span } from './atoms';
-import { checkPduSize, DATA_HEADER, maxReadItemData, maxReadItems, RESPONSE_BASE, type PlanOptions } from './limits';
+import { checkPduSize, maxReadItemData, maxReadItems, type PlanOptions } from './limits';
 import { coverProgram } from './program';
 
 /**
@@ -32,7 +33,7 @@ export function lowerBoundPdus(tags: readonly Tag[], pduSize: number, options: P
   const closeRun = () => {
     if (!run) return;
     const k = Math.ceil(run.tagBytes / maxItem);
-    bytes += Math.max(run.tagBytes + DATA_HEADER * k, run.end - run.start + k + 3);
+    bytes += Math.max(run.tagBytes + READ_RESPONSE_ITEM_HEADER * k, run.end - run.start + k + 3);
   };
   const closeGroup = () => {
     if (group) items += Math.max(1, Math.ceil(group.tagBytes / maxItem));
@@ -42,7 +43,7 @@ export function lowerBoundPdus(tags: readonly Tag[], pduSize: number, options: P
       closeGroup();
       group = { id: s.group, tagBytes: 0 };
     }
-    if (run && run.group === s.group && s.start - run.end < DATA_HEADER) {
+    if (run && run.group === s.group && s.start - run.end < READ_RESPONSE_ITEM_HEADER) {
       // Count only bytes not already covered (overlapping tags).
       const added = Math.max(0, s.end - Math.max(s.start, run.end));
       run.tagBytes += added;
@@ -56,7 +57,7 @@ export function lowerBoundPdus(tags: readonly Tag[], pduSize: number, options: P
   }
   closeRun();
   closeGroup();
-  const capacity = pduSize - RESPONSE_BASE;
+  const capacity = pduSize - VAR_RESPONSE_BASE;
   const perPdu = maxReadItems(pduSize, options.maxItems);
   let n = Math.max(Math.ceil(bytes / capacity), Math.ceil(items / perPdu));
   // Both limits at once: n PDUs carry at most n·perPdu items, so at most that many gaps can be left out.
@@ -108,7 +109,7 @@ function bytesWithItems(spans: readonly Span[]): (m: number) => number {
       end = s.end;
     } else {
       if (s.start > end) {
-        if (s.start - end > DATA_HEADER) gaps.push(s.start - end);
+        if (s.start - end > READ_RESPONSE_ITEM_HEADER) gaps.push(s.start - end);
         else union += s.start - end;
       }
       union += Math.max(0, s.end - Math.max(s.start, end));
@@ -122,6 +123,6 @@ function bytesWithItems(spans: readonly Span[]): (m: number) => number {
   for (const g of gaps) saved.push(saved[saved.length - 1]! + g);
   return (m) => {
     const left = Math.max(0, Math.min(m - groups, gaps.length));
-    return union + bridged - saved[left]! + DATA_HEADER * (groups + left);
+    return union + bridged - saved[left]! + READ_RESPONSE_ITEM_HEADER * (groups + left);
   };
 }

@@ -3,9 +3,10 @@
  * items fewer PDUs could carry, packed into those PDUs. planRead keeps it
  * only when it needs fewer PDUs than the address-order drafts.
  */
+import { READ_RESPONSE_ITEM_HEADER, VAR_RESPONSE_BASE } from '../constants';
 import type { Atom } from './atoms';
 import { fillAfter, type Bin, type Draft, type DraftItem } from './draft';
-import { DATA_HEADER, maxReadItemData, RESPONSE_BASE } from './limits';
+import { maxReadItemData } from './limits';
 import { coverProgram, startsOf } from './program';
 
 /** Largest program (atoms × states) packCover runs; beyond it the other drafts decide. */
@@ -30,7 +31,7 @@ export function packCover(atoms: readonly Atom[], pduSize: number, maxItems: num
   const most = Math.min(n, (fewerThan - 1) * maxItems);
   if (n * 2 * (most + 1) > COVER_STATES) return undefined;
   const { row, w, from } = coverProgram(atoms, most, true);
-  const capacity = pduSize - RESPONSE_BASE;
+  const capacity = pduSize - VAR_RESPONSE_BASE;
   // The cover's bytes with its last item's fill byte (a PDU's last item saves one, counted per PDU below).
   const bytes = (s: number) => row[s]! + (s >= w ? 1 : 0);
   for (let pdus = 1; pdus < fewerThan; pdus++) {
@@ -64,7 +65,7 @@ function packRuns(atoms: readonly Atom[], runs: readonly { first: number; last: 
   const r = runs.length;
   if (r > pdus * maxItems) return undefined;
   const len = runs.map((run) => atoms[run.last]!.end - atoms[run.first]!.start);
-  const weight = len.map((l) => DATA_HEADER + l + (l & 1));
+  const weight = len.map((l) => READ_RESPONSE_ITEM_HEADER + l + (l & 1));
   const binOf = new Int32Array(r);
   const load = new Float64Array(pdus);
   const count = new Int32Array(pdus);
@@ -133,12 +134,12 @@ function draftOf(atoms: readonly Atom[], runs: readonly { first: number; last: n
     if (list.length === 0) continue;
     const odd = list.findIndex((x) => (atoms[runs[x]!.last]!.end - atoms[runs[x]!.first]!.start) & 1);
     if (odd >= 0) list.push(...list.splice(odd, 1));
-    const bin: Bin = { items: [], response: RESPONSE_BASE };
+    const bin: Bin = { items: [], response: VAR_RESPONSE_BASE };
     for (const x of list) {
       const { first, last } = runs[x]!;
       const a = atoms[first]!;
       const item: DraftItem = { group: a.group, area: a.area, dbNumber: a.dbNumber, unit: a.unit, start: a.start, end: atoms[last]!.end };
-      bin.response += fillAfter(bin) + DATA_HEADER + (item.end - item.start);
+      bin.response += fillAfter(bin) + READ_RESPONSE_ITEM_HEADER + (item.end - item.start);
       bin.items.push(item);
       for (let i = first; i <= last; i++) placements[i] = [{ bin, item }];
     }

@@ -3,9 +3,10 @@
  * long as one PDU holds, each laid out exactly (bridge or split each gap,
  * fill bytes included).
  */
+import { READ_ITEM, READ_RESPONSE_ITEM_HEADER, VAR_REQUEST_BASE, VAR_RESPONSE_BASE } from '../constants';
 import type { Atom } from './atoms';
 import type { Bin, Draft, DraftItem } from './draft';
-import { DATA_HEADER, maxReadItemData, REQUEST_BASE, REQUEST_ITEM, RESPONSE_BASE } from './limits';
+import { maxReadItemData } from './limits';
 import { bridgeOrSplit, startsOf } from './program';
 
 /**
@@ -32,7 +33,7 @@ class SegmentLayout {
     this.width = maxItems + 1;
     const row = new Float64Array(2 * this.width).fill(Infinity);
     const len = atoms[i]!.end - atoms[i]!.start;
-    row[(len & 1) * this.width + 1] = DATA_HEADER + len;
+    row[(len & 1) * this.width + 1] = READ_RESPONSE_ITEM_HEADER + len;
     this.rows.push(row);
     this.from.push(new Int32Array(2 * this.width));
   }
@@ -60,11 +61,11 @@ class SegmentLayout {
     let state: number | undefined;
     let wire = Infinity;
     for (let s = 0; s < 2 * w; s++) {
-      const response = RESPONSE_BASE + row[s]!;
+      const response = VAR_RESPONSE_BASE + row[s]!;
       const k = s % w;
-      if (response > this.pduSize || REQUEST_BASE + REQUEST_ITEM * k > this.pduSize) continue;
-      if (response + REQUEST_ITEM * k < wire) {
-        wire = response + REQUEST_ITEM * k;
+      if (response > this.pduSize || VAR_REQUEST_BASE + READ_ITEM * k > this.pduSize) continue;
+      if (response + READ_ITEM * k < wire) {
+        wire = response + READ_ITEM * k;
         state = s;
       }
     }
@@ -75,7 +76,7 @@ class SegmentLayout {
   items(): { items: DraftItem[]; itemOf: number[]; response: number } {
     const last = this.rows.length - 1;
     const end = this.best(this.rows[last]!)!;
-    const response = RESPONSE_BASE + this.rows[last]![end]!;
+    const response = VAR_RESPONSE_BASE + this.rows[last]![end]!;
     const starts = startsOf(this.from, end);
     const items: DraftItem[] = [];
     const itemOf: number[] = [];
@@ -103,7 +104,7 @@ export function packSegments(atoms: readonly Atom[], pduSize: number, maxItems: 
       for (let at = atom.start; at < atom.end; ) {
         const length = Math.min(even(maxItem), atom.end - at);
         const item: DraftItem = { group: atom.group, area: atom.area, dbNumber: atom.dbNumber, unit: atom.unit, start: at, end: at + length };
-        const bin: Bin = { items: [item], response: RESPONSE_BASE + DATA_HEADER + length };
+        const bin: Bin = { items: [item], response: VAR_RESPONSE_BASE + READ_RESPONSE_ITEM_HEADER + length };
         bins.push(bin);
         pieces.push({ bin, item });
         at += length;

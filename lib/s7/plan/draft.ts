@@ -4,8 +4,9 @@
  * to the previous item when it is at most a threshold, opening a new item
  * otherwise.
  */
+import { READ_ITEM, READ_RESPONSE_ITEM_HEADER, VAR_REQUEST_BASE, VAR_RESPONSE_BASE } from '../constants';
 import type { Atom } from './atoms';
-import { DATA_HEADER, maxReadItemData, REQUEST_BASE, REQUEST_ITEM, RESPONSE_BASE } from './limits';
+import { maxReadItemData } from './limits';
 
 export interface DraftItem {
   group: number;
@@ -40,15 +41,15 @@ export function pack(atoms: readonly Atom[], pduSize: number, maxItems: number, 
   let current: Bin | undefined;
 
   const openBin = (): Bin => {
-    current = { items: [], response: RESPONSE_BASE };
+    current = { items: [], response: VAR_RESPONSE_BASE };
     bins.push(current);
     return current;
   };
   const newItemFits = (bin: Bin, length: number) =>
-    bin.items.length < maxItems && bin.response + fillAfter(bin) + DATA_HEADER + length <= pduSize;
+    bin.items.length < maxItems && bin.response + fillAfter(bin) + READ_RESPONSE_ITEM_HEADER + length <= pduSize;
   const addItem = (bin: Bin, a: { group: number; area: number; dbNumber: number; unit: number }, start: number, end: number): DraftItem => {
     const item: DraftItem = { group: a.group, area: a.area, dbNumber: a.dbNumber, unit: a.unit, start, end };
-    bin.response += fillAfter(bin) + DATA_HEADER + (end - start);
+    bin.response += fillAfter(bin) + READ_RESPONSE_ITEM_HEADER + (end - start);
     bin.items.push(item);
     return item;
   };
@@ -98,7 +99,7 @@ export function pack(atoms: readonly Atom[], pduSize: number, maxItems: number, 
     const even = (n: number) => n - (n % atom.unit);
     let at = atom.start;
     if (current && current.items.length < maxItems) {
-      const room = even(pduSize - current.response - fillAfter(current) - DATA_HEADER);
+      const room = even(pduSize - current.response - fillAfter(current) - READ_RESPONSE_ITEM_HEADER);
       if (room >= Math.max(atom.unit, 16)) {
         out.push({ bin: current, item: addItem(current, atom, at, at + room) });
         at += room;
@@ -116,7 +117,7 @@ export function pack(atoms: readonly Atom[], pduSize: number, maxItems: number, 
 
 export function wireBytes(draft: Draft): number {
   let n = 0;
-  for (const b of draft.bins) n += REQUEST_BASE + REQUEST_ITEM * b.items.length + b.response;
+  for (const b of draft.bins) n += VAR_REQUEST_BASE + READ_ITEM * b.items.length + b.response;
   return n;
 }
 

@@ -1,7 +1,8 @@
 /**
  * Sizes and limits of Read Var / Write Var jobs at a negotiated PDU size.
  *
- * Sizes (S7 header 10 + function and item count 2; docs/protocols.md, "Sizes and limits"):
+ * Sizes (lib/s7/constants.ts: VAR_REQUEST_BASE 12 and VAR_RESPONSE_BASE 14,
+ * READ_ITEM 12, item headers 4; docs/protocols.md, "Sizes and limits"):
  *   read request   12 + 12·items                       ≤ PDU
  *   read response  14 + Σ(4 + len + fill)              ≤ PDU
  *   write request  12 + 12·items + Σ(4 + len + fill)   ≤ PDU
@@ -9,12 +10,16 @@
  * where fill is one byte after odd-length data, except after the last item.
  */
 import { PlcError } from '../../errors';
-import { MAX_ITEMS } from '../constants';
-
-export const REQUEST_BASE = 12;
-export const RESPONSE_BASE = 14;
-export const REQUEST_ITEM = 12;
-export const DATA_HEADER = 4;
+import {
+  MAX_ITEMS,
+  MAX_PDU_SIZE,
+  MIN_PDU_SIZE,
+  READ_ITEM,
+  READ_RESPONSE_ITEM_HEADER,
+  VAR_REQUEST_BASE,
+  VAR_RESPONSE_BASE,
+  WRITE_DATA_HEADER,
+} from '../constants';
 
 export interface PlanOptions {
   /** false: every tag is its own item (used to isolate a failing tag from good neighbours). Default true. */
@@ -25,21 +30,21 @@ export interface PlanOptions {
 
 /** Bytes one read item can return in a PDU of `pduSize`. */
 export function maxReadItemData(pduSize: number): number {
-  return pduSize - RESPONSE_BASE - DATA_HEADER;
+  return pduSize - VAR_RESPONSE_BASE - READ_RESPONSE_ITEM_HEADER;
 }
 
 /** Bytes one write item can carry in a PDU of `pduSize`. */
 export function maxWriteItemData(pduSize: number): number {
-  return pduSize - REQUEST_BASE - REQUEST_ITEM - DATA_HEADER;
+  return pduSize - VAR_REQUEST_BASE - READ_ITEM - WRITE_DATA_HEADER;
 }
 
 /** Items one read request can carry. */
 export function maxReadItems(pduSize: number, maxItems = MAX_ITEMS): number {
-  return Math.max(1, Math.min(maxItems, MAX_ITEMS, Math.floor((pduSize - REQUEST_BASE) / REQUEST_ITEM)));
+  return Math.max(1, Math.min(maxItems, MAX_ITEMS, Math.floor((pduSize - VAR_REQUEST_BASE) / READ_ITEM)));
 }
 
 export function checkPduSize(pduSize: number): void {
-  if (!Number.isInteger(pduSize) || pduSize < 64 || pduSize > 0xffff) {
-    throw new PlcError('INVALID_VALUE', `unusable S7 PDU size ${pduSize} (expected 64..65535)`);
+  if (!Number.isInteger(pduSize) || pduSize < MIN_PDU_SIZE || pduSize > MAX_PDU_SIZE) {
+    throw new PlcError('INVALID_VALUE', `unusable S7 PDU size ${pduSize} (expected ${MIN_PDU_SIZE}..${MAX_PDU_SIZE})`);
   }
 }

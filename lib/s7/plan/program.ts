@@ -4,8 +4,8 @@
  * the open item. The exact layout (draft-segments.ts), the out-of-order
  * draft (draft-cover.ts) and the fill-byte bound (bound.ts) all run it.
  */
+import { READ_RESPONSE_ITEM_HEADER } from '../constants';
 import type { Atom } from './atoms';
-import { DATA_HEADER } from './limits';
 
 /**
  * One step of the bridge-or-split program (SegmentLayout, the lower bound):
@@ -34,8 +34,8 @@ export function bridgeOrSplit(prev: Float64Array, next: Float64Array, w: number,
       }
       if (k < maxItems) {
         const q = len & 1;
-        if (cost + p + DATA_HEADER + len < next[q * w + k + 1]!) {
-          next[q * w + k + 1] = cost + p + DATA_HEADER + len;
+        if (cost + p + READ_RESPONSE_ITEM_HEADER + len < next[q * w + k + 1]!) {
+          next[q * w + k + 1] = cost + p + READ_RESPONSE_ITEM_HEADER + len;
           if (from) from[q * w + k + 1] = -(p * w + k);
         }
       }
@@ -52,7 +52,7 @@ export function coverProgram(atoms: readonly Atom[], most: number, choices: bool
   const from: Int32Array[] = choices ? [new Int32Array(2 * w)] : [];
   let row = new Float64Array(2 * w).fill(Infinity);
   const first = atoms[0]!.end - atoms[0]!.start;
-  row[(first & 1) * w + 1] = DATA_HEADER + first;
+  row[(first & 1) * w + 1] = READ_RESPONSE_ITEM_HEADER + first;
   for (let i = 1; i < atoms.length; i++) {
     const next = new Float64Array(2 * w).fill(Infinity);
     const back = choices ? new Int32Array(2 * w) : undefined;

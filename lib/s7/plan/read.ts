@@ -17,12 +17,12 @@
  * list.
  */
 import type { Tag } from '../../types';
-import { S7Area, TransportSize } from '../constants';
+import { READ_ITEM, S7Area, TransportSize, VAR_REQUEST_BASE } from '../constants';
 import { atomsOf, spansOf, type Atom } from './atoms';
 import { pack, wireBytes, type Draft, type DraftItem } from './draft';
 import { packCover } from './draft-cover';
 import { packSegments } from './draft-segments';
-import { checkPduSize, maxReadItems, REQUEST_BASE, REQUEST_ITEM, type PlanOptions } from './limits';
+import { checkPduSize, maxReadItems, type PlanOptions } from './limits';
 
 /** Gap thresholds tried by planRead; 16 = the 12 + 4 bytes a new item costs. */
 const GAP_THRESHOLDS = [0, 3, 5, 8, 16, 32, 64, 128];
@@ -142,7 +142,7 @@ function finish(tags: readonly Tag[], pduSize: number, maxItems: number, merge: 
       where.set(d, { pdu, item });
       return readItem(d);
     }),
-    requestSize: REQUEST_BASE + REQUEST_ITEM * bin.items.length,
+    requestSize: VAR_REQUEST_BASE + READ_ITEM * bin.items.length,
     responseSize: bin.response,
   }));
   const perTag: TagSlice[][] = tags.map(() => []);

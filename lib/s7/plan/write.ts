@@ -1,9 +1,9 @@
 import { toPlcError, type PlcError } from '../../errors';
 import type { Tag } from '../../types';
 import { validateValue, writeSpan } from '../../values';
-import { DataTransportSize, MAX_ITEMS, S7Area, TransportSize } from '../constants';
+import { DataTransportSize, MAX_ITEMS, READ_ITEM, S7Area, TransportSize, VAR_REQUEST_BASE, VAR_RESPONSE_BASE, WRITE_DATA_HEADER } from '../constants';
 import { areaCode, isCounterOrTimer } from './atoms';
-import { checkPduSize, DATA_HEADER, maxWriteItemData, REQUEST_BASE, REQUEST_ITEM, RESPONSE_BASE, type PlanOptions } from './limits';
+import { checkPduSize, maxWriteItemData, type PlanOptions } from './limits';
 
 /** A Write Var item, shaped like the codec's write item. */
 export interface PlannedWriteItem {
@@ -43,7 +43,7 @@ export interface WritePlan {
 export function planWrite(writes: readonly { tag: Tag; value: unknown }[], pduSize: number, options: Pick<PlanOptions, 'maxItems'> = {}): WritePlan {
   checkPduSize(pduSize);
   const maxData = maxWriteItemData(pduSize);
-  const maxItems = Math.min(options.maxItems ?? MAX_ITEMS, MAX_ITEMS, pduSize - RESPONSE_BASE);
+  const maxItems = Math.min(options.maxItems ?? MAX_ITEMS, MAX_ITEMS, pduSize - VAR_RESPONSE_BASE);
   const pieces: { tag: number; item: PlannedWriteItem }[] = [];
   const errors: (PlcError | undefined)[] = writes.map(() => undefined);
   writes.forEach(({ tag, value }, index) => {
@@ -58,13 +58,13 @@ export function planWrite(writes: readonly { tag: Tag; value: unknown }[], pduSi
   for (const p of pieces) {
     const len = p.item.data.length;
     let bin = bins.find(
-      (b) => b.pdu.items.length < maxItems && b.pdu.requestSize + REQUEST_ITEM + (b.lastOdd ? 1 : 0) + DATA_HEADER + len <= pduSize,
+      (b) => b.pdu.items.length < maxItems && b.pdu.requestSize + READ_ITEM + (b.lastOdd ? 1 : 0) + WRITE_DATA_HEADER + len <= pduSize,
     );
     if (!bin) {
-      bin = { pdu: { items: [], tags: [], requestSize: REQUEST_BASE, responseSize: RESPONSE_BASE }, lastOdd: false };
+      bin = { pdu: { items: [], tags: [], requestSize: VAR_REQUEST_BASE, responseSize: VAR_RESPONSE_BASE }, lastOdd: false };
       bins.push(bin);
     }
-    bin.pdu.requestSize += REQUEST_ITEM + (bin.lastOdd ? 1 : 0) + DATA_HEADER + len;
+    bin.pdu.requestSize += READ_ITEM + (bin.lastOdd ? 1 : 0) + WRITE_DATA_HEADER + len;
     bin.pdu.responseSize += 1;
     bin.pdu.items.push(p.item);
     bin.pdu.tags.push(p.tag);
