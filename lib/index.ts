@@ -23,7 +23,6 @@ export * as s7 from './s7/codec';
 export { S7Client, type ItemLimitEvent, type S7Stats } from './s7/client';
 export type { S7Session } from './s7/client-session';
 export { planRead, planWrite, ReadPlanCache, type ReadPlan, type WritePlan } from './s7/plan';
-export { lowerBoundPdus } from './s7/plan/bound';
 export { S7Server, PROFILES as S7_PROFILES, type S7ServerOptions, type S7Faults, type S7Profile, type CpuProfile, type S7RequestEvent } from './s7/server';
 export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
 export type { CpuServices, ServiceSession } from './s7/server-services';
