@@ -7,7 +7,7 @@ import { READ_ITEM, READ_RESPONSE_ITEM_HEADER, VAR_REQUEST_BASE, VAR_RESPONSE_BA
 import type { Atom } from './atoms';
 import type { Bin, Draft, DraftItem } from './draft';
 import { maxReadItemData } from './limits';
-import { bridgeOrSplit, startsOf } from './program';
+import { bridgeOrSplit, firstRow, startsOf } from './program';
 
 /**
  * The cheapest items for each run of atoms i..j that one PDU can answer,
@@ -31,10 +31,7 @@ class SegmentLayout {
     private readonly pduSize: number,
   ) {
     this.width = maxItems + 1;
-    const row = new Float64Array(2 * this.width).fill(Infinity);
-    const len = atoms[i]!.end - atoms[i]!.start;
-    row[(len & 1) * this.width + 1] = READ_RESPONSE_ITEM_HEADER + len;
-    this.rows.push(row);
+    this.rows.push(firstRow(atoms[i]!, maxItems));
     this.from.push(new Int32Array(2 * this.width));
   }
 
@@ -45,10 +42,9 @@ class SegmentLayout {
 
   /** Adds atom j + 1; false (and nothing changes) when the run would no longer fit one PDU. */
   grow(): boolean {
-    const w = this.width;
-    const row = new Float64Array(2 * w).fill(Infinity);
-    const from = new Int32Array(2 * w);
-    bridgeOrSplit(this.rows[this.rows.length - 1]!, row, w, this.maxItems, this.maxItems, this.atoms[this.j]!, this.atoms[this.j + 1]!, from);
+    const from = new Int32Array(2 * this.width);
+    const prev = this.rows[this.rows.length - 1]!;
+    const row = bridgeOrSplit({ prev, a: this.atoms[this.j]!, b: this.atoms[this.j + 1]!, most: this.maxItems, reached: this.maxItems, from });
     if (this.best(row) === undefined) return false;
     this.rows.push(row);
     this.from.push(from);
