@@ -100,11 +100,23 @@ async function runClient(job, proxy) {
   });
 }
 
+/** The first of `files` under DIST that exists (a build from before lib/s7/plan/ has the bound in lib/s7/planner.js). */
+function requireFirst(files) {
+  for (const file of files.slice(0, -1)) {
+    try {
+      return require(path.join(DIST, file));
+    } catch (err) {
+      if (!err || err.code !== 'MODULE_NOT_FOUND') throw err;
+    }
+  }
+  return require(path.join(DIST, files[files.length - 1]));
+}
+
 /** The planner's lower bound at the PDU size and the item limit our client uses by default (a build without one: 255). */
 function lowerBound(tags, pdu) {
   try {
     const lib = plcwire();
-    const { lowerBoundPdus } = require(path.join(DIST, 'lib/s7/planner.js'));
+    const { lowerBoundPdus } = requireFirst(['lib/s7/plan/bound.js', 'lib/s7/planner.js']);
     return lowerBoundPdus(tags.map((t) => lib.parseAddress(t.address)), pdu, { maxItems: lib.DEFAULTS.maxItems });
   } catch {
     return undefined;

@@ -22,7 +22,7 @@ export type { FrameCheck } from './link/framer';
 export * as s7 from './s7/codec';
 export { S7Client, type ItemLimitEvent, type S7Stats } from './s7/client';
 export type { S7Session } from './s7/client-session';
-export { planRead, planWrite, lowerBoundPdus, ReadPlanCache, type ReadPlan, type WritePlan } from './s7/planner';
+export { planRead, planWrite, ReadPlanCache, type ReadPlan, type WritePlan } from './s7/plan';
 export { S7Server, PROFILES as S7_PROFILES, type S7ServerOptions, type S7Faults, type S7Profile, type CpuProfile, type S7RequestEvent } from './s7/server';
 export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
 export type { CpuServices, ServiceSession } from './s7/server-services';

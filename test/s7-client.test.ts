@@ -4,7 +4,7 @@ import { parseAddress } from '../lib/address';
 import { PlcError, TagErrors } from '../lib/errors';
 import { S7Client, localTsapFor, type ItemLimitEvent } from '../lib/s7/client';
 import { encodeConnectionConfirm, encodeDisconnectRequest, encodeReadResponse, encodeSetupAck } from '../lib/s7/codec';
-import { lowerBoundPdus } from '../lib/s7/planner';
+import { lowerBoundPdus } from '../lib/s7/plan/bound';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
 import { parseUrl, type S7Endpoint } from '../lib/url';

@@ -2,17 +2,8 @@ import { expect } from 'chai';
 import fc from 'fast-check';
 import { parseAddress } from '../lib/address';
 import { S7Area, TransportSize, DataTransportSize } from '../lib/s7/constants';
-import {
-  lowerBoundPdus,
-  maxReadItemData,
-  maxReadItems,
-  maxWriteItemData,
-  planRead,
-  planWrite,
-  ReadPlanCache,
-  tagData,
-  type ReadPlan,
-} from '../lib/s7/planner';
+import { maxReadItemData, maxReadItems, maxWriteItemData, planRead, planWrite, ReadPlanCache, tagData, type ReadPlan } from '../lib/s7/plan';
+import { lowerBoundPdus } from '../lib/s7/plan/bound';
 import type { Tag } from '../lib/types';
 
 const tags = (addresses: string[]) => addresses.map(parseAddress);

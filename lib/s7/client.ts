@@ -26,7 +26,7 @@ import { decodeTag, tagDecoder, type TagDecoder } from '../values';
 import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadAck, type ReadItemTable, type S7Message } from './codec';
 import { CotpType, DEFAULT_MAX_ITEMS, describeReturnCode, headerError } from './constants';
 import { openS7Session, S7Session } from './client-session';
-import { planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './planner';
+import { planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './plan';
 import type { BlockCounts, BlockInfo, UploadedBlock } from './blocks';
 import type { BlockType } from './constants';
 import type { DiagnosticEntry } from './diagnostics';

@@ -13,9 +13,21 @@ export const COTP_DT_HEADER = 3;
 export const S7_PROTOCOL_ID = 0x32;
 export const S7_JOB_HEADER = 10;
 export const S7_ACK_HEADER = 12;
+/** Function code and item count: the parameters of a Read/Write Var job, and of its answer, before the items. */
+export const VAR_PARAMETER_HEAD = 2;
+/** S7 bytes of a Read/Write Var job before its request items (12). */
+export const VAR_REQUEST_BASE = S7_JOB_HEADER + VAR_PARAMETER_HEAD;
+/** S7 bytes of a Read/Write Var answer before its data items (14). */
+export const VAR_RESPONSE_BASE = S7_ACK_HEADER + VAR_PARAMETER_HEAD;
+/** A request item (the variable specification), in Read Var and Write Var jobs alike. */
 export const READ_ITEM = 12;
+/** Return code, transport size and length in front of each data item of a Read Var answer. */
 export const READ_RESPONSE_ITEM_HEADER = 4;
+/** Return code, transport size and length in front of each data item of a Write Var job. */
 export const WRITE_DATA_HEADER = 4;
+/** The PDU sizes the client and the planner work with: at least 64, at most what the setup's 2-byte field holds. */
+export const MIN_PDU_SIZE = 64;
+export const MAX_PDU_SIZE = 0xffff;
 /** TPKT + COTP DT in front of every S7 PDU. */
 export const FRAME_OVERHEAD = TPKT_HEADER + COTP_DT_HEADER;
 
