@@ -1,7 +1,7 @@
 /**
  * S7Client: S7comm over ISO-on-TCP on the shared link layer. It uses the PDU
  * size and parallel jobs (AmQ) the PLC negotiated, packs tags into the fewest
- * PDUs (planner.ts), keeps up to AmQ jobs in flight, and gives a result per
+ * PDUs (lib/s7/plan/), keeps up to AmQ jobs in flight, and gives a result per
  * tag: a missing DB or an address out of range fails only its own tags.
  *
  * Replies are matched by PDU reference. A reply nobody waits for (wrong,
