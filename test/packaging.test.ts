@@ -232,6 +232,16 @@ describe('packaging: links of the README and docs/', () => {
     }
     expect(broken).to.deep.equal([]);
   });
+
+  it('every path docs/architecture.md names in `code` is a file or folder of the repository', () => {
+    const markdown = fs.readFileSync(path.join(ROOT, 'docs/architecture.md'), 'utf8');
+    const prose = markdown.replace(/^(```|~~~)[^\n]*\n[\s\S]*?^\1[^\n]*$/gm, '');
+    // Paths only: "lib/s7/plan/", "lib/link/driver.ts"; placeholders ("lib/<protocol>/url.ts") and globs are not checked.
+    const paths = [...prose.matchAll(/`([\w.-]+(?:\/[\w.-]*)+)`/g)].map((m) => m[1]!);
+    expect(paths.length).to.be.greaterThan(50);
+    const missing = [...new Set(paths)].filter((p) => !fs.existsSync(path.join(ROOT, p)));
+    expect(missing).to.deep.equal([]);
+  });
 });
 
 function listFiles(dir: string): string[] {
