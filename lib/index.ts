@@ -65,5 +65,5 @@ export { DEFAULT_FREEPORT_PROFILE, defineProfile, type FreeportProfile } from '.
 export { parseFreeportAddress, type FreeportTag } from './freeport/address';
 
 export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess, type MemoryFault } from './sim/memory';
-export { DemoProcess, DEMO_TAGS, type ProcessSnapshot } from './demo/process';
-export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './demo/plant';
+export { DemoProcess, DEMO_TAGS, type ProcessSnapshot } from './plant/process';
+export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './plant/plant';
