@@ -42,8 +42,9 @@ export function fail(io: CliIo, err: unknown, debug: boolean): number {
 export function exitCode(err: unknown): number {
   if (err instanceof UsageError) return EXIT.USAGE;
   if (err instanceof TagErrors) {
-    const codes = Object.values(err.errors).map((e) => exitCode(e));
-    return codes.includes(EXIT.USAGE) ? EXIT.USAGE : codes.includes(EXIT.REFUSED) ? EXIT.REFUSED : codes.includes(EXIT.CONNECTION) ? EXIT.CONNECTION : EXIT.TAG_ERROR;
+    // The tag errors' most telling code: bad input, then a refusal, then the link, else the tags themselves.
+    const codes = new Set(Object.values(err.errors).map((e) => exitCode(e)));
+    return [EXIT.USAGE, EXIT.REFUSED, EXIT.CONNECTION].find((c) => codes.has(c)) ?? EXIT.TAG_ERROR;
   }
   if (!(err instanceof PlcError)) return EXIT.TAG_ERROR;
   switch (err.code) {
