@@ -111,6 +111,10 @@ describe('architecture of lib/', () => {
     expect(violations((f) => !f.startsWith('lib/cli/'), (e) => e.to?.startsWith('lib/cli/') === true)).to.deep.equal([]);
   });
 
+  it('no module imports the CLI entry (main.ts): the commands share lib/cli/io.ts', () => {
+    expect(violations(() => true, (e) => e.to === 'lib/cli/main.ts')).to.deep.equal([]);
+  });
+
   it('lib imports nothing from outside lib (nodes, test, bench, dist)', () => {
     expect(violations(() => true, (e) => e.to !== undefined && !e.to.startsWith('lib/'))).to.deep.equal([]);
   });
