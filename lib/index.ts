@@ -22,7 +22,18 @@ export type { FrameCheck } from './link/framer';
 export * as s7 from './s7/codec';
 export { S7Client, type ItemLimitEvent, type S7Stats } from './s7/client';
 export type { S7Session } from './s7/client-session';
-export { planRead, planWrite, ReadPlanCache, type ReadPlan, type WritePlan } from './s7/plan';
+export {
+  planRead,
+  planWrite,
+  ReadPlanCache,
+  type PlannedReadItem,
+  type ReadPdu,
+  type ReadPlan,
+  type TagPieces,
+  type TagSlice,
+  type WritePdu,
+  type WritePlan,
+} from './s7/plan';
 export { S7Server, PROFILES as S7_PROFILES, type S7ServerOptions, type S7Faults, type S7Profile, type CpuProfile, type S7RequestEvent } from './s7/server';
 export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
 export type { CpuServices, ServiceSession } from './s7/server-services';
@@ -65,5 +76,5 @@ export { DEFAULT_FREEPORT_PROFILE, defineProfile, type FreeportProfile } from '.
 export { parseFreeportAddress, type FreeportTag } from './freeport/address';
 
 export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess, type MemoryFault } from './sim/memory';
-export { DemoProcess, DEMO_TAGS, type ProcessSnapshot } from './demo/process';
-export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './demo/plant';
+export { DemoProcess, DEMO_TAGS, type ProcessSnapshot } from './plant/process';
+export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './plant/plant';

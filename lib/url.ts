@@ -18,7 +18,7 @@
 import { FETCHWRITE_URLS, type FetchWriteEndpoint } from './fetchwrite/url';
 import { FREEPORT_URLS, type FreeportEndpoint } from './freeport/url';
 import type { UrlScheme } from './link/driver';
-import { UrlParams, urlError } from './link/url-params';
+import { UrlParams, urlError, type SafetyOptions } from './link/url-params';
 import { MAX_ITEMS } from './s7/constants';
 import { S7_URLS, type S7Endpoint } from './s7/url';
 
@@ -26,12 +26,7 @@ export type { S7ConnectionType, S7Endpoint } from './s7/url';
 export type { FetchWriteEndpoint } from './fetchwrite/url';
 export { FREEPORT_BAUD_RATES, type FreeportEndpoint, type FreeportLine, type Parity } from './freeport/url';
 
-export interface SafetyOptions {
-  /** Refuse every write before anything is sent. */
-  readOnly?: boolean;
-  /** When set, only writes to these addresses or areas (e.g. "DB10", "M", "DB1.DBW2") are allowed. */
-  allow?: string[];
-}
+export type { SafetyOptions } from './link/url-params';
 
 export type Endpoint = S7Endpoint | FetchWriteEndpoint | FreeportEndpoint;
 

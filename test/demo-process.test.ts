@@ -1,11 +1,11 @@
 /**
- * The demo plant's process (lib/demo/process.ts), stepped by hand: every
+ * The demo plant's process (lib/plant/process.ts), stepped by hand: every
  * cycle is deterministic, so these tests see exactly what the dashboard's
  * visitors see over time, without waiting for a timer.
  */
 import { expect } from 'chai';
-import { startPlant, type Plant } from '../lib/demo/plant';
-import { DemoProcess, MOTOR, THERMAL, type ProcessSnapshot } from '../lib/demo/process';
+import { startPlant, type Plant } from '../lib/plant/plant';
+import { DemoProcess, MOTOR, THERMAL, type ProcessSnapshot } from '../lib/plant/process';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';

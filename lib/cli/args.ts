@@ -1,4 +1,6 @@
 /** A small argv parser: positionals plus --flag, --flag value and --flag=value. */
+import type { Endpoint } from '../url';
+
 export interface ParsedArgs {
   positionals: string[];
   flags: Map<string, string | true>;
@@ -47,4 +49,10 @@ export function intFlag(args: ParsedArgs, name: string, fallback: number, min = 
 export function stringFlag(args: ParsedArgs, name: string): string | undefined {
   const raw = args.flags.get(name);
   return raw === true ? undefined : raw;
+}
+
+/** The endpoint with --timeout applied, when given. */
+export function withTimeout<E extends Endpoint>(endpoint: E, args: ParsedArgs): E {
+  if (!args.flags.has('timeout')) return endpoint;
+  return { ...endpoint, timeout: intFlag(args, 'timeout', endpoint.timeout, 1, 600_000) };
 }

@@ -3,38 +3,16 @@
  * the simulators. Every failure is one readable line on stderr and an exit
  * code a script can switch on (see EXIT and the README's CLI reference).
  */
-import { createInterface } from 'node:readline';
-import { createClient, type AnyClient } from '../connect';
-import { isLinkError, PlcError, TagErrors } from '../errors';
+import { createClient } from '../connect';
+import { PlcError, TagErrors } from '../errors';
 import type { PlcValue } from '../types';
 import { validateValue, type TagShape } from '../values';
 import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
-import { parseArgs, UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
+import { parseArgs, UsageError, intFlag, withTimeout, type ParsedArgs } from './args';
+import { EXIT, confirm, exitCode, fail, withClient, type CliIo } from './io';
 import { serve, SERVE_FLAGS } from './serve';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { toJson, valueFromText, valueToText, type TypedTag } from './values';
-
-export const EXIT = Object.freeze({
-  OK: 0,
-  /** The PLC refused or could not serve one or more tags. */
-  TAG_ERROR: 1,
-  /** Bad command line, URL, address or value: nothing was sent. */
-  USAGE: 2,
-  /** Could not connect, or the connection was lost. */
-  CONNECTION: 3,
-  /** A write or a control command was refused for safety (read-only, allow-list, no control=true, or no --yes). */
-  REFUSED: 4,
-  /** Stopped by Ctrl-C before it finished. */
-  INTERRUPTED: 130,
-});
-
-export interface CliIo {
-  stdout: NodeJS.WritableStream;
-  stderr: NodeJS.WritableStream;
-  stdin: NodeJS.ReadableStream & { isTTY?: boolean };
-  /** Aborted on SIGINT/SIGTERM. */
-  signal: AbortSignal;
-}
 
 const USAGE = `usage:
   plcwire read  <url> <address>... [--json] [--timeout ms]
@@ -97,7 +75,7 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
       case 'serve':
         return await serve(rest, args, io);
       case 'demo':
-        return await (await import('../demo/run')).runDemo(io);
+        return await (await import('./demo')).runDemo(io);
       default:
         throw new UsageError(`unknown command "${command}" (read, write, watch, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`);
     }
@@ -106,66 +84,11 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
   }
 }
 
-/** One line on stderr, and the exit code for the kind of failure. */
-export function fail(io: CliIo, err: unknown, debug: boolean): number {
-  const code = exitCode(err);
-  const message = err instanceof Error ? err.message : String(err);
-  io.stderr.write(`plcwire: ${message}${code === EXIT.USAGE && err instanceof UsageError ? ' (plcwire --help)' : ''}\n`);
-  if (debug && err instanceof Error && err.stack) io.stderr.write(`${err.stack}\n`);
-  return code;
-}
-
-export function exitCode(err: unknown): number {
-  if (err instanceof UsageError) return EXIT.USAGE;
-  if (err instanceof TagErrors) {
-    const codes = Object.values(err.errors).map((e) => exitCode(e));
-    return codes.includes(EXIT.USAGE) ? EXIT.USAGE : codes.includes(EXIT.REFUSED) ? EXIT.REFUSED : codes.includes(EXIT.CONNECTION) ? EXIT.CONNECTION : EXIT.TAG_ERROR;
-  }
-  if (!(err instanceof PlcError)) return EXIT.TAG_ERROR;
-  if (isLinkError(err)) return EXIT.CONNECTION;
-  switch (err.code) {
-    case 'INVALID_ADDRESS':
-    case 'INVALID_VALUE':
-    case 'INVALID_URL':
-      return EXIT.USAGE;
-    case 'WRITE_NOT_ALLOWED':
-      return EXIT.REFUSED;
-    case 'ABORTED':
-      return EXIT.INTERRUPTED;
-    case 'TIMEOUT':
-    case 'PROTOCOL_ERROR':
-      return EXIT.CONNECTION;
-    default:
-      return EXIT.TAG_ERROR;
-  }
-}
-
 function endpointArg(rest: string[], what: string): { endpoint: Endpoint; addresses: string[] } {
   const [url, ...addresses] = rest;
   if (url === undefined) throw new UsageError(`${what} needs a PLC url`);
   if (addresses.length === 0) throw new UsageError(`${what} needs at least one address`);
   return { endpoint: parseUrl(url), addresses };
-}
-
-export function withTimeout(endpoint: Endpoint, args: ParsedArgs): Endpoint {
-  if (!args.flags.has('timeout')) return endpoint;
-  return { ...endpoint, timeout: intFlag(args, 'timeout', endpoint.timeout, 1, 600_000) };
-}
-
-/** Connects `client`, runs `work`, always closes; Ctrl-C aborts the connect or the request. */
-export async function withClient<R>(client: AnyClient, io: CliIo, work: (client: AnyClient) => Promise<R>): Promise<R> {
-  const onAbort = () => void client.close();
-  io.signal.addEventListener('abort', onAbort, { once: true });
-  try {
-    await client.connect();
-    return await work(client);
-  } catch (err) {
-    if (io.signal.aborted) throw new PlcError('ABORTED', 'interrupted');
-    throw err;
-  } finally {
-    io.signal.removeEventListener('abort', onAbort);
-    await client.close();
-  }
 }
 
 async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
@@ -229,20 +152,6 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
 }
 
-export function confirm(io: CliIo, question: string): Promise<boolean> {
-  const rl = createInterface({ input: io.stdin, output: io.stderr });
-  return new Promise((resolve) => {
-    const onAbort = () => rl.close();
-    io.signal.addEventListener('abort', onAbort, { once: true });
-    rl.on('close', () => resolve(false));
-    rl.question(question, (answer) => {
-      io.signal.removeEventListener('abort', onAbort);
-      resolve(/^y(es)?$/i.test(answer.trim()));
-      rl.close();
-    });
-  });
-}
-
 /**
  * Polls until Ctrl-C; prints a line per changed value (all values first).
  * Link loss is reported on stderr and the client reconnects by itself.
@@ -293,7 +202,7 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   return EXIT.OK;
 }
 
-export function delay(ms: number, signal: AbortSignal): Promise<void> {
+function delay(ms: number, signal: AbortSignal): Promise<void> {
   return new Promise((resolve) => {
     if (signal.aborted) return resolve();
     const done = () => {
@@ -305,5 +214,3 @@ export function delay(ms: number, signal: AbortSignal): Promise<void> {
     signal.addEventListener('abort', done, { once: true });
   });
 }
-
-export { stringFlag };

@@ -6,7 +6,7 @@ import { S7Server, type S7Profile } from '../s7/server';
 import type { MemoryLayout } from '../sim/memory';
 import { FREEPORT_BAUD_RATES } from '../url';
 import { UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
-import type { CliIo } from './main';
+import { EXIT, untilInterrupted, type CliIo } from './io';
 
 export const SERVE_FLAGS = ['port', 'host', 'profile', 'layout', 'fetch-port', 'write-port', 'path', 'baud', 'tcp', 'stations', 'max-items'];
 
@@ -81,12 +81,9 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
       throw new UsageError(`serve needs a protocol: s7, fetchwrite or freeport`);
   }
   say('Ctrl-C stops.');
-  await new Promise<void>((resolve) => {
-    if (io.signal.aborted) resolve();
-    else io.signal.addEventListener('abort', () => resolve(), { once: true });
-  });
+  await untilInterrupted(io);
   await close();
-  return 0;
+  return EXIT.OK;
 }
 
 /** A bind error in words: port 102 needs privileges on Linux. */

@@ -20,8 +20,8 @@ import {
   type SzlList,
 } from '../s7/szl';
 import { endpointName, isLoopback, parseUrl, type S7Endpoint } from '../url';
-import { UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
-import { EXIT, confirm, withClient, withTimeout, type CliIo } from './main';
+import { UsageError, intFlag, stringFlag, withTimeout, type ParsedArgs } from './args';
+import { EXIT, confirm, withClient, type CliIo } from './io';
 import { toJson, valueToText } from './values';
 
 /** The S7 endpoint of the first positional; anything else is a usage error. */

@@ -65,14 +65,29 @@ class FwSession {
   }
 }
 
-/** A byte range of one ORG area, fetched as one or more jobs. */
-interface Range {
+/** Where a job's bytes are: the area, its DB number (DB only) and the first byte. */
+interface ByteAddress {
   org: Org;
   dbNumber: number;
   /** Bytes from the area's start (C/T: 2 per number). */
   start: number;
+}
+
+/** A byte range of one ORG area, fetched or written as one or more jobs. */
+interface ByteRange extends ByteAddress {
   length: number;
+}
+
+/** The bytes of merged tags, with the tags' indexes. */
+interface Range extends ByteRange {
   tags: number[];
+}
+
+/** One FETCH or WRITE request: a range of bytes, with the data to write. */
+interface Job {
+  op: OpCode.FetchRequest | OpCode.WriteRequest;
+  range: ByteRange;
+  data?: Buffer;
 }
 
 export class FetchWriteClient extends BaseClient<FwSession, Tag> {
@@ -182,8 +197,9 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   }
 
   /** One job on one channel (the caller holds the session's job queue). */
-  private async job(session: FwSession, op: OpCode.FetchRequest | OpCode.WriteRequest, org: Org, dbNumber: number, startByte: number, bytes: number, data: Buffer | undefined, signal?: AbortSignal): Promise<Buffer> {
+  private async job(session: FwSession, { op, range, data }: Job, signal?: AbortSignal): Promise<Buffer> {
     if (session.lost) throw session.lost;
+    const { org, dbNumber, start: startByte, length: bytes } = range;
     const channel = op === OpCode.FetchRequest ? session.fetch : session.write;
     const wordUnits = this.granule(org) === 2;
     const start = org === Org.C || org === Org.T ? startByte / 2 : wordUnits ? startByte / 2 : startByte;
@@ -225,7 +241,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
         let data: Buffer | undefined;
         let error: PlcError | undefined;
         try {
-          data = await this.fetchRange(session, range.org, range.dbNumber, range.start, range.length, signal);
+          data = await this.fetchRange(session, range, signal);
         } catch (err) {
           const e = toPlcError(err);
           if (endsRequest(e)) throw e;
@@ -249,7 +265,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   private async readOne(session: FwSession, tag: Tag, signal?: AbortSignal): Promise<TagResult<PlcValue>> {
     const [range] = this.mergeRanges([tag]);
     try {
-      const data = await this.fetchRange(session, range!.org, range!.dbNumber, range!.start, range!.length, signal);
+      const data = await this.fetchRange(session, range!, signal);
       return this.decode(tag, data, range!.start);
     } catch (err) {
       const e = toPlcError(err);
@@ -267,11 +283,15 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
   }
 
   /** Fetches a byte range, split into jobs the ORG's length range and the frame allow. */
-  private async fetchRange(session: FwSession, org: Org, dbNumber: number, start: number, length: number, signal?: AbortSignal): Promise<Buffer> {
+  private async fetchRange(session: FwSession, range: ByteRange, signal?: AbortSignal): Promise<Buffer> {
+    const { org, dbNumber, start, length } = range;
     const max = this.maxJobBytes(org);
-    if (length <= max) return this.job(session, OpCode.FetchRequest, org, dbNumber, start, length, undefined, signal);
+    const op = OpCode.FetchRequest;
+    if (length <= max) return this.job(session, { op, range }, signal);
     const parts: Buffer[] = [];
-    for (let o = 0; o < length; o += max) parts.push(await this.job(session, OpCode.FetchRequest, org, dbNumber, start + o, Math.min(max, length - o), undefined, signal));
+    for (let o = 0; o < length; o += max) {
+      parts.push(await this.job(session, { op, range: { org, dbNumber, start: start + o, length: Math.min(max, length - o) } }, signal));
+    }
     return Buffer.concat(parts);
   }
 
@@ -351,34 +371,39 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
       start = tag.byteOffset;
       data = Buffer.alloc(tag.byteLength);
       // Read-modify-write: fetched below with the enclosing unit.
-      return this.readModifyWrite(session, org, tag, start, start + data.length, (buf, offset) => encodeInto(tag, value, buf, offset), signal);
+      const range = { org, dbNumber: tag.dbNumber, start, length: data.length };
+      return this.readModifyWrite(session, range, (buf, offset) => encodeInto(tag, value, buf, offset), signal);
     }
     if (tag.area === 'C' || tag.area === 'T') {
       const span = writeSpan(tag, value);
-      return this.writeRange(session, org, tag.dbNumber, 2 * tag.byteOffset, span.data, signal);
+      return this.writeRange(session, { org, dbNumber: tag.dbNumber, start: 2 * tag.byteOffset }, span.data, signal);
     }
     const span = writeSpan(tag, value);
     start = tag.byteOffset + span.start;
     data = span.data;
-    if (start % g === 0 && data.length % g === 0) return this.writeRange(session, org, tag.dbNumber, start, data, signal);
-    return this.readModifyWrite(session, org, tag, start, start + data.length, (buf, offset) => data.copy(buf, offset), signal);
+    const at = { org, dbNumber: tag.dbNumber, start };
+    if (start % g === 0 && data.length % g === 0) return this.writeRange(session, at, data, signal);
+    return this.readModifyWrite(session, { ...at, length: data.length }, (buf, offset) => data.copy(buf, offset), signal);
   }
 
   /** Fetch the enclosing units, change them, write them back (serialised by the job queue; not atomic against the PLC program). */
-  private async readModifyWrite(session: FwSession, org: Org, tag: Tag, from: number, to: number, change: (buf: Buffer, offset: number) => void, signal?: AbortSignal): Promise<void> {
+  private async readModifyWrite(session: FwSession, changed: ByteRange, change: (buf: Buffer, offset: number) => void, signal?: AbortSignal): Promise<void> {
+    const { org, dbNumber } = changed;
     const g = this.granule(org);
+    const from = changed.start;
+    const to = from + changed.length;
     const start = from - (from % g);
     const end = to + ((g - (to % g)) % g);
-    const current = Buffer.from(await this.fetchRange(session, org, tag.dbNumber, start, end - start, signal));
+    const current = Buffer.from(await this.fetchRange(session, { org, dbNumber, start, length: end - start }, signal));
     change(current, from - start);
-    await this.writeRange(session, org, tag.dbNumber, start, current, signal);
+    await this.writeRange(session, { org, dbNumber, start }, current, signal);
   }
 
-  private async writeRange(session: FwSession, org: Org, dbNumber: number, start: number, data: Buffer, signal?: AbortSignal): Promise<void> {
+  private async writeRange(session: FwSession, { org, dbNumber, start }: ByteAddress, data: Buffer, signal?: AbortSignal): Promise<void> {
     const max = this.maxJobBytes(org);
     for (let o = 0; o < data.length; o += max) {
       const part = data.subarray(o, o + max);
-      await this.job(session, OpCode.WriteRequest, org, dbNumber, start + o, part.length, part, signal);
+      await this.job(session, { op: OpCode.WriteRequest, range: { org, dbNumber, start: start + o, length: part.length }, data: part }, signal);
     }
   }
 }

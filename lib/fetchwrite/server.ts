@@ -12,7 +12,7 @@ import * as net from 'node:net';
 import { FrameReader } from '../link/framer';
 import { PlcMemory, type MemoryLayout } from '../sim/memory';
 import type { AreaName } from '../types';
-import { HEADER, MAX_DATA, OpCode, Org, byteLength, checkRequest, decodeRequest, encodeResponse } from './codec';
+import { HEADER, MAX_DATA, OpCode, Org, byteLength, checkRequest, decodeRequest, encodeResponse, type FwRequest } from './codec';
 
 export interface FetchWriteServerOptions {
   /** Default 127.0.0.1. */
@@ -203,16 +203,16 @@ export class FetchWriteServer extends EventEmitter {
     this.emit('request', { kind: fetch ? 'fetch' : 'write', org: req.org, dbNumber: req.dbNumber, start: req.start, length: req.length } satisfies FetchWriteRequestEvent);
     if (this.faults.latencyMs > 0) await new Promise((r) => setTimeout(r, this.faults.latencyMs));
     if (this.faults.silent || socket.destroyed) return;
-    const op = fetch ? OpCode.FetchResponse : OpCode.WriteAck;
-    const answer = this.answer(req.org, req.dbNumber, req.start, req.length, op, req.data);
+    const answer = this.answer(req);
     if (this.faults.truncateAnswers > 0) {
       this.faults.truncateAnswers--;
       socket.write(answer.subarray(0, answer.length >> 1), () => socket.resetAndDestroy());
     } else socket.write(answer);
   }
 
-  private answer(org: number, dbNumber: number, start: number, units: number, op: OpCode.FetchResponse | OpCode.WriteAck, data: Buffer | undefined): Buffer {
-    const fetch = op === OpCode.FetchResponse;
+  private answer({ op: request, org, dbNumber, start, length: units, data }: FwRequest): Buffer {
+    const fetch = request === OpCode.FetchRequest;
+    const op = fetch ? OpCode.FetchResponse : OpCode.WriteAck;
     if (this.faults.errorCode !== 0) return encodeResponse(op, this.faults.errorCode);
     const area = AREA_BY_ORG[org];
     if (!area || units === 0 || (org === Org.DB && dbNumber === 0)) return encodeResponse(op, 0x06);

@@ -5,7 +5,7 @@
 import { DEFAULT_TIMEOUT } from '../link/client-base';
 import type { UrlScheme } from '../link/driver';
 import { hostPart, requireHost, urlError, type UrlParams } from '../link/url-params';
-import type { SafetyOptions } from '../url';
+import type { SafetyOptions } from '../link/url-params';
 
 export interface FetchWriteEndpoint extends SafetyOptions {
   protocol: 'fetchwrite';

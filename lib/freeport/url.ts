@@ -5,7 +5,7 @@
  */
 import type { UrlScheme } from '../link/driver';
 import { hostPart, portOf, requireHost, urlError, type UrlParams } from '../link/url-params';
-import type { SafetyOptions } from '../url';
+import type { SafetyOptions } from '../link/url-params';
 
 export type Parity = 'none' | 'even' | 'odd';
 

@@ -90,3 +90,11 @@ export function hostPart(host: string): string {
 export function urlError(url: string, problem: string): PlcError {
   return new PlcError('INVALID_URL', `invalid PLC URL "${url}": ${problem}`);
 }
+
+/** What every endpoint carries, whatever its protocol (`readOnly`, `allow`). */
+export interface SafetyOptions {
+  /** Refuse every write before anything is sent. */
+  readOnly?: boolean;
+  /** When set, only writes to these addresses or areas (e.g. "DB10", "M", "DB1.DBW2") are allowed. */
+  allow?: string[];
+}

@@ -57,9 +57,9 @@ export interface BlockInfo {
 
 const EPOCH_1984 = Date.UTC(1984, 0, 1);
 const DAY_MS = 86_400_000;
-export const BLOCK_INFO_LENGTH = 78;
-export const BLOCK_HEADER = 36;
-export const BLOCK_FOOTER = 56;
+const BLOCK_INFO_LENGTH = 78;
+const BLOCK_HEADER = 36;
+const BLOCK_FOOTER = 56;
 
 /** The order a CPU lists the block types in. */
 const LIST_ORDER: readonly BlockType[] = ['OB', 'FB', 'FC', 'DB', 'SDB', 'SFC', 'SFB'];

@@ -116,11 +116,6 @@ export const enum DataTransportSize {
   OCTET_STRING = 0x09,
 }
 
-/** Whether a data transport size counts its length in bits. */
-export function lengthInBits(size: number): boolean {
-  return size === DataTransportSize.BIT || size === DataTransportSize.BYTE || size === DataTransportSize.INTEGER;
-}
-
 /** Most items one Read/Write Var job can carry (the item count is one byte). */
 export const MAX_ITEMS = 255;
 

@@ -15,7 +15,7 @@ import { ProtocolError } from '../errors';
 import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
 import { SZL, type SzlList } from './szl';
 
-export const DIAGNOSTIC_ENTRY = 20;
+const DIAGNOSTIC_ENTRY = 20;
 
 export interface DiagnosticEntry {
   /** When the event happened (PLC clock fields as UTC, see readClock); an Invalid Date when the stamp is not a date. */
@@ -96,7 +96,7 @@ export function decodeDiagnosticBuffer(list: SzlList): DiagnosticEntry[] {
 /** What the simulator logs: an entry without its description. */
 export type DiagnosticEvent = Omit<DiagnosticEntry, 'description'>;
 
-export function encodeDiagnosticEntry(e: DiagnosticEvent): Buffer {
+function encodeDiagnosticEntry(e: DiagnosticEvent): Buffer {
   const r = Buffer.alloc(DIAGNOSTIC_ENTRY);
   r.writeUInt16BE(e.eventId, 0);
   r[2] = e.priority;

@@ -5,7 +5,7 @@ import { rackSlotOf } from './tsap';
 export type S7Profile = 's7-300' | 's7-400' | 's7-1200' | 's7-1500' | 's7-200' | 'logo';
 
 /** A TSAP the CPU accepts: the bits of `mask` must equal those of `value`. */
-export interface TsapMatch {
+interface TsapMatch {
   value: number;
   mask: number;
 }
@@ -132,7 +132,7 @@ export const PROFILES: Readonly<Record<S7Profile, CpuProfile>> = Object.freeze({
  * areas are in bytes, except C and T which are numbers of counters/timers.
  * V of an S7-200 address is DB1: keep DB1 in `dbs` to serve V addresses.
  */
-export interface S7JsonLayout {
+interface S7JsonLayout {
   dbs?: Record<string, number>;
   areas?: Partial<Record<'I' | 'Q' | 'M' | 'PE' | 'PA' | 'P' | 'C' | 'T', number>>;
 }

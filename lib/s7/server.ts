@@ -17,7 +17,7 @@ import { firstItems } from './server-items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
 import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuIdentity, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
 
-export { IDENTITIES, PROFILES, toMemoryLayout, type CpuIdentity, type CpuProfile, type S7JsonLayout, type S7Layout, type S7Profile } from './server-profiles';
+export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './server-profiles';
 export { STOP_CAUSES, type SimulatorMode, type StopCause } from './server-services';
 
 export interface S7ServerOptions {

@@ -81,12 +81,35 @@ export interface ServiceHost {
 /** A multi-part answer longer than this many parts is not a CPU's. */
 const MAX_PARTS = 4096;
 
+/** A userdata service: its function group and subfunction, which its answer repeats. */
+interface Service {
+  readonly group: UserdataGroup;
+  readonly subfunction: number;
+}
+
+/** The userdata services asked for here, named after their subfunctions. */
+const SERVICE = Object.freeze({
+  readSzl: { group: UserdataGroup.Cpu, subfunction: CpuSubfunction.ReadSzl },
+  readClock: { group: UserdataGroup.Time, subfunction: TimeSubfunction.ReadClock },
+  setClock: { group: UserdataGroup.Time, subfunction: TimeSubfunction.SetClock },
+  listAll: { group: UserdataGroup.Block, subfunction: BlockSubfunction.ListAll },
+  listType: { group: UserdataGroup.Block, subfunction: BlockSubfunction.ListType },
+  blockInfo: { group: UserdataGroup.Block, subfunction: BlockSubfunction.BlockInfo },
+  setPassword: { group: UserdataGroup.Security, subfunction: SecuritySubfunction.SetPassword },
+  clearPassword: { group: UserdataGroup.Security, subfunction: SecuritySubfunction.ClearPassword },
+} satisfies Record<string, Service>);
+
 export class S7Services {
   constructor(private readonly host: ServiceHost) {}
 
   // ---------------------------------------------------------------- transport
 
-  private async userdata(frame: Buffer, group: number, subfunction: number, what: string, signal?: AbortSignal): Promise<UserdataPdu> {
+  /** Asks for a userdata service: one request, its answer checked (the first part of a multi-part one). */
+  private request(service: Service, what: string, signal?: AbortSignal, data?: Buffer): Promise<UserdataPdu> {
+    return this.userdata(encodeUserdataRequest(service.group, service.subfunction, data), service, what, signal);
+  }
+
+  private async userdata(frame: Buffer, { group, subfunction }: Service, what: string, signal?: AbortSignal): Promise<UserdataPdu> {
     const answer = await this.host.exchange(frame, what, signal);
     let u: UserdataPdu;
     try {
@@ -104,12 +127,13 @@ export class S7Services {
   }
 
   /** Every part of an answer: the first, then the next ones asked for with the CPU's sequence number and data unit reference. */
-  private async allParts(first: UserdataPdu, group: number, subfunction: number, what: string, signal?: AbortSignal): Promise<Buffer> {
+  private async allParts(first: UserdataPdu, service: Service, what: string, signal?: AbortSignal): Promise<Buffer> {
     const parts = [first.data];
     let u = first;
     while (u.params.lastDataUnit === false) {
       if (parts.length >= MAX_PARTS) throw this.host.malformed(new ProtocolError(`${what}: more than ${MAX_PARTS} parts`));
-      u = await this.userdata(encodeUserdataNext(group, subfunction, u.params.sequence, u.params.dataUnitRef ?? 0), group, subfunction, `${what} (part ${parts.length + 1})`, signal);
+      const next = encodeUserdataNext(service.group, service.subfunction, u.params.sequence, u.params.dataUnitRef ?? 0);
+      u = await this.userdata(next, service, `${what} (part ${parts.length + 1})`, signal);
       parts.push(u.data);
     }
     return Buffer.concat(parts);
@@ -137,10 +161,9 @@ export class S7Services {
     checkWord('SZL ID', id);
     checkWord('SZL index', index);
     const what = `read SZL 0x${hex4(id)} index 0x${hex4(index)}`;
-    const request = encodeUserdataRequest(UserdataGroup.Cpu, CpuSubfunction.ReadSzl, Buffer.of(id >> 8, id & 0xff, index >> 8, index & 0xff));
-    const first = await this.userdata(request, UserdataGroup.Cpu, CpuSubfunction.ReadSzl, what, options.signal);
+    const first = await this.request(SERVICE.readSzl, what, options.signal, Buffer.of(id >> 8, id & 0xff, index >> 8, index & 0xff));
     if (first.returnCode !== 0xff) throw new PlcError('SZL_NOT_AVAILABLE', `${this.host.name} ${what}: the PLC has no such list (return code 0x${first.returnCode.toString(16)})`);
-    const bytes = await this.allParts(first, UserdataGroup.Cpu, CpuSubfunction.ReadSzl, what, options.signal);
+    const bytes = await this.allParts(first, SERVICE.readSzl, what, options.signal);
     try {
       return parseSzl(bytes);
     } catch (err) {
@@ -222,7 +245,7 @@ export class S7Services {
 
   async readClock(options: ClockOptions = {}): Promise<Date> {
     const what = 'read clock';
-    const u = await this.userdata(encodeUserdataRequest(UserdataGroup.Time, TimeSubfunction.ReadClock), UserdataGroup.Time, TimeSubfunction.ReadClock, what, options.signal);
+    const u = await this.request(SERVICE.readClock, what, options.signal);
     if (u.returnCode !== 0xff || u.data.length !== 10) {
       throw this.host.malformed(new ProtocolError(`${what}: ${u.data.length} data bytes (return code 0x${u.returnCode.toString(16)}), expected 10`));
     }
@@ -244,7 +267,7 @@ export class S7Services {
       throw new PlcError('INVALID_VALUE', `setClock: ${err instanceof Error ? err.message : String(err)}`);
     }
     data[1] = fields.getUTCFullYear() >= 2000 ? 0x20 : 0x19;
-    await this.userdata(encodeUserdataRequest(UserdataGroup.Time, TimeSubfunction.SetClock, data), UserdataGroup.Time, TimeSubfunction.SetClock, 'set clock', options.signal);
+    await this.request(SERVICE.setClock, 'set clock', options.signal, data);
   }
 
   // ---------------------------------------------------------------- control
@@ -276,8 +299,8 @@ export class S7Services {
 
   async listBlocks(options: RequestOptions = {}): Promise<BlockCounts> {
     const what = 'list blocks';
-    const u = await this.userdata(encodeUserdataRequest(UserdataGroup.Block, BlockSubfunction.ListAll), UserdataGroup.Block, BlockSubfunction.ListAll, what, options.signal);
-    const bytes = await this.allParts(u, UserdataGroup.Block, BlockSubfunction.ListAll, what, options.signal);
+    const u = await this.request(SERVICE.listAll, what, options.signal);
+    const bytes = await this.allParts(u, SERVICE.listAll, what, options.signal);
     try {
       return decodeBlockCounts(bytes);
     } catch (err) {
@@ -290,13 +313,13 @@ export class S7Services {
     const what = `list blocks of type ${type}`;
     let first: UserdataPdu;
     try {
-      first = await this.userdata(encodeUserdataRequest(UserdataGroup.Block, BlockSubfunction.ListType, encodeListTypeRequest(code)), UserdataGroup.Block, BlockSubfunction.ListType, what, options.signal);
+      first = await this.request(SERVICE.listType, what, options.signal, encodeListTypeRequest(code));
     } catch (err) {
       // "No (further) block of that type": the list is empty.
       if (err instanceof PlcError && err.plcCode === 0xd20e) return [];
       throw err;
     }
-    const bytes = await this.allParts(first, UserdataGroup.Block, BlockSubfunction.ListType, what, options.signal);
+    const bytes = await this.allParts(first, SERVICE.listType, what, options.signal);
     try {
       return decodeBlockListEntries(bytes).map((e) => e.number);
     } catch (err) {
@@ -308,7 +331,7 @@ export class S7Services {
     const code = blockType(type);
     checkBlockNumber(number);
     const what = `block info of ${type}${number}`;
-    const u = await this.userdata(encodeUserdataRequest(UserdataGroup.Block, BlockSubfunction.BlockInfo, encodeBlockInfoRequest(code, number)), UserdataGroup.Block, BlockSubfunction.BlockInfo, what, options.signal);
+    const u = await this.request(SERVICE.blockInfo, what, options.signal, encodeBlockInfoRequest(code, number));
     if (u.returnCode !== 0xff) throw new PlcError('OBJECT_DOES_NOT_EXIST', `${this.host.name} ${what}: no such block (return code 0x${u.returnCode.toString(16)})`, { plcCode: u.returnCode });
     try {
       return decodeBlockInfo(u.data);
@@ -359,11 +382,11 @@ export class S7Services {
 
   async setPassword(password: string, options: RequestOptions = {}): Promise<void> {
     const data = encodePassword(password);
-    await this.userdata(encodeUserdataRequest(UserdataGroup.Security, SecuritySubfunction.SetPassword, data), UserdataGroup.Security, SecuritySubfunction.SetPassword, 'set password', options.signal);
+    await this.request(SERVICE.setPassword, 'set password', options.signal, data);
   }
 
   async clearPassword(options: RequestOptions = {}): Promise<void> {
-    await this.userdata(encodeUserdataRequest(UserdataGroup.Security, SecuritySubfunction.ClearPassword), UserdataGroup.Security, SecuritySubfunction.ClearPassword, 'clear password', options.signal);
+    await this.request(SERVICE.clearPassword, 'clear password', options.signal);
   }
 }
 

@@ -165,7 +165,7 @@ export function decodeModuleIdentification(list: SzlList): ModuleIdentification 
 }
 
 /** "V2.9.2" → the two version words of a firmware record. */
-export function firmwareWords(firmware: string): [number, number] {
+function firmwareWords(firmware: string): [number, number] {
   const m = /^([A-Z]?)(\d+)\.(\d+)\.(\d+)$/.exec(firmware);
   if (!m) throw new TypeError(`firmware "${firmware}" is not of the form V1.2.3`);
   const letter = m[1] ? m[1].charCodeAt(0) : 0x56;

@@ -5,7 +5,7 @@
 import { DEFAULT_TIMEOUT } from '../link/client-base';
 import type { UrlScheme } from '../link/driver';
 import { hostPart, portOf, requireHost, urlError, type UrlParams } from '../link/url-params';
-import type { SafetyOptions } from '../url';
+import type { SafetyOptions } from '../link/url-params';
 import { DEFAULT_MAX_ITEMS, MAX_ITEMS, S7_PORT } from './constants';
 
 export type S7ConnectionType = 'pg' | 'op' | 'basic';

@@ -12,7 +12,7 @@ export interface TagRow {
 }
 
 /** What an address parser tells about an address (S7's parseAddress, parseFreeportAddress, client.tag). */
-export interface ParsedShape {
+interface ParsedShape {
   readonly type: string;
   readonly count: number;
   readonly isArray: boolean;
@@ -45,7 +45,7 @@ interface CsvRecord {
 }
 
 /** The name a row is known by: its name, or its address when it has none. */
-export function tagName(row: TagRow): string {
+function tagName(row: TagRow): string {
   return String(row.name ?? '').trim() || String(row.address ?? '').trim();
 }
 

@@ -8,7 +8,7 @@ import { integerIn, reject, type CodecTable } from './checks';
 
 const TIME_BASES_MS = [10, 100, 1000, 10000] as const;
 const MAX_UNITS = 999;
-export const S5TIME_MAX_MS = MAX_UNITS * TIME_BASES_MS[3];
+const S5TIME_MAX_MS = MAX_UNITS * TIME_BASES_MS[3];
 
 /** Three BCD digits of 0..999. */
 function toBcd3(n: number): number {
@@ -22,7 +22,7 @@ function fromBcd3(word: number): number {
 }
 
 /** The finest time base that holds `ms` exactly, so no precision is lost; else a ValueProblem. */
-export function encodeS5Time(type: 'S5TIME' | 'TIMER', value: unknown): number {
+function encodeS5Time(type: 'S5TIME' | 'TIMER', value: unknown): number {
   const ms = integerIn(type, value, 0, S5TIME_MAX_MS);
   for (let base = 0; base < TIME_BASES_MS.length; base++) {
     const units = ms / TIME_BASES_MS[base]!;
@@ -33,7 +33,7 @@ export function encodeS5Time(type: 'S5TIME' | 'TIMER', value: unknown): number {
   );
 }
 
-export function decodeS5Time(word: number): number {
+function decodeS5Time(word: number): number {
   return fromBcd3(word) * TIME_BASES_MS[(word >> 12) & 0x03]!;
 }
 

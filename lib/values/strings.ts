@@ -9,7 +9,7 @@ import type { TagShape } from './types-table';
 const NOT_LATIN1 = /[^\u0000-\u00ff]/; // eslint-disable-line no-control-regex
 
 /** A STRING[n] value: a string of at most n latin-1 characters. */
-export function latin1String(tag: TagShape, value: unknown): string {
+function latin1String(tag: TagShape, value: unknown): string {
   const limit = `STRING[${tag.stringLength}]`;
   if (typeof value !== 'string') return reject(`expected a string for ${limit}, got ${show(value)}`);
   if (value.length > tag.stringLength) reject(`${value.length} characters do not fit ${limit} (at most ${tag.stringLength})`);
@@ -18,7 +18,7 @@ export function latin1String(tag: TagShape, value: unknown): string {
 }
 
 /** A WSTRING[n] value: a string of at most n UTF-16 code units. */
-export function utf16String(tag: TagShape, value: unknown): string {
+function utf16String(tag: TagShape, value: unknown): string {
   const limit = `WSTRING[${tag.stringLength}]`;
   if (typeof value !== 'string') return reject(`expected a string for ${limit}, got ${show(value)}`);
   if (value.length > tag.stringLength) {

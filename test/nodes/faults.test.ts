@@ -111,7 +111,7 @@ const CASES: [string, () => Promise<Ctx>, Fault[]][] = [
   ['freeport', async () => ({ sim: await freeportSim() }), [STOPPED]],
 ];
 
-describe('nodes under faults (issue #8)', function () {
+describe('nodes under faults: Status and Catch report them, values flow again without a redeploy', function () {
   this.timeout(20000);
   let ctx: Ctx | undefined;
 

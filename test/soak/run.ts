@@ -6,7 +6,7 @@
  *   npm run soak -- [polls] [reconnects]
  */
 import { createClient } from '../../lib/connect';
-import { startPlant } from '../../lib/demo/plant';
+import { startPlant } from '../../lib/plant/plant';
 import type { PlcClient } from '../../lib/types';
 
 const POLLS = Number(process.argv[2] ?? 100_000);

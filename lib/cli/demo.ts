@@ -1,7 +1,7 @@
 /** `plcwire demo`: the three simulated PLCs with a running process, until Ctrl-C. */
-import type { CliIo } from '../cli/main';
-import { DEMO_STATIONS, startPlant } from './plant';
-import { DEMO_TAGS } from './process';
+import { DEMO_STATIONS, startPlant } from '../plant/plant';
+import { DEMO_TAGS } from '../plant/process';
+import { EXIT, untilInterrupted, type CliIo } from './io';
 
 export async function runDemo(io: CliIo): Promise<number> {
   const plant = await startPlant();
@@ -15,10 +15,7 @@ export async function runDemo(io: CliIo): Promise<number> {
   say(`  npx plcwire write "${plant.urls.s7}" ${DEMO_TAGS.run}=true`);
   say(`  npx plcwire read "${plant.urls.freeport}" ST${DEMO_STATIONS.level},REAL0`);
   say('Ctrl-C stops.');
-  await new Promise<void>((resolve) => {
-    if (io.signal.aborted) resolve();
-    else io.signal.addEventListener('abort', () => resolve(), { once: true });
-  });
+  await untilInterrupted(io);
   await plant.close();
-  return 0;
+  return EXIT.OK;
 }

@@ -1,0 +1,137 @@
+/**
+ * The shape of lib/, read from its sources: the import graph has no cycle,
+ * the layers point one way, and nothing exported is left unused (knip, with
+ * the exceptions knip.jsonc names and explains).
+ */
+import { expect } from 'chai';
+import { spawnSync } from 'node:child_process';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+
+const ROOT = path.resolve(__dirname, '../..');
+const LIB = path.join(ROOT, 'lib');
+
+interface Edge {
+  /** The specifier as written. */
+  spec: string;
+  /** Resolved .ts file (relative to the repository root) for a relative specifier, else undefined. */
+  to: string | undefined;
+  /** `import type` / `export type`: erased at compile time. */
+  typeOnly: boolean;
+}
+
+function tsFiles(dir: string): string[] {
+  return fs.readdirSync(dir, { withFileTypes: true }).flatMap((e) => {
+    const full = path.join(dir, e.name);
+    if (e.isDirectory()) return tsFiles(full);
+    return e.name.endsWith('.ts') && !e.name.endsWith('.d.ts') ? [full] : [];
+  });
+}
+
+// `import … from '…'`, `export … from '…'` (also over several lines), `import '…'`, `import('…')`, `require('…')`.
+const IMPORT = /^\s*(?:import|export)\s+(type\s+)?[^'";]*?\bfrom\s*['"]([^'"]+)['"]|^\s*import\s*['"]([^'"]+)['"]|\bimport\(\s*['"]([^'"]+)['"]\s*\)|\brequire\(\s*['"]([^'"]+)['"]\s*\)/gm;
+
+function edgesOf(file: string): Edge[] {
+  const source = fs.readFileSync(file, 'utf8');
+  const edges: Edge[] = [];
+  for (const m of source.matchAll(IMPORT)) {
+    const spec = (m[2] ?? m[3] ?? m[4] ?? m[5])!;
+    let to: string | undefined;
+    if (spec.startsWith('.')) {
+      const base = path.resolve(path.dirname(file), spec);
+      const found = [`${base}.ts`, path.join(base, 'index.ts')].find((f) => fs.existsSync(f));
+      to = path.relative(ROOT, found ?? base).split(path.sep).join('/');
+    }
+    edges.push({ spec, to, typeOnly: m[1] !== undefined });
+  }
+  return edges;
+}
+
+const GRAPH = new Map<string, Edge[]>(
+  tsFiles(LIB).map((f) => [path.relative(ROOT, f).split(path.sep).join('/'), edgesOf(f)]),
+);
+
+/** Every cycle closed by a back edge of a depth-first walk (none means the graph is acyclic). */
+function cycles(graph: Map<string, Edge[]>): string[][] {
+  const state = new Map<string, 'open' | 'done'>();
+  const stack: string[] = [];
+  const found: string[][] = [];
+  const visit = (file: string): void => {
+    state.set(file, 'open');
+    stack.push(file);
+    for (const { to } of graph.get(file) ?? []) {
+      if (to === undefined || !graph.has(to)) continue;
+      if (state.get(to) === 'open') found.push([...stack.slice(stack.indexOf(to)), to]);
+      else if (!state.has(to)) visit(to);
+    }
+    stack.pop();
+    state.set(file, 'done');
+  };
+  for (const file of [...graph.keys()].sort()) if (!state.has(file)) visit(file);
+  return found;
+}
+
+function violations(filter: (file: string) => boolean, forbidden: (edge: Edge) => boolean): string[] {
+  const out: string[] = [];
+  for (const [file, edges] of GRAPH) {
+    if (!filter(file)) continue;
+    for (const e of edges) if (forbidden(e)) out.push(`${file} imports ${e.spec}`);
+  }
+  return out;
+}
+
+const isCodec = (file: string) => file.startsWith('lib/s7/codec/') || /^lib\/[^/]+\/codec\.ts$/.test(file);
+
+describe('architecture of lib/', () => {
+  it('the import reader finds the imports it is meant to check', () => {
+    // Guards the checks below against a reader that silently sees nothing.
+    const main = GRAPH.get('lib/cli/main.ts')!.map((e) => e.to ?? e.spec);
+    expect(main).to.include.members(['lib/cli/io.ts', 'lib/cli/args.ts', 'lib/cli/demo.ts', 'lib/connect.ts']);
+    const server = GRAPH.get('lib/s7/server.ts')!;
+    expect(server.find((e) => e.to === 'lib/s7/server-profiles.ts' && !e.typeOnly)).to.not.equal(undefined);
+    expect(GRAPH.get('lib/s7/codec/tpkt.ts')!.find((e) => e.to === 'lib/link/framer.ts')?.typeOnly).to.equal(true);
+    expect(GRAPH.size).to.be.greaterThan(50);
+  });
+
+  it('has no import cycle, type-only imports included', () => {
+    expect(cycles(GRAPH).map((c) => c.join(' -> '))).to.deep.equal([]);
+  });
+
+  it('a cycle is found when there is one', () => {
+    const edge = (to: string): Edge => ({ spec: to, to, typeOnly: false });
+    const graph = new Map([
+      ['a', [edge('b')]],
+      ['b', [edge('c')]],
+      ['c', [edge('a')]],
+    ]);
+    expect(cycles(graph)).to.deep.equal([['a', 'b', 'c', 'a']]);
+  });
+
+  it('only the CLI imports the CLI', () => {
+    expect(violations((f) => !f.startsWith('lib/cli/'), (e) => e.to?.startsWith('lib/cli/') === true)).to.deep.equal([]);
+  });
+
+  it('no module imports the CLI entry (main.ts): the commands share lib/cli/io.ts', () => {
+    expect(violations(() => true, (e) => e.to === 'lib/cli/main.ts')).to.deep.equal([]);
+  });
+
+  it('lib imports nothing from outside lib (nodes, test, bench, dist)', () => {
+    expect(violations(() => true, (e) => e.to !== undefined && !e.to.startsWith('lib/'))).to.deep.equal([]);
+  });
+
+  it('the codecs are pure: no Node or npm module, no run-time import of link/ (only its FrameCheck contract as a type)', () => {
+    const codecs = [...GRAPH.keys()].filter(isCodec);
+    expect(codecs).to.include.members(['lib/s7/codec/pdu.ts', 'lib/fetchwrite/codec.ts', 'lib/freeport/codec.ts']);
+    const bad = violations(isCodec, (e) => (e.to === undefined && e.spec !== 'node:buffer') || (e.to?.startsWith('lib/link/') === true && !e.typeOnly));
+    expect(bad).to.deep.equal([]);
+  });
+
+  it('has no unused file, export or type (knip)', function () {
+    this.timeout(60_000);
+    const knip = path.join(ROOT, 'node_modules/knip/bin/knip.js'); // a dev dependency; its exports map hides bin/
+    const run = spawnSync(process.execPath, [knip, '--no-progress', '--no-config-hints'], { cwd: ROOT, encoding: 'utf8', timeout: 55_000 });
+    expect(run.error, String(run.error)).to.equal(undefined);
+    expect(`${run.stdout}${run.stderr}`.trim(), 'knip found unused code (see knip.jsonc for the exceptions)').to.equal('');
+    expect(run.status).to.equal(0);
+  });
+});
