@@ -84,7 +84,6 @@ function newStats(plans: ReadPlanCache): S7Stats {
  * the item limit was learnt plans again.
  */
 interface S7Prepared {
-  plan: ReadPlan | undefined;
   compiled: CompiledRead | undefined;
 }
 
@@ -93,6 +92,8 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   readonly endpoint: S7Endpoint;
   private readonly plans = new ReadPlanCache();
   readonly stats: S7Stats = newStats(this.plans);
+  /** Each cached plan's request frames, for a list that finds its plan in the cache (the same addresses in a new array). */
+  private readonly compiledPlans = new WeakMap<ReadPlan, CompiledRead>();
   /** Items per job: the URL's maxItems or 20, lowered when the PLC serves fewer (learnItemLimit). */
   private itemLimit: number;
   private planOptions: PlanOptions;
@@ -100,7 +101,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   protected readonly driver: Driver<S7Session, Tag, S7Prepared> = {
     syntax: S7_TAG_SYNTAX,
     openSession: (signal) => this.openSession(signal),
-    prepareRead: () => ({ plan: undefined, compiled: undefined }),
+    prepareRead: () => ({ compiled: undefined }),
     readTags: (session, tags, signal, prepared) => this.readTags(session, tags, signal, prepared),
     readValues: (session, tags, signal, prepared) => this.readValues(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
@@ -374,7 +375,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   private async readServed(session: S7Session, tags: readonly Tag[], merge: boolean, signal?: AbortSignal, prepared?: S7Prepared): Promise<CollectedRead> {
     for (;;) {
       const c = merge
-        ? this.preparedPlan(session.pduSize, tags, prepared ?? { plan: undefined, compiled: undefined })
+        ? this.preparedPlan(session.pduSize, tags, prepared ?? { compiled: undefined })
         : compileRead(planRead(tags, session.pduSize, { merge: false, maxItems: this.itemLimit }), tags);
       const read = await this.execute(session, tags, c, signal);
       if (read.served === 0) return read;
@@ -389,11 +390,15 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
    * keeps the ones it started with.
    */
   private preparedPlan(pduSize: number, tags: readonly Tag[], prepared: S7Prepared): CompiledRead {
-    const { plan, compiled } = prepared;
-    if (compiled && plan!.pduSize === pduSize && plan!.maxItems === maxReadItems(pduSize, this.itemLimit)) return compiled;
+    const known = prepared.compiled;
+    if (known && known.plan.pduSize === pduSize && known.plan.maxItems === maxReadItems(pduSize, this.itemLimit)) return known;
     const fresh = this.plans.get(tags, pduSize, this.planOptions);
-    prepared.plan = fresh;
-    return (prepared.compiled = compileRead(fresh, tags));
+    let c = this.compiledPlans.get(fresh);
+    if (!c) {
+      c = compileRead(fresh, tags);
+      this.compiledPlans.set(fresh, c);
+    }
+    return (prepared.compiled = c);
   }
 
   /** The PLC served only `served` items of a job: jobs carry at most that many from now on. */
