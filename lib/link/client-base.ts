@@ -134,7 +134,8 @@ const MAX_CACHED_TAGS = 10_000;
 
 /**
  * What every driver's client shares: the supervisor (connect, reconnect,
- * state events, close), address parsing with a cache, per-tag results,
+ * state events, close), address parsing with a cache, prepared reads
+ * (prepare(), and the same for an array read() is given again), per-tag results,
  * TagErrors and the write safety (read-only, allow-list). It knows no
  * protocol: a client supplies its `driver` (lib/link/driver.ts).
  *
@@ -261,7 +262,8 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   /**
    * Reads tags. Polling the same list? Prefer prepare(). Given the same
    * array object again (unchanged), read() recognises it and skips what
-   * prepare() saves as well; a new array each time is parsed and planned again.
+   * prepare() saves as well; a new array each time is parsed and prepared
+   * again (an S7 client finds the plan in its bounded plan cache).
    */
   read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>> {
     let list: ReadList<T, M>;
