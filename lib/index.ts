@@ -15,7 +15,7 @@ export { tagsFromCsv, tagsToCsv, addressWithType, duplicateNames, type TagRow, t
 export * as values from './values';
 export { decodeTag, encodeTag, encodeInto, validateValue, elementByteLength, tagByteLength } from './values';
 
-export { BaseClient, type ClientOptions, type Driver, type DriverSession, type DriverTag, type ReadValues, type TagSyntax } from './link/client-base';
+export { BaseClient, type ClientOptions, type PreparedRead, type Driver, type DriverSession, type DriverTag, type ReadValues, type TagSyntax } from './link/client-base';
 export type { BackoffOptions } from './link/backoff';
 export type { FrameCheck } from './link/framer';
 

@@ -95,10 +95,15 @@ export interface RequestOptions {
 export interface PlcClient extends EventEmitter {
   readonly protocol: Protocol;
   readonly state: LinkState;
-  /** Reads tags; resolves `{ address: value }`, or rejects with TagErrors (whose `results` has the good ones). */
+  /**
+   * Reads tags; resolves `{ address: value }`, or rejects with TagErrors (whose `results` has the good ones).
+   * Polling the same list: pass the same array object each time, or use prepare(); a new array is parsed and planned again.
+   */
   read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>>;
   /** Reads tags; always resolves with a result per tag (rejects only when nothing could be attempted). */
   readDetailed(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, TagResult<PlcValue>>>;
+  /** Parses `addresses` once and keeps what the driver computes for them: the fast way to poll the same tags (see PreparedRead). */
+  prepare(addresses: readonly string[]): PreparedRead;
   /** Writes `{ address: value }`; resolves when the PLC acknowledged every tag, else rejects with TagErrors. */
   write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void>;
   /** Writes; always resolves with a result per tag. */
@@ -108,6 +113,34 @@ export interface PlcClient extends EventEmitter {
   ): Promise<Record<string, TagResult<void>>>;
   /** Stops reconnecting, fails what is pending with CLOSED, closes the socket. Always resolves. */
   close(): Promise<void>;
+}
+
+/**
+ * A tag list prepared for polling, from `client.prepare(addresses)`. It owns
+ * what a poll of the list needs and would otherwise work out again: the
+ * parsed tags, and what the driver computes once for them (S7: the read
+ * plan for the negotiated PDU size and the PLC's item limit, and the
+ * request frames, kept and reused; FETCH/WRITE: the merged fetch ranges;
+ * freeport: the tags grouped by station). A reconnect to a CPU with another
+ * PDU size, or a PLC that turns out to serve fewer items per job, re-plans
+ * it at the next read. Nothing of it holds the link: reads made while the
+ * client is not connected fail fast with NOT_CONNECTED, and the handle
+ * works again once the link is back.
+ *
+ * `client.read(array)` gets the same benefit only as long as it is given
+ * the same array object every time (the list is recognised by identity);
+ * a new array, even with the same addresses, is parsed and grouped again
+ * (an S7 client still finds the plan in its bounded plan cache).
+ */
+export interface PreparedRead {
+  /** The addresses, in the order given to prepare() (a frozen copy). */
+  readonly addresses: readonly string[];
+  /** Same result as `client.read(addresses)`: `{ address: value }`, or rejects with TagErrors (its `results` keeps the good values). */
+  read(options?: RequestOptions): Promise<Record<string, PlcValue>>;
+  /** Same result as `client.readDetailed(addresses)`: a result per tag. */
+  readDetailed(options?: RequestOptions): Promise<Record<string, TagResult<PlcValue>>>;
+  /** Drops the plan and frames it holds; reads then reject with CLOSED. Nothing else needs releasing. */
+  close(): void;
 }
 
 export type { PlcError, TagResult };

@@ -90,15 +90,23 @@ interface Job {
   data?: Buffer;
 }
 
-export class FetchWriteClient extends BaseClient<FwSession, Tag> {
+/** What a prepared tag list keeps (Driver.prepareRead): the tags that can be read, merged into fetch ranges. */
+interface FwPrepared {
+  /** Indexes of the tags a fetch cannot read (PA, the output modules). */
+  unreadable: number[];
+  ranges: Range[];
+}
+
+export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
   readonly protocol: Protocol = 'fetchwrite';
   readonly endpoint: FetchWriteEndpoint;
   /** Jobs sent, for diagnostics and tests. */
   readonly stats = { fetches: 0, writes: 0 };
-  protected readonly driver: Driver<FwSession, Tag> = {
+  protected readonly driver: Driver<FwSession, Tag, FwPrepared> = {
     syntax: { ...S7_TAG_SYNTAX, parse: (address) => this.parseTag(address) },
     openSession: (signal) => this.openSession(signal),
-    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
+    prepareRead: (tags) => this.prepareRead(tags),
+    readTags: (session, tags, signal, prepared) => this.readTags(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
     isLinkError: endsRequest,
   };
@@ -228,14 +236,19 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag> {
     return response.data;
   }
 
-  private async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
-    const results: TagResult<PlcValue>[] = new Array(tags.length);
+  /** The fetch ranges of a tag list (they depend on the tags and the endpoint's DB unit only). */
+  private prepareRead(tags: readonly Tag[]): FwPrepared {
+    const unreadable: number[] = [];
     const readable: number[] = [];
-    tags.forEach((tag, i) => {
-      if (tag.area === 'PA') results[i] = { ok: false, error: wrongDirection(tag, 'read') };
-      else readable.push(i);
-    });
+    tags.forEach((tag, i) => (tag.area === 'PA' ? unreadable : readable).push(i));
     const ranges = this.mergeRanges(readable.map((i) => tags[i]!)).map((r) => ({ ...r, tags: r.tags.map((k) => readable[k]!) }));
+    return { unreadable, ranges };
+  }
+
+  private async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal, prepared = this.prepareRead(tags)): Promise<TagResult<PlcValue>[]> {
+    const results: TagResult<PlcValue>[] = new Array(tags.length);
+    const { unreadable, ranges } = prepared;
+    for (const i of unreadable) results[i] = { ok: false, error: wrongDirection(tags[i]!, 'read') };
     await session.jobs.run(async () => {
       for (const range of ranges) {
         let data: Buffer | undefined;

@@ -35,18 +35,22 @@ export interface FreeportClientOptions extends Partial<ClientOptions> {
   profile?: Partial<FreeportProfile>;
 }
 
-export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
+/** What a prepared tag list keeps (Driver.prepareRead): its tags grouped by station, one read request each. */
+type FreeportPrepared = [station: number, group: { tag: FreeportTag; i: number }[]][];
+
+export class FreeportClient extends BaseClient<FreeportSession, FreeportTag, FreeportPrepared> {
   readonly protocol = 'freeport' as const;
   readonly endpoint: FreeportEndpoint;
   readonly profile: FreeportProfile;
   private readonly binding: BindingInterface | undefined;
-  protected readonly driver: Driver<FreeportSession, FreeportTag> = {
+  protected readonly driver: Driver<FreeportSession, FreeportTag, FreeportPrepared> = {
     syntax: {
       parse: (address) => parseFreeportAddress(address, { maxStation: maxStation(this.profile), dataBytes: this.profile.dataBytes }),
       ...STATION_AREAS,
     },
     openSession: (signal) => this.openSession(signal),
-    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
+    prepareRead: (tags) => byStation(tags),
+    readTags: (session, tags, signal, prepared) => this.readTags(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
     // A silent or garbling station fails its own tags; only a lost line fails the whole request.
     isLinkError,
@@ -102,10 +106,15 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag> {
     this.sessionLost(session, err);
   }
 
-  private async readTags(session: FreeportSession, tags: readonly FreeportTag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
+  private async readTags(
+    session: FreeportSession,
+    tags: readonly FreeportTag[],
+    signal?: AbortSignal,
+    prepared = byStation(tags),
+  ): Promise<TagResult<PlcValue>[]> {
     const results: TagResult<PlcValue>[] = new Array(tags.length);
     await Promise.all(
-      [...groupByStation(tags.map((tag, i) => ({ tag, i })))].map(async ([station, group]) => {
+      prepared.map(async ([station, group]) => {
         let reply: FreeportReply;
         try {
           reply = await session.exchange(readRequest(station, this.profile), signal);
@@ -197,6 +206,11 @@ const STATION_AREAS: Omit<TagSyntax<FreeportTag>, 'parse'> = Object.freeze({
   allowArea: (entry: string) => (/^ST\d+$/.test(entry) ? entry.replace(/^ST0+(?=\d)/, 'ST') : undefined),
   contains: (outer: FreeportTag, inner: FreeportTag) => outer.station === inner.station && spanContains(outer, inner),
 });
+
+/** A read's tags by station, with their indexes. */
+function byStation(tags: readonly FreeportTag[]): FreeportPrepared {
+  return [...groupByStation(tags.map((tag, i) => ({ tag, i })))];
+}
 
 function groupByStation<I extends { tag: FreeportTag }>(items: readonly I[]): Map<number, I[]> {
   const groups = new Map<number, I[]>();

@@ -1,7 +1,9 @@
 import { EventEmitter } from 'node:events';
 import type { Duplex } from 'node:stream';
 import { ConnectionError, PlcError, TagErrors, toPlcError, type TagResult } from '../errors';
-import type { LinkState, PlcClient, PlcValue, Protocol, RequestOptions } from '../types';
+import type { LinkState, PlcClient, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
+
+export type { PreparedRead } from '../types';
 import type { BackoffOptions } from './backoff';
 import type { Driver, DriverSession, DriverTag, ReadValues } from './driver';
 import { LinkSupervisor } from './supervisor';
@@ -44,11 +46,15 @@ export function endpointOptions(name: string, endpoint: EndpointOptions, options
   };
 }
 
-interface PreparedRead<T> {
+
+/** A parsed address list and what the driver prepared for it (behind a PreparedRead, or an array read() sees again). */
+interface ReadList<T, M> {
   /** A copy of the list, to notice a caller that changed its array between polls. */
   addresses: readonly string[];
   tags: T[];
   bad: { address: string; error: PlcError }[];
+  /** The driver's prepareRead(tags). */
+  prepared: M | undefined;
   /** Reads of this list so far; from the second on, results are built by a compiled object literal. */
   uses: number;
   values?: RecordBuilder | null;
@@ -67,7 +73,7 @@ const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) a
  * address strings. Falls back to the loop (null) where code generation is
  * disabled or a key would be special in a literal.
  */
-function recordBuilder(prepared: PreparedRead<{ readonly address: string }>, kind: 'values' | 'results'): RecordBuilder | undefined {
+function recordBuilder(prepared: ReadList<{ readonly address: string }, unknown>, kind: 'values' | 'results'): RecordBuilder | undefined {
   let build = prepared[kind];
   if (build !== undefined) return build ?? undefined;
   if (++prepared.uses < 2) return undefined;
@@ -103,14 +109,15 @@ const MAX_CACHED_TAGS = 10_000;
 
 /**
  * What every driver's client shares: the supervisor (connect, reconnect,
- * state events, close), address parsing with a cache, per-tag results,
+ * state events, close), address parsing with a cache, prepared reads
+ * (prepare(), and the same for an array read() is given again), per-tag results,
  * TagErrors and the write safety (read-only, allow-list). It knows no
  * protocol: a client supplies its `driver` (lib/link/driver.ts).
  *
  * Requests made while not connected fail fast with NOT_CONNECTED: a stale
  * write executed minutes later, when the link comes back, is worse than an error.
  */
-export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
+export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M = undefined>
   extends EventEmitter
   implements PlcClient
 {
@@ -120,7 +127,8 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
   protected readonly maxQueued: number | undefined;
   private readonly supervisor: LinkSupervisor<S>;
   private readonly tags = new Map<string, T | PlcError>();
-  private readonly preparedReads = new WeakMap<readonly string[], PreparedRead<T>>();
+  /** The lists behind arrays read() was given, by identity (see PreparedRead). */
+  private readonly lists = new WeakMap<readonly string[], ReadList<T, M>>();
   private readonly readOnly: boolean;
   private readonly allow: readonly string[] | undefined;
   private allowed: { areas: Set<string>; tags: T[] } | undefined;
@@ -143,7 +151,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
   }
 
   /** The protocol's part (lib/link/driver.ts); used from connect() on, so a field initialiser may set it. */
-  protected abstract readonly driver: Driver<S, T>;
+  protected abstract readonly driver: Driver<S, T, M>;
 
   get state(): LinkState {
     return this.supervisor.state;
@@ -203,15 +211,53 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
     return cached;
   }
 
-  async read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>> {
-    const prepared = this.prepare(addresses);
+  /**
+   * Parses the addresses once and keeps what this client's driver can
+   * compute ahead for them (see PreparedRead): the fast way to poll the same
+   * tags. Throws the AddressError (INVALID_ADDRESS, naming the address) of
+   * the first address that does not parse; nothing is sent. Needs no link:
+   * a list may be prepared before connect().
+   */
+  prepare(addresses: readonly string[]): PreparedRead {
+    if (!Array.isArray(addresses) || !addresses.every((a) => typeof a === 'string')) {
+      throw new PlcError('INVALID_ADDRESS', 'prepare() takes an array of address strings');
+    }
+    let list: ReadList<T, M> | undefined = this.readList(addresses);
+    const [bad] = list.bad;
+    if (bad) throw bad.error;
+    const closed = () => new PlcError('CLOSED', `a prepared read of ${this.name} was used after its close()`);
+    return {
+      addresses: Object.freeze(list.addresses.slice()),
+      read: (options) => (list ? this.readOf(list, options) : Promise.reject(closed())),
+      readDetailed: (options) => (list ? this.readDetailedOf(list, options) : Promise.reject(closed())),
+      close: () => void (list = undefined),
+    };
+  }
+
+  /**
+   * Reads tags. Polling the same list? Prefer prepare(). Given the same
+   * array object again (unchanged), read() recognises it and skips what
+   * prepare() saves as well; a new array each time is parsed and prepared
+   * again (an S7 client finds the plan in its bounded plan cache).
+   */
+  read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>> {
+    let list: ReadList<T, M>;
+    try {
+      list = this.listOf(addresses);
+    } catch (err) {
+      return Promise.reject(err);
+    }
+    return this.readOf(list, options);
+  }
+
+  private async readOf(prepared: ReadList<T, M>, options?: RequestOptions): Promise<Record<string, PlcValue>> {
     if (prepared.bad.length > 0) {
-      const results = await this.readDetailed(addresses, options);
+      const results = await this.readDetailedOf(prepared, options);
       throw new TagErrors(results);
     }
     const session = this.liveSession();
     const { tags } = prepared;
-    const { values, errors } = tags.length > 0 ? await this.valuesOf(session, tags, options?.signal) : NO_VALUES;
+    const { values, errors } = tags.length > 0 ? await this.valuesOf(session, tags, options?.signal, prepared.prepared) : NO_VALUES;
     if (errors) return this.valuesOrThrow(this.byAddress(prepared, toResults(values, errors)));
     const build = recordBuilder(prepared, 'values');
     if (build) return build(values) as Record<string, PlcValue>;
@@ -221,10 +267,10 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
   }
 
   /** The driver's readValues, or the same outcome derived from its readTags. */
-  private async valuesOf(session: S, tags: readonly T[], signal?: AbortSignal): Promise<ReadValues> {
+  private async valuesOf(session: S, tags: readonly T[], signal: AbortSignal | undefined, prepared: M | undefined): Promise<ReadValues> {
     const { driver } = this;
-    if (driver.readValues) return driver.readValues(session, tags, signal);
-    const results = await driver.readTags(session, tags, signal);
+    if (driver.readValues) return driver.readValues(session, tags, signal, prepared);
+    const results = await driver.readTags(session, tags, signal, prepared);
     const values = new Array<PlcValue>(results.length);
     let errors: (PlcError | undefined)[] | undefined;
     for (let i = 0; i < results.length; i++) {
@@ -245,18 +291,25 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
     return values;
   }
 
-  async readDetailed(
-    addresses: readonly string[],
-    options: RequestOptions = {},
-  ): Promise<Record<string, TagResult<PlcValue>>> {
+  /** A result per tag; like read(), fastest for a prepared list (prepare()) or the same array again. */
+  readDetailed(addresses: readonly string[], options: RequestOptions = {}): Promise<Record<string, TagResult<PlcValue>>> {
+    let list: ReadList<T, M>;
+    try {
+      list = this.listOf(addresses);
+    } catch (err) {
+      return Promise.reject(err);
+    }
+    return this.readDetailedOf(list, options);
+  }
+
+  private async readDetailedOf(prepared: ReadList<T, M>, options: RequestOptions = {}): Promise<Record<string, TagResult<PlcValue>>> {
     const session = this.liveSession();
-    const prepared = this.prepare(addresses);
-    const read = prepared.tags.length > 0 ? await this.driver.readTags(session, prepared.tags, options.signal) : [];
+    const read = prepared.tags.length > 0 ? await this.driver.readTags(session, prepared.tags, options.signal, prepared.prepared) : [];
     return this.byAddress(prepared, read);
   }
 
   /** Results keyed by address: unparsable addresses first, then the tags read (a tag given twice: its last result). */
-  private byAddress(prepared: PreparedRead<T>, read: readonly TagResult<PlcValue>[]): Record<string, TagResult<PlcValue>> {
+  private byAddress(prepared: ReadList<T, M>, read: readonly TagResult<PlcValue>[]): Record<string, TagResult<PlcValue>> {
     const build = prepared.bad.length === 0 ? recordBuilder(prepared, 'results') : undefined;
     if (build) return build(read) as Record<string, TagResult<PlcValue>>;
     const results: Record<string, TagResult<PlcValue>> = {};
@@ -267,14 +320,20 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
   }
 
   /**
-   * The parsed tags of an address list. Polls pass the same array again and
-   * again: it is recognised by identity (and checked element by element, in
-   * case the caller changed it), so the tags array keeps its identity too and
-   * the driver's plan cache finds it at once.
+   * The list behind an array read() is given: polls that pass the same
+   * array again are recognised by identity (and checked element by element,
+   * in case the caller changed it), and get what a PreparedRead keeps.
    */
-  private prepare(addresses: readonly string[]): PreparedRead<T> {
-    const known = this.preparedReads.get(addresses);
+  private listOf(addresses: readonly string[]): ReadList<T, M> {
+    const known = this.lists.get(addresses);
     if (known && sameStrings(known.addresses, addresses)) return known;
+    const list = this.readList(addresses);
+    this.lists.set(addresses, list);
+    return list;
+  }
+
+  /** Parses an address list and has the driver prepare its tags. */
+  private readList(addresses: readonly string[]): ReadList<T, M> {
     const tags: T[] = [];
     const bad: { address: string; error: PlcError }[] = [];
     for (const address of addresses) {
@@ -282,9 +341,8 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag>
       if (tag instanceof PlcError) bad.push({ address, error: tag });
       else tags.push(tag);
     }
-    const prepared: PreparedRead<T> = { addresses: addresses.slice(), tags, bad, uses: 0 };
-    this.preparedReads.set(addresses, prepared);
-    return prepared;
+    const prepared = tags.length > 0 ? this.driver.prepareRead?.(tags) : undefined;
+    return { addresses: addresses.slice(), tags, bad, prepared, uses: 0 };
   }
 
   async write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void> {

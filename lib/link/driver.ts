@@ -63,9 +63,25 @@ export interface TagSyntax<T extends DriverTag> {
  * One protocol's part of a client. Every promise settles; none of these
  * is called while the client has no live session (requests then fail with
  * NOT_CONNECTED before reaching the driver).
+ *
+ * `M` is what the driver works out once per tag list that is read again and
+ * again (prepareRead): the client keeps it with the list (a PreparedRead, or
+ * the list behind an array read() sees again) and hands it back with that
+ * list's tags.
  */
-export interface Driver<S extends DriverSession, T extends DriverTag> {
+export interface Driver<S extends DriverSession, T extends DriverTag, M = undefined> {
   readonly syntax: TagSyntax<T>;
+
+  /**
+   * Optional: what this driver can compute once for a tag list (its grouping,
+   * its plan, its request frames) so that polling the list does not compute
+   * it again. Called once per list, before any session may exist: what
+   * depends on the link (an S7 plan depends on the PDU size and the item
+   * limit) the driver fills in at a read and checks at every read, so a
+   * reconnect to another CPU re-plans. Must not throw; every read of the list
+   * gets it as `prepared`.
+   */
+  prepareRead?(tags: readonly T[]): M;
 
   /**
    * Opens a session: transport, handshakes, and the handlers that report
@@ -79,14 +95,14 @@ export interface Driver<S extends DriverSession, T extends DriverTag> {
    * out of range, undecodable) is its result; throw only when the whole
    * request failed (isLinkError).
    */
-  readTags(session: S, tags: readonly T[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]>;
+  readTags(session: S, tags: readonly T[], signal?: AbortSignal, prepared?: M): Promise<TagResult<PlcValue>[]>;
 
   /**
    * read()'s path: the same outcome as readTags without a result object per
    * tag. Optional: without it the client derives it from readTags; a driver
    * whose poll is hot implements it (and derives readTags from it).
    */
-  readValues?(session: S, tags: readonly T[], signal?: AbortSignal): Promise<ReadValues>;
+  readValues?(session: S, tags: readonly T[], signal?: AbortSignal, prepared?: M): Promise<ReadValues>;
 
   /**
    * One result per item, in order. Encode values here: a ValueError is that

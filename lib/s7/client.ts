@@ -26,7 +26,7 @@ import { decodeTag, tagDecoder, type TagDecoder } from '../values';
 import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadAck, type ReadItemTable, type S7Message } from './codec';
 import { CotpType, DEFAULT_MAX_ITEMS, describeReturnCode, headerError } from './constants';
 import { openS7Session, S7Session } from './client-session';
-import { planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './plan';
+import { maxReadItems, planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './plan';
 import type { BlockCounts, BlockInfo, UploadedBlock } from './blocks';
 import type { BlockType } from './constants';
 import type { DiagnosticEntry } from './diagnostics';
@@ -47,7 +47,11 @@ export interface S7Stats {
   requests: number;
   /** Replies that matched no pending job (wrong, duplicated or late PDU reference). */
   ignoredReplies: number;
-  /** Read plans computed; polling the same tag list again uses its plan (and its request frames) as they are. */
+  /**
+   * Read plans computed. A prepared list (client.prepare, or the same array
+   * given to read() again) keeps its plan and request frames: polling it
+   * plans nothing until the PDU size or the item limit changes.
+   */
   plansMade: number;
 }
 
@@ -73,21 +77,33 @@ function newStats(plans: ReadPlanCache): S7Stats {
   };
 }
 
-export class S7Client extends BaseClient<S7Session, Tag> {
+/**
+ * What a prepared tag list keeps (Driver.prepareRead): its merged plan and
+ * the plan's request frames, for the PDU size and item limit the plan was
+ * made for. A read at another PDU size (a reconnect to another CPU) or after
+ * the item limit was learnt plans again.
+ */
+interface S7Prepared {
+  compiled: CompiledRead | undefined;
+}
+
+export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   readonly protocol: Protocol = 's7';
   readonly endpoint: S7Endpoint;
   private readonly plans = new ReadPlanCache();
   readonly stats: S7Stats = newStats(this.plans);
+  /** Each cached plan's request frames, for a list that finds its plan in the cache (the same addresses in a new array). */
   private readonly compiledPlans = new WeakMap<ReadPlan, CompiledRead>();
   /** Items per job: the URL's maxItems or 20, lowered when the PLC serves fewer (learnItemLimit). */
   private itemLimit: number;
   private planOptions: PlanOptions;
   private readonly services: S7Services;
-  protected readonly driver: Driver<S7Session, Tag> = {
+  protected readonly driver: Driver<S7Session, Tag, S7Prepared> = {
     syntax: S7_TAG_SYNTAX,
     openSession: (signal) => this.openSession(signal),
-    readTags: (session, tags, signal) => this.readTags(session, tags, signal),
-    readValues: (session, tags, signal) => this.readValues(session, tags, signal),
+    prepareRead: () => ({ compiled: undefined }),
+    readTags: (session, tags, signal, prepared) => this.readTags(session, tags, signal, prepared),
+    readValues: (session, tags, signal, prepared) => this.readValues(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
     isLinkError,
   };
@@ -326,14 +342,14 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 
   // ---------------------------------------------------------------- reads
 
-  private async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<TagResult<PlcValue>[]> {
-    const { values, errors } = await this.readValues(session, tags, signal);
+  private async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal, prepared?: S7Prepared): Promise<TagResult<PlcValue>[]> {
+    const { values, errors } = await this.readValues(session, tags, signal, prepared);
     return toResults(values, errors);
   }
 
-  private async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal): Promise<ReadValues> {
+  private async readValues(session: S7Session, tags: readonly Tag[], signal?: AbortSignal, prepared?: S7Prepared): Promise<ReadValues> {
     this.stats.requests++;
-    const read = await this.readServed(session, tags, true, signal);
+    const read = await this.readServed(session, tags, true, signal, prepared);
     if (read.retry.length > 0) {
       // An item merged from several tags failed (e.g. one tag past the end of a DB): read those tags alone.
       const alone = read.retry.map((i) => tags[i]!);
@@ -349,20 +365,40 @@ export class S7Client extends BaseClient<S7Session, Tag> {
   }
 
   /**
-   * Reads `tags` with the plan for the current item limit (cached when
-   * merged). When the PLC answered fewer items than a job asked for, that is
-   * its limit: learnt, and the tags are read again with a plan for it (each
-   * round plans for fewer items than the one before, so this ends).
+   * Reads `tags` with the plan for the current item limit: merged, the one
+   * `prepared` keeps for the list; not merged (every tag its own item, for
+   * the tags of failed merged items), a plan of its own. When the PLC
+   * answered fewer items than a job asked for, that is its limit: learnt,
+   * and the tags are read again with a plan for it (each round plans for
+   * fewer items than the one before, so this ends).
    */
-  private async readServed(session: S7Session, tags: readonly Tag[], merge: boolean, signal?: AbortSignal): Promise<CollectedRead> {
+  private async readServed(session: S7Session, tags: readonly Tag[], merge: boolean, signal?: AbortSignal, prepared?: S7Prepared): Promise<CollectedRead> {
     for (;;) {
-      const plan = merge
-        ? this.plans.get(tags, session.pduSize, this.planOptions)
-        : planRead(tags, session.pduSize, { merge: false, maxItems: this.itemLimit });
-      const read = await this.execute(session, tags, plan, signal);
+      const c = merge
+        ? this.preparedPlan(session.pduSize, tags, prepared ?? { compiled: undefined })
+        : compileRead(planRead(tags, session.pduSize, { merge: false, maxItems: this.itemLimit }), tags);
+      const read = await this.execute(session, tags, c, signal);
       if (read.served === 0) return read;
       this.learnItemLimit(read.served);
     }
+  }
+
+  /**
+   * A prepared list's plan and frames, made again (found in the plan cache,
+   * or planned) when the PDU size or the item limit differs from the one
+   * they were made for. Re-planning replaces them; a poll still in flight
+   * keeps the ones it started with.
+   */
+  private preparedPlan(pduSize: number, tags: readonly Tag[], prepared: S7Prepared): CompiledRead {
+    const known = prepared.compiled;
+    if (known && known.plan.pduSize === pduSize && known.plan.maxItems === maxReadItems(pduSize, this.itemLimit)) return known;
+    const fresh = this.plans.get(tags, pduSize, this.planOptions);
+    let c = this.compiledPlans.get(fresh);
+    if (!c) {
+      c = compileRead(fresh, tags);
+      this.compiledPlans.set(fresh, c);
+    }
+    return (prepared.compiled = c);
   }
 
   /** The PLC served only `served` items of a job: jobs carry at most that many from now on. */
@@ -376,18 +412,8 @@ export class S7Client extends BaseClient<S7Session, Tag> {
     this.emit('itemLimit', { limit: served, was } satisfies ItemLimitEvent);
   }
 
-  /** A plan's request frames (reused while not in flight) and where each tag's bytes lie, computed once per plan. */
-  private compiled(plan: ReadPlan, tags: readonly Tag[]): CompiledRead {
-    let c = this.compiledPlans.get(plan);
-    if (!c) {
-      c = compileRead(plan, tags);
-      this.compiledPlans.set(plan, c);
-    }
-    return c;
-  }
-
-  private execute(session: S7Session, tags: readonly Tag[], plan: ReadPlan, signal?: AbortSignal): Promise<CollectedRead> {
-    const c = this.compiled(plan, tags);
+  private execute(session: S7Session, tags: readonly Tag[], c: CompiledRead, signal?: AbortSignal): Promise<CollectedRead> {
+    const { plan } = c;
     const n = plan.pdus.length;
     const answers: Buffer[] = new Array<Buffer>(n);
     if (n === 0) return Promise.resolve(this.collect(session, tags, plan, c, answers));
@@ -598,7 +624,9 @@ export class S7Client extends BaseClient<S7Session, Tag> {
 /** What a read of one plan found: values and errors per tag, the tags to read alone, and `served` (see collect). */
 type CollectedRead = ReadValues & { retry: number[]; served: number };
 
+/** A plan ready to send: its request frames (reused while not in flight) and where each tag's bytes lie. */
 interface CompiledRead {
+  plan: ReadPlan;
   /** Per PDU: the Read Var frame (its PDU reference is set when sent), reused while not in flight. */
   frames: Buffer[];
   busy: Uint8Array;
@@ -640,6 +668,7 @@ function compileRead(plan: ReadPlan, tags: readonly Tag[]): CompiledRead {
   }
   let shared: Map<number, number> | undefined;
   return {
+    plan,
     frames: plan.pdus.map((pdu) => encodeReadRequest(0, pdu.items)),
     busy,
     release: plan.pdus.map((_, p) => () => (busy[p] = 0)),
