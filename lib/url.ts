@@ -51,7 +51,7 @@ export const DEFAULTS = Object.freeze({
   ...S7_URLS.defaults,
   ...FETCHWRITE_URLS.defaults,
   ...FREEPORT_URLS.defaults,
-}) as Readonly<typeof S7_URLS.defaults & typeof FETCHWRITE_URLS.defaults & typeof FREEPORT_URLS.defaults>;
+}) as Readonly<typeof S7_URLS.defaults>; // the three drivers' defaults share one type (UrlScheme)
 
 export type S7CpuPreset = 's7-1500' | 's7-1200' | 's7-400' | 's7-300' | 'logo' | 's7-200';
 

@@ -86,6 +86,8 @@ function parseExactJson(text: string): unknown {
       }
     }
     if (c === '"') {
+      // JSON strings exclude the control characters U+0000..U+001F (RFC 8259, section 7).
+      // eslint-disable-next-line no-control-regex
       const m = /^"(?:[^"\\\u0000-\u001f]|\\["\\/bfnrt]|\\u[0-9a-fA-F]{4})*"/.exec(text.slice(i));
       if (!m) fail('bad string');
       i += m![0].length;

@@ -18,7 +18,6 @@ const ROOT = path.resolve(__dirname, '../..');
 const LOCALES = { 'en-US': 'en-US', de: 'de-DE', 'zh-CN': 'zh-CN' } as const;
 type Locale = keyof typeof LOCALES;
 
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 const lib = require(path.join(ROOT, 'dist/lib/index.js'));
 
 /** The flow the editor opens: nodes with and without configuration errors. */
@@ -447,7 +446,7 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
           await page.selectOption('#node-input-action', 'state');
           await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning').style.display === 'none');
           await page.selectOption('#node-input-action', 'clock-sync');
-          await page.waitForFunction((text) => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.style.display !== 'none', noControl);
+          await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.style.display !== 'none');
           expect(await warning(page)).to.equal(noControl);
           await page.click('#node-dialog-cancel');
           await page.waitForSelector('#node-input-action', { state: 'detached', timeout: 10_000 });

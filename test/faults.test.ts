@@ -466,6 +466,7 @@ describe('faults over real sockets: a typed error in time, no write dropped, rec
         const outcomes: (number | PlcError)[] = [];
         let polling = true;
         const poller = (async () => {
+          // eslint-disable-next-line no-unmodified-loop-condition -- cleared by the test once the restart is done; each pass awaits a read
           while (polling) {
             try {
               outcomes.push((await c.read([rig.addr(15)]))[rig.addr(15)] as number);

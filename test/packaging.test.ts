@@ -253,7 +253,6 @@ function listFiles(dir: string): string[] {
 
 describe('packaging: the Dashboard 2 example', () => {
   it('is exactly the npm start demo flow on the demo plant\'s ports (regenerate with node demo/flows.js)', () => {
-    // eslint-disable-next-line @typescript-eslint/no-require-imports
     const { demoFlow, DEMO_URLS } = require(path.join(__dirname, '../../demo/flows.js')) as { demoFlow(u: unknown): unknown[]; DEMO_URLS: unknown };
     const file = path.join(__dirname, '../../examples/Dashboard 2/Plant dashboard for all three protocols.json');
     const flow = JSON.parse(fs.readFileSync(file, 'utf8')) as { type: string; path?: string }[];

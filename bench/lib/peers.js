@@ -13,7 +13,7 @@ function peer(name) {
     return require(require.resolve(name, { paths: [INTEROP] }));
   } catch (err) {
     if (err && err.code === 'MODULE_NOT_FOUND') {
-      throw new Error(`${name} is not installed: run \`(cd test/interop && npm ci)\` first`);
+      throw new Error(`${name} is not installed: run \`(cd test/interop && npm ci)\` first`, { cause: err });
     }
     throw err;
   }
@@ -26,7 +26,7 @@ function plcwire() {
   try {
     return require(path.join(DIST, 'lib/index.js'));
   } catch (err) {
-    throw new Error(`dist/ is not built (run \`npm run build\`): ${err.message}`);
+    throw new Error(`dist/ is not built (run \`npm run build\`): ${err.message}`, { cause: err });
   }
 }
 

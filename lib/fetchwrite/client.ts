@@ -246,7 +246,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
   }
 
   private async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal, prepared = this.prepareRead(tags)): Promise<TagResult<PlcValue>[]> {
-    const results: TagResult<PlcValue>[] = new Array(tags.length);
+    const results: TagResult<PlcValue>[] = new Array<TagResult<PlcValue>>(tags.length);
     const { unreadable, ranges } = prepared;
     for (const i of unreadable) results[i] = { ok: false, error: wrongDirection(tags[i]!, 'read') };
     await session.jobs.run(async () => {
@@ -338,7 +338,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
   }
 
   private async writeTags(session: FwSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
-    const results: TagResult<void>[] = new Array(items.length);
+    const results: TagResult<void>[] = new Array<TagResult<void>>(items.length);
     const valid: number[] = [];
     items.forEach((it, i) => {
       if (it.tag.area === 'PE') {

@@ -112,7 +112,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag, Fre
     signal?: AbortSignal,
     prepared = byStation(tags),
   ): Promise<TagResult<PlcValue>[]> {
-    const results: TagResult<PlcValue>[] = new Array(tags.length);
+    const results: TagResult<PlcValue>[] = new Array<TagResult<PlcValue>>(tags.length);
     await Promise.all(
       prepared.map(async ([station, group]) => {
         let reply: FreeportReply;
@@ -140,7 +140,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag, Fre
     items: readonly { tag: FreeportTag; value: unknown }[],
     signal?: AbortSignal,
   ): Promise<TagResult<void>[]> {
-    const results: TagResult<void>[] = new Array(items.length);
+    const results: TagResult<void>[] = new Array<TagResult<void>>(items.length);
     const valid: { tag: FreeportTag; value: unknown; i: number; bytes: Buffer }[] = [];
     items.forEach(({ tag, value }, i) => {
       try {

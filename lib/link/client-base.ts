@@ -81,6 +81,7 @@ function recordBuilder(prepared: ReadList<{ readonly address: string }, unknown>
   const keys = prepared.tags.map((t) => t.address);
   if (!keys.includes('__proto__')) {
     try {
+      // eslint-disable-next-line @typescript-eslint/no-implied-eval -- keys are JSON-quoted (see above)
       build = new Function('read', `return {${keys.map((k, i) => `${JSON.stringify(k)}: read[${i}]`).join(',\n')}};`) as RecordBuilder;
     } catch {
       build = null;

@@ -130,7 +130,7 @@ export function jobPduRef(frame: Buffer): number {
 }
 
 /** Scratch per item, reused by every job (jobs are served synchronously, one at a time). */
-const itemBuffer: (Buffer | undefined)[] = new Array(256);
+const itemBuffer: (Buffer | undefined)[] = new Array<Buffer | undefined>(256);
 const itemOffset = new Int32Array(256);
 const itemLength = new Int32Array(256);
 const itemCode = new Uint8Array(256);

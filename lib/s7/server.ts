@@ -130,6 +130,8 @@ export class S7Server extends EventEmitter {
     this.wantPort = options.port ?? 102;
     const profile = options.profile ?? 's7-1500';
     const resolved = typeof profile === 'string' ? PROFILES[profile] : profile;
+    // Only a name can miss: an object profile is its own resolution.
+    // eslint-disable-next-line @typescript-eslint/no-base-to-string
     if (!resolved) throw new TypeError(`unknown S7 profile "${String(profile)}" (${Object.keys(PROFILES).join(', ')})`);
     this.profile = resolved;
     this.memory = options.memory ?? new PlcMemory(options.layout ? toMemoryLayout(options.layout) : resolved.layout);

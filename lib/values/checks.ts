@@ -31,6 +31,8 @@ export function show(value: unknown): string {
   if (value === undefined) return 'undefined';
   if (typeof value === 'object') return 'an object';
   if (typeof value === 'function') return 'a function';
+  // A primitive is left (number, string, boolean, bigint, symbol): String() shows it as it is.
+  // eslint-disable-next-line @typescript-eslint/no-base-to-string
   return String(value);
 }
 

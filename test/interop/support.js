@@ -9,7 +9,7 @@ let snap7;
 try {
   snap7 = require('node-snap7');
 } catch (err) {
-  throw new Error(`node-snap7 is not installed: run \`(cd test/interop && npm ci)\` (done by .ci/run)\n${err.message}`);
+  throw new Error(`node-snap7 is not installed: run \`(cd test/interop && npm ci)\` (done by .ci/run)\n${err.message}`, { cause: err });
 }
 
 function freePort() {

@@ -9,7 +9,6 @@ import { loadCatalogs, withCatalog } from './catalogs';
 import { fetchWriteSim } from './sims';
 import { ALL_NODES, helper, nodes, Recorder, until } from './support';
 
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 const lib = require('../../lib/index');
 const { DiagnosticsCursor, actionOf } = require('../../../nodes/shared/control.js');
 

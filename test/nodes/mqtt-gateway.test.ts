@@ -12,7 +12,6 @@ import { helper, nodes, ROOT, until } from './support';
 import { s7Sim } from './sims';
 import type { Sim } from './support';
 
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 const mqtt = require('mqtt');
 
 const RED_PATH = require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red');

@@ -2,7 +2,6 @@
 import type { Sim } from './support';
 
 /* The library's simulators are loaded at run time so this file compiles while a driver is still being written. */
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 const lib = (p: string): any => require(`../../lib/${p}`);
 
 export async function s7Sim(): Promise<Sim> {

@@ -12,7 +12,6 @@ const LIB_DIR = path.join(ROOT, 'dist', 'lib') + path.sep;
 export const RED_PATH = require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red');
 const CORE = path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(RED_PATH)] }));
 
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 export const helper: any = require('node-red-node-test-helper');
 helper.init(RED_PATH);
 

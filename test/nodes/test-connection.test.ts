@@ -9,7 +9,6 @@ import * as http from 'node:http';
 import * as net from 'node:net';
 import { ALL_NODES, helper, until } from './support';
 
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 const lib = require('../../lib/index');
 
 /** A TCP peer that accepts and never answers; `open` counts the sockets still open on its side. */

@@ -61,9 +61,8 @@ async function main(): Promise<void> {
 
   // In the helper RED._ is the identity: a close timeout is logged as the key "nodes.flows.stopping-error".
   // Let closes settle, then measure: one connection, and polls at the configured pace.
-  let connected = server.connectionCount;
   await until(() => server.connectionCount === 1, 3000, 'one connection').catch(() => undefined);
-  connected = server.connectionCount;
+  const connected = server.connectionCount;
   out.skip();
   const readsBefore = reads;
   const windowMs = 2000;

@@ -11,9 +11,7 @@
  */
 import * as net from 'node:net';
 
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 const { Aedes } = require('aedes');
-// eslint-disable-next-line @typescript-eslint/no-var-requires
 const memory = require('aedes-persistence');
 
 export class TestBroker {

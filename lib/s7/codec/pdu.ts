@@ -379,7 +379,7 @@ function decodeItems(params: Buffer): S7Item[] {
   if (params.length < 2) throw new ProtocolError('request parameters too short');
   const count = params[1]!;
   if (params.length !== 2 + READ_ITEM * count) throw new ProtocolError(`${count} items need ${2 + READ_ITEM * count} parameter bytes, got ${params.length}`);
-  const items: S7Item[] = new Array(count);
+  const items: S7Item[] = new Array<S7Item>(count);
   for (let i = 0; i < count; i++) {
     const o = 2 + READ_ITEM * i;
     if (params[o] !== 0x12 || params[o + 1] !== 0x0a || params[o + 2] !== 0x10) {
@@ -402,7 +402,7 @@ function decodeItems(params: Buffer): S7Item[] {
  * `05 00 00 04` and no bytes (its S7 data length counts 4 bytes for the item).
  */
 function decodeDataItems(data: Buffer, count: number, answer = false): ReadResponseItem[] {
-  const items: ReadResponseItem[] = new Array(count);
+  const items: ReadResponseItem[] = new Array<ReadResponseItem>(count);
   let p = 0;
   for (let i = 0; i < count; i++) {
     if (p + 4 > data.length) throw new ProtocolError(`data item ${i + 1} of ${count} is missing`);

@@ -129,7 +129,7 @@ function draftOf(atoms: readonly Atom[], runs: readonly { first: number; last: n
   const members: number[][] = Array.from({ length: pdus }, () => []);
   runs.forEach((_, x) => members[binOf[x]!]!.push(x));
   const bins: Bin[] = [];
-  const placements: Draft['placements'] = new Array(atoms.length);
+  const placements: Draft['placements'] = new Array<Draft['placements'][number]>(atoms.length);
   for (const list of members) {
     if (list.length === 0) continue;
     const odd = list.findIndex((x) => (atoms[runs[x]!.last]!.end - atoms[runs[x]!.first]!.start) & 1);
