@@ -1,6 +1,6 @@
 'use strict';
 const { attach, settleWithin } = require('./shared/user');
-const { LifeSignWatch, nextLifeSign } = require('./shared/lifesign');
+const { LifeSignWatch, nextLifeSign } = require('..');
 const { linkStatus, sentStatus, aliveStatus, lostStatus, waitingStatus } = require('./shared/status');
 
 /**

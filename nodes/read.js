@@ -1,6 +1,6 @@
 'use strict';
 const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
-const { tagTable, tagsOfMessage, outcomes, ChangeFilter, codeError } = require('./shared/tags');
+const { tagTable, tagsOfMessage, outcomes, tagFailure, ChangeFilter, PlcError } = require('..');
 const { tagErrorsStatus } = require('./shared/status');
 
 /** Reads waiting behind the running one at most; more is an error, not memory growth. */
@@ -44,7 +44,7 @@ module.exports = function (RED) {
     /** Runs reads one after another. */
     function serial(job) {
       if (waiting >= MAX_WAITING_READS) {
-        return Promise.reject(codeError('QUEUE_FULL', `more than ${MAX_WAITING_READS} reads waiting; the PLC answers slower than messages arrive`));
+        return Promise.reject(new PlcError('QUEUE_FULL', `more than ${MAX_WAITING_READS} reads waiting; the PLC answers slower than messages arrive`));
       }
       waiting++;
       const run = chain.then(() => {
@@ -74,17 +74,6 @@ module.exports = function (RED) {
       failing = bad > 0;
       if (failing) node.status(tagErrorsStatus(RED._, bad));
       else if (connection) connection.showLink();
-    }
-
-    /** An Error naming every failed tag, for done(err) / node.error(err, msg). */
-    function failure(bad) {
-      const first = bad[0];
-      const more = bad.length > 1 ? ` (+${bad.length - 1})` : '';
-      const label = first.name === first.address ? `"${first.address}"` : `"${first.name}" (${first.address})`;
-      const err = new Error(`read ${label}: ${first.error.message}${more}`);
-      err.code = first.error.code;
-      err.tag = first.name;
-      return err;
     }
 
     /** Messages for `list` in the node's output mode, built on `base` (the input message, if any). */
@@ -144,7 +133,7 @@ module.exports = function (RED) {
           for (const o of list) if (o.ok) reported.delete(o.name);
           if (bad.length > 0) {
             bad.forEach((o) => reported.add(o.name));
-            node.error(failure(bad), { topic: node.name || 'plcwire', payload: Object.fromEntries(bad.map((o) => [o.name, o.error])) });
+            node.error(tagFailure('read', bad), { topic: node.name || 'plcwire', payload: Object.fromEntries(bad.map((o) => [o.name, o.error])) });
           }
         },
         (err) => {
@@ -162,7 +151,7 @@ module.exports = function (RED) {
       const asked = tagsOfMessage(msg.tags);
       const list = asked || tags;
       if (list.length === 0) {
-        done(codeError('INVALID_ADDRESS', RED._('plcwire.errors.noTags')));
+        done(new PlcError('INVALID_ADDRESS', RED._('plcwire.errors.noTags')));
         return;
       }
       serial(() => read(list)).then(
@@ -172,7 +161,7 @@ module.exports = function (RED) {
           if (!asked) showQuality(results);
           emit(send, results, msg, mode);
           const bad = results.filter((o) => !o.ok);
-          done(bad.length > 0 ? failure(bad) : undefined);
+          done(bad.length > 0 ? tagFailure('read', bad) : undefined);
         },
         (err) => done(err),
       );
