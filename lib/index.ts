@@ -20,6 +20,7 @@ export {
   tagFailure,
   valueChanged,
   ChangeFilter,
+  PolledTable,
   writeRequest,
   LifeSignWatch,
   nextLifeSign,
