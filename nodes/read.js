@@ -22,7 +22,9 @@ function uniqueAddresses(list) {
  * per-tag outcome objects. Any failed tag takes the long way, through
  * per-tag outcomes. Both send the same messages. Every message sent is a
  * fresh object, one send() each: nothing a downstream node changes in one
- * message shows in another, and Node-RED clones none of them.
+ * message shows in another, and Node-RED clones none of them (it clones
+ * every message after the first of one send([msgs]) call). The messages of
+ * one read share one _msgid, as those of one send([msgs]) call do.
  */
 module.exports = function (RED) {
   function PlcwireRead(config) {
@@ -148,11 +150,15 @@ module.exports = function (RED) {
     function emit(send, list, base, mode) {
       const out = mode === 'changes' ? changes.filter(list) : list;
       const msgs = messages(out, base, mode === 'changes' ? 'per-tag' : mode);
-      for (const msg of msgs) send(msg);
+      const id = base || msgs.length < 2 ? undefined : RED.util.generateId();
+      for (const msg of msgs) {
+        if (id) msg._msgid = id;
+        send(msg);
+      }
     }
 
-    /** A per-tag message of row `i` of the table, which read `value`. */
-    function rowMessage(i, value, base) {
+    /** A per-tag message of row `i` of the table, which read `value` (`id`: the poll's message id, without `base`). */
+    function rowMessage(i, value, base, id) {
       const t = tags[i];
       let msg;
       if (base) {
@@ -162,7 +168,7 @@ module.exports = function (RED) {
         msg.payload = value;
         msg.quality = 'good';
         delete msg.errors;
-      } else msg = { topic: t.name, address: t.address, payload: value, quality: 'good' };
+      } else msg = { topic: t.name, address: t.address, payload: value, quality: 'good', _msgid: id };
       // Two rows of one address read one value: the later row's message gets its own copy.
       return table.repeated[i] ? RED.util.cloneMessage(msg) : msg;
     }
@@ -187,9 +193,12 @@ module.exports = function (RED) {
       const row = table.rowValues(values);
       const rows = mode === 'changes' ? changes.changedRows(table, row) : undefined;
       const n = rows ? rows.length : row.length;
+      if (n === 0) return;
+      // The messages of one read share one id, as the messages of one send([msgs]) call do.
+      const id = base ? undefined : RED.util.generateId();
       for (let k = 0; k < n; k++) {
         const i = rows ? rows[k] : k;
-        send(rowMessage(i, row[i], base && k < n - 1 ? RED.util.cloneMessage(base) : base));
+        send(rowMessage(i, row[i], base && k < n - 1 ? RED.util.cloneMessage(base) : base, id));
       }
     }
 

@@ -72,6 +72,19 @@ describe('nodes: read messages downstream', function () {
     expect(seen.arrived.find((a) => a.msg === next)!.payload).to.equal('[1,2,3]');
   });
 
+  it('per-tag: the messages of one poll share one _msgid, as the messages of one send() call do', async () => {
+    const tags = [0, 1, 2].map((i) => ({ name: `t${i}`, address: sim.addr(i) }));
+    await helper.load(ALL_NODES, flow(sim, { output: 'per-tag', tags }));
+    const rec = new Recorder(helper.getNode('out'));
+    const polls = [];
+    for (let p = 0; p < 2; p++) polls.push([await rec.next(), await rec.next(), await rec.next()]);
+    for (const poll of polls) {
+      expect(poll.map((m) => m.topic)).to.deep.equal(['t0', 't1', 't2']);
+      expect(new Set(poll.map((m) => m._msgid)).size).to.equal(1);
+    }
+    expect(polls[0]![0]._msgid).not.to.equal(polls[1]![0]._msgid);
+  });
+
   it('object mode: every poll sends new objects, so a node that changes one message changes no later one', async () => {
     await helper.load(ALL_NODES, flow(sim, { output: 'object', tags: [{ name: 'list', address: ARRAY }, { name: 'word', address: sim.addr(4) }] }));
     const rec = new Recorder(helper.getNode('out'));
