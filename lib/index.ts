@@ -12,6 +12,28 @@ export * from './url';
 
 export { parseAddress, parseTypeSpec, formatAddress, type TypeSpec, type TagLocation } from './address';
 export { tagsFromCsv, tagsToCsv, addressWithType, duplicateNames, type TagRow, type CsvImport, type TagTableProblem, type TagTableProblemCode, type AddressParser } from './tags/table';
+export {
+  tagTable,
+  tagsOfMessage,
+  errorInfo,
+  outcomes,
+  tagFailure,
+  valueChanged,
+  ChangeFilter,
+  PolledTable,
+  writeRequest,
+  LifeSignWatch,
+  nextLifeSign,
+  LIFE_SIGN_COUNTER_MAX,
+  type TagErrorInfo,
+  type TagOutcome,
+  type TagFailure,
+  type WriteRequest,
+  type LifeSignMode,
+  type LifeSignEvent,
+  type LifeSignState,
+  type LifeSignReport,
+} from './flows';
 export * as values from './values';
 export { decodeTag, encodeTag, encodeInto, validateValue, elementByteLength, tagByteLength } from './values';
 

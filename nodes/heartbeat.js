@@ -1,8 +1,7 @@
 'use strict';
 const { attach, settleWithin } = require('./shared/user');
-const { LifeSignWatch, nextLifeSign } = require('./shared/lifesign');
+const { LifeSignWatch, nextLifeSign, isLinkError } = require('..');
 const { linkStatus, sentStatus, aliveStatus, lostStatus, waitingStatus } = require('./shared/status');
-const { isLinkError } = require('../dist/lib/index.js');
 
 /**
  * plcwire-heartbeat: every `interval` ms writes the PC's life sign

@@ -1,6 +1,6 @@
 'use strict';
 const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
-const { tagTable, writeRequest, errorInfo } = require('./shared/tags');
+const { tagTable, writeRequest, errorInfo, tagFailure } = require('..');
 
 /**
  * plcwire-write: writes `msg.payload = { nameOrAddress: value }` (or
@@ -44,24 +44,14 @@ module.exports = function (RED) {
             else {
               const info = errorInfo(r ? r.error : undefined, address);
               msg.results[name] = { ok: false, ...info };
-              failed.push({ name, info });
+              failed.push({ name, error: info });
             }
           }
           if (failed.length < Object.keys(request.names).length) send(msg);
-          done(failed.length > 0 ? failure(failed) : undefined);
+          done(failed.length > 0 ? tagFailure('write', failed) : undefined);
         })
         .catch((err) => done(err));
     });
-
-    function failure(failed) {
-      const { name, info } = failed[0];
-      const label = name === info.address ? `"${name}"` : `"${name}" (${info.address})`;
-      const more = failed.length > 1 ? ` (+${failed.length - 1})` : '';
-      const err = new Error(`write ${label}: ${info.message}${more}`);
-      err.code = info.code;
-      err.tag = name;
-      return err;
-    }
 
     node.on('close', function (removed, done) {
       closing = true;

@@ -203,7 +203,13 @@ describe('browser: the npm start demo in headless Chromium', function () {
     const editor = await browser.newPage({ viewport: { width: 1280, height: 900 } });
     try {
       await editor.goto(demo.editor, { waitUntil: 'domcontentloaded' });
-      await editor.waitForFunction(() => (globalThis as any).RED?.nodes?.getType?.('plcwire-read') !== undefined, undefined, { timeout: 30_000 });
+      // Every type the examples use: the editor registers node sets one after another, each once the
+      // scripts it loads (resources/…/plcwire-editor.js) have arrived, so one type says nothing of the next.
+      await editor.waitForFunction(
+        () => ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control'].every((t) => (globalThis as any).RED?.nodes?.getType?.(t) !== undefined),
+        undefined,
+        { timeout: 30_000 },
+      );
       const files = fs.readdirSync(EXAMPLES, { recursive: true, encoding: 'utf8' }).filter((f) => f.endsWith('.json'));
       expect(files.length).to.be.at.least(5);
       for (const file of files) {

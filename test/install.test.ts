@@ -21,10 +21,10 @@ const RUNTIMES = [
   { name: 'Node-RED 5 on Node 22', node: path.join(ROOT, 'test/nr5/node_modules/node/bin/node'), red: path.join(ROOT, 'test/nr5/node_modules/node-red/red.js'), major: '5.' },
 ];
 
-function get(url: string): Promise<{ status: number; body: string }> {
+function get(url: string, accept = 'application/json'): Promise<{ status: number; body: string }> {
   return new Promise((resolve, reject) => {
     http
-      .get(url, { headers: { Accept: 'application/json' } }, (res) => {
+      .get(url, { headers: { Accept: accept } }, (res) => {
         let body = '';
         res.setEncoding('utf8');
         res.on('data', (d: string) => (body += d));
@@ -102,6 +102,16 @@ describe('install: the tarball in a fresh Node-RED user directory', function () 
           const ours = Object.keys(catalogs).filter((ns) => ns.startsWith(MODULE));
           expect(ours.length, `${lng} catalogs among ${Object.keys(catalogs).slice(0, 8).join(', ')}`).to.be.greaterThan(0);
         }
+      });
+
+      it('serves the editor code every dialog loads, at the URL the dialogs name', async () => {
+        const configs = await get(`${base}/nodes`, 'text/html'); // what the editor loads
+        expect(configs.status).to.equal(200);
+        const sources = new Set([...configs.body.matchAll(/<script\b[^>]*\bsrc="(resources\/[^"]+)"/g)].map((m) => m[1]!));
+        expect([...sources]).to.deep.equal([`resources/${MODULE}/plcwire-editor.js`]);
+        const res = await get(`${base}/${[...sources][0]}`, '*/*');
+        expect(res.status).to.equal(200);
+        expect(res.body).to.include('window.plcwireEditor');
       });
 
       it('serves the examples', async () => {

@@ -134,6 +134,17 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
     }
   });
 
+  it('ships the editor code the dialogs share in resources/, and each dialog loads it from the URL Node-RED serves it at', () => {
+    expect(files).to.include('resources/plcwire-editor.js');
+    for (const file of Object.values(pkg['node-red']?.nodes ?? {})) {
+      const html = file.replace(/^\.\//, '').replace(/\.js$/, '.html');
+      const text = fs.readFileSync(path.join(pkgDir, html), 'utf8');
+      const sources = [...text.matchAll(/<script\b[^>]*\bsrc="([^"]+)"/g)].map((m) => m[1]!);
+      expect(sources, html).to.deep.equal([`resources/${pkg.name}/plcwire-editor.js`]);
+    }
+    expect(fs.readFileSync(path.join(pkgDir, 'resources/plcwire-editor.js'), 'utf8')).to.match(/^\/\*\*[\s\S]*?\*\/\n\(function \(\) \{[\s\S]*\}\)\(\);\n$/);
+  });
+
   it('node entry files load as CommonJS and export a plain function', () => {
     for (const file of Object.values(pkg['node-red']?.nodes ?? {})) {
       const text = fs.readFileSync(path.join(pkgDir, file), 'utf8');

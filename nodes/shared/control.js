@@ -5,7 +5,7 @@
  * shown in debug sidebars), and which diagnostic entries are new since the
  * last call. No Node-RED and no sockets.
  */
-const { codeError } = require('./tags');
+const { PlcError } = require('../..');
 
 const ACTIONS = Object.freeze(['info', 'state', 'diagnostics', 'clock', 'clock-sync', 'blocks', 'stop', 'start']);
 /** Actions that change the PLC: refused on a connection without `control=true`. */
@@ -20,7 +20,7 @@ function actionOf(msg, configured) {
   const asked = msg.action;
   if (asked !== undefined && asked !== null && asked !== '') {
     if (ACTIONS.includes(asked)) return asked;
-    throw codeError('INVALID_VALUE', `msg.action "${String(asked)}" is not one of ${ACTIONS.join(', ')}`);
+    throw new PlcError('INVALID_VALUE', `msg.action "${String(asked)}" is not one of ${ACTIONS.join(', ')}`);
   }
   if (typeof msg.topic === 'string' && ACTIONS.includes(msg.topic)) return msg.topic;
   return configured;

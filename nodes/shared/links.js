@@ -5,7 +5,7 @@
  * (read, write, heartbeat) reach them through their config node.
  */
 const { EventEmitter } = require('node:events');
-const plc = require('../../dist/lib/index.js');
+const plc = require('../..');
 
 /** @type {Map<string, Link>} */
 const links = new Map();

@@ -69,14 +69,17 @@ export function describeProtocol(title: string, factory: SimFactory): void {
         await rec.next(() => true);
         const client = helper.getNode('conn').client;
         const seen = new Set<unknown>();
-        const readDetailed = client.readDetailed;
-        client.readDetailed = function (addresses: string[], ...rest: unknown[]) {
-          seen.add(addresses);
-          expect(addresses).to.deep.equal([sim.addr(0), sim.addr(1)]);
-          return readDetailed.call(this, addresses, ...rest);
-        };
+        // read() when every tag succeeds, readDetailed() for the per-tag outcomes: both get the one array.
+        const methods = { read: client.read, readDetailed: client.readDetailed };
+        for (const [method, original] of Object.entries(methods)) {
+          client[method] = function (addresses: string[], ...rest: unknown[]) {
+            seen.add(addresses);
+            expect(addresses).to.deep.equal([sim.addr(0), sim.addr(1)]);
+            return original.call(this, addresses, ...rest);
+          };
+        }
         for (let i = 0; i < 3; i++) await rec.next(() => true);
-        client.readDetailed = readDetailed;
+        Object.assign(client, methods);
         expect(seen.size).to.equal(1);
       });
 
