@@ -5,14 +5,20 @@
 import type { TagRow } from '../tags/table';
 
 /** Normalises a table of { name, address }: names default to the address, blank rows are dropped. */
+/** A cell of a tag row as trimmed text; an object is shown as its JSON, so the address error names what was given. */
+function text(v: unknown): string {
+  if (v === undefined || v === null) return '';
+  return (typeof v === 'object' ? JSON.stringify(v) : String(v as string | number | boolean | bigint)).trim();
+}
+
 export function tagTable(rows: unknown): TagRow[] {
   if (!Array.isArray(rows)) return [];
   const out: TagRow[] = [];
   for (const row of rows as ({ name?: unknown; address?: unknown } | null | undefined)[]) {
     if (!row) continue;
-    const address = String(row.address ?? '').trim();
+    const address = text(row.address);
     if (!address) continue;
-    const name = String(row.name ?? '').trim() || address;
+    const name = text(row.name) || address;
     out.push({ name, address });
   }
   return out;
@@ -26,7 +32,7 @@ export function tagTable(rows: unknown): TagRow[] {
 export function tagsOfMessage(value: unknown): TagRow[] | undefined {
   if (value === undefined || value === null) return undefined;
   if (typeof value === 'string') return tagTable([{ address: value }]);
-  if (Array.isArray(value)) return tagTable(value.map((v) => (typeof v === 'string' ? { address: v } : v)));
-  if (typeof value === 'object') return tagTable(Object.entries(value).map(([name, address]) => ({ name, address })));
+  if (Array.isArray(value)) return tagTable((value as unknown[]).map((v) => (typeof v === 'string' ? { address: v } : v)));
+  if (typeof value === 'object') return tagTable(Object.entries(value as Record<string, unknown>).map(([name, address]) => ({ name, address })));
   return undefined;
 }
