@@ -47,16 +47,19 @@ async function run(job) {
         p.busy = true;
         counts.started++;
         const started = performance.now();
-        p.c.read().then(
-          () => {
-            counts.done++;
-            if (timing) pollMs.push(performance.now() - started);
-          },
-          (err) => {
-            counts.failed++;
-            firstError ??= String((err && err.message) || err);
-          },
-        ).finally(() => (p.busy = false));
+        p.c
+          .read()
+          .then(
+            () => {
+              counts.done++;
+              if (timing) pollMs.push(performance.now() - started);
+            },
+            (err) => {
+              counts.failed++;
+              firstError ??= String((err && err.message) || err);
+            },
+          )
+          .finally(() => (p.busy = false));
       }
       next += job.intervalMs;
       setTimeout(tick, Math.max(0, next - performance.now()));

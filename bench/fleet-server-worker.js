@@ -48,7 +48,14 @@ process.on('message', async (msg) => {
     if (msg.op === 'start') process.send({ ok: true, ...(await start(msg)) });
     else if (msg.op === 'stats') {
       const cpu = process.cpuUsage();
-      process.send({ ok: true, connections: servers.map((s) => s.server.connectionCount), readsPerPlc: servers.map((s) => s.reads), reads, writes, cpuUs: cpu.user + cpu.system });
+      process.send({
+        ok: true,
+        connections: servers.map((s) => s.server.connectionCount),
+        readsPerPlc: servers.map((s) => s.reads),
+        reads,
+        writes,
+        cpuUs: cpu.user + cpu.system,
+      });
     } else if (msg.op === 'change') {
       change(msg.everyMs);
       process.send({ ok: true });

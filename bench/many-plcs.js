@@ -26,7 +26,9 @@ const ROWS = option(args, 'rows', '10x100,50x100,100x100,200x100,20x1000')
     return { plcs, tags };
   });
 // 'raw': the floor, prebuilt requests and no parsing (bench/lib/raw-poll.js); not an anchor.
-const CLIENTS = option(args, 'clients', [...['ours', 'st-one', 'nodes7'].filter((c) => CLIENT_NAMES.includes(c)), 'raw'].join(',')).split(',');
+const CLIENTS = option(args, 'clients', [...['ours', 'st-one', 'nodes7'].filter((c) => CLIENT_NAMES.includes(c)), 'raw'].join(',')).split(
+  ',',
+);
 const PDU = 960;
 const ROUNDS = Number(option(args, 'rounds', QUICK ? 1 : 2));
 // --prof DIR: every client process writes a V8 CPU profile there (summarize with bench/lib/cpuprofile.js).
@@ -47,7 +49,9 @@ function better(a, b) {
 
 async function main() {
   const t0 = Date.now();
-  console.log(`plcwire many-PLC benchmark — Node ${process.version}, ${os.cpus()[0].model}, ${os.cpus().length} CPUs, load ${os.loadavg()[0].toFixed(1)}`);
+  console.log(
+    `plcwire many-PLC benchmark — Node ${process.version}, ${os.cpus()[0].model}, ${os.cpus().length} CPUs, load ${os.loadavg()[0].toFixed(1)}`,
+  );
   const rows = [];
   const ours = [];
   for (const row of ROWS) {
@@ -58,8 +62,21 @@ async function main() {
       if (round % 2) order.reverse();
       for (const i of order) {
         const client = CLIENTS[i];
-        const job = { client, ports: fleet.ports, tags: row.tags, pdu: PDU, intervalMs: INTERVAL_MS, warmMs: WARM_MS, durationMs: DURATION_MS };
-        const r = await runFleetClient(job, PROF_DIR ? ['--cpu-prof', '--cpu-prof-dir', PROF_DIR, '--cpu-prof-name', `${client}-${row.plcs}x${row.tags}-${round}.cpuprofile`] : []);
+        const job = {
+          client,
+          ports: fleet.ports,
+          tags: row.tags,
+          pdu: PDU,
+          intervalMs: INTERVAL_MS,
+          warmMs: WARM_MS,
+          durationMs: DURATION_MS,
+        };
+        const r = await runFleetClient(
+          job,
+          PROF_DIR
+            ? ['--cpu-prof', '--cpu-prof-dir', PROF_DIR, '--cpu-prof-name', `${client}-${row.plcs}x${row.tags}-${round}.cpuprofile`]
+            : [],
+        );
         // Every connection closed: the client closed each one before its process exited.
         const s1 = await closedStats(fleet);
         if (s1.connections.some((c) => c !== 0)) r.leftOpen = s1.connections.reduce((a, b) => a + b, 0);
@@ -97,17 +114,59 @@ async function main() {
     const floor = results.find((r) => r.client === 'raw' && !r.error && r.done > 0);
     if (o && anchors.length) {
       const best = anchors.reduce((a, b) => (a.cpuUsPerTagPoll <= b.cpuUsPerTagPoll ? a : b));
-      rows.push([label, `ours/${best.client}`, '', '', '', '', '', `${fmt(o.cpuPercent / best.cpuPercent, 2)}×`, `${fmt(o.cpuUsPerTagPoll / best.cpuUsPerTagPoll, 2)}×`, `${fmt(o.cpuUsPerPoll / best.cpuUsPerPoll, 2)}×`, `${fmt(o.rssMiB / best.rssMiB, 2)}×`, '', '']);
+      rows.push([
+        label,
+        `ours/${best.client}`,
+        '',
+        '',
+        '',
+        '',
+        '',
+        `${fmt(o.cpuPercent / best.cpuPercent, 2)}×`,
+        `${fmt(o.cpuUsPerTagPoll / best.cpuUsPerTagPoll, 2)}×`,
+        `${fmt(o.cpuUsPerPoll / best.cpuUsPerPoll, 2)}×`,
+        `${fmt(o.rssMiB / best.rssMiB, 2)}×`,
+        '',
+        '',
+      ]);
       if (floor) {
         // What each library spends per poll on top of the floor (the socket and timer path every client pays).
         const above = (r) => r.cpuUsPerPoll - floor.cpuUsPerPoll;
-        rows.push([label, `ours/${best.client} above raw`, '', '', '', '', '', '', `${fmt(above(o) / above(best), 2)}×`, `${fmt(above(o), 0)} / ${fmt(above(best), 0)}`, '', '', '']);
+        rows.push([
+          label,
+          `ours/${best.client} above raw`,
+          '',
+          '',
+          '',
+          '',
+          '',
+          '',
+          `${fmt(above(o) / above(best), 2)}×`,
+          `${fmt(above(o), 0)} / ${fmt(above(best), 0)}`,
+          '',
+          '',
+          '',
+        ]);
       }
     }
   }
   printTable(
     `Many PLCs from one process: every PLC polled every ${INTERVAL_MS} ms for ${DURATION_MS} ms (after ${WARM_MS} ms warm-up), better of ${ROUNDS} rounds; simulators (S7-1500, PDU ${PDU}) in another process`,
-    ['PLCs × tags', 'client', 'polls/s', 'due/s', 'done', 'skipped', 'failed', 'CPU', 'µs/tag-poll', 'µs/poll (user+sys)', 'RSS MiB', 'loop p99 ms', 'poll p99 ms'],
+    [
+      'PLCs × tags',
+      'client',
+      'polls/s',
+      'due/s',
+      'done',
+      'skipped',
+      'failed',
+      'CPU',
+      'µs/tag-poll',
+      'µs/poll (user+sys)',
+      'RSS MiB',
+      'loop p99 ms',
+      'poll p99 ms',
+    ],
     rows,
   );
   const flat = ours.filter((x) => x.row.tags === 100);

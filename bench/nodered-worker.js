@@ -48,7 +48,10 @@ async function start(label) {
         metrics: false,
         audit: false,
         handler: () => (m) => {
-          if (logging) console.log(`[${name}] ${m.type ? `[${m.type}${m.name ? `:${m.name}` : ''}] ` : ''}${m.msg && m.msg.stack ? m.msg.stack : m.msg}`);
+          if (logging)
+            console.log(
+              `[${name}] ${m.type ? `[${m.type}${m.name ? `:${m.name}` : ''}] ` : ''}${m.msg && m.msg.stack ? m.msg.stack : m.msg}`,
+            );
         },
       },
     },
@@ -104,7 +107,8 @@ function mark() {
 let session;
 /** The timed window alone in a profile (node --cpu-prof would hold Node-RED's start-up too). */
 async function profile(file) {
-  const post = (method, params) => new Promise((resolve, reject) => session.post(method, params, (err, r) => (err ? reject(err) : resolve(r))));
+  const post = (method, params) =>
+    new Promise((resolve, reject) => session.post(method, params, (err, r) => (err ? reject(err) : resolve(r))));
   if (!file) {
     session = new inspector.Session();
     session.connect();

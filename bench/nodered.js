@@ -98,7 +98,16 @@ async function runNodeRed(name, fleet, row, round) {
     const [b, f1] = await Promise.all([rt.ask({ op: 'mark' }), fleet.stats()]);
     if (PROF_DIR) await rt.ask({ op: 'profile', file: path.join(PROF_DIR, `nodered-${name.replace(/\W+/g, '-')}-${round}.cpuprofile`) });
     const seconds = (performance.now() - t0) / 1000;
-    return { seconds, reads: f1.reads - f0.reads, messages: b.messages - a.messages, cpuUs: b.cpuUs - a.cpuUs, userUs: b.userUs - a.userUs, systemUs: b.systemUs - a.systemUs, rssMiB: b.rss / 2 ** 20, loopP99Ms: b.loopP99Ms };
+    return {
+      seconds,
+      reads: f1.reads - f0.reads,
+      messages: b.messages - a.messages,
+      cpuUs: b.cpuUs - a.cpuUs,
+      userUs: b.userUs - a.userUs,
+      systemUs: b.systemUs - a.systemUs,
+      rssMiB: b.rss / 2 ** 20,
+      loopP99Ms: b.loopP99Ms,
+    };
   } finally {
     await rt.stop();
   }
@@ -122,12 +131,24 @@ async function polling(row) {
         const lib = MODES[name].library;
         const s0 = await fleet.stats();
         const execArgv = PROF_DIR ? ['--cpu-prof', '--cpu-prof-dir', PROF_DIR, '--cpu-prof-name', `lib-${lib}-${round}.cpuprofile`] : [];
-        const r = await runFleetClient({ client: lib, ports: fleet.ports, tags: row.tags, pdu: PDU, intervalMs: INTERVAL_MS, warmMs: WARM_MS, durationMs: DURATION_MS }, execArgv);
+        const r = await runFleetClient(
+          { client: lib, ports: fleet.ports, tags: row.tags, pdu: PDU, intervalMs: INTERVAL_MS, warmMs: WARM_MS, durationMs: DURATION_MS },
+          execArgv,
+        );
         const s1 = await closedStats(fleet);
         if (r.error) results[name] ??= { error: r.error };
         else {
           pdusPerPoll[lib] = (s1.reads - s0.reads) / r.allStarted;
-          keep(name, { seconds: r.seconds, polls: r.done, messages: undefined, cpuUs: r.cpuUsPerPoll * r.done, userUs: r.userUsPerPoll * r.done, systemUs: r.systemUsPerPoll * r.done, rssMiB: r.rssMiB, loopP99Ms: r.loopP99Ms });
+          keep(name, {
+            seconds: r.seconds,
+            polls: r.done,
+            messages: undefined,
+            cpuUs: r.cpuUsPerPoll * r.done,
+            userUs: r.userUsPerPoll * r.done,
+            systemUs: r.systemUsPerPoll * r.done,
+            rssMiB: r.rssMiB,
+            loopP99Ms: r.loopP99Ms,
+          });
         }
       }
     }
@@ -188,8 +209,16 @@ function pollingRows(row, results) {
   ratio('ours changes', 'ours object', 'changes vs object');
   // The layer alone: what the runtime with its nodes costs per poll on top of the same library alone.
   const layer = (mode, lib) => (per(mode) !== undefined && per(lib) !== undefined ? per(mode) - per(lib) : undefined);
-  for (const [mode, lib] of [['ours object', 'lib ours'], ['ours per-tag', 'lib ours'], ['ours changes', 'lib ours'], ['contrib all', 'lib st-one'], ['contrib all-split', 'lib st-one'], ['contrib split diff', 'lib st-one']]) {
-    if (layer(mode, lib) !== undefined) rows.push([label, `${mode} − ${lib}`, '', '', '', '', `${fmt(layer(mode, lib), 0)} µs`, '', '', 'the Node-RED layer per poll']);
+  for (const [mode, lib] of [
+    ['ours object', 'lib ours'],
+    ['ours per-tag', 'lib ours'],
+    ['ours changes', 'lib ours'],
+    ['contrib all', 'lib st-one'],
+    ['contrib all-split', 'lib st-one'],
+    ['contrib split diff', 'lib st-one'],
+  ]) {
+    if (layer(mode, lib) !== undefined)
+      rows.push([label, `${mode} − ${lib}`, '', '', '', '', `${fmt(layer(mode, lib), 0)} µs`, '', '', 'the Node-RED layer per poll']);
   }
   return rows;
 }
@@ -219,7 +248,14 @@ async function deployCheck(n) {
       s = await fleet.stats();
       const total = s.connections.reduce((a, b) => a + b, 0);
       const off = s.connections.filter((c) => c !== 1).length;
-      rows.push([k === 0 ? 'deploy' : `full redeploy ${k}`, `${n} + ${n}`, fmt(deployMs, 0), fmt(firstMs, 0), fmt(total), off ? `${off} PLCs without exactly 1` : 'exactly 1 each']);
+      rows.push([
+        k === 0 ? 'deploy' : `full redeploy ${k}`,
+        `${n} + ${n}`,
+        fmt(deployMs, 0),
+        fmt(firstMs, 0),
+        fmt(total),
+        off ? `${off} PLCs without exactly 1` : 'exactly 1 each',
+      ]);
     }
   } finally {
     await rt.stop();
@@ -232,7 +268,9 @@ async function main() {
   const t0 = Date.now();
   const rows = [];
   for (const row of ROWS) rows.push(...pollingRows(row, await polling(row)));
-  console.log(`plcwire Node-RED benchmark — Node ${process.version}, Node-RED ${nodeRedVersion}, ${os.cpus()[0].model}, ${os.cpus().length} CPUs, load ${os.loadavg()[0].toFixed(1)}`);
+  console.log(
+    `plcwire Node-RED benchmark — Node ${process.version}, Node-RED ${nodeRedVersion}, ${os.cpus()[0].model}, ${os.cpus().length} CPUs, load ${os.loadavg()[0].toFixed(1)}`,
+  );
   printTable(
     `Polls through Node-RED: every PLC every ${INTERVAL_MS} ms, ${DURATION_MS} ms timed after ${WARM_MS} ms, best of ${ROUNDS} rounds; one INT per PLC changes every ${CHANGE_EVERY_MS} ms; "lib" = the library alone in a process`,
     ['PLCs × tags', 'runtime / mode', 'polls/s', 'due/s', 'msgs/s', 'CPU', 'µs/poll (user+sys)', 'µs/tag-poll', 'RSS MiB', 'loop p99 ms'],

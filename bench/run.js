@@ -117,15 +117,18 @@ function lowerBound(tags, pdu) {
   try {
     const lib = plcwire();
     const { lowerBoundPdus } = requireFirst(['lib/s7/plan/bound.js', 'lib/s7/planner.js']);
-    return lowerBoundPdus(tags.map((t) => lib.parseAddress(t.address)), pdu, { maxItems: lib.DEFAULTS.maxItems });
+    return lowerBoundPdus(
+      tags.map((t) => lib.parseAddress(t.address)),
+      pdu,
+      { maxItems: lib.DEFAULTS.maxItems },
+    );
   } catch {
     return undefined;
   }
 }
 
 // --- printing ---------------------------------------------------------------
-const fmt = (v, digits = 0) =>
-  v === undefined || Number.isNaN(v) ? '–' : v >= 1e5 ? v.toExponential(2) : v.toFixed(digits);
+const fmt = (v, digits = 0) => (v === undefined || Number.isNaN(v) ? '–' : v >= 1e5 ? v.toExponential(2) : v.toFixed(digits));
 function printTable(title, header, rows) {
   const widths = header.map((h, i) => Math.max(h.length, ...rows.map((r) => String(r[i]).length)));
   const line = (cells) => cells.map((c, i) => (i < 2 ? String(c).padEnd(widths[i]) : String(c).padStart(widths[i]))).join('  ');
@@ -159,7 +162,15 @@ async function comparison() {
         if (round % 2) order.reverse();
         for (const i of order) {
           const r = await runClient(
-            { client: clients[i], table: name, pdu: s.pdu, port: server.port, proxyPort, durationMs: DURATION_MS, countPolls: round === 0 ? COUNT_POLLS : 0 },
+            {
+              client: clients[i],
+              table: name,
+              pdu: s.pdu,
+              port: server.port,
+              proxyPort,
+              durationMs: DURATION_MS,
+              countPolls: round === 0 ? COUNT_POLLS : 0,
+            },
             proxy,
           );
           const prev = results[i];
@@ -175,7 +186,8 @@ async function comparison() {
       const ours = results.find((r) => r.client === 'ours');
       const bound = lowerBound(tags, s.pdu);
       for (const r of results) {
-        if (!r.error) memory.push({ server: s.label, table: name, client: r.client, tags: tags.length, heap: r.heapBytesPerTag * tags.length });
+        if (!r.error)
+          memory.push({ server: s.label, table: name, client: r.client, tags: tags.length, heap: r.heapBytesPerTag * tags.length });
         if (r.error) {
           rows.push([s.label, name, r.client ?? '', `error: ${r.error}`.slice(0, 60), '', '', '', '', '', '', '']);
           continue;
@@ -215,7 +227,19 @@ async function comparison() {
   }
   printTable(
     `Polls against the same server (loopback; best of ${ROUNDS} rounds of ${DURATION_MS} ms per client; PDUs and bytes counted by a proxy over ${COUNT_POLLS} polls)`,
-    ['server', 'table', 'client', 'polls/s', 'PDUs/poll', 'lower bound', 'max items', 'bytes/poll', 'CPU ms/1000 tags', 'RSS B/tag', 'heap B/tag'],
+    [
+      'server',
+      'table',
+      'client',
+      'polls/s',
+      'PDUs/poll',
+      'lower bound',
+      'max items',
+      'bytes/poll',
+      'CPU ms/1000 tags',
+      'RSS B/tag',
+      'heap B/tag',
+    ],
     rows.map((r) => [`${r[0]}`, `${r[1]} ${r[2]}`, ...r.slice(3)]),
   );
   printMarginalMemory(memory);
@@ -335,7 +359,9 @@ async function serverLoad() {
 
 async function main() {
   const t0 = Date.now();
-  console.log(`plcwire benchmark — Node ${process.version}, ${require('node:os').cpus()[0].model}, ${require('node:os').cpus().length} CPUs`);
+  console.log(
+    `plcwire benchmark — Node ${process.version}, ${require('node:os').cpus()[0].model}, ${require('node:os').cpus().length} CPUs`,
+  );
   await comparison();
   await latencyModel();
   await serverLoad();

@@ -65,7 +65,7 @@ process.on('message', async (msg) => {
       process.exit(0);
     }
   } catch (err) {
-    process.send({ ok: false, error: String(err && err.stack || err) });
+    process.send({ ok: false, error: String((err && err.stack) || err) });
   }
 });
 process.on('disconnect', () => process.exit(0));

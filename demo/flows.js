@@ -71,62 +71,219 @@ function demoFlow(urls) {
     id: 'demo.comment.dashboard',
     type: 'comment',
     name: 'Needs @flowfuse/node-red-dashboard (Dashboard 2.0); page at /dashboard/plant',
-    info: 'Install Dashboard 2.0 from the palette manager: @flowfuse/node-red-dashboard.\n\nBOOLs are lamps (ui-template); a watchdog (trigger) per link greys out that link\'s widgets through `msg.class` when no value arrived for a few polls.',
+    info: "Install Dashboard 2.0 from the palette manager: @flowfuse/node-red-dashboard.\n\nBOOLs are lamps (ui-template); a watchdog (trigger) per link greys out that link's widgets through `msg.class` when no value arrived for a few polls.",
     ...at(340, 90),
   });
 
   // Dashboard 2.0 skeleton: one page of 12 columns, a group per PLC.
-  nodes.push({ id: 'ui.base', type: 'ui-base', name: 'plcwire', path: '/dashboard', includeClientData: true, acceptsClientConfig: ['ui-notification', 'ui-control'], showPathInSidebar: false, navigationStyle: 'none', titleBarStyle: 'default' });
-  nodes.push({ id: 'ui.theme', type: 'ui-theme', name: 'plcwire', colors: { surface: '#1f3a5f', primary: '#0d74ce', bgPage: '#f9f9fb', groupBg: '#ffffff', groupOutline: '#d9d9e0' }, sizes: { density: 'default', pagePadding: '12px', groupGap: '12px', groupBorderRadius: '4px', widgetGap: '12px' } });
-  nodes.push({ id: 'ui.page', type: 'ui-page', name: 'Plant', ui: 'ui.base', path: '/plant', icon: 'factory', layout: 'grid', theme: 'ui.theme', order: 1, visible: 'true', disabled: 'false', breakpoints: [{ name: 'Default', px: 0, cols: 3 }, { name: 'Tablet', px: 576, cols: 6 }, { name: 'Small Desktop', px: 768, cols: 9 }, { name: 'Desktop', px: 1024, cols: 12 }] });
-  const group = (id, name, order, width) => nodes.push({ id, type: 'ui-group', name, page: 'ui.page', width, height: 1, order, showTitle: true, visible: 'true', disabled: 'false', groupType: 'default' });
+  nodes.push({
+    id: 'ui.base',
+    type: 'ui-base',
+    name: 'plcwire',
+    path: '/dashboard',
+    includeClientData: true,
+    acceptsClientConfig: ['ui-notification', 'ui-control'],
+    showPathInSidebar: false,
+    navigationStyle: 'none',
+    titleBarStyle: 'default',
+  });
+  nodes.push({
+    id: 'ui.theme',
+    type: 'ui-theme',
+    name: 'plcwire',
+    colors: { surface: '#1f3a5f', primary: '#0d74ce', bgPage: '#f9f9fb', groupBg: '#ffffff', groupOutline: '#d9d9e0' },
+    sizes: { density: 'default', pagePadding: '12px', groupGap: '12px', groupBorderRadius: '4px', widgetGap: '12px' },
+  });
+  nodes.push({
+    id: 'ui.page',
+    type: 'ui-page',
+    name: 'Plant',
+    ui: 'ui.base',
+    path: '/plant',
+    icon: 'factory',
+    layout: 'grid',
+    theme: 'ui.theme',
+    order: 1,
+    visible: 'true',
+    disabled: 'false',
+    breakpoints: [
+      { name: 'Default', px: 0, cols: 3 },
+      { name: 'Tablet', px: 576, cols: 6 },
+      { name: 'Small Desktop', px: 768, cols: 9 },
+      { name: 'Desktop', px: 1024, cols: 12 },
+    ],
+  });
+  const group = (id, name, order, width) =>
+    nodes.push({
+      id,
+      type: 'ui-group',
+      name,
+      page: 'ui.page',
+      width,
+      height: 1,
+      order,
+      showTitle: true,
+      visible: 'true',
+      disabled: 'false',
+      groupType: 'default',
+    });
   group('ui.g.s7', 'S7-1200 (S7comm)', 1, 6);
   group('ui.g.cpu', 'S7-1200 CPU', 2, 6);
   group('ui.g.fw', 'CP (FETCH/WRITE)', 3, 3);
   group('ui.g.fp', 'S7-200 (freeport)', 4, 3);
   const cls = (id) => `plcwire-${id.replace(/\W/g, '-')}`;
   const text = (id, g, label, order, width, y) =>
-    nodes.push({ id, type: 'ui-text', group: g, order, width, height: 1, name: label, label, format: '{{msg.payload}}', layout: 'row-spread', style: false, value: 'payload', valueType: 'msg', className: cls(id), ...at(X.widget, y), wires: [] });
+    nodes.push({
+      id,
+      type: 'ui-text',
+      group: g,
+      order,
+      width,
+      height: 1,
+      name: label,
+      label,
+      format: '{{msg.payload}}',
+      layout: 'row-spread',
+      style: false,
+      value: 'payload',
+      valueType: 'msg',
+      className: cls(id),
+      ...at(X.widget, y),
+      wires: [],
+    });
   const template = (id, g, label, order, width, y, format, height = 1) =>
-    nodes.push({ id, type: 'ui-template', group: g, page: '', ui: '', name: label, order, width, height, head: '', format, storeOutMessages: true, passthru: false, resendOnRefresh: true, templateScope: 'local', className: cls(id), ...at(X.widget, y), wires: [[]] });
+    nodes.push({
+      id,
+      type: 'ui-template',
+      group: g,
+      page: '',
+      ui: '',
+      name: label,
+      order,
+      width,
+      height,
+      head: '',
+      format,
+      storeOutMessages: true,
+      passthru: false,
+      resendOnRefresh: true,
+      templateScope: 'local',
+      className: cls(id),
+      ...at(X.widget, y),
+      wires: [[]],
+    });
   // A BOOL from the PLC: the lamp lights while msg.payload is true.
   const boolLamp = (id, g, label, order, width, y) =>
-    template(id, g, label, order, width, y, `<div class="plcwire-lamp-row">
+    template(
+      id,
+      g,
+      label,
+      order,
+      width,
+      y,
+      `<div class="plcwire-lamp-row">
   <span>${html(label)}</span>
   <span class="plcwire-lamp" :class="msg.payload === true ? 'plcwire-lamp-on' : 'plcwire-lamp-off'" :title="msg.payload === true ? 'on' : 'off'"></span>
-</div>`);
+</div>`,
+    );
   // A state: msg.lamp names the colour (green, yellow, red, grey), msg.payload the text beside it.
   const stateLamp = (id, g, label, order, width, y) =>
-    template(id, g, label, order, width, y, `<div class="plcwire-lamp-row">
+    template(
+      id,
+      g,
+      label,
+      order,
+      width,
+      y,
+      `<div class="plcwire-lamp-row">
   <span>${html(label)}</span>
   <span class="plcwire-lamp-text">{{ msg.payload }}</span>
   <span class="plcwire-lamp" :class="'plcwire-lamp-' + (msg.lamp || 'grey')"></span>
-</div>`);
-  const round = (id, y, wires) => nodes.push({ id, type: 'change', name: 'one decimal', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }], ...at(X.shape, y), wires: [wires] });
+</div>`,
+    );
+  const round = (id, y, wires) =>
+    nodes.push({
+      id,
+      type: 'change',
+      name: 'one decimal',
+      rules: [{ t: 'set', p: 'payload', pt: 'msg', to: '$round(payload, 1)', tot: 'jsonata' }],
+      ...at(X.shape, y),
+      wires: [wires],
+    });
   const route = (id, names, y, wires) =>
-    nodes.push({ id, type: 'switch', name: 'by tag', property: 'topic', propertyType: 'msg', checkall: 'false', outputs: names.length, rules: names.map((v) => ({ t: 'eq', v, vt: 'str' })), ...at(X.route, y), wires });
+    nodes.push({
+      id,
+      type: 'switch',
+      name: 'by tag',
+      property: 'topic',
+      propertyType: 'msg',
+      checkall: 'false',
+      outputs: names.length,
+      rules: names.map((v) => ({ t: 'eq', v, vt: 'str' })),
+      ...at(X.route, y),
+      wires,
+    });
   // A link's watchdog: 'live' with the first value, 'stale' when none came for `seconds`; the mark
   // turns that into a class for the link's widgets (a message with only `class` keeps their value).
   const watchdog = (prefix, seconds, y, widgets) => {
-    nodes.push({ id: `${prefix}.watch`, type: 'trigger', name: `watchdog ${seconds} s`, op1: 'live', op2: 'stale', op1type: 'str', op2type: 'str', duration: String(seconds), extend: true, overrideDelay: false, units: 's', reset: '', bytopic: 'all', topic: 'topic', outputs: 1, ...at(X.route, y), wires: [[`${prefix}.mark`]] });
-    nodes.push({ id: `${prefix}.mark`, type: 'function', name: 'mark stale', func: `return { class: msg.payload === 'stale' ? '${STALE}' : '${LIVE}' };`, outputs: 1, timeout: 0, noerr: 0, initialize: '', finalize: '', libs: [], ...at(X.shape, y), wires: [widgets] });
+    nodes.push({
+      id: `${prefix}.watch`,
+      type: 'trigger',
+      name: `watchdog ${seconds} s`,
+      op1: 'live',
+      op2: 'stale',
+      op1type: 'str',
+      op2type: 'str',
+      duration: String(seconds),
+      extend: true,
+      overrideDelay: false,
+      units: 's',
+      reset: '',
+      bytopic: 'all',
+      topic: 'topic',
+      outputs: 1,
+      ...at(X.route, y),
+      wires: [[`${prefix}.mark`]],
+    });
+    nodes.push({
+      id: `${prefix}.mark`,
+      type: 'function',
+      name: 'mark stale',
+      func: `return { class: msg.payload === 'stale' ? '${STALE}' : '${LIVE}' };`,
+      outputs: 1,
+      timeout: 0,
+      noerr: 0,
+      initialize: '',
+      finalize: '',
+      libs: [],
+      ...at(X.shape, y),
+      wires: [widgets],
+    });
   };
   // A link's state from its read node's status: the lamp's colour is the status fill.
   const linkState = (prefix, name, readId, y, widget) => {
     nodes.push({ id: `st.${prefix}`, type: 'status', name, scope: [readId], ...at(X.source, y), wires: [[`st.text.${prefix}`]] });
     nodes.push({
-      id: `st.text.${prefix}`, type: 'change', name: 'status to lamp',
+      id: `st.text.${prefix}`,
+      type: 'change',
+      name: 'status to lamp',
       rules: [
         { t: 'set', p: 'payload', pt: 'msg', to: "$replace(status.text, 'plcwire.status.', '')", tot: 'jsonata' },
         { t: 'set', p: 'lamp', pt: 'msg', to: 'status.fill', tot: 'msg' },
       ],
-      ...at(X.route, y), wires: [[widget]],
+      ...at(X.route, y),
+      wires: [[widget]],
     });
   };
 
   // Connections: one per PLC, shared by every node below.
   // control=true: the CPU panel's Stop and Start buttons may stop and restart the CPU.
-  nodes.push({ id: 'conn.s7', type: 'plcwire-connection', name: 'S7-1200 sim', url: `${urls.s7}${urls.s7.includes('?') ? '&' : '?'}control=true` });
+  nodes.push({
+    id: 'conn.s7',
+    type: 'plcwire-connection',
+    name: 'S7-1200 sim',
+    url: `${urls.s7}${urls.s7.includes('?') ? '&' : '?'}control=true`,
+  });
   nodes.push({ id: 'conn.fw', type: 'plcwire-connection', name: 'CP fetch/write sim', url: urls.fetchwrite });
   nodes.push({ id: 'conn.fp', type: 'plcwire-connection', name: 'S7-200 freeport sim', url: urls.freeport });
 
@@ -143,18 +300,152 @@ function demoFlow(urls) {
     { name: 'heater', address: 'DB1.DBX4.2' },
   ];
   const s7Widgets = ['ui.level', 'ui.chart', 'ui.temp', 'ui.motor', 'ui.running', 'ui.speed', 'ui.parts', 'ui.heater'];
-  nodes.push({ id: 's7.read', type: 'plcwire-read', name: 'poll S7', connection: 'conn.s7', interval: 500, output: 'per-tag', deadband: 0, tags: s7Tags, ...at(X.source, row(3)), wires: [['s7.route', 's7.watch']] });
-  route('s7.route', s7Tags.map((t) => t.name), row(3), [['s7.round.level'], ['s7.round.temp'], ['ui.motor'], ['ui.running'], ['ui.speed'], ['ui.parts'], ['ui.heater']]);
+  nodes.push({
+    id: 's7.read',
+    type: 'plcwire-read',
+    name: 'poll S7',
+    connection: 'conn.s7',
+    interval: 500,
+    output: 'per-tag',
+    deadband: 0,
+    tags: s7Tags,
+    ...at(X.source, row(3)),
+    wires: [['s7.route', 's7.watch']],
+  });
+  route(
+    's7.route',
+    s7Tags.map((t) => t.name),
+    row(3),
+    [['s7.round.level'], ['s7.round.temp'], ['ui.motor'], ['ui.running'], ['ui.speed'], ['ui.parts'], ['ui.heater']],
+  );
   round('s7.round.level', row(0), ['ui.level', 'ui.chart']);
   round('s7.round.temp', row(2), ['ui.temp', 'ui.chart']);
-  nodes.push({ id: 'ui.level', type: 'ui-gauge', name: 'Tank level', group: 'ui.g.s7', order: 1, width: 3, height: 3, gtype: 'gauge-half', gstyle: 'needle', title: 'Tank level', units: '%', min: 0, max: 100, segments: [{ from: 0, color: '#5cd65c' }, { from: 80, color: '#ffc800' }, { from: 90, color: '#ea5353' }], sizeThickness: 16, sizeGap: 4, sizeKeyThickness: 8, styleRounded: true, styleGlow: false, className: 'plcwire-level', ...at(X.widget, row(0)), wires: [] });
-  nodes.push({ id: 'ui.chart', type: 'ui-chart', name: 'Level and temp', group: 'ui.g.s7', order: 3, width: 6, height: 4, label: 'Level % and temperature °C (last 2 min)', chartType: 'line', category: 'topic', categoryType: 'msg', xAxisType: 'time', xAxisPropertyType: 'timestamp', yAxisProperty: 'payload', yAxisPropertyType: 'msg', action: 'append', removeOlder: 2, removeOlderUnit: '60', removeOlderPoints: '', showLegend: true, pointShape: 'circle', pointRadius: 2, interpolation: 'linear', colors: ['#0095FF', '#FF7F0E'], className: 'plcwire-chart', ...at(X.widget, row(1)), wires: [] });
-  nodes.push({ id: 'ui.temp', type: 'ui-gauge', name: 'Temperature', group: 'ui.g.s7', order: 2, width: 3, height: 3, gtype: 'gauge-half', gstyle: 'needle', title: 'Temperature', units: '°C', min: 0, max: 80, segments: [{ from: 0, color: '#4a90d9' }, { from: 30, color: '#5cd65c' }, { from: 55, color: '#ffc800' }, { from: 65, color: '#ea5353' }], sizeThickness: 16, sizeGap: 4, sizeKeyThickness: 8, styleRounded: true, styleGlow: false, className: 'plcwire-temp', ...at(X.widget, row(2)), wires: [] });
+  nodes.push({
+    id: 'ui.level',
+    type: 'ui-gauge',
+    name: 'Tank level',
+    group: 'ui.g.s7',
+    order: 1,
+    width: 3,
+    height: 3,
+    gtype: 'gauge-half',
+    gstyle: 'needle',
+    title: 'Tank level',
+    units: '%',
+    min: 0,
+    max: 100,
+    segments: [
+      { from: 0, color: '#5cd65c' },
+      { from: 80, color: '#ffc800' },
+      { from: 90, color: '#ea5353' },
+    ],
+    sizeThickness: 16,
+    sizeGap: 4,
+    sizeKeyThickness: 8,
+    styleRounded: true,
+    styleGlow: false,
+    className: 'plcwire-level',
+    ...at(X.widget, row(0)),
+    wires: [],
+  });
+  nodes.push({
+    id: 'ui.chart',
+    type: 'ui-chart',
+    name: 'Level and temp',
+    group: 'ui.g.s7',
+    order: 3,
+    width: 6,
+    height: 4,
+    label: 'Level % and temperature °C (last 2 min)',
+    chartType: 'line',
+    category: 'topic',
+    categoryType: 'msg',
+    xAxisType: 'time',
+    xAxisPropertyType: 'timestamp',
+    yAxisProperty: 'payload',
+    yAxisPropertyType: 'msg',
+    action: 'append',
+    removeOlder: 2,
+    removeOlderUnit: '60',
+    removeOlderPoints: '',
+    showLegend: true,
+    pointShape: 'circle',
+    pointRadius: 2,
+    interpolation: 'linear',
+    colors: ['#0095FF', '#FF7F0E'],
+    className: 'plcwire-chart',
+    ...at(X.widget, row(1)),
+    wires: [],
+  });
+  nodes.push({
+    id: 'ui.temp',
+    type: 'ui-gauge',
+    name: 'Temperature',
+    group: 'ui.g.s7',
+    order: 2,
+    width: 3,
+    height: 3,
+    gtype: 'gauge-half',
+    gstyle: 'needle',
+    title: 'Temperature',
+    units: '°C',
+    min: 0,
+    max: 80,
+    segments: [
+      { from: 0, color: '#4a90d9' },
+      { from: 30, color: '#5cd65c' },
+      { from: 55, color: '#ffc800' },
+      { from: 65, color: '#ea5353' },
+    ],
+    sizeThickness: 16,
+    sizeGap: 4,
+    sizeKeyThickness: 8,
+    styleRounded: true,
+    styleGlow: false,
+    className: 'plcwire-temp',
+    ...at(X.widget, row(2)),
+    wires: [],
+  });
   // The operator's switch: a click sends the run command to the PLC (passthru off, so the polled
   // bit coming in is not written back), and the switch shows the bit as polled (decouple: the
   // indicator follows the input), so it moves when anything else sets or clears DB1.DBX4.0.
-  nodes.push({ id: 'ui.motor', type: 'ui-switch', name: 'Motor run', label: 'Motor run', group: 'ui.g.s7', order: 4, width: 3, height: 1, passthru: false, decouple: true, topic: 'DB1.DBX4.0', topicType: 'str', style: '', className: 'plcwire-motor', layout: 'row-spread', clickableArea: 'switch', onvalue: true, onvalueType: 'bool', onicon: '', oncolor: '', offvalue: false, offvalueType: 'bool', officon: '', offcolor: '', ...at(X.shape, row(3)), wires: [['s7.write']] });
-  nodes.push({ id: 's7.write', type: 'plcwire-write', name: 'write motor', connection: 'conn.s7', tags: [], ...at(X.widget, row(3)), wires: [[]] });
+  nodes.push({
+    id: 'ui.motor',
+    type: 'ui-switch',
+    name: 'Motor run',
+    label: 'Motor run',
+    group: 'ui.g.s7',
+    order: 4,
+    width: 3,
+    height: 1,
+    passthru: false,
+    decouple: true,
+    topic: 'DB1.DBX4.0',
+    topicType: 'str',
+    style: '',
+    className: 'plcwire-motor',
+    layout: 'row-spread',
+    clickableArea: 'switch',
+    onvalue: true,
+    onvalueType: 'bool',
+    onicon: '',
+    oncolor: '',
+    offvalue: false,
+    offvalueType: 'bool',
+    officon: '',
+    offcolor: '',
+    ...at(X.shape, row(3)),
+    wires: [['s7.write']],
+  });
+  nodes.push({
+    id: 's7.write',
+    type: 'plcwire-write',
+    name: 'write motor',
+    connection: 'conn.s7',
+    tags: [],
+    ...at(X.widget, row(3)),
+    wires: [[]],
+  });
   // Half a row more below the write node, for its status.
   boolLamp('ui.running', 'ui.g.s7', 'Motor running', 5, 3, row(4.5));
   text('ui.speed', 'ui.g.s7', 'Speed (rpm)', 6, 3, row(5.5));
@@ -164,14 +455,29 @@ function demoFlow(urls) {
   stateLamp('ui.link.s7', 'ui.g.s7', 'S7 link', 9, 3, row(8.5));
 
   // S7: heartbeat — our counter to DB1.DBW14, the PLC's counter in DB1.DBW12 must keep changing.
-  nodes.push({ id: 's7.heartbeat', type: 'plcwire-heartbeat', name: 'S7 life sign', connection: 'conn.s7', writeAddress: 'DB1.DBW14:INT', writeMode: 'counter', interval: 1000, watchAddress: 'DB1.DBW12:INT', timeout: 3000, ...at(X.source, row(9.5)), wires: [['s7.hbtext']] });
   nodes.push({
-    id: 's7.hbtext', type: 'change', name: 'event to lamp',
+    id: 's7.heartbeat',
+    type: 'plcwire-heartbeat',
+    name: 'S7 life sign',
+    connection: 'conn.s7',
+    writeAddress: 'DB1.DBW14:INT',
+    writeMode: 'counter',
+    interval: 1000,
+    watchAddress: 'DB1.DBW12:INT',
+    timeout: 3000,
+    ...at(X.source, row(9.5)),
+    wires: [['s7.hbtext']],
+  });
+  nodes.push({
+    id: 's7.hbtext',
+    type: 'change',
+    name: 'event to lamp',
     rules: [
       { t: 'set', p: 'lamp', pt: 'msg', to: "payload.state = 'alive' ? 'green' : 'red'", tot: 'jsonata' },
       { t: 'set', p: 'payload', pt: 'msg', to: 'payload.event', tot: 'msg' },
     ],
-    ...at(X.route, row(9.5)), wires: [['ui.heartbeat']],
+    ...at(X.route, row(9.5)),
+    wires: [['ui.heartbeat']],
   });
   stateLamp('ui.heartbeat', 'ui.g.s7', 'PLC heartbeat', 10, 3, row(9.5));
   // Below the rows the widgets are wired from, so its marks fan out upwards across no node.
@@ -181,27 +487,62 @@ function demoFlow(urls) {
   // Stop and Start buttons; a watchdog greys the panel when the state stops coming.
   y = row(13);
   const control = (id, name, action, r, wires) =>
-    nodes.push({ id, type: 'plcwire-control', name, connection: 'conn.s7', action, newOnly: false, ...at(X.route, row(r)), wires: [wires] });
+    nodes.push({
+      id,
+      type: 'plcwire-control',
+      name,
+      connection: 'conn.s7',
+      action,
+      newOnly: false,
+      ...at(X.route, row(r)),
+      wires: [wires],
+    });
   const cpuWidgets = ['ui.cpu.state', 'ui.cpu.clock', 'ui.cpu.identity'];
-  nodes.push({ id: 'cpu.poll', type: 'inject', name: 'every second', props: [{ p: 'payload' }], repeat: '1', crontab: '', once: true, onceDelay: '1', topic: '', payload: '', payloadType: 'date', ...at(X.source, row(0)), wires: [['cpu.state', 'cpu.clock', 'cpu.diag']] });
+  nodes.push({
+    id: 'cpu.poll',
+    type: 'inject',
+    name: 'every second',
+    props: [{ p: 'payload' }],
+    repeat: '1',
+    crontab: '',
+    once: true,
+    onceDelay: '1',
+    topic: '',
+    payload: '',
+    payloadType: 'date',
+    ...at(X.source, row(0)),
+    wires: [['cpu.state', 'cpu.clock', 'cpu.diag']],
+  });
   control('cpu.state', 'CPU state', 'state', 0, ['cpu.lamp', 'cpu.watch']);
   // state and stop/start answer { state: 'run' | 'stop' | … }.
   nodes.push({
-    id: 'cpu.lamp', type: 'change', name: 'state to lamp',
+    id: 'cpu.lamp',
+    type: 'change',
+    name: 'state to lamp',
     rules: [
       { t: 'set', p: 'lamp', pt: 'msg', to: "payload.state = 'run' ? 'green' : payload.state = 'stop' ? 'red' : 'yellow'", tot: 'jsonata' },
       { t: 'set', p: 'payload', pt: 'msg', to: '$uppercase(payload.state)', tot: 'jsonata' },
     ],
-    ...at(X.shape, row(0)), wires: [['ui.cpu.state']],
+    ...at(X.shape, row(0)),
+    wires: [['ui.cpu.state']],
   });
   stateLamp('ui.cpu.state', 'ui.g.cpu', 'CPU', 2, 3, row(0));
   control('cpu.clock', 'PLC clock', 'clock', 1.5, ['cpu.clocktext']);
-  nodes.push({ id: 'cpu.clocktext', type: 'change', name: 'date and time', rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace($substring(payload, 0, 19), 'T', ' ')", tot: 'jsonata' }], ...at(X.shape, row(1.5)), wires: [['ui.cpu.clock']] });
+  nodes.push({
+    id: 'cpu.clocktext',
+    type: 'change',
+    name: 'date and time',
+    rules: [{ t: 'set', p: 'payload', pt: 'msg', to: "$replace($substring(payload, 0, 19), 'T', ' ')", tot: 'jsonata' }],
+    ...at(X.shape, row(1.5)),
+    wires: [['ui.cpu.clock']],
+  });
   text('ui.cpu.clock', 'ui.g.cpu', 'PLC clock', 3, 3, row(1.5));
   control('cpu.diag', 'diagnostics', 'diagnostics', 3, ['cpu.rows']);
   // The newest ten entries as table rows: the time to the millisecond, the event ID as the CPU's tools write it.
   nodes.push({
-    id: 'cpu.rows', type: 'function', name: 'newest ten',
+    id: 'cpu.rows',
+    type: 'function',
+    name: 'newest ten',
     func: `const hex = (n) => '16#' + n.toString(16).toUpperCase().padStart(4, '0');
 msg.payload = msg.payload.slice(0, 10).map((e) => ({
   time: e.time ? e.time.slice(0, 23).replace('T', ' ') : '',
@@ -209,32 +550,105 @@ msg.payload = msg.payload.slice(0, 10).map((e) => ({
   description: e.description || '',
 }));
 return msg;`,
-    outputs: 1, timeout: 0, noerr: 0, initialize: '', finalize: '', libs: [], ...at(X.shape, row(3)), wires: [['ui.cpu.diag']],
+    outputs: 1,
+    timeout: 0,
+    noerr: 0,
+    initialize: '',
+    finalize: '',
+    libs: [],
+    ...at(X.shape, row(3)),
+    wires: [['ui.cpu.diag']],
   });
   nodes.push({
-    id: 'ui.cpu.diag', type: 'ui-table', group: 'ui.g.cpu', name: 'Diagnostic buffer', label: 'Diagnostic buffer (newest first)', order: 6, width: 6, height: 0, maxrows: 10, passthru: false, autocols: false, showSearch: false, deselect: true, selectionType: 'none',
+    id: 'ui.cpu.diag',
+    type: 'ui-table',
+    group: 'ui.g.cpu',
+    name: 'Diagnostic buffer',
+    label: 'Diagnostic buffer (newest first)',
+    order: 6,
+    width: 6,
+    height: 0,
+    maxrows: 10,
+    passthru: false,
+    autocols: false,
+    showSearch: false,
+    deselect: true,
+    selectionType: 'none',
     columns: [
       { title: 'Time', key: 'time', keyType: 'key', type: 'text', width: '', align: 'start' },
       { title: 'Event', key: 'event', keyType: 'key', type: 'text', width: '', align: 'start' },
       { title: 'Description', key: 'description', keyType: 'key', type: 'text', width: '', align: 'start' },
     ],
-    mobileBreakpoint: 'sm', mobileBreakpointType: 'defaults', action: 'replace', className: 'plcwire-cpu-diag', ...at(X.widget, row(3)), wires: [[]],
+    mobileBreakpoint: 'sm',
+    mobileBreakpointType: 'defaults',
+    action: 'replace',
+    className: 'plcwire-cpu-diag',
+    ...at(X.widget, row(3)),
+    wires: [[]],
   });
-  nodes.push({ id: 'cpu.identify', type: 'inject', name: 'every 10 s', props: [{ p: 'payload' }], repeat: '10', crontab: '', once: true, onceDelay: '1', topic: '', payload: '', payloadType: 'date', ...at(X.source, row(4.5)), wires: [['cpu.info']] });
+  nodes.push({
+    id: 'cpu.identify',
+    type: 'inject',
+    name: 'every 10 s',
+    props: [{ p: 'payload' }],
+    repeat: '10',
+    crontab: '',
+    once: true,
+    onceDelay: '1',
+    topic: '',
+    payload: '',
+    payloadType: 'date',
+    ...at(X.source, row(4.5)),
+    wires: [['cpu.info']],
+  });
   control('cpu.info', 'CPU identity', 'info', 4.5, ['ui.cpu.identity']);
   const field = (label, expr) => `  <div><span>${html(label)}</span><b>{{ ${expr} }}</b></div>`;
-  template('ui.cpu.identity', 'ui.g.cpu', 'CPU identity', 1, 6, row(4.5), [
-    '<div class="plcwire-cpu-identity">',
-    field('Module', "(msg.payload || {}).moduleTypeName"),
-    field('Name', "(msg.payload || {}).moduleName"),
-    field('Order code', "(msg.payload || {}).orderCode"),
-    field('Firmware', "(msg.payload || {}).firmware"),
-    field('Serial number', "(msg.payload || {}).serialNumber"),
-    field('AS name', "(msg.payload || {}).asName"),
-    '</div>',
-  ].join('\n'), 2);
+  template(
+    'ui.cpu.identity',
+    'ui.g.cpu',
+    'CPU identity',
+    1,
+    6,
+    row(4.5),
+    [
+      '<div class="plcwire-cpu-identity">',
+      field('Module', '(msg.payload || {}).moduleTypeName'),
+      field('Name', '(msg.payload || {}).moduleName'),
+      field('Order code', '(msg.payload || {}).orderCode'),
+      field('Firmware', '(msg.payload || {}).firmware'),
+      field('Serial number', '(msg.payload || {}).serialNumber'),
+      field('AS name', '(msg.payload || {}).asName'),
+      '</div>',
+    ].join('\n'),
+    2,
+  );
   const cpuButton = (id, label, action, order, color, icon, r) =>
-    nodes.push({ id, type: 'ui-button', group: 'ui.g.cpu', name: label, label, order, width: 3, height: 1, emulateClick: false, tooltip: '', color: '', bgcolor: '', className: `plcwire-cpu-${action}`, icon, iconPosition: 'left', payload: '', payloadType: 'str', topic: action, topicType: 'str', buttonColor: color, textColor: '#ffffff', iconColor: '#ffffff', ...at(X.source, row(r)), wires: [[`cpu.${action}`]] });
+    nodes.push({
+      id,
+      type: 'ui-button',
+      group: 'ui.g.cpu',
+      name: label,
+      label,
+      order,
+      width: 3,
+      height: 1,
+      emulateClick: false,
+      tooltip: '',
+      color: '',
+      bgcolor: '',
+      className: `plcwire-cpu-${action}`,
+      icon,
+      iconPosition: 'left',
+      payload: '',
+      payloadType: 'str',
+      topic: action,
+      topicType: 'str',
+      buttonColor: color,
+      textColor: '#ffffff',
+      iconColor: '#ffffff',
+      ...at(X.source, row(r)),
+      wires: [[`cpu.${action}`]],
+    });
   cpuButton('ui.cpu.stop', 'Stop CPU', 'stop', 4, '#d32f2f', 'stop', 6);
   control('cpu.stop', 'stop CPU', 'stop', 6, ['cpu.lamp']);
   cpuButton('ui.cpu.start', 'Start CPU', 'start', 5, '#1f9d2a', 'play', 7.5);
@@ -243,7 +657,21 @@ return msg;`,
 
   // FETCH/WRITE: the same DB1 through the CP.
   y = row(11);
-  nodes.push({ id: 'fw.read', type: 'plcwire-read', name: 'poll CP', connection: 'conn.fw', interval: 1000, output: 'per-tag', deadband: 0, tags: [{ name: 'level', address: 'DB1,REAL0' }, { name: 'parts', address: 'DB1,DINT8' }], ...at(X.source, row(0)), wires: [['fw.route', 'fw.watch']] });
+  nodes.push({
+    id: 'fw.read',
+    type: 'plcwire-read',
+    name: 'poll CP',
+    connection: 'conn.fw',
+    interval: 1000,
+    output: 'per-tag',
+    deadband: 0,
+    tags: [
+      { name: 'level', address: 'DB1,REAL0' },
+      { name: 'parts', address: 'DB1,DINT8' },
+    ],
+    ...at(X.source, row(0)),
+    wires: [['fw.route', 'fw.watch']],
+  });
   route('fw.route', ['level', 'parts'], row(0), [['fw.round'], ['ui.fw.parts']]);
   round('fw.round', row(0), ['ui.fw.level']);
   text('ui.fw.level', 'ui.g.fw', 'Tank level (%)', 1, 3, row(0));
@@ -254,7 +682,21 @@ return msg;`,
 
   // Freeport: stations 5 (level, REAL) and 6 (parts, DINT) on the RS-485 bus, through a serial device server.
   y = row(5);
-  nodes.push({ id: 'fp.read', type: 'plcwire-read', name: 'poll S7-200', connection: 'conn.fp', interval: 1000, output: 'per-tag', deadband: 0, tags: [{ name: 'level', address: 'ST5,REAL0' }, { name: 'parts', address: 'ST6,DINT0' }], ...at(X.source, row(0)), wires: [['fp.route', 'fp.watch']] });
+  nodes.push({
+    id: 'fp.read',
+    type: 'plcwire-read',
+    name: 'poll S7-200',
+    connection: 'conn.fp',
+    interval: 1000,
+    output: 'per-tag',
+    deadband: 0,
+    tags: [
+      { name: 'level', address: 'ST5,REAL0' },
+      { name: 'parts', address: 'ST6,DINT0' },
+    ],
+    ...at(X.source, row(0)),
+    wires: [['fp.route', 'fp.watch']],
+  });
   route('fp.route', ['level', 'parts'], row(0), [['fp.round'], ['ui.fp.parts']]);
   round('fp.round', row(0), ['ui.fp.level']);
   text('ui.fp.level', 'ui.g.fp', 'Tank level (%)', 1, 3, row(0));
@@ -265,9 +707,47 @@ return msg;`,
 
   // Errors from any plcwire node, and the dashboard's CSS.
   y = row(5);
-  nodes.push({ id: 'catch', type: 'catch', name: 'plcwire errors', scope: null, uncaught: false, ...at(X.source, row(0)), wires: [['debug']] });
-  nodes.push({ id: 'debug', type: 'debug', name: 'errors', active: true, tosidebar: true, console: false, complete: 'error', targetType: 'msg', ...at(X.route, row(0)), wires: [] });
-  nodes.push({ id: 'ui.style', type: 'ui-template', group: '', page: '', ui: 'ui.base', name: 'CSS: lamps, stale', order: 0, width: 0, height: 0, head: '', format: STYLE, storeOutMessages: true, passthru: true, resendOnRefresh: true, templateScope: 'site:style', className: '', ...at(X.shape, row(0)), wires: [[]] });
+  nodes.push({
+    id: 'catch',
+    type: 'catch',
+    name: 'plcwire errors',
+    scope: null,
+    uncaught: false,
+    ...at(X.source, row(0)),
+    wires: [['debug']],
+  });
+  nodes.push({
+    id: 'debug',
+    type: 'debug',
+    name: 'errors',
+    active: true,
+    tosidebar: true,
+    console: false,
+    complete: 'error',
+    targetType: 'msg',
+    ...at(X.route, row(0)),
+    wires: [],
+  });
+  nodes.push({
+    id: 'ui.style',
+    type: 'ui-template',
+    group: '',
+    page: '',
+    ui: 'ui.base',
+    name: 'CSS: lamps, stale',
+    order: 0,
+    width: 0,
+    height: 0,
+    head: '',
+    format: STYLE,
+    storeOutMessages: true,
+    passthru: true,
+    resendOnRefresh: true,
+    templateScope: 'site:style',
+    className: '',
+    ...at(X.shape, row(0)),
+    wires: [[]],
+  });
 
   return nodes;
 }

@@ -11,7 +11,17 @@ export * from './types';
 export * from './url';
 
 export { parseAddress, parseTypeSpec, formatAddress, type TypeSpec, type TagLocation } from './address';
-export { tagsFromCsv, tagsToCsv, addressWithType, duplicateNames, type TagRow, type CsvImport, type TagTableProblem, type TagTableProblemCode, type AddressParser } from './tags/table';
+export {
+  tagsFromCsv,
+  tagsToCsv,
+  addressWithType,
+  duplicateNames,
+  type TagRow,
+  type CsvImport,
+  type TagTableProblem,
+  type TagTableProblemCode,
+  type AddressParser,
+} from './tags/table';
 export {
   tagTable,
   tagsOfMessage,
@@ -37,7 +47,16 @@ export {
 export * as values from './values';
 export { decodeTag, encodeTag, encodeInto, validateValue, elementByteLength, tagByteLength } from './values';
 
-export { BaseClient, type ClientOptions, type PreparedRead, type Driver, type DriverSession, type DriverTag, type ReadValues, type TagSyntax } from './link/client-base';
+export {
+  BaseClient,
+  type ClientOptions,
+  type PreparedRead,
+  type Driver,
+  type DriverSession,
+  type DriverTag,
+  type ReadValues,
+  type TagSyntax,
+} from './link/client-base';
 export type { BackoffOptions } from './link/backoff';
 export type { FrameCheck } from './link/framer';
 
@@ -56,7 +75,15 @@ export {
   type WritePdu,
   type WritePlan,
 } from './s7/plan';
-export { S7Server, PROFILES as S7_PROFILES, type S7ServerOptions, type S7Faults, type S7Profile, type CpuProfile, type S7RequestEvent } from './s7/server';
+export {
+  S7Server,
+  PROFILES as S7_PROFILES,
+  type S7ServerOptions,
+  type S7Faults,
+  type S7Profile,
+  type CpuProfile,
+  type S7RequestEvent,
+} from './s7/server';
 export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
 export type { CpuServices, ServiceSession } from './s7/server-services';
 export { type PlcInfo, type ClockOptions } from './s7/services';

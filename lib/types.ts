@@ -107,10 +107,7 @@ export interface PlcClient extends EventEmitter {
   /** Writes `{ address: value }`; resolves when the PLC acknowledged every tag, else rejects with TagErrors. */
   write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void>;
   /** Writes; always resolves with a result per tag. */
-  writeDetailed(
-    values: Readonly<Record<string, unknown>>,
-    options?: RequestOptions,
-  ): Promise<Record<string, TagResult<void>>>;
+  writeDetailed(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<Record<string, TagResult<void>>>;
   /** Stops reconnecting, fails what is pending with CLOSED, closes the socket. Always resolves. */
   close(): Promise<void>;
 }

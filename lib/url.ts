@@ -39,7 +39,9 @@ const DRIVER_URLS: { readonly [P in Endpoint['protocol']]: UrlScheme<Extract<End
 
 /** The URL schemes, each with its driver's entry. */
 const SCHEMES: ReadonlyMap<string, UrlScheme<Endpoint>> = new Map(
-  Object.values(DRIVER_URLS).flatMap((entry) => Object.keys(entry.schemes).map((scheme) => [scheme, entry as UrlScheme<Endpoint>] as const)),
+  Object.values(DRIVER_URLS).flatMap((entry) =>
+    Object.keys(entry.schemes).map((scheme) => [scheme, entry as UrlScheme<Endpoint>] as const),
+  ),
 );
 
 function urlsOf(e: Endpoint): UrlScheme<Endpoint> {

@@ -74,7 +74,10 @@ module.exports = function (RED) {
         client = connection.client;
         if (!client) throw noConnectionError(RED);
         if (!(client instanceof plc.S7Client)) {
-          throw new plc.PlcError('NOT_SUPPORTED', RED._('plcwire-control.errors.notS7', { action, protocol: client.endpoint ? client.endpoint.protocol : '?' }));
+          throw new plc.PlcError(
+            'NOT_SUPPORTED',
+            RED._('plcwire-control.errors.notS7', { action, protocol: client.endpoint ? client.endpoint.protocol : '?' }),
+          );
         }
       } catch (err) {
         if (action) msg.topic = action;

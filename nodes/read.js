@@ -56,7 +56,9 @@ module.exports = function (RED) {
     /** Runs reads one after another. */
     function serial(job) {
       if (waiting >= MAX_WAITING_READS) {
-        return Promise.reject(new PlcError('QUEUE_FULL', `more than ${MAX_WAITING_READS} reads waiting; the PLC answers slower than messages arrive`));
+        return Promise.reject(
+          new PlcError('QUEUE_FULL', `more than ${MAX_WAITING_READS} reads waiting; the PLC answers slower than messages arrive`),
+        );
       }
       waiting++;
       const run = chain.then(() => {
@@ -213,35 +215,37 @@ module.exports = function (RED) {
       timer = undefined;
       if (closing || !connection || node.linkState !== 'connected' || tags.length === 0) return;
       const started = Date.now();
-      serial(readTable).then(
-        (read) => {
-          if (closing) return;
-          const send = (m) => node.send(m);
-          if (read.values) {
-            showQuality(0);
-            emitGood(send, read.values, undefined, output);
-            reported.clear();
-            return;
-          }
-          const { list } = read;
-          showQuality(list.filter((o) => !o.ok).length);
-          emit(send, list, undefined, output);
-          const bad = list.filter((o) => !o.ok && !reported.has(o.name));
-          for (const o of list) if (o.ok) reported.delete(o.name);
-          if (bad.length > 0) {
-            bad.forEach((o) => reported.add(o.name));
-            node.error(tagFailure('read', bad), { topic, payload: Object.fromEntries(bad.map((o) => [o.name, o.error])) });
-          }
-        },
-        (err) => {
-          // A lost link shows on the status and reaches Catch through the connection; anything else is reported here.
-          if (!closing && !isLinkError(err)) {
-            node.error(err, { topic, payload: {} });
-          }
-        },
-      ).finally(() => {
-        if (!closing && node.linkState === 'connected') schedule(Math.max(0, interval - (Date.now() - started)));
-      });
+      serial(readTable)
+        .then(
+          (read) => {
+            if (closing) return;
+            const send = (m) => node.send(m);
+            if (read.values) {
+              showQuality(0);
+              emitGood(send, read.values, undefined, output);
+              reported.clear();
+              return;
+            }
+            const { list } = read;
+            showQuality(list.filter((o) => !o.ok).length);
+            emit(send, list, undefined, output);
+            const bad = list.filter((o) => !o.ok && !reported.has(o.name));
+            for (const o of list) if (o.ok) reported.delete(o.name);
+            if (bad.length > 0) {
+              bad.forEach((o) => reported.add(o.name));
+              node.error(tagFailure('read', bad), { topic, payload: Object.fromEntries(bad.map((o) => [o.name, o.error])) });
+            }
+          },
+          (err) => {
+            // A lost link shows on the status and reaches Catch through the connection; anything else is reported here.
+            if (!closing && !isLinkError(err)) {
+              node.error(err, { topic, payload: {} });
+            }
+          },
+        )
+        .finally(() => {
+          if (!closing && node.linkState === 'connected') schedule(Math.max(0, interval - (Date.now() - started)));
+        });
     }
 
     node.on('input', function (msg, send, done) {

@@ -23,7 +23,6 @@
     return c ? c.url || '' : '';
   };
 
-
   /** Asks the runtime (the library's own parser) about addresses: callback(results) with { address: { ok, type, message } }. */
   editor.validate = function (url, addresses, callback) {
     $.ajax({
@@ -31,8 +30,12 @@
       type: 'POST',
       contentType: 'application/json',
       data: JSON.stringify({ url: url || undefined, addresses: addresses }),
-      success: function (res) { callback((res && res.results) || {}, res && res.url); },
-      error: function () { callback({}); }
+      success: function (res) {
+        callback((res && res.results) || {}, res && res.url);
+      },
+      error: function () {
+        callback({});
+      },
     });
   };
 
@@ -68,9 +71,11 @@
           var known = (answers[url] = answers[url] || {});
           known[''] = (res && res.url) || { ok: true };
           // With an invalid URL there are no address answers: the connection is what is wrong.
-          addresses.forEach(function (a) { known[a] = (res && res.results && res.results[a]) || { ok: true }; });
+          addresses.forEach(function (a) {
+            known[a] = (res && res.results && res.results[a]) || { ok: true };
+          });
           revalidate();
-        }
+        },
         // No answer (runtime gone): nothing is cached, the next validation asks again.
       });
     });
@@ -88,8 +93,12 @@
       redraw = true;
       return true;
     }
-    RED.nodes.eachConfig(function (n) { if (n.type === 'plcwire-connection' && again(n)) configs = true; });
-    RED.nodes.eachNode(function (n) { if (n.type.indexOf('plcwire-') === 0) again(n); });
+    RED.nodes.eachConfig(function (n) {
+      if (n.type === 'plcwire-connection' && again(n)) configs = true;
+    });
+    RED.nodes.eachNode(function (n) {
+      if (n.type.indexOf('plcwire-') === 0) again(n);
+    });
     if (configs && RED.sidebar.config && RED.sidebar.config.refresh) RED.sidebar.config.refresh();
     if (redraw) RED.view.redraw(true);
   }
@@ -120,15 +129,29 @@
   /** Names given to more than one row. */
   editor.duplicateNames = function (rows) {
     var count = {};
-    (rows || []).forEach(function (r) { var n = rowName(r); if (n) count[n] = (count[n] || 0) + 1; });
-    return Object.keys(count).filter(function (n) { return count[n] > 1; });
+    (rows || []).forEach(function (r) {
+      var n = rowName(r);
+      if (n) count[n] = (count[n] || 0) + 1;
+    });
+    return Object.keys(count).filter(function (n) {
+      return count[n] > 1;
+    });
   };
 
   /** For a node's `tags` validate: true, or what is wrong (names used twice, addresses the parser refuses). */
   editor.validateTags = function (node, tags) {
     if (!Array.isArray(tags)) return false;
-    var problems = editor.duplicateNames(tags).map(function (n) { return node._('plcwire.editor.duplicateName', { name: n }); });
-    problems = problems.concat(addressProblems(node.connection, tags.map(function (t) { return String((t && t.address) || '').trim(); })));
+    var problems = editor.duplicateNames(tags).map(function (n) {
+      return node._('plcwire.editor.duplicateName', { name: n });
+    });
+    problems = problems.concat(
+      addressProblems(
+        node.connection,
+        tags.map(function (t) {
+          return String((t && t.address) || '').trim();
+        }),
+      ),
+    );
     return problems.length ? problems : true;
   };
 
@@ -156,12 +179,24 @@
         var r = results[address];
         if (closed || !r) return;
         if (r.ok) hint.text(r.type + (r.count > 1 ? '[' + r.count + ']' : ''));
-        else { input.addClass('plcwire-invalid'); hint.text(r.message).addClass('plcwire-bad'); }
+        else {
+          input.addClass('plcwire-invalid');
+          hint.text(r.message).addClass('plcwire-bad');
+        }
       });
     }
-    input.on('input change', function () { clearTimeout(timer); timer = setTimeout(check, 300); });
+    input.on('input change', function () {
+      clearTimeout(timer);
+      timer = setTimeout(check, 300);
+    });
     check();
-    return { check: check, dispose: function () { closed = true; clearTimeout(timer); } };
+    return {
+      check: check,
+      dispose: function () {
+        closed = true;
+        clearTimeout(timer);
+      },
+    };
   };
 
   /** Asks the runtime to read CSV text into tags (the library's importer, with the connection's parser). */
@@ -171,8 +206,12 @@
       type: 'POST',
       contentType: 'application/json',
       data: JSON.stringify({ url: url || undefined, text: text }),
-      success: function (res) { callback((res && res.tags) || [], (res && res.problems) || []); },
-      error: function (xhr) { RED.notify(String((xhr && xhr.statusText) || 'error'), 'error'); }
+      success: function (res) {
+        callback((res && res.tags) || [], (res && res.problems) || []);
+      },
+      error: function (xhr) {
+        RED.notify(String((xhr && xhr.statusText) || 'error'), 'error');
+      },
     });
   }
 
@@ -183,7 +222,15 @@
 
   /** The table as CSV, in the form the importer reads back (lib/tags/table.ts, tagsToCsv). */
   editor.tagsToCsv = function (tags) {
-    return ['name,address'].concat(tags.map(function (t) { return csvField(t.name) + ',' + csvField(t.address); })).join('\r\n') + '\r\n';
+    return (
+      ['name,address']
+        .concat(
+          tags.map(function (t) {
+            return csvField(t.name) + ',' + csvField(t.address);
+          }),
+        )
+        .join('\r\n') + '\r\n'
+    );
   };
 
   /**
@@ -195,16 +242,23 @@
    */
   editor.tagTable = function (container, tags, urlOf, t) {
     var toolbar = $('<div class="plcwire-tags-toolbar">').insertBefore(container);
-    var importButton = $('<button type="button" class="red-ui-button red-ui-button-small"><i class="fa fa-upload"></i> </button>').appendTo(toolbar);
+    var importButton = $('<button type="button" class="red-ui-button red-ui-button-small"><i class="fa fa-upload"></i> </button>').appendTo(
+      toolbar,
+    );
     importButton.append(document.createTextNode(t('plcwire.editor.importCsv')));
-    var exportButton = $('<button type="button" class="red-ui-button red-ui-button-small"><i class="fa fa-download"></i> </button>').appendTo(toolbar);
+    var exportButton = $(
+      '<button type="button" class="red-ui-button red-ui-button-small"><i class="fa fa-download"></i> </button>',
+    ).appendTo(toolbar);
     exportButton.append(document.createTextNode(t('plcwire.editor.exportCsv')));
     var file = $('<input type="file" accept=".csv,text/csv,text/plain" style="display:none">').appendTo(toolbar);
     var timer;
     var closed = false;
 
     function rowOf(item) {
-      return { name: String(item.find('.plcwire-tag-name').val() || '').trim(), address: String(item.find('.plcwire-tag-address').val() || '').trim() };
+      return {
+        name: String(item.find('.plcwire-tag-name').val() || '').trim(),
+        address: String(item.find('.plcwire-tag-address').val() || '').trim(),
+      };
     }
 
     function markDuplicates(items) {
@@ -213,16 +267,25 @@
       items.forEach(function (item, i) {
         var name = rowName(rows[i]);
         var duplicate = twice.indexOf(name) >= 0;
-        item.find('.plcwire-tag-name').toggleClass('plcwire-invalid', duplicate).attr('title', duplicate ? t('plcwire.editor.duplicateName', { name: name }) : '');
+        item
+          .find('.plcwire-tag-name')
+          .toggleClass('plcwire-invalid', duplicate)
+          .attr('title', duplicate ? t('plcwire.editor.duplicateName', { name: name }) : '');
       });
     }
 
     function validateAll() {
       if (closed) return;
       var items = [];
-      container.editableList('items').each(function () { items.push($(this)); });
+      container.editableList('items').each(function () {
+        items.push($(this));
+      });
       markDuplicates(items);
-      var addresses = items.map(function (r) { return rowOf(r).address; }).filter(Boolean);
+      var addresses = items
+        .map(function (r) {
+          return rowOf(r).address;
+        })
+        .filter(Boolean);
       if (!addresses.length) return;
       editor.validate(urlOf(), addresses, function (results) {
         if (closed) return;
@@ -241,7 +304,11 @@
         });
       });
     }
-    function later() { if (closed) return; clearTimeout(timer); timer = setTimeout(validateAll, 300); }
+    function later() {
+      if (closed) return;
+      clearTimeout(timer);
+      timer = setTimeout(validateAll, 300);
+    }
 
     container.css({ 'min-height': '150px', 'min-width': '450px' }).editableList({
       addButton: t('plcwire.editor.addTag'),
@@ -250,26 +317,42 @@
       height: 'auto',
       addItem: function (row, index, data) {
         var line = $('<div class="plcwire-tag-row">').appendTo(row);
-        $('<input type="text" class="plcwire-tag-name">').attr('placeholder', t('plcwire.editor.tagName')).val(data.name || '').appendTo(line).on('input change', later);
-        $('<input type="text" class="plcwire-tag-address">').attr('placeholder', t('plcwire.editor.tagAddress')).val(data.address || '').appendTo(line).on('input change', later);
+        $('<input type="text" class="plcwire-tag-name">')
+          .attr('placeholder', t('plcwire.editor.tagName'))
+          .val(data.name || '')
+          .appendTo(line)
+          .on('input change', later);
+        $('<input type="text" class="plcwire-tag-address">')
+          .attr('placeholder', t('plcwire.editor.tagAddress'))
+          .val(data.address || '')
+          .appendTo(line)
+          .on('input change', later);
         $('<span class="plcwire-tag-type">').appendTo(line);
         later();
       },
-      removeItem: later
+      removeItem: later,
     });
-    (tags || []).forEach(function (tag) { container.editableList('addItem', tag); });
+    (tags || []).forEach(function (tag) {
+      container.editableList('addItem', tag);
+    });
 
     function addImported(imported, problems, replace) {
       if (closed) return;
       if (replace) container.editableList('empty');
-      imported.forEach(function (tag) { container.editableList('addItem', tag); });
+      imported.forEach(function (tag) {
+        container.editableList('addItem', tag);
+      });
       later();
       RED.notify(t('plcwire.editor.imported', { count: imported.length }), { type: 'success', timeout: 3000 });
       if (problems.length) {
         // Names and addresses come from the file: text nodes, never HTML.
         var list = $('<div>').append($('<p>').text(t('plcwire.editor.importProblems')));
         var ul = $('<ul>').appendTo(list);
-        problems.slice(0, 10).forEach(function (p) { $('<li>').text(t('plcwire.editor.line', { line: p.line, message: p.message })).appendTo(ul); });
+        problems.slice(0, 10).forEach(function (p) {
+          $('<li>')
+            .text(t('plcwire.editor.line', { line: p.line, message: p.message }))
+            .appendTo(ul);
+        });
         if (problems.length > 10) $('<li>').text('…').appendTo(ul);
         RED.notify(list, { type: 'warning', timeout: 10000 });
       }
@@ -284,19 +367,45 @@
         fixed: true,
         type: 'compact',
         buttons: [
-          { id: 'plcwire-import-cancel', text: RED._('common.label.cancel'), click: function () { choice.close(); } },
-          { id: 'plcwire-import-append', text: t('plcwire.editor.append'), click: function () { choice.close(); addImported(imported, problems, false); } },
-          { id: 'plcwire-import-replace', text: t('plcwire.editor.replace'), class: 'primary', click: function () { choice.close(); addImported(imported, problems, true); } }
-        ]
+          {
+            id: 'plcwire-import-cancel',
+            text: RED._('common.label.cancel'),
+            click: function () {
+              choice.close();
+            },
+          },
+          {
+            id: 'plcwire-import-append',
+            text: t('plcwire.editor.append'),
+            click: function () {
+              choice.close();
+              addImported(imported, problems, false);
+            },
+          },
+          {
+            id: 'plcwire-import-replace',
+            text: t('plcwire.editor.replace'),
+            class: 'primary',
+            click: function () {
+              choice.close();
+              addImported(imported, problems, true);
+            },
+          },
+        ],
       });
     }
 
-    importButton.on('click', function () { file.val(''); file.trigger('click'); });
+    importButton.on('click', function () {
+      file.val('');
+      file.trigger('click');
+    });
     file.on('change', function () {
       var f = this.files && this.files[0];
       if (!f) return;
       var reader = new FileReader();
-      reader.onload = function () { if (!closed) importCsv(urlOf(), String(reader.result || ''), chooseAndAdd); };
+      reader.onload = function () {
+        if (!closed) importCsv(urlOf(), String(reader.result || ''), chooseAndAdd);
+      };
       reader.readAsText(f);
     });
     exportButton.on('click', function () {
@@ -306,7 +415,10 @@
       a.download = 'plcwire-tags.csv';
       document.body.appendChild(a);
       a.click();
-      setTimeout(function () { URL.revokeObjectURL(a.href); a.remove(); }, 0);
+      setTimeout(function () {
+        URL.revokeObjectURL(a.href);
+        a.remove();
+      }, 0);
     });
 
     var api = {
@@ -322,7 +434,7 @@
       dispose: function () {
         closed = true;
         clearTimeout(timer);
-      }
+      },
     };
     return api;
   };
@@ -332,17 +444,25 @@
    * rows revalidate when the connection changes. Returns the table.
    */
   editor.dialogTagTable = function (node) {
-    var t = function (k, o) { return node._(k, o); };
-    var urlOf = function () { return editor.urlOf($('#node-input-connection').val()); };
+    var t = function (k, o) {
+      return node._(k, o);
+    };
+    var urlOf = function () {
+      return editor.urlOf($('#node-input-connection').val());
+    };
     var table = editor.tagTable($('#node-input-plcwire-tags'), node.tags, urlOf, t);
-    $('#node-input-connection').on('change', function () { table.revalidate(); });
+    $('#node-input-connection').on('change', function () {
+      table.revalidate();
+    });
     return table;
   };
 
   /** Gives the tag table the dialog height the other rows leave. */
   editor.resizeTagTable = function (size) {
     var height = size.height;
-    $('#dialog-form>div:not(.node-input-plcwire-tags-row)').each(function () { height -= $(this).outerHeight(true); });
+    $('#dialog-form>div:not(.node-input-plcwire-tags-row)').each(function () {
+      height -= $(this).outerHeight(true);
+    });
     $('#node-input-plcwire-tags').editableList('height', Math.max(150, height - 40));
   };
 })();

@@ -6,11 +6,34 @@ import type { AreaName, DataTypeName, Tag } from '../lib/types';
 
 /** Element sizes written out again here, so the parser's table is checked against an independent one. */
 const BYTES: Record<DataTypeName, number> = {
-  BOOL: 1, BYTE: 1, CHAR: 1, SINT: 1, USINT: 1,
-  WORD: 2, INT: 2, UINT: 2, WCHAR: 2, S5TIME: 2, DATE: 2, COUNTER: 2, TIMER: 2,
-  DWORD: 4, DINT: 4, UDINT: 4, REAL: 4, TIME: 4, TIME_OF_DAY: 4,
-  LWORD: 8, LINT: 8, ULINT: 8, LREAL: 8, LTIME: 8, DATE_AND_TIME: 8,
-  DTL: 12, STRING: 0, WSTRING: 0,
+  BOOL: 1,
+  BYTE: 1,
+  CHAR: 1,
+  SINT: 1,
+  USINT: 1,
+  WORD: 2,
+  INT: 2,
+  UINT: 2,
+  WCHAR: 2,
+  S5TIME: 2,
+  DATE: 2,
+  COUNTER: 2,
+  TIMER: 2,
+  DWORD: 4,
+  DINT: 4,
+  UDINT: 4,
+  REAL: 4,
+  TIME: 4,
+  TIME_OF_DAY: 4,
+  LWORD: 8,
+  LINT: 8,
+  ULINT: 8,
+  LREAL: 8,
+  LTIME: 8,
+  DATE_AND_TIME: 8,
+  DTL: 12,
+  STRING: 0,
+  WSTRING: 0,
 };
 const TYPES = Object.keys(BYTES) as DataTypeName[];
 const MEMORY_TYPES = TYPES.filter((t) => t !== 'COUNTER' && t !== 'TIMER');
@@ -76,7 +99,39 @@ function checkInvariants(s: string, t: Tag): void {
 const grammarish = fc
   .array(
     fc.oneof(
-      fc.constantFrom('DB', 'DB1', 'DB0', ',', '.', ':', '%', '[', ']', 'X', 'B', 'W', 'D', 'DBX', 'DBW', 'DBD', 'DBB', 'V', 'T', 'C', 'Z', 'M', 'I', 'Q', 'E', 'A', 'PI', 'PQ', 'PE', 'PA', ' '),
+      fc.constantFrom(
+        'DB',
+        'DB1',
+        'DB0',
+        ',',
+        '.',
+        ':',
+        '%',
+        '[',
+        ']',
+        'X',
+        'B',
+        'W',
+        'D',
+        'DBX',
+        'DBW',
+        'DBD',
+        'DBB',
+        'V',
+        'T',
+        'C',
+        'Z',
+        'M',
+        'I',
+        'Q',
+        'E',
+        'A',
+        'PI',
+        'PQ',
+        'PE',
+        'PA',
+        ' ',
+      ),
       fc.constantFrom(...TYPES, 'R', 'DI', 'S', 'TOD', 'DT', 'WS', 'x', 'real', 'int'),
       fc.nat({ max: 70000 }).map(String),
       fc.constantFrom('0', '1', '7', '8', '254', '255', '65535', '65536', '00', '99999999999999999999'),
@@ -86,7 +141,10 @@ const grammarish = fc
   .map((parts) => parts.join(''));
 
 /** Addresses composed along the syntaxes, with small and edge numbers: about half of them parse. */
-const num = fc.oneof(fc.integer({ min: 0, max: 12 }).map(String), fc.constantFrom('0', '7', '8', '30', '254', '255', '65534', '65535', '65536', '007'));
+const num = fc.oneof(
+  fc.integer({ min: 0, max: 12 }).map(String),
+  fc.constantFrom('0', '7', '8', '30', '254', '255', '65534', '65535', '65536', '007'),
+);
 const typeName = fc.constantFrom(...TYPES, 'R', 'DI', 'I', 'C', 'S', 'TOD', 'DT', 'WS', 'B', 'W', 'DW', 'X', 'real', 'Int');
 const dots = fc.array(num, { maxLength: 2 }).map((ns) => ns.map((n) => `.${n}`).join(''));
 const override = fc.option(
@@ -95,9 +153,18 @@ const override = fc.option(
 );
 const structured = fc.oneof(
   fc.tuple(num, typeName, num, dots).map(([db, t, off, d]) => `DB${db},${t}${off}${d}`),
-  fc.tuple(fc.constantFrom('', '%'), num, fc.constantFrom('X', 'B', 'W', 'D'), num, dots, override).map(([p, db, w, off, d, o]) => `${p}DB${db}.DB${w}${off}${d}${o}`),
   fc
-    .tuple(fc.constantFrom('', '%'), fc.constantFrom('I', 'Q', 'E', 'A', 'M', 'PI', 'PE', 'PQ', 'PA', 'V'), fc.constantFrom('', 'X', 'B', 'W', 'D', 'R', 'I', 'DI', 'C'), num, dots, override)
+    .tuple(fc.constantFrom('', '%'), num, fc.constantFrom('X', 'B', 'W', 'D'), num, dots, override)
+    .map(([p, db, w, off, d, o]) => `${p}DB${db}.DB${w}${off}${d}${o}`),
+  fc
+    .tuple(
+      fc.constantFrom('', '%'),
+      fc.constantFrom('I', 'Q', 'E', 'A', 'M', 'PI', 'PE', 'PQ', 'PA', 'V'),
+      fc.constantFrom('', 'X', 'B', 'W', 'D', 'R', 'I', 'DI', 'C'),
+      num,
+      dots,
+      override,
+    )
     .map(([p, area, w, off, d, o]) => `${p}${area}${w}${off}${d}${o}`),
   fc.tuple(fc.constantFrom('T', 'C', 'Z', 't', 'c'), num, override).map(([a, n, o]) => `${a}${n}${o}`),
 );

@@ -2,7 +2,17 @@ import { expect } from 'chai';
 import { AddressError } from '../lib/errors';
 import { formatAddress, parseAddress, parseTypeSpec } from '../lib/address';
 
-type Expect = [area: string, db: number, byte: number, bit: number, type: string, count: number, isArray: boolean, strLen: number, bytes: number];
+type Expect = [
+  area: string,
+  db: number,
+  byte: number,
+  bit: number,
+  type: string,
+  count: number,
+  isArray: boolean,
+  strLen: number,
+  bytes: number,
+];
 
 export const ACCEPTED: Record<string, Expect> = {
   // nodes7 style, DB
@@ -87,7 +97,7 @@ export const ACCEPTED: Record<string, Expect> = {
   '%T3': ['T', 0, 3, 0, 'TIMER', 1, false, 0, 2],
   'T3:TIMER[4]': ['T', 0, 3, 0, 'TIMER', 4, true, 0, 8],
   'C0:COUNTER[3]': ['C', 0, 0, 0, 'COUNTER', 3, true, 0, 6],
-  'T65535': ['T', 0, 65535, 0, 'TIMER', 1, false, 0, 2],
+  T65535: ['T', 0, 65535, 0, 'TIMER', 1, false, 0, 2],
   // IEC / TIA style
   'DB1.DBX0.1': ['DB', 1, 0, 1, 'BOOL', 1, false, 0, 1],
   'DB1.DBB0': ['DB', 1, 0, 0, 'BYTE', 1, false, 0, 1],
@@ -139,7 +149,7 @@ export const ACCEPTED: Record<string, Expect> = {
   VD10: ['DB', 1, 10, 0, 'DWORD', 1, false, 0, 4],
   'V10.1': ['DB', 1, 10, 1, 'BOOL', 1, false, 0, 1],
   'VX10.1': ['DB', 1, 10, 1, 'BOOL', 1, false, 0, 1],
-  'vw10': ['DB', 1, 10, 0, 'WORD', 1, false, 0, 2],
+  vw10: ['DB', 1, 10, 0, 'WORD', 1, false, 0, 2],
   'VD10:REAL': ['DB', 1, 10, 0, 'REAL', 1, false, 0, 4],
   'VW10:INT': ['DB', 1, 10, 0, 'INT', 1, false, 0, 2],
 };
@@ -158,9 +168,9 @@ export const REJECTED: Record<string, RegExp> = {
   'DB1,FOO2': /unknown type "FOO"/,
   'DB1.DBD0:FOO': /unknown type "FOO"/,
   'DB1.DBD0:foo[2]': /unknown type "foo"/,
-  'MB70000': /offset 70000 out of range \(0\.\.65535\)/,
+  MB70000: /offset 70000 out of range \(0\.\.65535\)/,
   'DB1,INT99999999999999999999': /offset 99999999999999999999 out of range/,
-  'T70000': /offset 70000 out of range/,
+  T70000: /offset 70000 out of range/,
   'T65535:TIMER[2]': /ends at T65536, beyond T65535/,
   'DB1.DBW65534:INT[2]': /ends at byte 65537, beyond 65535/,
   'DB1.DBB65535:BOOL[1]': /BOOL needs a bit address/,
@@ -190,7 +200,7 @@ export const REJECTED: Record<string, RegExp> = {
   'DB1,INT2:REAL': /drop the ":TYPE" override/,
   'MR4:INT': /"MR" names its type; drop the ":TYPE" override/,
   'DB1,INT2x': /unexpected "x" after "DB1,INT2"$/,
-  'MW4x': /unexpected "x" after "MW4"$/,
+  MW4x: /unexpected "x" after "MW4"$/,
   'DB1.DBX0.1.2': /unexpected "\.2" after "DB1\.DBX0\.1"$/,
   'DB1.DBW2 4': /unexpected " 4" after "DB1\.DBW2"$/,
   'I0.1.2': /unexpected "\.2" after "I0\.1"$/,

@@ -29,7 +29,8 @@ function tsFiles(dir: string): string[] {
 }
 
 // `import … from '…'`, `export … from '…'` (also over several lines), `import '…'`, `import('…')`, `require('…')`.
-const IMPORT = /^\s*(?:import|export)\s+(type\s+)?[^'";]*?\bfrom\s*['"]([^'"]+)['"]|^\s*import\s*['"]([^'"]+)['"]|\bimport\(\s*['"]([^'"]+)['"]\s*\)|\brequire\(\s*['"]([^'"]+)['"]\s*\)/gm;
+const IMPORT =
+  /^\s*(?:import|export)\s+(type\s+)?[^'";]*?\bfrom\s*['"]([^'"]+)['"]|^\s*import\s*['"]([^'"]+)['"]|\bimport\(\s*['"]([^'"]+)['"]\s*\)|\brequire\(\s*['"]([^'"]+)['"]\s*\)/gm;
 
 function edgesOf(file: string): Edge[] {
   const source = fs.readFileSync(file, 'utf8');
@@ -40,16 +41,17 @@ function edgesOf(file: string): Edge[] {
     if (spec.startsWith('.')) {
       const base = path.resolve(path.dirname(file), spec);
       const found = [`${base}.ts`, path.join(base, 'index.ts')].find((f) => fs.existsSync(f));
-      to = path.relative(ROOT, found ?? base).split(path.sep).join('/');
+      to = path
+        .relative(ROOT, found ?? base)
+        .split(path.sep)
+        .join('/');
     }
     edges.push({ spec, to, typeOnly: m[1] !== undefined });
   }
   return edges;
 }
 
-const GRAPH = new Map<string, Edge[]>(
-  tsFiles(LIB).map((f) => [path.relative(ROOT, f).split(path.sep).join('/'), edgesOf(f)]),
-);
+const GRAPH = new Map<string, Edge[]>(tsFiles(LIB).map((f) => [path.relative(ROOT, f).split(path.sep).join('/'), edgesOf(f)]));
 
 /** Every cycle closed by a back edge of a depth-first walk (none means the graph is acyclic). */
 function cycles(graph: Map<string, Edge[]>): string[][] {
@@ -108,21 +110,39 @@ describe('architecture of lib/', () => {
   });
 
   it('only the CLI imports the CLI', () => {
-    expect(violations((f) => !f.startsWith('lib/cli/'), (e) => e.to?.startsWith('lib/cli/') === true)).to.deep.equal([]);
+    expect(
+      violations(
+        (f) => !f.startsWith('lib/cli/'),
+        (e) => e.to?.startsWith('lib/cli/') === true,
+      ),
+    ).to.deep.equal([]);
   });
 
   it('no module imports the CLI entry (main.ts): the commands share lib/cli/io.ts', () => {
-    expect(violations(() => true, (e) => e.to === 'lib/cli/main.ts')).to.deep.equal([]);
+    expect(
+      violations(
+        () => true,
+        (e) => e.to === 'lib/cli/main.ts',
+      ),
+    ).to.deep.equal([]);
   });
 
   it('lib imports nothing from outside lib (nodes, test, bench, dist)', () => {
-    expect(violations(() => true, (e) => e.to !== undefined && !e.to.startsWith('lib/'))).to.deep.equal([]);
+    expect(
+      violations(
+        () => true,
+        (e) => e.to !== undefined && !e.to.startsWith('lib/'),
+      ),
+    ).to.deep.equal([]);
   });
 
   it('the codecs are pure: no Node or npm module, no run-time import of link/ (only its FrameCheck contract as a type)', () => {
     const codecs = [...GRAPH.keys()].filter(isCodec);
     expect(codecs).to.include.members(['lib/s7/codec/pdu.ts', 'lib/fetchwrite/codec.ts', 'lib/freeport/codec.ts']);
-    const bad = violations(isCodec, (e) => (e.to === undefined && e.spec !== 'node:buffer') || (e.to?.startsWith('lib/link/') === true && !e.typeOnly));
+    const bad = violations(
+      isCodec,
+      (e) => (e.to === undefined && e.spec !== 'node:buffer') || (e.to?.startsWith('lib/link/') === true && !e.typeOnly),
+    );
     expect(bad).to.deep.equal([]);
   });
 

@@ -95,7 +95,17 @@ async function drawnNodes(page: Page, z: string): Promise<Drawn[]> {
         bottom: Math.max(...rects.map((r: any) => r.bottom)),
       };
       const body = g.querySelector(':scope > rect.red-ui-flow-node').getBoundingClientRect();
-      out.push({ id: n.id, type: n.type, x: n.x, y: n.y, w: n.w, h: n.h, label: RED.utils.getNodeLabel(n, n.type), box, below: box.bottom - body.bottom });
+      out.push({
+        id: n.id,
+        type: n.type,
+        x: n.x,
+        y: n.y,
+        w: n.w,
+        h: n.h,
+        label: RED.utils.getNodeLabel(n, n.type),
+        box,
+        below: box.bottom - body.bottom,
+      });
     });
     return out;
   }, z);
@@ -119,25 +129,40 @@ function underestimated(drawn: Drawn[], source: (id: string) => FlowNode | undef
     const n = source(d.id);
     if (!n) return [`${d.id} not in the flow`];
     const e = estimatedSize(n);
-    return e.w >= d.w && e.h >= d.h && e.below >= d.below ? [] : [`"${d.label}" drawn ${d.w}x${d.h} +${d.below} below, estimated ${e.w}x${e.h} +${e.below}`];
+    return e.w >= d.w && e.h >= d.h && e.below >= d.below
+      ? []
+      : [`"${d.label}" drawn ${d.w}x${d.h} +${d.below} below, estimated ${e.w}x${e.h} +${e.below}`];
   });
 }
 
 /** Whether the widget with class `cls` carries the stale mark. */
 function staleOf(page: Page, cls: string): Promise<boolean> {
-  return page.evaluate(([c, stale]) => (globalThis as any).document.querySelector(`.${c}`)?.classList.contains(stale) ?? false, [cls, STALE]);
+  return page.evaluate(
+    ([c, stale]) => (globalThis as any).document.querySelector(`.${c}`)?.classList.contains(stale) ?? false,
+    [cls, STALE],
+  );
 }
 
 function waitForStale(page: Page, classes: string[], stale: boolean, ms: number): Promise<unknown> {
   return page.waitForFunction(
-    ([list, mark, want]) => (list as string[]).every((c) => (globalThis as any).document.querySelector(`.${c}`)?.classList.contains(mark) === want),
+    ([list, mark, want]) =>
+      (list as string[]).every((c) => (globalThis as any).document.querySelector(`.${c}`)?.classList.contains(mark) === want),
     [classes, STALE, stale] as const,
     { timeout: ms },
   );
 }
 
 /** Widgets of each link (their classes, demo/flows.js). */
-const S7_WIDGETS = ['plcwire-level', 'plcwire-temp', 'plcwire-chart', 'plcwire-motor', 'plcwire-ui-running', 'plcwire-ui-heater', 'plcwire-ui-speed', 'plcwire-ui-parts'];
+const S7_WIDGETS = [
+  'plcwire-level',
+  'plcwire-temp',
+  'plcwire-chart',
+  'plcwire-motor',
+  'plcwire-ui-running',
+  'plcwire-ui-heater',
+  'plcwire-ui-speed',
+  'plcwire-ui-parts',
+];
 const CP_WIDGETS = ['plcwire-ui-fw-level', 'plcwire-ui-fw-parts'];
 const S7_200_WIDGETS = ['plcwire-ui-fp-level', 'plcwire-ui-fp-parts'];
 
@@ -179,7 +204,10 @@ describe('browser: the npm start demo in headless Chromium', function () {
     const source = (id: string) => flow.find((n) => n.id === id);
     // The nodes' status shows once the flow runs: the polls' "connected", the switch's "off".
     await page.waitForFunction(
-      () => [...(globalThis as any).document.querySelectorAll('.red-ui-flow-node-status-group')].filter((g: any) => (globalThis as any).getComputedStyle(g).display !== 'none').length >= 5,
+      () =>
+        [...(globalThis as any).document.querySelectorAll('.red-ui-flow-node-status-group')].filter(
+          (g: any) => (globalThis as any).getComputedStyle(g).display !== 'none',
+        ).length >= 5,
       undefined,
       { timeout: 15_000 },
     );
@@ -192,10 +220,19 @@ describe('browser: the npm start demo in headless Chromium', function () {
     // Nothing off to the right of the workspace (palette and sidebar open): no scrolling sideways to find a widget.
     const visible = await page.evaluate(() => {
       const chart = (globalThis as any).document.getElementById('red-ui-workspace-chart');
-      return { left: chart.getBoundingClientRect().left, right: chart.getBoundingClientRect().left + chart.clientWidth, scrolled: chart.scrollLeft };
+      return {
+        left: chart.getBoundingClientRect().left,
+        right: chart.getBoundingClientRect().left + chart.clientWidth,
+        scrolled: chart.scrollLeft,
+      };
     });
     expect(visible.scrolled).to.equal(0);
-    expect(drawn.filter((d) => d.box.left < visible.left || d.box.right > visible.right).map((d) => `"${d.label}" at ${d.box.left}..${d.box.right}`), `workspace ${visible.left}..${visible.right}`).to.deep.equal([]);
+    expect(
+      drawn
+        .filter((d) => d.box.left < visible.left || d.box.right > visible.right)
+        .map((d) => `"${d.label}" at ${d.box.left}..${d.box.right}`),
+      `workspace ${visible.left}..${visible.right}`,
+    ).to.deep.equal([]);
   });
 
   it('the editor draws every example, imported as a new flow, with no node over another, none larger than estimated', async () => {
@@ -206,7 +243,10 @@ describe('browser: the npm start demo in headless Chromium', function () {
       // Every type the examples use: the editor registers node sets one after another, each once the
       // scripts it loads (resources/…/plcwire-editor.js) have arrived, so one type says nothing of the next.
       await editor.waitForFunction(
-        () => ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control'].every((t) => (globalThis as any).RED?.nodes?.getType?.(t) !== undefined),
+        () =>
+          ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control'].every(
+            (t) => (globalThis as any).RED?.nodes?.getType?.(t) !== undefined,
+          ),
         undefined,
         { timeout: 30_000 },
       );
@@ -230,7 +270,10 @@ describe('browser: the npm start demo in headless Chromium', function () {
         const drawn = await drawnNodes(editor, imported.z);
         // A group has a position too, but the editor draws it as a frame around its nodes, not as a node.
         expect(drawn.length, file).to.equal(flow.filter((n) => typeof n.x === 'number' && n.type !== 'group').length);
-        expect(underestimated(drawn, (id) => flow.find((n) => n.id === imported.ids[id])), file).to.deep.equal([]);
+        expect(
+          underestimated(drawn, (id) => flow.find((n) => n.id === imported.ids[id])),
+          file,
+        ).to.deep.equal([]);
         // Ports may touch (they stick out 5 px), nodes may not overlap.
         expect(overlapsOf(drawn, 0), file).to.deep.equal([]);
         // Placed the way flow-layout.ts's placementOf says, up to one shift of the whole flow:
@@ -248,7 +291,9 @@ describe('browser: the npm start demo in headless Chromium', function () {
   it('the dashboard shows the tank level changing live', async () => {
     await page.goto(demo.dashboard, { waitUntil: 'domcontentloaded' });
     const selector = '.plcwire-ui-fw-level';
-    await page.waitForFunction((sel) => /\d/.test((globalThis as any).document.querySelector(sel)?.textContent ?? ''), selector, { timeout: 30_000 });
+    await page.waitForFunction((sel) => /\d/.test((globalThis as any).document.querySelector(sel)?.textContent ?? ''), selector, {
+      timeout: 30_000,
+    });
     const first = await page.locator(selector).innerText();
     // The simulated tank fills at 4 %/s: the shown level must change within seconds.
     await page.waitForFunction(
@@ -263,8 +308,16 @@ describe('browser: the npm start demo in headless Chromium', function () {
 
   it('the temperature moves on the dashboard (the heater warms the tank with the motor stopped)', async () => {
     // The gauge's text: title, scale ends, value and unit ("Temperature 0 80 26.2 °C").
-    const shown = () => page.locator('.plcwire-temp').innerText().then((t) => Number(/(\d+(?:\.\d+)?)\s*°C/.exec(t)?.[1]));
-    await page.waitForFunction(() => /\d\s*°C/.test((globalThis as any).document.querySelector('.plcwire-temp')?.innerText ?? ''), undefined, { timeout: 15_000 });
+    const shown = () =>
+      page
+        .locator('.plcwire-temp')
+        .innerText()
+        .then((t) => Number(/(\d+(?:\.\d+)?)\s*°C/.exec(t)?.[1]));
+    await page.waitForFunction(
+      () => /\d\s*°C/.test((globalThis as any).document.querySelector('.plcwire-temp')?.innerText ?? ''),
+      undefined,
+      { timeout: 15_000 },
+    );
     const first = await shown();
     expect(first).to.be.within(15, 60);
     await page.waitForFunction(
@@ -280,16 +333,28 @@ describe('browser: the npm start demo in headless Chromium', function () {
   it('the motor switch follows the PLC: set or cleared by another client, it moves', async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
     const input = page.locator('.plcwire-motor input[type=checkbox]');
-    await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]') !== null, undefined, { timeout: 15_000 });
+    await page.waitForFunction(
+      () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]') !== null,
+      undefined,
+      { timeout: 15_000 },
+    );
     expect(db1[4]! & 0x01).to.equal(0);
     expect(await input.isChecked()).to.equal(false);
     const other = createClient(demo.plant.urls.s7);
     try {
       await other.connect();
       await other.write({ 'DB1.DBX4.0': true });
-      await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true, undefined, { timeout: 10_000 });
+      await page.waitForFunction(
+        () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true,
+        undefined,
+        { timeout: 10_000 },
+      );
       await other.write({ 'DB1.DBX4.0': false });
-      await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === false, undefined, { timeout: 10_000 });
+      await page.waitForFunction(
+        () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === false,
+        undefined,
+        { timeout: 10_000 },
+      );
     } finally {
       await other.close();
     }
@@ -298,23 +363,39 @@ describe('browser: the npm start demo in headless Chromium', function () {
     expect(db1[4]! & 0x01).to.equal(0);
   });
 
-  it('clicking the motor switch writes the run command to the simulated PLC, and the switch shows the PLC\'s bit', async () => {
+  it("clicking the motor switch writes the run command to the simulated PLC, and the switch shows the PLC's bit", async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
     expect(db1[4]! & 0x01).to.equal(0);
     // The switch's own control (Vuetify draws the thumb over a hidden checkbox).
     await page.locator('.plcwire-motor .v-selection-control__input').click();
     await until(() => (db1[4]! & 0x01) === 1, 10_000, 'DB1.DBX4.0 set by the dashboard');
-    await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true, undefined, { timeout: 10_000 });
+    await page.waitForFunction(
+      () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true,
+      undefined,
+      { timeout: 10_000 },
+    );
     // The process reacts: the motor ramps up and the dashboard shows its speed.
     await until(() => db1.readInt16BE(6) > 0, 10_000, 'motor speed rising');
-    await page.waitForFunction(() => /[1-9]/.test((globalThis as any).document.querySelector('.plcwire-ui-speed')?.textContent ?? ''), undefined, { timeout: 15_000 });
+    await page.waitForFunction(
+      () => /[1-9]/.test((globalThis as any).document.querySelector('.plcwire-ui-speed')?.textContent ?? ''),
+      undefined,
+      { timeout: 15_000 },
+    );
   });
 
   it('BOOLs are lamps: Motor running lights while DB1.DBX4.1 is set, Heater on shows DB1.DBX4.2, and no true/false text', async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
-    const lit = (cls: string) => page.evaluate((c) => (globalThis as any).document.querySelector(`.${c} .plcwire-lamp`)?.classList.contains('plcwire-lamp-on') ?? null, cls);
+    const lit = (cls: string) =>
+      page.evaluate(
+        (c) => (globalThis as any).document.querySelector(`.${c} .plcwire-lamp`)?.classList.contains('plcwire-lamp-on') ?? null,
+        cls,
+      );
     // The motor was started by the previous test.
-    await page.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-ui-running .plcwire-lamp')?.classList.contains('plcwire-lamp-on'), undefined, { timeout: 10_000 });
+    await page.waitForFunction(
+      () => (globalThis as any).document.querySelector('.plcwire-ui-running .plcwire-lamp')?.classList.contains('plcwire-lamp-on'),
+      undefined,
+      { timeout: 10_000 },
+    );
     expect(db1[4]! & 0x02).to.equal(0x02);
     // The heater lamp shows the thermostat's bit as last polled: it agrees with memory within a poll or two.
     const deadline = Date.now() + 10_000;
@@ -333,23 +414,34 @@ describe('browser: the npm start demo in headless Chromium', function () {
   const cpuLamp = () =>
     page.evaluate(() => {
       const w = (globalThis as any).document.querySelector('.plcwire-ui-cpu-state');
-      return { text: (w?.querySelector('.plcwire-lamp-text')?.textContent ?? '').trim(), lamp: w?.querySelector('.plcwire-lamp')?.className ?? '' };
+      return {
+        text: (w?.querySelector('.plcwire-lamp-text')?.textContent ?? '').trim(),
+        lamp: w?.querySelector('.plcwire-lamp')?.className ?? '',
+      };
     });
   const waitForCpu = (text: string, colour: string) =>
     page.waitForFunction(
       ([t, c]) => {
         const w = (globalThis as any).document.querySelector('.plcwire-ui-cpu-state');
-        return (w?.querySelector('.plcwire-lamp-text')?.textContent ?? '').trim() === t && (w?.querySelector('.plcwire-lamp')?.classList.contains(`plcwire-lamp-${c}`) ?? false);
+        return (
+          (w?.querySelector('.plcwire-lamp-text')?.textContent ?? '').trim() === t &&
+          (w?.querySelector('.plcwire-lamp')?.classList.contains(`plcwire-lamp-${c}`) ?? false)
+        );
       },
       [text, colour] as const,
       { timeout: 10_000 },
     );
   /** The diagnostic table's rows as the page shows them, cell texts joined by " | ". */
   const diagnosticRows = () =>
-    page.evaluate(() => [...(globalThis as any).document.querySelectorAll('.plcwire-cpu-diag tbody tr')].map((tr: any) => [...tr.querySelectorAll('td')].map((td: any) => td.innerText.trim()).join(' | ')));
+    page.evaluate(() =>
+      [...(globalThis as any).document.querySelectorAll('.plcwire-cpu-diag tbody tr')].map((tr: any) =>
+        [...tr.querySelectorAll('td')].map((td: any) => td.innerText.trim()).join(' | '),
+      ),
+    );
   const waitForTopRow = (pattern: RegExp) =>
     page.waitForFunction(
-      ([source, flags]) => new RegExp(source!, flags).test((globalThis as any).document.querySelector('.plcwire-cpu-diag tbody tr')?.innerText ?? ''),
+      ([source, flags]) =>
+        new RegExp(source!, flags).test((globalThis as any).document.querySelector('.plcwire-cpu-diag tbody tr')?.innerText ?? ''),
       [pattern.source, pattern.flags] as const,
       { timeout: 10_000 },
     );
@@ -370,23 +462,38 @@ describe('browser: the npm start demo in headless Chromium', function () {
       demo.plant.s7.on('request', on);
     });
   const levelShown = async () => Number(/(\d+(?:\.\d+)?)\s*%/.exec(await page.locator('.plcwire-level').innerText())?.[1]);
-  const partsShown = async () => Number((await page.locator('.plcwire-ui-parts').innerText()).replace(/\D+/g, ' ').trim().split(' ').at(-1));
+  const partsShown = async () =>
+    Number((await page.locator('.plcwire-ui-parts').innerText()).replace(/\D+/g, ' ').trim().split(' ').at(-1));
   const hex = (id: number) => `16#${id.toString(16).toUpperCase().padStart(4, '0')}`;
 
   it('the CPU panel shows the simulated S7-1200: its identity, RUN on a green lamp, its clock running, and the diagnostic buffer newest first', async () => {
     const id = demo.plant.s7.cpu.identity;
-    await page.waitForFunction((code) => ((globalThis as any).document.querySelector('.plcwire-ui-cpu-identity')?.innerText ?? '').includes(code), id.orderCode, { timeout: 15_000 });
+    await page.waitForFunction(
+      (code) => ((globalThis as any).document.querySelector('.plcwire-ui-cpu-identity')?.innerText ?? '').includes(code),
+      id.orderCode,
+      { timeout: 15_000 },
+    );
     const identity = await page.locator('.plcwire-ui-cpu-identity').innerText();
     for (const value of [id.moduleTypeName, id.orderCode, id.firmware, id.serialNumber]) expect(identity).to.include(value);
     await waitForCpu('RUN', 'green');
     // The clock as the CPU gives it, and it runs.
-    const clock = () => page.locator('.plcwire-ui-cpu-clock').innerText().then((t) => /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.exec(t)?.[0] ?? '');
-    await page.waitForFunction(() => /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.test((globalThis as any).document.querySelector('.plcwire-ui-cpu-clock')?.innerText ?? ''), undefined, { timeout: 10_000 });
+    const clock = () =>
+      page
+        .locator('.plcwire-ui-cpu-clock')
+        .innerText()
+        .then((t) => /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.exec(t)?.[0] ?? '');
+    await page.waitForFunction(
+      () => /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.test((globalThis as any).document.querySelector('.plcwire-ui-cpu-clock')?.innerText ?? ''),
+      undefined,
+      { timeout: 10_000 },
+    );
     const first = await clock();
     expect(Math.abs(Date.parse(`${first.replace(' ', 'T')}Z`) - Date.now())).to.be.below(10_000);
     await page.waitForFunction(
       (before) => {
-        const now = /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.exec((globalThis as any).document.querySelector('.plcwire-ui-cpu-clock')?.innerText ?? '')?.[0];
+        const now = /\d{4}-\d\d-\d\d \d\d:\d\d:\d\d/.exec(
+          (globalThis as any).document.querySelector('.plcwire-ui-cpu-clock')?.innerText ?? '',
+        )?.[0];
         return now !== undefined && now > before;
       },
       first,
@@ -394,7 +501,11 @@ describe('browser: the npm start demo in headless Chromium', function () {
     );
     // The simulator's buffer, newest first: power on, STOP to STARTUP, STARTUP to RUN.
     const log = demo.plant.s7.diagnostics;
-    await page.waitForFunction((n) => (globalThis as any).document.querySelectorAll('.plcwire-cpu-diag tbody tr').length === n, Math.min(10, log.length), { timeout: 10_000 });
+    await page.waitForFunction(
+      (n) => (globalThis as any).document.querySelectorAll('.plcwire-cpu-diag tbody tr').length === n,
+      Math.min(10, log.length),
+      { timeout: 10_000 },
+    );
     const rows = await diagnosticRows();
     expect(rows.map((r) => r.split(' | ')[1])).to.deep.equal(log.slice(0, 10).map((e) => hex(e.eventId)));
     expect(rows[0]).to.match(/^\d{4}-\d\d-\d\d \d\d:\d\d:\d\d\.\d{3} \| 16#4302 \| Mode transition STARTUP to RUN$/);
@@ -429,7 +540,11 @@ describe('browser: the npm start demo in headless Chromium', function () {
     // The link itself is fine: the values still arrive, nothing is greyed out.
     for (const c of S7_WIDGETS) expect(await staleOf(page, c), c).to.equal(false);
     // The PLC's heartbeat counter is part of the program: it stands still, and the heartbeat node says so.
-    await page.waitForFunction(() => /plcwire-lamp-red/.test((globalThis as any).document.querySelector('.plcwire-ui-heartbeat .plcwire-lamp')?.className ?? ''), undefined, { timeout: 10_000 });
+    await page.waitForFunction(
+      () => /plcwire-lamp-red/.test((globalThis as any).document.querySelector('.plcwire-ui-heartbeat .plcwire-lamp')?.className ?? ''),
+      undefined,
+      { timeout: 10_000 },
+    );
   });
 
   it('Start CPU restarts it: RUN on a green lamp, the restart on top of the diagnostic buffer, and the values move again', async () => {
@@ -451,7 +566,11 @@ describe('browser: the npm start demo in headless Chromium', function () {
       [stopped.level, stopped.parts] as const,
       { timeout: 10_000 },
     );
-    await page.waitForFunction(() => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-heartbeat .plcwire-lamp')?.className ?? ''), undefined, { timeout: 10_000 });
+    await page.waitForFunction(
+      () => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-heartbeat .plcwire-lamp')?.className ?? ''),
+      undefined,
+      { timeout: 10_000 },
+    );
     expect((await cpuLamp()).text).to.equal('RUN');
   });
 
@@ -463,8 +582,14 @@ describe('browser: the npm start demo in headless Chromium', function () {
       if (await notice.isVisible()) await notice.click();
       // The page from its top down to the lowest group and its margin (the buttons clicked above may have scrolled it).
       await page.evaluate(() => (globalThis as any).window.scrollTo(0, 0));
-      const bottom = await page.evaluate(() => Math.max(...[...(globalThis as any).document.querySelectorAll('.nrdb-ui-group')].map((g: any) => g.getBoundingClientRect().bottom)));
-      await page.screenshot({ path: process.env.PLCWIRE_SCREENSHOT, fullPage: true, clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 } });
+      const bottom = await page.evaluate(() =>
+        Math.max(...[...(globalThis as any).document.querySelectorAll('.nrdb-ui-group')].map((g: any) => g.getBoundingClientRect().bottom)),
+      );
+      await page.screenshot({
+        path: process.env.PLCWIRE_SCREENSHOT,
+        fullPage: true,
+        clip: { x: 0, y: 0, width: 1280, height: Math.ceil(bottom) + 12 },
+      });
     }
     try {
       for (const width of [1280, 800, 390]) {
@@ -479,7 +604,8 @@ describe('browser: the npm start demo in headless Chromium', function () {
             if (g.left < view.left - 0.5 || g.right > view.right + 0.5) problems.push(`group ${group.id} ${g.left}..${g.right} off screen`);
             for (const widget of group.querySelectorAll('.nrdb-ui-widget')) {
               const w = widget.getBoundingClientRect();
-              if (w.left < g.left - 0.5 || w.right > g.right + 0.5 || w.top < g.top - 0.5 || w.bottom > g.bottom + 0.5) problems.push(`${widget.id} ${w.left}..${w.right} outside ${group.id} ${g.left}..${g.right}`);
+              if (w.left < g.left - 0.5 || w.right > g.right + 0.5 || w.top < g.top - 0.5 || w.bottom > g.bottom + 0.5)
+                problems.push(`${widget.id} ${w.left}..${w.right} outside ${group.id} ${g.left}..${g.right}`);
             }
           }
           return problems;
@@ -491,7 +617,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     }
   });
 
-  it('an S7 link that goes down greys out its widgets as stale within seconds, the other links\' stay live, and all recover', async () => {
+  it("an S7 link that goes down greys out its widgets as stale within seconds, the other links' stay live, and all recover", async () => {
     for (const c of [...S7_WIDGETS, ...CP_WIDGETS, ...S7_200_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
     const faults = demo.plant.s7.faults;
     faults.refuseConnections = true;
@@ -500,14 +626,20 @@ describe('browser: the npm start demo in headless Chromium', function () {
       // The watchdog fires 2 s after the last value (S7 polls every 500 ms).
       await waitForStale(page, S7_WIDGETS, true, 8_000);
       for (const c of [...CP_WIDGETS, ...S7_200_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
-      const link = await page.evaluate(() => (globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? '');
+      const link = await page.evaluate(
+        () => (globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? '',
+      );
       expect(link).to.match(/plcwire-lamp-(red|yellow)/);
     } finally {
       faults.refuseConnections = false;
     }
     // Reconnected on the backoff schedule, the first values clear the mark.
     await waitForStale(page, S7_WIDGETS, false, 30_000);
-    await page.waitForFunction(() => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? ''), undefined, { timeout: 10_000 });
+    await page.waitForFunction(
+      () => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? ''),
+      undefined,
+      { timeout: 10_000 },
+    );
   });
 
   it('a hung CP (connected, answering nothing) greys out the FETCH/WRITE widgets too, and they recover when it answers again', async () => {

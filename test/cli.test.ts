@@ -58,7 +58,7 @@ function parseExactJson(text: string): unknown {
       i++;
       const out: Record<string, unknown> = {};
       space();
-      if (text[i] === '}') return i++, out;
+      if (text[i] === '}') return (i++, out);
       for (;;) {
         space();
         const key = value();
@@ -76,7 +76,7 @@ function parseExactJson(text: string): unknown {
       i++;
       const out: unknown[] = [];
       space();
-      if (text[i] === ']') return i++, out;
+      if (text[i] === ']') return (i++, out);
       for (;;) {
         out.push(value());
         space();
@@ -98,8 +98,12 @@ function parseExactJson(text: string): unknown {
       i += m[0].length;
       return m[1] === undefined && m[2] === undefined ? BigInt(m[0]) : Number(m[0]);
     }
-    for (const [word, v] of [['true', true], ['false', false], ['null', null]] as const) {
-      if (text.startsWith(word, i)) return (i += word.length), v;
+    for (const [word, v] of [
+      ['true', true],
+      ['false', false],
+      ['null', null],
+    ] as const) {
+      if (text.startsWith(word, i)) return ((i += word.length), v);
     }
     return fail('unexpected character');
   };
@@ -214,7 +218,18 @@ describe('plcwire CLI', function () {
   describe('toJson', () => {
     it('writes bigints (in arrays too) as bare digits and everything else as JSON.stringify does', () => {
       expect(toJson({ a: [1n, -(2n ** 63n)], b: 2n ** 64n - 1n })).to.equal('{"a":[1,-9223372036854775808],"b":18446744073709551615}');
-      const plain = { n: 1.5, s: 'x"\\\u0001é', t: true, z: null, u: undefined, nan: NaN, inf: -Infinity, arr: [undefined, 1, [2]], d: new Date(0), o: {} };
+      const plain = {
+        n: 1.5,
+        s: 'x"\\\u0001é',
+        t: true,
+        z: null,
+        u: undefined,
+        nan: NaN,
+        inf: -Infinity,
+        arr: [undefined, 1, [2]],
+        d: new Date(0),
+        o: {},
+      };
       expect(toJson(plain)).to.equal(JSON.stringify(plain));
       expect(toJson(undefined)).to.equal('null');
     });
@@ -300,7 +315,10 @@ describe('plcwire CLI', function () {
       expect(await srv.exit).to.equal(0);
     });
 
-    for (const [profile, tsaps] of [['s7-200', 'localTsap=1000&remoteTsap=1001'], ['logo', 'localTsap=0100&remoteTsap=0200']] as const) {
+    for (const [profile, tsaps] of [
+      ['s7-200', 'localTsap=1000&remoteTsap=1001'],
+      ['logo', 'localTsap=0100&remoteTsap=0200'],
+    ] as const) {
       it(`serve s7 --profile ${profile} answers its TSAP URL with V memory and refuses rack/slot`, async () => {
         const port = await freePort();
         const srv = run(['serve', 's7', '--port', String(port), '--profile', profile]);
@@ -347,7 +365,11 @@ describe('plcwire CLI', function () {
         w.child.kill('SIGINT');
       }
       expect(await w.exit).to.equal(0);
-      const lines = w.output().out.trim().split('\n').map((l) => JSON.parse(l) as { values: Record<string, number> });
+      const lines = w
+        .output()
+        .out.trim()
+        .split('\n')
+        .map((l) => JSON.parse(l) as { values: Record<string, number> });
       expect(lines.map((l) => l.values['DB1,INT2'])).to.deep.equal([1234, 77, 78]);
     });
 
@@ -430,19 +452,36 @@ describe('plcwire system commands (the installed binary against the simulator)',
     const r = await plcwire(['info', url, '--json']);
     expect(r.code, r.err).to.equal(0);
     const info = JSON.parse(r.out) as Record<string, unknown>;
-    expect(info).to.include({ orderCode: '6ES7 516-3AN02-0AB0', firmware: 'V2.9.2', moduleTypeName: 'CPU 1516-3 PN/DP', serialNumber: 'S V-PW0000042019', asName: 'PLCWIRE-SIM', moduleName: 'PLC_1', state: 'run', pduSize: 960 });
+    expect(info).to.include({
+      orderCode: '6ES7 516-3AN02-0AB0',
+      firmware: 'V2.9.2',
+      moduleTypeName: 'CPU 1516-3 PN/DP',
+      serialNumber: 'S V-PW0000042019',
+      asName: 'PLCWIRE-SIM',
+      moduleName: 'PLC_1',
+      state: 'run',
+      pduSize: 960,
+    });
     expect(info.clock).to.match(/^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z$/);
     expect(Math.abs(Date.parse(info.clock as string) - Date.now())).to.be.below(10_000);
     server.stop();
     const text = await plcwire(['info', url]);
-    expect(text.out).to.match(/^orderCode: 6ES7 516-3AN02-0AB0$/m).and.match(/^state: stop$/m);
+    expect(text.out)
+      .to.match(/^orderCode: 6ES7 516-3AN02-0AB0$/m)
+      .and.match(/^state: stop$/m);
   });
 
   it('szl --json gives the records as hex and the decoded form; a list the CPU lacks exits 1, a bad ID 2', async () => {
     const url = await start('s7-300');
     let r = await plcwire(['szl', url, '0x0011', '--json']);
     expect(r.code, r.err).to.equal(0);
-    const list = JSON.parse(r.out) as { id: string; index: string; recordLength: number; records: string[]; decoded: { orderCode: string } };
+    const list = JSON.parse(r.out) as {
+      id: string;
+      index: string;
+      recordLength: number;
+      records: string[];
+      decoded: { orderCode: string };
+    };
     expect(list).to.include({ id: '0x0011', index: '0x0000', recordLength: 28 });
     expect(list.records[0]).to.match(/^0001364553372033/); // index 1, "6ES7 3…"
     expect(list.decoded.orderCode).to.equal('6ES7 315-2EH14-0AB0');
@@ -491,7 +530,7 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect(r.code).to.equal(EXIT.USAGE);
   });
 
-  it('blocks gives counts per type, the numbers of one type, one block\'s info; an S7-1500 has no block functions (exit 1)', async () => {
+  it("blocks gives counts per type, the numbers of one type, one block's info; an S7-1500 has no block functions (exit 1)", async () => {
     let url = await start('s7-300', { 1: 100, 5: 20 });
     let r = await plcwire(['blocks', url, '--json']);
     expect(r.code, r.err).to.equal(0);
@@ -538,7 +577,16 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect(r.code, r.err).to.equal(0);
     const report = JSON.parse(r.out) as { ok: boolean; steps: { step: string; ok: boolean; detail: string; hint?: string }[] };
     expect(report.ok).to.equal(true);
-    expect(report.steps.map((s) => s.step)).to.deep.equal(['resolve', 'tcp', 'cotp', 'setup', 'identity', 'protection', 'putget', 'address DB1,INT0']);
+    expect(report.steps.map((s) => s.step)).to.deep.equal([
+      'resolve',
+      'tcp',
+      'cotp',
+      'setup',
+      'identity',
+      'protection',
+      'putget',
+      'address DB1,INT0',
+    ]);
     r = await plcwire(['doctor', url, 'DB1,INT0', 'DB1,DINT98']);
     expect(r.code).to.equal(EXIT.TAG_ERROR);
     expect(r.out).to.match(/^FAIL address DB1,DINT98: DB1 has 100 bytes \(block info\); DB1,DINT98 needs bytes 98\.\.101$/m);

@@ -20,7 +20,6 @@ const { demoFlow, DEMO_URLS, STALE, LIVE } = require(path.join(ROOT, 'demo/flows
   LIVE: string;
 };
 
-
 function exampleFiles(dir = path.join(ROOT, 'examples')): string[] {
   return fs.readdirSync(dir, { withFileTypes: true }).flatMap((e) => {
     const p = path.join(dir, e.name);
@@ -72,7 +71,9 @@ describe('demo flow: tidy in the editor and on the dashboard', () => {
       { id: 'write', type: 'plcwire-write', name: 'write setpoint', x: 540, y: 100, z: tab, wires: [[]] },
     ];
     expect(layoutProblems(drawnBoxes(row, 'centred'))).to.deep.equal([]);
-    expect(layoutProblems(drawnBoxes(row, 'dropped'))).to.deep.equal(['"write {"setpoint": 1500, "motor": true}" (inject) and "write setpoint" (write) overlap']);
+    expect(layoutProblems(drawnBoxes(row, 'dropped'))).to.deep.equal([
+      '"write {"setpoint": 1500, "motor": true}" (inject) and "write setpoint" (write) overlap',
+    ]);
     const dashboard: FlowNode[] = [
       { id: 'page', type: 'ui-page', breakpoints: [{ cols: 3 }, { cols: 12 }] },
       { id: 'g', type: 'ui-group', name: 'narrow', page: 'page', width: 3 },
@@ -91,7 +92,8 @@ describe('demo flow: tidy in the editor and on the dashboard', () => {
 describe('demo flow: the dashboard shows what the PLC holds', () => {
   const flow = demoFlow(DEMO_URLS);
   const node = (id: string) => flow.find((n) => n.id === id)!;
-  const feeding = (id: string) => flow.filter((n) => (n.wires as string[][] | undefined)?.some((port) => port.includes(id))).map((n) => n.id);
+  const feeding = (id: string) =>
+    flow.filter((n) => (n.wires as string[][] | undefined)?.some((port) => port.includes(id))).map((n) => n.id);
 
   it('the motor switch is fed the polled run bit, shows it, and a click writes DB1.DBX4.0 without echoing the polled bit back', () => {
     const motor = node('ui.motor');
@@ -114,7 +116,7 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
     expect(bools).to.have.members(['run', 'running', 'heater']);
   });
 
-  it('every widget fed by a link is marked stale by that link\'s watchdog, and only by it', () => {
+  it("every widget fed by a link is marked stale by that link's watchdog, and only by it", () => {
     const links = { s7: 's7.read', fw: 'fw.read', fp: 'fp.read' };
     const widgetsOf = (read: string): Set<string> => {
       // Everything downstream of the read node, through routing and shaping nodes.
@@ -137,7 +139,9 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
       expect(feeding(`${prefix}.watch`)).to.deep.equal([read]);
       const marked = new Set((node(`${prefix}.mark`).wires as string[][])[0]);
       expect([...marked].sort(), prefix).to.deep.equal([...widgetsOf(read)].sort());
-      expect(String(node(`${prefix}.mark`).func)).to.include(STALE).and.include(LIVE);
+      expect(String(node(`${prefix}.mark`).func))
+        .to.include(STALE)
+        .and.include(LIVE);
     }
   });
 
@@ -146,7 +150,10 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
     const actionOf = (id: string) => node(id).action;
     expect((node('cpu.poll').wires as string[][])[0].map(actionOf).sort()).to.deep.equal(['clock', 'diagnostics', 'state']);
     expect(node('cpu.poll')).to.include({ type: 'inject', repeat: '1', topic: '' });
-    for (const [button, action] of [['ui.cpu.stop', 'stop'], ['ui.cpu.start', 'start']]) {
+    for (const [button, action] of [
+      ['ui.cpu.stop', 'stop'],
+      ['ui.cpu.start', 'start'],
+    ]) {
       // The button's topic names the action too, so the node does that and nothing else.
       expect(node(button!)).to.include({ type: 'ui-button', group: 'ui.g.cpu', topic: action, topicType: 'str' });
       const [target] = (node(button!).wires as string[][])[0]!;

@@ -64,10 +64,15 @@ describe('connection doctor', function () {
       expect(by.resolve!.detail).to.equal('127.0.0.1 is an IP address');
       expect(by.cotp!.detail).to.equal('the CPU accepted the connection request (rack 0, slot 1: called TSAP 0x0101, calling TSAP 0x0100)');
       expect(by.setup!.detail).to.equal('PDU 960 bytes (asked 960), 8 parallel jobs (AmQ)');
-      expect(by.identity!.detail).to.contain('CPU 1516-3 PN/DP (6ES7 516-3AN02-0AB0) firmware V2.9.2').and.contain('in RUN').and.contain('family S7-1500');
+      expect(by.identity!.detail)
+        .to.contain('CPU 1516-3 PN/DP (6ES7 516-3AN02-0AB0) firmware V2.9.2')
+        .and.contain('in RUN')
+        .and.contain('family S7-1500');
       expect(by.protection!.detail).to.match(/^level 1: no protection/);
       expect(by.putget!.detail).to.contain('the CPU serves Read Var (PUT/GET): MB0 = 0');
-      expect(by['address DB1,INT0']!.detail).to.equal('DB1 exists, its length is not known (this CPU offers no block info over S7comm); DB1,INT0 = 0');
+      expect(by['address DB1,INT0']!.detail).to.equal(
+        'DB1 exists, its length is not known (this CPU offers no block info over S7comm); DB1,INT0 = 0',
+      );
       expect(by['address MW10']!.detail).to.equal('MW10 = 0');
     });
 
@@ -115,17 +120,27 @@ describe('connection doctor', function () {
       const r = await diagnose(`s7://127.0.0.1:${port}?slot=1`);
       expect(names(r)).to.deep.equal(['resolve', 'tcp']);
       expect(last(r).ok).to.equal(false);
-      expect(last(r).detail).to.equal(`127.0.0.1:${port} refused the connection (ECONNREFUSED): the host is up, but nothing listens on port ${port}`);
+      expect(last(r).detail).to.equal(
+        `127.0.0.1:${port} refused the connection (ECONNREFUSED): the host is up, but nothing listens on port ${port}`,
+      );
       expect(last(r).hint).to.contain('S7 uses 102');
     });
 
     it('stops at a filtered port: the connection attempt gets no reply within the timeout', async function () {
       // A listener with a full backlog (listen(0), never accepting): the kernel drops further SYNs, as a firewall does.
       // Node accepts every connection it is offered, so the listener is a python3 one-liner.
-      if (spawnSync('python3', ['-c', '']).status !== 0) skipBecause(this, 'python3 is not installed (it holds a listener that never accepts)');
-      const py: ChildProcess = spawn('python3', ['-c', 'import socket,sys\ns=socket.socket();s.bind(("127.0.0.1",0));s.listen(0)\nprint(s.getsockname()[1],flush=True)\nsys.stdin.read()'], {
-        stdio: ['pipe', 'pipe', 'inherit'],
-      });
+      if (spawnSync('python3', ['-c', '']).status !== 0)
+        skipBecause(this, 'python3 is not installed (it holds a listener that never accepts)');
+      const py: ChildProcess = spawn(
+        'python3',
+        [
+          '-c',
+          'import socket,sys\ns=socket.socket();s.bind(("127.0.0.1",0));s.listen(0)\nprint(s.getsockname()[1],flush=True)\nsys.stdin.read()',
+        ],
+        {
+          stdio: ['pipe', 'pipe', 'inherit'],
+        },
+      );
       const filler: net.Socket[] = [];
       try {
         const [line] = (await once(py.stdout!, 'data')) as [Buffer];
@@ -137,7 +152,9 @@ describe('connection doctor', function () {
         const r = await diagnose(`s7://127.0.0.1:${port}?slot=1&timeout=400`);
         expect(Date.now() - started).to.be.below(2000);
         expect(names(r)).to.deep.equal(['resolve', 'tcp']);
-        expect(last(r).detail).to.equal(`no answer from 127.0.0.1:${port} within 400 ms: filtered (the connection attempt got no reply at all)`);
+        expect(last(r).detail).to.equal(
+          `no answer from 127.0.0.1:${port} within 400 ms: filtered (the connection attempt got no reply at all)`,
+        );
         expect(last(r).hint).to.contain('firewall');
       } finally {
         for (const s of filler) s.destroy();
@@ -219,7 +236,10 @@ describe('connection doctor', function () {
         expect(step.ok).to.equal(false);
         expect(step.detail).to.contain('wrong rack/slot or TSAP');
         expect(step.hint).to.contain(`which points to ${family}`).and.contain(`use ${fix} in the URL`);
-        expect(step.hint).to.contain('S7-300 rack 0, slot 2; S7-400 rack 0, slot 3').and.contain('S7-1200/1500 rack 0, slot 1').and.contain('LOGO! localTsap=0100&remoteTsap=0200');
+        expect(step.hint)
+          .to.contain('S7-300 rack 0, slot 2; S7-400 rack 0, slot 3')
+          .and.contain('S7-1200/1500 rack 0, slot 1')
+          .and.contain('LOGO! localTsap=0100&remoteTsap=0200');
       });
     }
 
@@ -283,7 +303,10 @@ describe('connection doctor', function () {
       let reads = 0;
       server.on('request', (e: { kind: string }) => (reads += e.kind === 'read' ? 1 : 0));
       r = await run(server, url(server, 'slot=1'), ['DB1,REAL98']);
-      expect(last(r)).to.include({ ok: false, detail: 'DB1 has 101 bytes (found by reading single bytes); DB1,REAL98 needs bytes 98..101' });
+      expect(last(r)).to.include({
+        ok: false,
+        detail: 'DB1 has 101 bytes (found by reading single bytes); DB1,REAL98 needs bytes 98..101',
+      });
       expect(last(r).hint).to.contain('past the end of DB1');
       expect(reads).to.be.below(12);
     });
@@ -329,7 +352,10 @@ describe('connection doctor', function () {
       const server = await sim('s7-1500');
       server.faults.silent = true;
       const ac = new AbortController();
-      const p = diagnose(url(server, 'slot=1'), [], { signal: ac.signal, onStep: (s) => s.step === 'setup' && setTimeout(() => ac.abort(), 50) });
+      const p = diagnose(url(server, 'slot=1'), [], {
+        signal: ac.signal,
+        onStep: (s) => s.step === 'setup' && setTimeout(() => ac.abort(), 50),
+      });
       const err = await p.then(
         () => undefined,
         (e: unknown) => e,

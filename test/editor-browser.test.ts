@@ -30,15 +30,107 @@ function testFlow(s7Port: number, doctorPort: number): object[] {
     { id: 'conn-bad', type: 'plcwire-connection', name: 'typo', url: 's7://127.0.0.1?rack=0&slott=1' },
     // No node uses it: the runtime opens no link to its PLC, only Test connection does.
     { id: 'conn-doctor', type: 'plcwire-connection', name: 'doctor', url: `s7://127.0.0.1:${doctorPort}?rack=0&slot=1&timeout=1000` },
-    { id: 'read-ok', type: 'plcwire-read', name: 'ok', ...at(40), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
-    { id: 'read-csv', type: 'plcwire-read', name: 'csv', ...at(100), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }] },
-    { id: 'read-empty', type: 'plcwire-read', name: 'empty', ...at(160), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [] },
-    { id: 'read-badurl', type: 'plcwire-read', name: 'bad url', ...at(220), connection: 'conn-bad', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'a', address: 'DB1.DBW0:INT' }] },
-    { id: 'read-badtag', type: 'plcwire-read', name: 'bad tag', ...at(280), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 'x', address: 'XYZ%' }] },
-    { id: 'read-dup', type: 'plcwire-read', name: 'dup', ...at(340), connection: 'conn-ok', interval: 0, output: 'object', deadband: 0, tags: [{ name: 's', address: 'MW2' }, { name: 's', address: 'MW4' }] },
-    { id: 'write-badtag', type: 'plcwire-write', name: 'bad write', ...at(400), connection: 'conn-ok', tags: [{ name: 'w', address: 'DB1.DBX0' }] },
-    { id: 'hb-bad', type: 'plcwire-heartbeat', name: 'bad hb', ...at(460), connection: 'conn-ok', writeAddress: 'DB1.DBW2:REAL', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
-    { id: 'hb-ok', type: 'plcwire-heartbeat', name: 'hb', ...at(520), connection: 'conn-ok', writeAddress: 'DB1.DBW2:INT', writeMode: 'counter', interval: 1000, watchAddress: '', timeout: 3000 },
+    {
+      id: 'read-ok',
+      type: 'plcwire-read',
+      name: 'ok',
+      ...at(40),
+      connection: 'conn-ok',
+      interval: 0,
+      output: 'object',
+      deadband: 0,
+      tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }],
+    },
+    {
+      id: 'read-csv',
+      type: 'plcwire-read',
+      name: 'csv',
+      ...at(100),
+      connection: 'conn-ok',
+      interval: 0,
+      output: 'object',
+      deadband: 0,
+      tags: [{ name: 'speed', address: 'DB1.DBW0:INT' }],
+    },
+    {
+      id: 'read-empty',
+      type: 'plcwire-read',
+      name: 'empty',
+      ...at(160),
+      connection: 'conn-ok',
+      interval: 0,
+      output: 'object',
+      deadband: 0,
+      tags: [],
+    },
+    {
+      id: 'read-badurl',
+      type: 'plcwire-read',
+      name: 'bad url',
+      ...at(220),
+      connection: 'conn-bad',
+      interval: 0,
+      output: 'object',
+      deadband: 0,
+      tags: [{ name: 'a', address: 'DB1.DBW0:INT' }],
+    },
+    {
+      id: 'read-badtag',
+      type: 'plcwire-read',
+      name: 'bad tag',
+      ...at(280),
+      connection: 'conn-ok',
+      interval: 0,
+      output: 'object',
+      deadband: 0,
+      tags: [{ name: 'x', address: 'XYZ%' }],
+    },
+    {
+      id: 'read-dup',
+      type: 'plcwire-read',
+      name: 'dup',
+      ...at(340),
+      connection: 'conn-ok',
+      interval: 0,
+      output: 'object',
+      deadband: 0,
+      tags: [
+        { name: 's', address: 'MW2' },
+        { name: 's', address: 'MW4' },
+      ],
+    },
+    {
+      id: 'write-badtag',
+      type: 'plcwire-write',
+      name: 'bad write',
+      ...at(400),
+      connection: 'conn-ok',
+      tags: [{ name: 'w', address: 'DB1.DBX0' }],
+    },
+    {
+      id: 'hb-bad',
+      type: 'plcwire-heartbeat',
+      name: 'bad hb',
+      ...at(460),
+      connection: 'conn-ok',
+      writeAddress: 'DB1.DBW2:REAL',
+      writeMode: 'counter',
+      interval: 1000,
+      watchAddress: '',
+      timeout: 3000,
+    },
+    {
+      id: 'hb-ok',
+      type: 'plcwire-heartbeat',
+      name: 'hb',
+      ...at(520),
+      connection: 'conn-ok',
+      writeAddress: 'DB1.DBW2:INT',
+      writeMode: 'counter',
+      interval: 1000,
+      watchAddress: '',
+      timeout: 3000,
+    },
     { id: 'ctl-stop', type: 'plcwire-control', name: 'stop', ...at(580), connection: 'conn-ok', action: 'stop', newOnly: false },
     { id: 'conn-fw', type: 'plcwire-connection', name: 'fw', url: 'fetchwrite://127.0.0.1?port=1' },
     { id: 'ctl-fw', type: 'plcwire-control', name: 'not s7', ...at(640), connection: 'conn-fw', action: 'state', newOnly: false },
@@ -56,7 +148,10 @@ async function startNodeRed(flow: object[]): Promise<NodeRed> {
   const port = await freePort();
   fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
   fs.symlinkSync(ROOT, path.join(dir, 'node_modules', '@plcwire', 'node-red-siemens'), 'dir');
-  fs.writeFileSync(path.join(dir, 'package.json'), JSON.stringify({ name: 'editor-test', private: true, dependencies: { '@plcwire/node-red-siemens': '*' } }));
+  fs.writeFileSync(
+    path.join(dir, 'package.json'),
+    JSON.stringify({ name: 'editor-test', private: true, dependencies: { '@plcwire/node-red-siemens': '*' } }),
+  );
   fs.writeFileSync(path.join(dir, 'flows.json'), JSON.stringify(flow));
   const settings = {
     uiHost: '127.0.0.1',
@@ -70,7 +165,10 @@ async function startNodeRed(flow: object[]): Promise<NodeRed> {
   };
   fs.writeFileSync(path.join(dir, 'settings.js'), `module.exports = ${JSON.stringify(settings)};\n`);
   const red = require.resolve('node-red/red.js', { paths: [ROOT] });
-  const child: ChildProcess = spawn(process.execPath, [red, '--userDir', dir, '--settings', path.join(dir, 'settings.js')], { cwd: dir, stdio: ['ignore', 'pipe', 'pipe'] });
+  const child: ChildProcess = spawn(process.execPath, [red, '--userDir', dir, '--settings', path.join(dir, 'settings.js')], {
+    cwd: dir,
+    stdio: ['ignore', 'pipe', 'pipe'],
+  });
   let output = '';
   child.stdout!.on('data', (d: Buffer) => (output += d.toString()));
   child.stderr!.on('data', (d: Buffer) => (output += d.toString()));
@@ -155,14 +253,20 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
     const errors: Error[] = [];
     page.on('pageerror', (err) => errors.push(err));
     await page.goto(red.url, { waitUntil: 'domcontentloaded' });
-    await page.waitForFunction(() => (globalThis as any).RED?.nodes?.node('read-ok') && (globalThis as any).document.getElementById('read-ok'), undefined, { timeout: 30_000 });
+    await page.waitForFunction(
+      () => (globalThis as any).RED?.nodes?.node('read-ok') && (globalThis as any).document.getElementById('read-ok'),
+      undefined,
+      { timeout: 30_000 },
+    );
     return { context, page, errors };
   }
 
   /** Opens the edit dialog of node `id` and waits for its tag table. */
   async function editTags(page: Page, id: string): Promise<void> {
     await page.evaluate((nodeId) => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node(nodeId)), id);
-    await page.waitForSelector('#node-input-plcwire-tags .red-ui-editableList-item-content, .red-ui-editableList-addButton', { timeout: 10_000 });
+    await page.waitForSelector('#node-input-plcwire-tags .red-ui-editableList-item-content, .red-ui-editableList-addButton', {
+      timeout: 10_000,
+    });
     await page.waitForSelector('#node-dialog-ok', { state: 'visible' });
   }
 
@@ -177,20 +281,29 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
 
   const tagsOf = (page: Page, id: string) => page.evaluate((nodeId) => (globalThis as any).RED.nodes.node(nodeId).tags, id);
 
-  describe('deploy-time validation with the library\'s parser', () => {
+  describe("deploy-time validation with the library's parser", () => {
     const INVALID = ['conn-bad', 'read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad', 'ctl-fw'];
 
     it('gives nodes with a config error the red triangle, and says why', async () => {
       const { context, page, errors } = await openEditor();
       try {
-        await page.waitForFunction((ids) => ids.every((id: string) => (globalThis as any).RED.nodes.node(id).valid === false), INVALID, { timeout: 10_000 });
+        await page.waitForFunction((ids) => ids.every((id: string) => (globalThis as any).RED.nodes.node(id).valid === false), INVALID, {
+          timeout: 10_000,
+        });
         const state = await page.evaluate(
           (ids) =>
             Object.fromEntries(
               ids.map((id: string) => {
                 const n = (globalThis as any).RED.nodes.node(id);
                 const badge = (globalThis as any).document.querySelector(`[id="${id}"] .red-ui-flow-node-error`);
-                return [id, { valid: n.valid, errors: (n.validationErrors || []).join(' | '), triangle: badge ? !badge.classList.contains('hide') : null }];
+                return [
+                  id,
+                  {
+                    valid: n.valid,
+                    errors: (n.validationErrors || []).join(' | '),
+                    triangle: badge ? !badge.classList.contains('hide') : null,
+                  },
+                ];
               }),
             ),
           [...INVALID, 'conn-ok', 'read-ok', 'read-csv', 'hb-ok', 'ctl-stop'],
@@ -201,8 +314,10 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         expect(state['write-badtag'].errors).to.include('DB1.DBX0');
         expect(state['hb-bad'].errors).to.include('REAL');
         expect(state['ctl-fw'].errors).to.include('"fw" is not S7comm');
-        for (const id of ['read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad', 'ctl-fw']) expect(state[id].triangle, `${id} has the red triangle`).to.equal(true);
-        for (const id of ['conn-ok', 'read-ok', 'read-csv', 'hb-ok', 'ctl-stop']) expect(state[id].valid, `${id}: ${state[id].errors}`).to.equal(true);
+        for (const id of ['read-badurl', 'read-badtag', 'read-dup', 'write-badtag', 'hb-bad', 'ctl-fw'])
+          expect(state[id].triangle, `${id} has the red triangle`).to.equal(true);
+        for (const id of ['conn-ok', 'read-ok', 'read-csv', 'hb-ok', 'ctl-stop'])
+          expect(state[id].valid, `${id}: ${state[id].errors}`).to.equal(true);
         for (const id of ['read-ok', 'read-csv', 'hb-ok']) expect(state[id].triangle, `${id} has no red triangle`).to.equal(false);
 
         // Deploy asks first, listing them (nothing is deployed: the test cancels).
@@ -264,7 +379,11 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
     });
 
     async function importCsv(page: Page, csv: string): Promise<void> {
-      await page.setInputFiles('.plcwire-tags-toolbar input[type=file]', { name: 'tags.csv', mimeType: 'text/csv', buffer: Buffer.from(csv) });
+      await page.setInputFiles('.plcwire-tags-toolbar input[type=file]', {
+        name: 'tags.csv',
+        mimeType: 'text/csv',
+        buffer: Buffer.from(csv),
+      });
     }
 
     const rows = (page: Page) =>
@@ -284,8 +403,14 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         await importCsv(page, 'name,address,type\nspeed,DB1.DBW6,INT\nlevel,DB1.DBD8,REAL\n');
         await page.waitForSelector('#plcwire-import-append');
         await page.click('#plcwire-import-append');
-        await page.waitForFunction(() => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 3);
-        await page.waitForFunction(() => [...(globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-type')].every((e) => e.textContent !== ''));
+        await page.waitForFunction(
+          () => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 3,
+        );
+        await page.waitForFunction(() =>
+          [...(globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-type')].every(
+            (e) => e.textContent !== '',
+          ),
+        );
         expect(await rows(page)).to.deep.equal([
           { name: 'speed', address: 'DB1.DBW0:INT', duplicate: true, type: 'INT' },
           { name: 'speed', address: 'DB1.DBW6:INT', duplicate: true, type: 'INT' },
@@ -297,7 +422,9 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         await editTags(page, 'read-csv');
         await importCsv(page, 'speed;DB1.DBW6;INT\nlevel;DB1.DBD8;REAL\n');
         await page.click('#plcwire-import-replace');
-        await page.waitForFunction(() => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 2);
+        await page.waitForFunction(
+          () => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-row').length === 2,
+        );
         expect((await rows(page)).map((r) => [r.name, r.address, r.duplicate])).to.deep.equal([
           ['speed', 'DB1.DBW6:INT', false],
           ['level', 'DB1.DBD8:REAL', false],
@@ -320,14 +447,27 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         try {
           // Node statuses are rendered by the runtime (en-US here), so Status nodes and dashboards get the same words as the canvas.
           const connected = catalogText('en-US', 'plcwire.status.connected');
-          await page.waitForFunction((text) => (globalThis as any).document.querySelector('[id="read-ok"] .red-ui-flow-node-status-label')?.textContent === text, connected, { timeout: 10_000 });
+          await page.waitForFunction(
+            (text) => (globalThis as any).document.querySelector('[id="read-ok"] .red-ui-flow-node-status-label')?.textContent === text,
+            connected,
+            { timeout: 10_000 },
+          );
           await editTags(page, 'read-empty');
           await importCsv(page, 'a,MW2\nb,MW4\nc,MW6:INT,WORD\n');
           const message = catalogText(locale, 'plcwire.editor.imported', { count: 3 });
-          await page.waitForFunction((text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification')].some((n) => n.textContent?.trim() === text), message, { timeout: 10_000 });
+          await page.waitForFunction(
+            (text) =>
+              [...(globalThis as any).document.querySelectorAll('.red-ui-notification')].some((n) => n.textContent?.trim() === text),
+            message,
+            { timeout: 10_000 },
+          );
           // The row whose type column contradicts its address is named, with its line.
           const problem = catalogText(locale, 'plcwire.editor.line', { line: 3, message: '"MW6:INT" is INT, the type column says WORD' });
-          await page.waitForFunction((text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification li')].some((n) => n.textContent === text), problem, { timeout: 10_000 });
+          await page.waitForFunction(
+            (text) => [...(globalThis as any).document.querySelectorAll('.red-ui-notification li')].some((n) => n.textContent === text),
+            problem,
+            { timeout: 10_000 },
+          );
           await closeDialog(page, 'cancel');
           expect(errors).to.deep.equal([]);
         } finally {
@@ -375,13 +515,25 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
       try {
         await editConnection(page, 'conn-ok');
         await page.selectOption('#node-config-input-cpu', 's7-1200');
-        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-maxItems').value === '255', undefined, { timeout: 10_000 });
+        await page.waitForFunction(
+          () => (globalThis as any).document.querySelector('#node-config-plcwire-maxItems').value === '255',
+          undefined,
+          { timeout: 10_000 },
+        );
         await page.selectOption('#node-config-input-cpu', 's7-200');
-        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-localTsap').value === '1000', undefined, { timeout: 10_000 });
+        await page.waitForFunction(
+          () => (globalThis as any).document.querySelector('#node-config-plcwire-localTsap').value === '1000',
+          undefined,
+          { timeout: 10_000 },
+        );
         expect(await page.inputValue('#node-config-plcwire-remoteTsap')).to.equal('1001');
         expect(await page.inputValue('#node-config-plcwire-maxItems')).to.equal('');
         await page.selectOption('#node-config-input-cpu', 's7-1500');
-        await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-maxItems').value === '255', undefined, { timeout: 10_000 });
+        await page.waitForFunction(
+          () => (globalThis as any).document.querySelector('#node-config-plcwire-maxItems').value === '255',
+          undefined,
+          { timeout: 10_000 },
+        );
         expect(await page.inputValue('#node-config-plcwire-addressing')).to.equal('rack');
         const url = await doneConnection(page);
         expect(lib.parseUrl(url)).to.include({ rack: 0, slot: 1, maxItems: 255 });
@@ -391,28 +543,46 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
       }
     });
 
-    it('Test connection lists the doctor\'s steps: all passing, then the failing one with its fix on a wrong slot; no connection stays open', async () => {
+    it("Test connection lists the doctor's steps: all passing, then the failing one with its fix on a wrong slot; no connection stays open", async () => {
       const { context, page, errors } = await openEditor();
       try {
-        const catalog = JSON.parse(fs.readFileSync(path.join(ROOT, 'nodes/locales/en-US/connection.json'), 'utf8'))['plcwire-connection'].editor;
+        const catalog = JSON.parse(fs.readFileSync(path.join(ROOT, 'nodes/locales/en-US/connection.json'), 'utf8'))['plcwire-connection']
+          .editor;
         const summary = () => page.textContent('#node-config-plcwire-test-summary');
         const steps = () =>
-          page.$$eval('#node-config-plcwire-test-steps li', (list) => list.map((li) => ({ step: li.getAttribute('data-step'), ok: li.classList.contains('plcwire-step-ok'), text: li.textContent ?? '' })));
+          page.$$eval('#node-config-plcwire-test-steps li', (list) =>
+            list.map((li) => ({
+              step: li.getAttribute('data-step'),
+              ok: li.classList.contains('plcwire-step-ok'),
+              text: li.textContent ?? '',
+            })),
+          );
         await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn-doctor'));
         await page.locator('#node-config-plcwire-slot').waitFor({ state: 'visible' });
         await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-config-plcwire-slot').value === '1');
         await page.click('#node-config-plcwire-test');
-        await page.waitForFunction((texts) => texts.includes((globalThis as any).document.querySelector('#node-config-plcwire-test-summary').textContent), [catalog.testOk, catalog.testFailed], { timeout: 20_000 });
+        await page.waitForFunction(
+          (texts) => texts.includes((globalThis as any).document.querySelector('#node-config-plcwire-test-summary').textContent),
+          [catalog.testOk, catalog.testFailed],
+          { timeout: 20_000 },
+        );
         expect(await summary()).to.equal(catalog.testOk);
         const passed = await steps();
         expect(passed.map((s) => s.step)).to.include.members(['tcp', 'cotp']);
-        expect(passed.every((s) => s.ok), JSON.stringify(passed)).to.equal(true);
+        expect(
+          passed.every((s) => s.ok),
+          JSON.stringify(passed),
+        ).to.equal(true);
         await waitFor(() => doctorSim.connectionCount === 0, 'no connection after the passing test');
 
         // A field typed just before the click counts: the URL is built from the fields at once.
         await page.fill('#node-config-plcwire-slot', '5');
         await page.click('#node-config-plcwire-test');
-        await page.waitForFunction((text) => (globalThis as any).document.querySelector('#node-config-plcwire-test-summary').textContent === text, catalog.testFailed, { timeout: 20_000 });
+        await page.waitForFunction(
+          (text) => (globalThis as any).document.querySelector('#node-config-plcwire-test-summary').textContent === text,
+          catalog.testFailed,
+          { timeout: 20_000 },
+        );
         const failed = await steps();
         const last = failed[failed.length - 1]!;
         expect(last.ok, JSON.stringify(failed)).to.equal(false);
@@ -428,10 +598,11 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
     });
 
     /** The control node's warning as shown, or '' when it is hidden. */
-    const warning = (page: Page) => page.evaluate(() => {
-      const w = (globalThis as any).document.querySelector('#node-input-plcwire-control-warning');
-      return w && w.style.display !== 'none' ? String(w.textContent) : '';
-    });
+    const warning = (page: Page) =>
+      page.evaluate(() => {
+        const w = (globalThis as any).document.querySelector('#node-input-plcwire-control-warning');
+        return w && w.style.display !== 'none' ? String(w.textContent) : '';
+      });
 
     for (const locale of Object.keys(LOCALES) as Locale[]) {
       it(`${locale}: the control dialog warns while stop, start or clock-sync would be refused by the connection`, async () => {
@@ -441,18 +612,29 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
           const noControl = String(catalog['plcwire-control'].warning.noControl).replace('__name__', 'plc');
           await page.evaluate(() => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node('ctl-stop')));
           await page.waitForSelector('#node-input-action', { state: 'visible' });
-          await page.waitForFunction((text) => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.textContent === text, noControl, { timeout: 10_000 });
+          await page.waitForFunction(
+            (text) => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.textContent === text,
+            noControl,
+            { timeout: 10_000 },
+          );
           expect(await warning(page)).to.equal(noControl);
           await page.selectOption('#node-input-action', 'state');
-          await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning').style.display === 'none');
+          await page.waitForFunction(
+            () => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning').style.display === 'none',
+          );
           await page.selectOption('#node-input-action', 'clock-sync');
-          await page.waitForFunction(() => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.style.display !== 'none');
+          await page.waitForFunction(
+            () => (globalThis as any).document.querySelector('#node-input-plcwire-control-warning')?.style.display !== 'none',
+          );
           expect(await warning(page)).to.equal(noControl);
           await page.click('#node-dialog-cancel');
           await page.waitForSelector('#node-input-action', { state: 'detached', timeout: 10_000 });
 
           // With control allowed on the connection, no warning.
-          await page.evaluate(() => { const c = (globalThis as any).RED.nodes.node('conn-ok'); c.url += '&control=true'; });
+          await page.evaluate(() => {
+            const c = (globalThis as any).RED.nodes.node('conn-ok');
+            c.url += '&control=true';
+          });
           await page.evaluate(() => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node('ctl-stop')));
           await page.waitForSelector('#node-input-action', { state: 'visible' });
           await after300ms(page);

@@ -353,7 +353,9 @@ function burst(c: AnyClient, rig: Rig, from: number, count: number, value: (i: n
     rejected,
     async settled(ms: number) {
       let timer: NodeJS.Timeout | undefined;
-      const deadline = new Promise<never>((_, reject) => (timer = setTimeout(() => reject(new Error(`writes still pending after ${ms} ms: a hang`)), ms)));
+      const deadline = new Promise<never>(
+        (_, reject) => (timer = setTimeout(() => reject(new Error(`writes still pending after ${ms} ms: a hang`)), ms)),
+      );
       try {
         await Promise.race([Promise.all(all), deadline]);
       } finally {
@@ -386,7 +388,10 @@ function resources(): Map<string, number> {
 }
 
 function describeResources(m: Map<string, number>): string {
-  return [...m].sort().map(([k, n]) => `${k}×${n}`).join(', ');
+  return [...m]
+    .sort()
+    .map(([k, n]) => `${k}×${n}`)
+    .join(', ');
 }
 
 async function expectNoLeaks(before: Map<string, number>): Promise<void> {
@@ -544,7 +549,10 @@ describe('faults over real sockets: a typed error in time, no write dropped, rec
         rig.proxies.forEach((p) => (p.mode = 'garbage'));
         const b = burst(c, rig, 0, BURST, (i) => 500 + i);
         // A bus skips noise it cannot frame, so there the answer is simply missing.
-        const codes = rig.protocol === 'freeport' ? ['TIMEOUT', 'PROTOCOL_ERROR', 'TAG_ERRORS'] : ['PROTOCOL_ERROR', 'CONNECTION_LOST', 'NOT_CONNECTED', 'TAG_ERRORS'];
+        const codes =
+          rig.protocol === 'freeport'
+            ? ['TIMEOUT', 'PROTOCOL_ERROR', 'TAG_ERRORS']
+            : ['PROTOCOL_ERROR', 'CONNECTION_LOST', 'NOT_CONNECTED', 'TAG_ERRORS'];
         await typedWithin(c.read([rig.addr(15)]), rig.timeout, codes);
         await b.settled(rig.timeout * (BURST + 1) + 1000);
         expect(b.acked).to.deep.equal([]);
@@ -718,7 +726,10 @@ describe('faults over real sockets: a typed error in time, no write dropped, rec
 
     describe('userdata (system services)', () => {
       /** A client with the services (S7Client) through the proxy; `transform` sees every userdata answer (ROSCTR 7). */
-      async function servicesRig(transform: (frame: Buffer, pair: ProxyPair, n: number) => void, profile: 's7-1200' | 's7-1500' = 's7-1200') {
+      async function servicesRig(
+        transform: (frame: Buffer, pair: ProxyPair, n: number) => void,
+        profile: 's7-1200' | 's7-1500' = 's7-1200',
+      ) {
         const rig = await open(() => s7Rig(profile));
         const url = await rig.proxied();
         let n = 0;
@@ -742,15 +753,21 @@ describe('faults over real sockets: a typed error in time, no write dropped, rec
 
       const HOSTILE: [string, (f: Buffer) => Buffer][] = [
         ['its S7 data length one byte longer than the frame', (f) => (f.writeUInt16BE(f.readUInt16BE(15) + 1, 15), f)],
-        ['its item announcing more bytes than follow', (f) => (f.writeUInt16BE(f.readUInt16BE(f.readUInt16BE(13) + 19) + 9, f.readUInt16BE(13) + 19), f)],
-        ['an 8-byte parameter part (no error field)', (f) => {
-          const p = Buffer.from(f.subarray(17, 25));
-          p[3] = 4;
-          const out = Buffer.concat([f.subarray(0, 17), p, f.subarray(29)]);
-          out.writeUInt16BE(out.length, 2);
-          out.writeUInt16BE(8, 13);
-          return out;
-        }],
+        [
+          'its item announcing more bytes than follow',
+          (f) => (f.writeUInt16BE(f.readUInt16BE(f.readUInt16BE(13) + 19) + 9, f.readUInt16BE(13) + 19), f),
+        ],
+        [
+          'an 8-byte parameter part (no error field)',
+          (f) => {
+            const p = Buffer.from(f.subarray(17, 25));
+            p[3] = 4;
+            const out = Buffer.concat([f.subarray(0, 17), p, f.subarray(29)]);
+            out.writeUInt16BE(out.length, 2);
+            out.writeUInt16BE(8, 13);
+            return out;
+          },
+        ],
         ['the answer of another function group', (f) => ((f[22] = 0x87), f)],
         // The SZL header (N_DR at byte 39 of the frame) announcing one record more than the answer carries.
         ['an SZL header counting one record more than it carries', (f) => (f.writeUInt16BE(f.readUInt16BE(39) + 1, 39), f)],
@@ -829,7 +846,7 @@ describe('faults over real sockets: a typed error in time, no write dropped, rec
       for (let i = 0; i < BURST; i++) rig.poke(i, 0);
       const b = burst(c, rig, 0, BURST, (i) => 950 + i, 0);
       await b.settled(2000);
-      expect(b.rejected.map((e) => ((e.cause as PlcError | undefined)?.code ?? e.code))).to.deep.equal(Array(BURST).fill('ACCESS_DENIED'));
+      expect(b.rejected.map((e) => (e.cause as PlcError | undefined)?.code ?? e.code)).to.deep.equal(Array(BURST).fill('ACCESS_DENIED'));
       for (let i = 0; i < BURST; i++) expect(rig.peek(i)).to.equal(0);
       rig.server().faults.accessDenied = false;
       expect(c.state).to.equal('connected');
@@ -840,7 +857,9 @@ describe('faults over real sockets: a typed error in time, no write dropped, rec
   describe('freeport bus', () => {
     async function busClient(rig: Awaited<ReturnType<typeof freeportRig>>, query = '', profile?: { replyEchoesAddress: boolean }) {
       const endpoint = parseUrl(query ? rig.url().replace('retries=0', query) : rig.url()) as FreeportEndpoint;
-      const c = track(new FreeportClient(endpoint, { backoff: BACKOFF, ...(profile ? { profile } : {}) })) as FreeportClient & { delays: unknown[] };
+      const c = track(new FreeportClient(endpoint, { backoff: BACKOFF, ...(profile ? { profile } : {}) })) as FreeportClient & {
+        delays: unknown[];
+      };
       c.delays = [];
       c.on('reconnecting', (r: unknown) => c.delays.push(r));
       await c.connect();
@@ -916,7 +935,10 @@ describe('faults over real sockets: a typed error in time, no write dropped, rec
     });
 
     it('a station answering for another address (replies echo DA): the answer is not taken, the request times out', async () => {
-      const bus = new FreeportBus({ stations: { 5: Buffer.from([0, 5, 0, 0]), 6: Buffer.from([0, 6, 0, 0]) }, profile: { replyEchoesAddress: true } });
+      const bus = new FreeportBus({
+        stations: { 5: Buffer.from([0, 5, 0, 0]), 6: Buffer.from([0, 6, 0, 0]) },
+        profile: { replyEchoesAddress: true },
+      });
       const port = await bus.listenTcp({ port: 0 });
       cleanups.push(() => bus.close());
       const endpoint = parseUrl(`freeport+tcp://127.0.0.1:${port}?timeout=150&retries=0`) as FreeportEndpoint;

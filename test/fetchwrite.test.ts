@@ -34,7 +34,10 @@ describe('FETCH/WRITE client against the CP simulator', function () {
     jobs = [];
     server.on('request', (r: FetchWriteRequestEvent) => jobs.push(r));
     const q = options.port ? `port=${ports.fetchPort}` : `fetchPort=${ports.fetchPort}&writePort=${ports.writePort}`;
-    client = new FetchWriteClient(endpoint(`${q}&timeout=1500${options.dbUnit ? `&dbUnit=${options.dbUnit}` : ''}${options.query ?? ''}`), FAST);
+    client = new FetchWriteClient(
+      endpoint(`${q}&timeout=1500${options.dbUnit ? `&dbUnit=${options.dbUnit}` : ''}${options.query ?? ''}`),
+      FAST,
+    );
     await client.connect();
   }
 
@@ -117,10 +120,14 @@ describe('FETCH/WRITE client against the CP simulator', function () {
     expect(m.area('I')![1]).to.equal(0x8f);
     expect(m.area('Q')![2]).to.equal(0x04);
     expect(jobs.map(jobText)).to.deep.equal([
-      'fetch 1/1@6+1', 'write 1/1@6+1',
-      'fetch 2/0@3+1', 'write 2/0@3+1',
-      'fetch 3/0@1+1', 'write 3/0@1+1',
-      'fetch 4/0@2+1', 'write 4/0@2+1',
+      'fetch 1/1@6+1',
+      'write 1/1@6+1',
+      'fetch 2/0@3+1',
+      'write 2/0@3+1',
+      'fetch 3/0@1+1',
+      'write 3/0@1+1',
+      'fetch 4/0@2+1',
+      'write 4/0@2+1',
     ]);
   });
 
@@ -138,9 +145,12 @@ describe('FETCH/WRITE client against the CP simulator', function () {
     await client.write({ 'DB1,S20.4': 'hi' });
     expect(db.subarray(20, 26).toString('hex')).to.equal('04026869eeee');
     expect(jobs.map(jobText)).to.deep.equal([
-      'fetch 1/1@6+1', 'write 1/1@6+1',
-      'fetch 1/1@6+2', 'write 1/1@6+2',
-      'fetch 1/1@10+2', 'write 1/1@10+2',
+      'fetch 1/1@6+1',
+      'write 1/1@6+1',
+      'fetch 1/1@6+2',
+      'write 1/1@6+2',
+      'fetch 1/1@10+2',
+      'write 1/1@10+2',
     ]);
   });
 
@@ -154,7 +164,20 @@ describe('FETCH/WRITE client against the CP simulator', function () {
   it('merges several tags into as few fetches as the ranges allow', async () => {
     await start();
     server.memory.createDataBlock(3, 4096);
-    await client.read(['DB1,INT0', 'DB1,INT2', 'DB1,REAL40', 'DB1,INT1000', 'MB0', 'MB10', 'MW200', 'DB2,INT0', 'DB3,INT0', 'DB3,INT3000', 'IB0', 'IB127']);
+    await client.read([
+      'DB1,INT0',
+      'DB1,INT2',
+      'DB1,REAL40',
+      'DB1,INT1000',
+      'MB0',
+      'MB10',
+      'MW200',
+      'DB2,INT0',
+      'DB3,INT0',
+      'DB3,INT3000',
+      'IB0',
+      'IB127',
+    ]);
     expect(jobs.map(jobText)).to.deep.equal([
       'fetch 1/1@0+501',
       'fetch 1/2@0+1',
@@ -176,7 +199,14 @@ describe('FETCH/WRITE client against the CP simulator', function () {
     jobs.length = 0;
     await client.write({ 'C0:COUNTER[3]': [1, 2, 3] });
     expect(await client.read(['C0:COUNTER[3]'])).to.deep.equal({ 'C0:COUNTER[3]': [1, 2, 3] });
-    expect(jobs.map(jobText)).to.deep.equal(['write 6/0@0+1', 'write 6/0@1+1', 'write 6/0@2+1', 'fetch 6/0@0+1', 'fetch 6/0@1+1', 'fetch 6/0@2+1']);
+    expect(jobs.map(jobText)).to.deep.equal([
+      'write 6/0@0+1',
+      'write 6/0@1+1',
+      'write 6/0@2+1',
+      'fetch 6/0@0+1',
+      'fetch 6/0@1+1',
+      'fetch 6/0@2+1',
+    ]);
   });
 
   it('splits a write beyond the ORG length range', async () => {
@@ -454,7 +484,10 @@ describe('FETCH/WRITE simulator against hostile clients', function () {
     try {
       const victims = [
         [await raw(server.fetchPort), Buffer.from('GET / HTTP/1.1\r\nHost: x\r\n\r\n')],
-        [await raw(server.fetchPort), encodeRequest({ op: OpCode.WriteRequest, org: 2, dbNumber: 0, start: 0, length: 1, data: hex('01') })],
+        [
+          await raw(server.fetchPort),
+          encodeRequest({ op: OpCode.WriteRequest, org: 2, dbNumber: 0, start: 0, length: 1, data: hex('01') }),
+        ],
         [await raw(server.writePort), encodeRequest({ op: OpCode.FetchRequest, org: 2, dbNumber: 0, start: 0, length: 1 })],
       ] as const;
       for (const [socket, bytes] of victims) {
@@ -568,7 +601,12 @@ describe('FETCH/WRITE client against hostile peers', function () {
   });
 
   it('a wrong system id or header length: a protocol error', async () => {
-    for (const patch of [[0, 0x54], [2, 0x11], [6, 0x00], [9, 0x00]] as const) {
+    for (const patch of [
+      [0, 0x54],
+      [2, 0x11],
+      [6, 0x00],
+      [9, 0x00],
+    ] as const) {
       const bad = encodeResponse(OpCode.FetchResponse, 0, hex('0000'));
       bad[patch[0]] = patch[1];
       const port = await peer((socket) => socket.write(bad));
@@ -611,7 +649,9 @@ describe('FETCH/WRITE client against hostile peers', function () {
   });
 
   it('a peer that resets in the middle of a response: CONNECTION_LOST', async () => {
-    const port = await peer((socket) => socket.write(encodeResponse(OpCode.FetchResponse, 0, hex('1234')).subarray(0, 9), () => socket.resetAndDestroy()));
+    const port = await peer((socket) =>
+      socket.write(encodeResponse(OpCode.FetchResponse, 0, hex('1234')).subarray(0, 9), () => socket.resetAndDestroy()),
+    );
     expect(((await readFrom(port)) as PlcError).code).to.equal('CONNECTION_LOST');
   });
 

@@ -4,7 +4,9 @@ import { ChangeFilter, errorInfo, outcomes, PlcError, tagFailure, tagsOfMessage,
 
 describe('flows: tag tables', () => {
   it('defaults names to addresses and drops blank rows', () => {
-    expect(tagTable([{ name: ' a ', address: ' DB1,INT0 ' }, { name: '', address: 'M0.1' }, { name: 'x', address: '' }, null])).to.deep.equal([
+    expect(
+      tagTable([{ name: ' a ', address: ' DB1,INT0 ' }, { name: '', address: 'M0.1' }, { name: 'x', address: '' }, null]),
+    ).to.deep.equal([
       { name: 'a', address: 'DB1,INT0' },
       { name: 'M0.1', address: 'M0.1' },
     ]);
@@ -12,14 +14,23 @@ describe('flows: tag tables', () => {
 
   it('reads msg.tags as an address, an array or an object', () => {
     expect(tagsOfMessage('MW2')).to.deep.equal([{ name: 'MW2', address: 'MW2' }]);
-    expect(tagsOfMessage(['MW2', { name: 'b', address: 'MW4' }])).to.deep.equal([{ name: 'MW2', address: 'MW2' }, { name: 'b', address: 'MW4' }]);
+    expect(tagsOfMessage(['MW2', { name: 'b', address: 'MW4' }])).to.deep.equal([
+      { name: 'MW2', address: 'MW2' },
+      { name: 'b', address: 'MW4' },
+    ]);
     expect(tagsOfMessage({ c: 'MW6' })).to.deep.equal([{ name: 'c', address: 'MW6' }]);
     expect(tagsOfMessage(undefined)).to.equal(undefined);
   });
 
   it('keeps table order in outcomes, with errors as plain data', () => {
     const err = Object.assign(new Error('boom'), { code: 'ACCESS_DENIED' }) as unknown as PlcError;
-    const list = outcomes([{ name: 'b', address: 'B' }, { name: 'a', address: 'A' }], { A: { ok: true, value: 1 }, B: { ok: false, error: err } });
+    const list = outcomes(
+      [
+        { name: 'b', address: 'B' },
+        { name: 'a', address: 'A' },
+      ],
+      { A: { ok: true, value: 1 }, B: { ok: false, error: err } },
+    );
     expect(list).to.deep.equal([
       { name: 'b', address: 'B', ok: false, error: { code: 'ACCESS_DENIED', message: 'boom', address: 'B' } },
       { name: 'a', address: 'A', ok: true, value: 1 },
@@ -66,13 +77,14 @@ describe('flows: write requests', () => {
   });
 
   it('refuses a payload without a target, an empty object, a missing value and a name and address of the same tag', () => {
-    expect(() => writeRequest(table, { payload: 5 })).to.throw(/msg.topic/).with.property('code', 'INVALID_VALUE');
+    expect(() => writeRequest(table, { payload: 5 }))
+      .to.throw(/msg.topic/)
+      .with.property('code', 'INVALID_VALUE');
     expect(() => writeRequest(table, { payload: {} })).to.throw(/names no tag/);
     expect(() => writeRequest(table, { payload: { speed: null } })).to.throw(/no value for "speed"/);
     expect(() => writeRequest(table, { payload: { speed: 1, 'DB1,INT0': 2 } })).to.throw(/same address/);
   });
 });
-
 
 describe('flows: failure messages', () => {
   const error = (code: string, message: string, address: string) => ({ code, message, address });
@@ -92,7 +104,11 @@ describe('flows: failure messages', () => {
   });
 
   it('turns errors into plain data, PLC_ERROR when they have no code', () => {
-    expect(errorInfo(Object.assign(new Error('x'), { code: 'TIMEOUT' }), 'MW2')).to.deep.equal({ code: 'TIMEOUT', message: 'x', address: 'MW2' });
+    expect(errorInfo(Object.assign(new Error('x'), { code: 'TIMEOUT' }), 'MW2')).to.deep.equal({
+      code: 'TIMEOUT',
+      message: 'x',
+      address: 'MW2',
+    });
     expect(errorInfo('odd', 'MW4')).to.deep.equal({ code: 'PLC_ERROR', message: 'odd', address: 'MW4' });
   });
 });

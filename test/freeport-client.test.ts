@@ -91,7 +91,10 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
       'ST6,B0.4': [0x12, 0x34, 0x56, 0x78],
       'ST5,REAL0': 10,
     });
-    expect(log.requests.map((r) => [r.command, r.station, r.length])).to.deep.equal([['read', 6, 4], ['read', 5, 4]]);
+    expect(log.requests.map((r) => [r.command, r.station, r.length])).to.deep.equal([
+      ['read', 6, 4],
+      ['read', 5, 4],
+    ]);
   });
 
   it('writes E6 27 A1 C3 to station 5 as exactly qR0504E627A1C325Q and checks the acknowledgement', async () => {
@@ -113,7 +116,12 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
     expect(bus.station(6).data).to.deep.equal(Buffer.from([0x12, 0x34, 0x01, 0x02]));
     await client.write({ 'ST6,X0.0': true });
     expect(bus.station(6).data).to.deep.equal(Buffer.from([0x13, 0x34, 0x01, 0x02]));
-    expect(log.requests.map((r) => [r.command, r.length])).to.deep.equal([['read', 4], ['write', 4], ['read', 4], ['write', 4]]);
+    expect(log.requests.map((r) => [r.command, r.length])).to.deep.equal([
+      ['read', 4],
+      ['write', 4],
+      ['read', 4],
+      ['write', 4],
+    ]);
   });
 
   it('merges several writes to one station into one read-modify-write', async () => {
@@ -140,7 +148,10 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
     const log = record(bus);
     const results = await client.writeDetailed({ 'ST5,DWORD1': 1, 'ST5,INT0': 70000, 'ST5,X0.9': true, 'ST999,BYTE0': 1 });
     expect(codes(results)).to.deep.equal({
-      'ST5,DWORD1': 'INVALID_ADDRESS', 'ST5,INT0': 'INVALID_VALUE', 'ST5,X0.9': 'INVALID_ADDRESS', 'ST999,BYTE0': 'INVALID_ADDRESS',
+      'ST5,DWORD1': 'INVALID_ADDRESS',
+      'ST5,INT0': 'INVALID_VALUE',
+      'ST5,X0.9': 'INVALID_ADDRESS',
+      'ST999,BYTE0': 'INVALID_ADDRESS',
     });
     expect(log.requests).to.have.length(0);
   });
@@ -163,7 +174,10 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
   });
 
   it('a station not on the bus times out like a silent one', async () => {
-    const err = await client.read(['ST30,BYTE0']).then(() => undefined, (e: unknown) => e);
+    const err = await client.read(['ST30,BYTE0']).then(
+      () => undefined,
+      (e: unknown) => e,
+    );
     expect(err).to.be.instanceOf(TagErrors);
     expect((err as TagErrors).errors['ST30,BYTE0']!.code).to.equal('TIMEOUT');
   });
@@ -187,7 +201,7 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
   it('under random bit flips and dropped characters, every value that arrives is right', async () => {
     await client.close(); // the port is the noisy bus's now
     let seed = 42;
-    const random = () => ((seed = (seed * 1103515245 + 12345) % 2 ** 31) / 2 ** 31);
+    const random = () => (seed = (seed * 1103515245 + 12345) % 2 ** 31) / 2 ** 31;
     const noisyBus = new FreeportBus({ stations: { 6: Buffer.from([0x12, 0x34, 0x56, 0x78]) }, random });
     const wired = noisyBus.mockBinding(MockBinding);
     const c = new FreeportClient(serialEndpoint({ retries: 6, timeout: 30 }), { binding: wired, ...FAST });
@@ -247,7 +261,10 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
 
   it('when the serial device disappears: pending requests fail, the link reconnects, values are right again', async () => {
     bus.station(6).silent = true;
-    const pending = client.read(['ST6,DWORD0']).then(() => undefined, (e: unknown) => e);
+    const pending = client.read(['ST6,DWORD0']).then(
+      () => undefined,
+      (e: unknown) => e,
+    );
     await waitFor(bus, 'request');
     const disconnected = waitFor<PlcError>(client, 'disconnected');
     const reconnected = waitFor(client, 'connected', 2000);
@@ -294,8 +311,14 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
   });
 
   it('connect() rejects with CONNECT_FAILED naming a serial port that does not exist', async () => {
-    const c = new FreeportClient(serialEndpoint({ transport: { kind: 'serial', path: '/dev/ttyNOPE', baudRate: 9600, parity: 'none', dataBits: 8, stopBits: 1 } }), { binding: MockBinding });
-    const err = (await c.connect().then(() => undefined, (e: unknown) => e)) as PlcError;
+    const c = new FreeportClient(
+      serialEndpoint({ transport: { kind: 'serial', path: '/dev/ttyNOPE', baudRate: 9600, parity: 'none', dataBits: 8, stopBits: 1 } }),
+      { binding: MockBinding },
+    );
+    const err = (await c.connect().then(
+      () => undefined,
+      (e: unknown) => e,
+    )) as PlcError;
     expect(err.code).to.equal('CONNECT_FAILED');
     expect(err.message).to.include('/dev/ttyNOPE');
     await c.close();
@@ -308,7 +331,12 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
     await c.connect();
     try {
       const results = await c.writeDetailed({ 'ST5,BYTE0': 1, 'ST6,BYTE0': 2, 'ST7,BYTE1': 3, 'ST7,BYTE2': 4 });
-      expect(codes(results)).to.deep.equal({ 'ST5,BYTE0': 'WRITE_NOT_ALLOWED', 'ST6,BYTE0': 'ok', 'ST7,BYTE1': 'ok', 'ST7,BYTE2': 'WRITE_NOT_ALLOWED' });
+      expect(codes(results)).to.deep.equal({
+        'ST5,BYTE0': 'WRITE_NOT_ALLOWED',
+        'ST6,BYTE0': 'ok',
+        'ST7,BYTE1': 'ok',
+        'ST7,BYTE2': 'WRITE_NOT_ALLOWED',
+      });
       expect(log.requests.map((r) => `${r.command}${r.station}`)).to.deep.equal(['write6', 'read7', 'write7']);
     } finally {
       await c.close();
@@ -321,7 +349,13 @@ describe('freeport master over TCP to a serial device server', () => {
     const handles0 = activeHandles();
     let bus = new FreeportBus({ stations: { 5: Buffer.from([0, 0, 0, 42]), 6: Buffer.alloc(4) } });
     const port = await bus.listenTcp({ port: 0 });
-    const endpoint: FreeportEndpoint = { protocol: 'freeport', transport: { kind: 'tcp', host: '127.0.0.1', port }, timeout: 200, retries: 0, interFrameGapMs: 1 };
+    const endpoint: FreeportEndpoint = {
+      protocol: 'freeport',
+      transport: { kind: 'tcp', host: '127.0.0.1', port },
+      timeout: 200,
+      retries: 0,
+      interFrameGapMs: 1,
+    };
     const client = new FreeportClient(endpoint, FAST);
     try {
       await client.connect();
@@ -359,8 +393,17 @@ describe('freeport master over TCP to a serial device server', () => {
     const bus = new FreeportBus({ stations: [5] });
     const port = await bus.listenTcp();
     await bus.close();
-    const client = new FreeportClient({ protocol: 'freeport', transport: { kind: 'tcp', host: '127.0.0.1', port }, timeout: 200, retries: 0, interFrameGapMs: 0 });
-    const err = (await client.connect().then(() => undefined, (e: unknown) => e)) as PlcError;
+    const client = new FreeportClient({
+      protocol: 'freeport',
+      transport: { kind: 'tcp', host: '127.0.0.1', port },
+      timeout: 200,
+      retries: 0,
+      interFrameGapMs: 0,
+    });
+    const err = (await client.connect().then(
+      () => undefined,
+      (e: unknown) => e,
+    )) as PlcError;
     expect(err.code).to.equal('CONNECT_FAILED');
     await client.close();
     await settle();

@@ -1,15 +1,7 @@
 import { expect } from 'chai';
 import fc from 'fast-check';
 import { PlcError, ProtocolError } from '../lib/errors';
-import {
-  computeChecksum,
-  decodeReply,
-  decodeRequest,
-  encodeReply,
-  encodeRequest,
-  readRequest,
-  writeRequest,
-} from '../lib/freeport/codec';
+import { computeChecksum, decodeReply, decodeRequest, encodeReply, encodeRequest, readRequest, writeRequest } from '../lib/freeport/codec';
 import { FreeportParser } from '../lib/freeport/parser';
 import { defineProfile, DEFAULT_FREEPORT_PROFILE, replyLength, requestLength } from '../lib/freeport/profile';
 
@@ -49,7 +41,10 @@ describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
     });
 
     it('rejects a reply with a bad checksum, bad framing or non-hex DU with ProtocolError', () => {
-      expect(() => decodeReply(ascii('qE627A1C377Q'))).to.throw(ProtocolError, /checksum mismatch: frame carries 77, its characters give 76/);
+      expect(() => decodeReply(ascii('qE627A1C377Q'))).to.throw(
+        ProtocolError,
+        /checksum mismatch: frame carries 77, its characters give 76/,
+      );
       expect(() => decodeReply(ascii('qE627A1C376X'))).to.throw(ProtocolError, /not framed/);
       expect(() => decodeReply(ascii('qE627A1CZ76Q'))).to.throw(ProtocolError, /not hex/);
       expect(() => decodeReply(ascii('qE627A1C3Q'))).to.throw(ProtocolError, /10 characters \(expected 12\)/);
@@ -103,8 +98,14 @@ describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
 
     it('builds frames of a custom profile: other characters, wider fields, sum checksum, echoed address', () => {
       const p = defineProfile({
-        start: ':', end: '\r', readCommand: 'r', writeCommand: 'w',
-        addressWidth: 4, dataBytes: 2, checksum: 'sum-mod-256', replyEchoesAddress: true,
+        start: ':',
+        end: '\r',
+        readCommand: 'r',
+        writeCommand: 'w',
+        addressWidth: 4,
+        dataBytes: 2,
+        checksum: 'sum-mod-256',
+        replyEchoesAddress: true,
       });
       const req = text(encodeRequest(writeRequest(0x1234, Buffer.from([0xab, 0xcd]), p), p));
       const body = 'w123402ABCD';
@@ -141,7 +142,10 @@ describe('freeport stream parser', () => {
     for (let cut = 0; cut <= stream.length; cut++) {
       const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply');
       const frames = [...parser.push(stream.subarray(0, cut)), ...parser.push(stream.subarray(cut))];
-      expect(frames.map((f) => f.kind), `cut at ${cut}`).to.deep.equal(['reply', 'reply']);
+      expect(
+        frames.map((f) => f.kind),
+        `cut at ${cut}`,
+      ).to.deep.equal(['reply', 'reply']);
     }
   });
 
@@ -154,19 +158,21 @@ describe('freeport stream parser', () => {
 
   it('resynchronises after noise, a truncated frame and garbage', () => {
     const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply');
-    const frames = parser.push(Buffer.concat([
-      Buffer.from([0x00, 0xff, 0x71, 0x13]), // noise, a stray start character
-      ascii('qE627A'), // a reply cut off by a station reset
-      reply,
-      ascii('Qxyz\r\n'),
-      reply,
-    ]));
+    const frames = parser.push(
+      Buffer.concat([
+        Buffer.from([0x00, 0xff, 0x71, 0x13]), // noise, a stray start character
+        ascii('qE627A'), // a reply cut off by a station reset
+        reply,
+        ascii('Qxyz\r\n'),
+        reply,
+      ]),
+    );
     expect(frames.map((f) => f.kind)).to.deep.equal(['reply', 'reply']);
     expect(parser.skippedBytes).to.be.greaterThan(0);
     expect(parser.buffered).to.equal(0);
   });
 
-  it('ignores the master\'s own echo and other stations\' traffic in the other direction', () => {
+  it("ignores the master's own echo and other stations' traffic in the other direction", () => {
     const replies = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'reply');
     expect(replies.push(Buffer.concat([request, reply]))).to.have.length(1);
     const requests = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'request');
@@ -197,14 +203,19 @@ describe('freeport stream parser', () => {
   it('always finds a valid frame after any garbage (the start character fits no other position)', () => {
     const alphabet = fc.constantFrom(...'qQWR0123456789ABCDEFabcdef\x00\xff\r\n'.split(''));
     fc.assert(
-      fc.property(fc.array(alphabet, { maxLength: 60 }), fc.uint8Array({ minLength: 4, maxLength: 4 }), fc.integer({ min: 0, max: 255 }), (garbage, data, station) => {
-        const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'request');
-        const frame = encodeRequest(writeRequest(station, Buffer.from(data)));
-        const frames = parser.push(Buffer.concat([ascii(garbage.join('')), frame]));
-        const last = frames[frames.length - 1];
-        expect(last?.kind).to.equal('request');
-        if (last?.kind === 'request') expect(last.request).to.deep.include({ station, command: 'write' });
-      }),
+      fc.property(
+        fc.array(alphabet, { maxLength: 60 }),
+        fc.uint8Array({ minLength: 4, maxLength: 4 }),
+        fc.integer({ min: 0, max: 255 }),
+        (garbage, data, station) => {
+          const parser = new FreeportParser(DEFAULT_FREEPORT_PROFILE, 'request');
+          const frame = encodeRequest(writeRequest(station, Buffer.from(data)));
+          const frames = parser.push(Buffer.concat([ascii(garbage.join('')), frame]));
+          const last = frames[frames.length - 1];
+          expect(last?.kind).to.equal('request');
+          if (last?.kind === 'request') expect(last.request).to.deep.include({ station, command: 'write' });
+        },
+      ),
       { numRuns: 500 },
     );
   });

@@ -153,9 +153,12 @@ describe('freeport end to end over a real pseudo-terminal pair (real serialport 
     // As a /dev/serial/by-id/… link does when the adapter is plugged back in and comes up as another ttyUSB.
     const link = path.join(dir, 'adapter');
     fs.symlinkSync(fs.realpathSync(pty.master), link);
-    const client = new FreeportClient(endpoint({ transport: { kind: 'serial', path: link, baudRate: 19200, parity: 'none', dataBits: 8, stopBits: 1 } }), {
-      backoff: { initialDelay: 50, maxDelay: 200, jitter: 0 },
-    });
+    const client = new FreeportClient(
+      endpoint({ transport: { kind: 'serial', path: link, baudRate: 19200, parity: 'none', dataBits: 8, stopBits: 1 } }),
+      {
+        backoff: { initialDelay: 50, maxDelay: 200, jitter: 0 },
+      },
+    );
     const otherDir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-pty-'));
     const other = await openPtyPair(otherDir);
     const otherBus = new FreeportBus({ stations: { 5: Buffer.from([0, 0, 0, 9]) } });
@@ -224,7 +227,9 @@ describe('the pseudo-terminal pair under the real serialport bindings', function
     const pair = await openPtyPair(dir);
     const open = (p: string) =>
       new Promise<InstanceType<typeof SerialPort>>((resolve, reject) => {
-        const port: InstanceType<typeof SerialPort> = new SerialPort({ path: p, baudRate: 19200 }, (err) => (err ? reject(err) : resolve(port)));
+        const port: InstanceType<typeof SerialPort> = new SerialPort({ path: p, baudRate: 19200 }, (err) =>
+          err ? reject(err) : resolve(port),
+        );
       });
     const received = (port: InstanceType<typeof SerialPort>, length: number) => {
       const chunks: Buffer[] = [];
@@ -236,7 +241,10 @@ describe('the pseudo-terminal pair under the real serialport bindings', function
           if (n >= length) resolve(Buffer.concat(chunks));
         }),
       );
-      return Promise.race([all, new Promise<never>((_, reject) => setTimeout(() => reject(new Error(`got ${n} of ${length} bytes within 3 s`)), 3000).unref())]);
+      return Promise.race([
+        all,
+        new Promise<never>((_, reject) => setTimeout(() => reject(new Error(`got ${n} of ${length} bytes within 3 s`)), 3000).unref()),
+      ]);
     };
     const master = await open(pair.master);
     const station = await open(pair.station);

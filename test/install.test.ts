@@ -18,7 +18,12 @@ const MODULE = '@plcwire/node-red-siemens';
 
 const RUNTIMES = [
   { name: 'Node-RED 4 on Node 20', node: process.execPath, red: path.join(ROOT, 'node_modules/node-red/red.js'), major: '4.' },
-  { name: 'Node-RED 5 on Node 22', node: path.join(ROOT, 'test/nr5/node_modules/node/bin/node'), red: path.join(ROOT, 'test/nr5/node_modules/node-red/red.js'), major: '5.' },
+  {
+    name: 'Node-RED 5 on Node 22',
+    node: path.join(ROOT, 'test/nr5/node_modules/node/bin/node'),
+    red: path.join(ROOT, 'test/nr5/node_modules/node-red/red.js'),
+    major: '5.',
+  },
 ];
 
 function get(url: string, accept = 'application/json'): Promise<{ status: number; body: string }> {
@@ -52,14 +57,24 @@ describe('install: the tarball in a fresh Node-RED user directory', function () 
       let log = '';
 
       before(async () => {
-        if (!fs.existsSync(runtime.node) || !fs.existsSync(runtime.red)) throw new Error(`${runtime.name} is not installed (.ci/run installs it)`);
+        if (!fs.existsSync(runtime.node) || !fs.existsSync(runtime.red))
+          throw new Error(`${runtime.name} is not installed (.ci/run installs it)`);
         const userDir = fs.mkdtempSync(path.join(work, 'user-'));
         fs.writeFileSync(path.join(userDir, 'package.json'), JSON.stringify({ name: 'node-red-project', private: true }));
         // What the palette manager does: npm install the package into the user directory.
-        execFileSync('npm', ['install', '--no-audit', '--no-fund', '--prefer-offline', '--omit=dev', tarball], { cwd: userDir, stdio: 'pipe' });
+        execFileSync('npm', ['install', '--no-audit', '--no-fund', '--prefer-offline', '--omit=dev', tarball], {
+          cwd: userDir,
+          stdio: 'pipe',
+        });
         const port = await freePort();
-        fs.writeFileSync(path.join(userDir, 'settings.js'), `module.exports = { uiHost: '127.0.0.1', uiPort: ${port}, flowFile: 'flows.json', credentialSecret: false, diagnostics: { enabled: false }, telemetry: { enabled: false }, logging: { console: { level: 'info' } } };\n`);
-        child = spawn(runtime.node, [runtime.red, '--userDir', userDir, '--settings', path.join(userDir, 'settings.js')], { cwd: userDir, stdio: ['ignore', 'pipe', 'pipe'] });
+        fs.writeFileSync(
+          path.join(userDir, 'settings.js'),
+          `module.exports = { uiHost: '127.0.0.1', uiPort: ${port}, flowFile: 'flows.json', credentialSecret: false, diagnostics: { enabled: false }, telemetry: { enabled: false }, logging: { console: { level: 'info' } } };\n`,
+        );
+        child = spawn(runtime.node, [runtime.red, '--userDir', userDir, '--settings', path.join(userDir, 'settings.js')], {
+          cwd: userDir,
+          stdio: ['ignore', 'pipe', 'pipe'],
+        });
         child.stdout!.on('data', (d: Buffer) => (log += d.toString()));
         child.stderr!.on('data', (d: Buffer) => (log += d.toString()));
         base = `http://127.0.0.1:${port}`;
@@ -87,7 +102,9 @@ describe('install: the tarball in a fresh Node-RED user directory', function () 
       it('lists our four node types, enabled and without error', async () => {
         const res = await get(`${base}/nodes`);
         expect(res.status).to.equal(200);
-        const sets = (JSON.parse(res.body) as { module: string; types: string[]; enabled: boolean; err?: string }[]).filter((s) => s.module === MODULE);
+        const sets = (JSON.parse(res.body) as { module: string; types: string[]; enabled: boolean; err?: string }[]).filter(
+          (s) => s.module === MODULE,
+        );
         expect(sets.map((s) => s.err).filter(Boolean), log).to.deep.equal([]);
         expect(sets.every((s) => s.enabled)).to.equal(true);
         expect(sets.flatMap((s) => s.types)).to.include.members(TYPES);

@@ -26,7 +26,10 @@ describe('link: FrameReader', () => {
     for (let split = 0; split <= stream.length; split++) {
       const reader = new FrameReader(lengthPrefixed);
       const frames = [...reader.push(stream.subarray(0, split)), ...reader.push(stream.subarray(split))];
-      expect(frames.map((f) => f.toString('hex')), `split at ${split}`).to.deep.equal(expected);
+      expect(
+        frames.map((f) => f.toString('hex')),
+        `split at ${split}`,
+      ).to.deep.equal(expected);
       expect(reader.buffered).to.equal(0);
     }
   });
@@ -163,10 +166,14 @@ describe('link: JobQueue', () => {
         return reply;
       });
     }
-    await until(() => {
-      collectGarbage();
-      return freed === 20;
-    }, 2000, 'all 20 replies freed');
+    await until(
+      () => {
+        collectGarbage();
+        return freed === 20;
+      },
+      2000,
+      'all 20 replies freed',
+    );
   });
 });
 
@@ -291,7 +298,9 @@ describe('link: openTcp', () => {
     const before = activeHandles();
     const err = await openTcp({ host: '127.0.0.1', port, timeout: 1000 }).catch((e: PlcError) => e);
     expect((err as PlcError).code).to.equal('CONNECT_FAILED');
-    expect((err as PlcError).message).to.include(`127.0.0.1:${port}`).and.include('ECONNREFUSED');
+    expect((err as PlcError).message)
+      .to.include(`127.0.0.1:${port}`)
+      .and.include('ECONNREFUSED');
     await settle();
     expect(activeHandles()).to.equal(before);
   });

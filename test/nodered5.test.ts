@@ -36,7 +36,18 @@ describe('Node-RED 5 on Node 22', function () {
     const mocha = require.resolve('mocha/bin/mocha.js', { paths: [ROOT] });
     const child = spawn(
       NODE22,
-      [mocha, '--no-config', '--timeout', '20000', '--exit', '--reporter', 'json', '--reporter-option', `output=${out}`, ...files.map((f) => path.join(SUITE, f))],
+      [
+        mocha,
+        '--no-config',
+        '--timeout',
+        '20000',
+        '--exit',
+        '--reporter',
+        'json',
+        '--reporter-option',
+        `output=${out}`,
+        ...files.map((f) => path.join(SUITE, f)),
+      ],
       { cwd: ROOT, env: { ...process.env, PLCWIRE_NODE_RED: path.join(NR5, 'node-red') }, stdio: ['ignore', 'pipe', 'pipe'] },
     );
     child.stdout.on('data', (d: Buffer) => (output += d.toString()));

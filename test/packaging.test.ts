@@ -10,7 +10,6 @@ import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
 
-
 interface PackageJson {
   name: string;
   license?: string;
@@ -37,16 +36,23 @@ export function admits(range: string, version: string): boolean {
     .every((part) => {
       const m = /^(>=|>|<=|<|\^|~)?(\d+)(?:\.(\d+|x))?(?:\.(\d+|x))?$/.exec(part);
       if (!m) throw new Error(`unsupported range "${part}"`);
-      const b = [Number(m[2]), Number(m[3] === 'x' ? 0 : m[3] ?? 0), Number(m[4] === 'x' ? 0 : m[4] ?? 0)];
+      const b = [Number(m[2]), Number(m[3] === 'x' ? 0 : (m[3] ?? 0)), Number(m[4] === 'x' ? 0 : (m[4] ?? 0))];
       const c = cmp(v, b);
       switch (m[1]) {
-        case '>=': return c >= 0;
-        case '>': return c > 0;
-        case '<=': return c <= 0;
-        case '<': return c < 0;
-        case '^': return c >= 0 && v[0] === b[0];
-        case '~': return c >= 0 && v[0] === b[0] && v[1] === b[1];
-        default: return m[3] === undefined || m[3] === 'x' ? v[0] === b[0] : c === 0;
+        case '>=':
+          return c >= 0;
+        case '>':
+          return c > 0;
+        case '<=':
+          return c <= 0;
+        case '<':
+          return c < 0;
+        case '^':
+          return c >= 0 && v[0] === b[0];
+        case '~':
+          return c >= 0 && v[0] === b[0] && v[1] === b[1];
+        default:
+          return m[3] === undefined || m[3] === 'x' ? v[0] === b[0] : c === 0;
       }
     });
 }
@@ -108,7 +114,18 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
   it('N01: every node type has the plcwire- prefix and none is taken by another package', () => {
     const types = Object.keys(pkg['node-red']?.nodes ?? {});
     expect(types).to.include.members(['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat']);
-    const taken = ['s7 endpoint', 's7 in', 's7 out', 's7 control', 's7-config', 's7-read', 's7-write', 's7-trigger', 's7-browse', 's7-control'];
+    const taken = [
+      's7 endpoint',
+      's7 in',
+      's7 out',
+      's7 control',
+      's7-config',
+      's7-read',
+      's7-write',
+      's7-trigger',
+      's7-browse',
+      's7-control',
+    ];
     for (const t of types) {
       expect(t).to.match(/^plcwire-/);
       expect(taken).not.to.include(t);
@@ -130,7 +147,10 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
       for (const lang of ['en-US', 'zh-CN', 'de']) {
         expect(files, `${type} ${lang} messages`).to.include(`${base}/locales/${lang}/${name}.json`);
       }
-      expect(files.some((f) => f.startsWith(`${base}/icons/`) && f.endsWith('.svg')), `${type} icon`).to.equal(true);
+      expect(
+        files.some((f) => f.startsWith(`${base}/icons/`) && f.endsWith('.svg')),
+        `${type} icon`,
+      ).to.equal(true);
     }
   });
 
@@ -142,7 +162,9 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
       const sources = [...text.matchAll(/<script\b[^>]*\bsrc="([^"]+)"/g)].map((m) => m[1]!);
       expect(sources, html).to.deep.equal([`resources/${pkg.name}/plcwire-editor.js`]);
     }
-    expect(fs.readFileSync(path.join(pkgDir, 'resources/plcwire-editor.js'), 'utf8')).to.match(/^\/\*\*[\s\S]*?\*\/\n\(function \(\) \{[\s\S]*\}\)\(\);\n$/);
+    expect(fs.readFileSync(path.join(pkgDir, 'resources/plcwire-editor.js'), 'utf8')).to.match(
+      /^\/\*\*[\s\S]*?\*\/\n\(function \(\) \{[\s\S]*\}\)\(\);\n$/,
+    );
   });
 
   it('node entry files load as CommonJS and export a plain function', () => {
@@ -161,7 +183,10 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
       expect(flow, f).to.be.an('array');
       flow.forEach((n) => used.add(n.type));
       if (!f.startsWith('examples/Dashboard 2/')) {
-        expect(flow.filter((n) => n.type.startsWith('ui-')), `${f} uses no third-party nodes`).to.deep.equal([]);
+        expect(
+          flow.filter((n) => n.type.startsWith('ui-')),
+          `${f} uses no third-party nodes`,
+        ).to.deep.equal([]);
       }
     }
     for (const type of Object.keys(pkg['node-red']?.nodes ?? {})) {
@@ -174,7 +199,7 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
     const readme = fs.readFileSync(path.join(pkgDir, 'README.md'), 'utf8');
     const sources = imageSources(readme);
     expect(sources, 'images in the README').not.to.deep.equal([]);
-    const url = typeof pkg.repository === 'string' ? pkg.repository : pkg.repository?.url ?? '';
+    const url = typeof pkg.repository === 'string' ? pkg.repository : (pkg.repository?.url ?? '');
     const repo = /github\.com\/([^/]+\/[^/.]+)/.exec(url)?.[1];
     for (const src of sources) {
       if (/^[a-z][a-z0-9+.-]*:/i.test(src)) {
@@ -192,7 +217,9 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
 
   it('ships the compiled library, the CLI and the docs, and no tests or sources', () => {
     expect(files).to.include.members(['dist/lib/index.js', 'dist/lib/index.d.ts', 'bin/plcwire.js', 'README.md']);
-    expect(files.filter((f) => f.startsWith('dist/test/') || f.startsWith('test/') || f.endsWith('.ts') && !f.endsWith('.d.ts'))).to.deep.equal([]);
+    expect(
+      files.filter((f) => f.startsWith('dist/test/') || f.startsWith('test/') || (f.endsWith('.ts') && !f.endsWith('.d.ts'))),
+    ).to.deep.equal([]);
   });
 });
 
@@ -214,7 +241,11 @@ function headingAnchors(markdown: string): Set<string> {
   const anchors = new Set<string>();
   const seen = new Map<string, number>();
   for (const m of proseOf(markdown).matchAll(/^#{1,6}\s+(.+?)\s*#*\s*$/gm)) {
-    const base = m[1]!.toLowerCase().replace(/[^\p{L}\p{N}\s_-]/gu, '').trim().replace(/\s/g, '-');
+    const base = m[1]!
+      .toLowerCase()
+      .replace(/[^\p{L}\p{N}\s_-]/gu, '')
+      .trim()
+      .replace(/\s/g, '-');
     const n = seen.get(base) ?? 0;
     seen.set(base, n + 1);
     anchors.add(n === 0 ? base : `${base}-${n}`);
@@ -224,7 +255,13 @@ function headingAnchors(markdown: string): Set<string> {
 
 describe('packaging: links of the README and docs/', () => {
   it('every relative link names a file of the repository, and every #anchor a heading of the file it points into', () => {
-    const pages = ['README.md', ...fs.readdirSync(path.join(ROOT, 'docs')).filter((f) => f.endsWith('.md')).map((f) => `docs/${f}`)];
+    const pages = [
+      'README.md',
+      ...fs
+        .readdirSync(path.join(ROOT, 'docs'))
+        .filter((f) => f.endsWith('.md'))
+        .map((f) => `docs/${f}`),
+    ];
     const broken: string[] = [];
     for (const page of pages) {
       const text = fs.readFileSync(path.join(ROOT, page), 'utf8');
@@ -263,12 +300,19 @@ function listFiles(dir: string): string[] {
 }
 
 describe('packaging: the Dashboard 2 example', () => {
-  it('is exactly the npm start demo flow on the demo plant\'s ports (regenerate with node demo/flows.js)', () => {
-    const { demoFlow, DEMO_URLS } = require(path.join(__dirname, '../../demo/flows.js')) as { demoFlow(u: unknown): unknown[]; DEMO_URLS: unknown };
+  it("is exactly the npm start demo flow on the demo plant's ports (regenerate with node demo/flows.js)", () => {
+    const { demoFlow, DEMO_URLS } = require(path.join(__dirname, '../../demo/flows.js')) as {
+      demoFlow(u: unknown): unknown[];
+      DEMO_URLS: unknown;
+    };
     const file = path.join(__dirname, '../../examples/Dashboard 2/Plant dashboard for all three protocols.json');
     const flow = JSON.parse(fs.readFileSync(file, 'utf8')) as { type: string; path?: string }[];
     expect(flow).to.deep.equal(demoFlow(DEMO_URLS));
-    for (const type of ['ui-base', 'ui-theme', 'ui-page', 'ui-group']) expect(flow.some((n) => n.type === type), type).to.equal(true);
+    for (const type of ['ui-base', 'ui-theme', 'ui-page', 'ui-group'])
+      expect(
+        flow.some((n) => n.type === type),
+        type,
+      ).to.equal(true);
     expect(flow.some((n) => n.type === 'comment' && /node-red-dashboard/.test((n as { name?: string }).name ?? ''))).to.equal(true);
   });
 });

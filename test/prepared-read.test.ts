@@ -325,7 +325,10 @@ describe('prepared reads (client.prepare) on freeport, in-process (@serialport/b
       retries: 1,
       interFrameGapMs: 0,
     };
-    client = new FreeportClient(endpoint, { binding: bus.mockBinding(MockBinding), backoff: { initialDelay: 10, maxDelay: 50, jitter: 0 } });
+    client = new FreeportClient(endpoint, {
+      binding: bus.mockBinding(MockBinding),
+      backoff: { initialDelay: 10, maxDelay: 50, jitter: 0 },
+    });
   });
 
   afterEach(async () => {

@@ -133,7 +133,7 @@ describe('S7 client against the S7 simulator', function () {
     session.onSend = counting;
   });
 
-  it('a poll\'s answers and values die young: nothing links one poll to the next', async () => {
+  it("a poll's answers and values die young: nothing links one poll to the next", async () => {
     // 1000 REALs 8 bytes apart: 10 PDUs at PDU 960, more than AmQ 8, so jobs keep entering and leaving the session.
     const big = new S7Server({ port: 0, profile: 's7-1500', memory: new PlcMemory({ dataBlocks: { 1: 8192 } }) });
     await big.listen();
@@ -155,7 +155,7 @@ describe('S7 client against the S7 simulator', function () {
     }
   });
 
-  it('writing a STRING keeps the PLC\'s max-length byte; a too-long value is refused before anything is sent', async () => {
+  it("writing a STRING keeps the PLC's max-length byte; a too-long value is refused before anything is sent", async () => {
     await client.connect();
     const db = server.memory.area('DB', 1)!;
     db[200] = 5;
@@ -425,7 +425,9 @@ describe('S7 client: items per job', function () {
     const limits: ItemLimitEvent[] = [];
     c.on('itemLimit', (e: ItemLimitEvent) => limits.push(e));
     const writes = new Map<string, number>();
-    server.memory.on('write', (w: { dbNumber: number; offset: number }) => writes.set(`${w.dbNumber}.${w.offset}`, (writes.get(`${w.dbNumber}.${w.offset}`) ?? 0) + 1));
+    server.memory.on('write', (w: { dbNumber: number; offset: number }) =>
+      writes.set(`${w.dbNumber}.${w.offset}`, (writes.get(`${w.dbNumber}.${w.offset}`) ?? 0) + 1),
+    );
     const list = scattered(30);
     const values = Object.fromEntries(list.map((a, i) => [a, 1000 + i]));
     const results = await c.writeDetailed(values);
@@ -470,7 +472,9 @@ describe('S7 client against hostile peers', function () {
         if (!handshake) return then(socket, chunk);
         if (stage === 0) {
           stage = 1;
-          socket.write(encodeConnectionConfirm({ sourceRef: 1, destinationRef: 1, callingTsap: 0x0100, calledTsap: 0x0301, tpduSize: 0x0a }));
+          socket.write(
+            encodeConnectionConfirm({ sourceRef: 1, destinationRef: 1, callingTsap: 0x0100, calledTsap: 0x0301, tpduSize: 0x0a }),
+          );
         } else if (stage === 1) {
           stage = 2;
           socket.write(encodeSetupAck(chunk.readUInt16BE(11), { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 }));

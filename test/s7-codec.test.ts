@@ -30,15 +30,29 @@ import { CAPTURE, DOC, HAND, hex, show } from './fixtures/s7';
 describe('S7 codec', () => {
   describe('the frames of docs/protocols.md', () => {
     it('encodes the connection request byte for byte (calling TSAP 0x1000, called 0x0301 = basic, rack 0 slot 1)', () => {
-      const frame = encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x1000, calledTsap: remoteTsapFor('basic', 0, 1), tpduSize: 0x0a });
+      const frame = encodeConnectionRequest({
+        sourceRef: 1,
+        callingTsap: 0x1000,
+        calledTsap: remoteTsapFor('basic', 0, 1),
+        tpduSize: 0x0a,
+      });
       expect(show(frame)).to.equal(show(DOC.connectionRequest));
-      expect(decodeCotp(DOC.connectionRequest)).to.deep.equal({ type: 'CR', sourceRef: 1, destinationRef: 0, callingTsap: 0x1000, calledTsap: 0x0301, tpduSize: 0x0a });
+      expect(decodeCotp(DOC.connectionRequest)).to.deep.equal({
+        type: 'CR',
+        sourceRef: 1,
+        destinationRef: 0,
+        callingTsap: 0x1000,
+        calledTsap: 0x0301,
+        tpduSize: 0x0a,
+      });
     });
 
     it('decodes the PLC connection confirm (byte 5 = 0xD0) and encodes it the same way', () => {
       const cc = decodeCotp(DOC.connectionConfirm);
       expect(cc).to.deep.equal({ type: 'CC', destinationRef: 1, sourceRef: 0x11, callingTsap: 0x1000, calledTsap: 0x0301, tpduSize: 0x0a });
-      expect(show(encodeConnectionConfirm({ destinationRef: 1, sourceRef: 0x11, callingTsap: 0x1000, calledTsap: 0x0301, tpduSize: 0x0a }))).to.equal(show(DOC.connectionConfirm));
+      expect(
+        show(encodeConnectionConfirm({ destinationRef: 1, sourceRef: 0x11, callingTsap: 0x1000, calledTsap: 0x0301, tpduSize: 0x0a })),
+      ).to.equal(show(DOC.connectionConfirm));
     });
 
     it('encodes setup communication byte for byte and decodes the negotiated PDU 240 from the answer', () => {
@@ -69,15 +83,29 @@ describe('S7 codec', () => {
 
   describe('frames of real peers', () => {
     it('encodes the S7-300 connection request (TPDU size first, called TSAP 0x0102 = PG rack 0 slot 2)', () => {
-      const frame = encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x0100, calledTsap: remoteTsapFor('pg', 0, 2), tpduSize: 0x0a }, 'size-first');
+      const frame = encodeConnectionRequest(
+        { sourceRef: 1, callingTsap: 0x0100, calledTsap: remoteTsapFor('pg', 0, 2), tpduSize: 0x0a },
+        'size-first',
+      );
       expect(show(frame)).to.equal(show(CAPTURE.connectionRequestSlot2));
-      expect(decodeCotp(CAPTURE.connectionRequestSlot2)).to.deep.include({ type: 'CR', callingTsap: 0x0100, calledTsap: 0x0102, tpduSize: 0x0a });
+      expect(decodeCotp(CAPTURE.connectionRequestSlot2)).to.deep.include({
+        type: 'CR',
+        callingTsap: 0x0100,
+        calledTsap: 0x0102,
+        tpduSize: 0x0a,
+      });
     });
 
     it('encodes setup communication asking for 480 and decodes an S7-1200 answering 240', () => {
       expect(show(encodeSetupCommunication(0, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 480 }))).to.equal(show(CAPTURE.setup480));
-      expect(show(encodeSetupCommunication(0x0400, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 480 }))).to.equal(show(CAPTURE.setup1200Request));
-      expect(decodeS7(CAPTURE.setup1200Ack)).to.deep.equal({ kind: 'setup-ack', pduRef: 0x0400, params: { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 } });
+      expect(show(encodeSetupCommunication(0x0400, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 480 }))).to.equal(
+        show(CAPTURE.setup1200Request),
+      );
+      expect(decodeS7(CAPTURE.setup1200Ack)).to.deep.equal({
+        kind: 'setup-ack',
+        pduRef: 0x0400,
+        params: { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 },
+      });
     });
 
     it('decodes the PUT/GET refusal of an S7-1200 and words it', () => {
@@ -87,29 +115,45 @@ describe('S7 codec', () => {
       const err = headerError(0x81, 0x04, 'read DB1,INT0');
       expect(err).to.be.instanceOf(PlcError);
       expect(err.code).to.equal('ACCESS_DENIED');
-      expect(err.message).to.equal('read DB1,INT0: the PLC answered 0x8104: function not supported or access denied: PUT/GET access is not enabled on this S7-1200/1500 (or the block is optimized)');
+      expect(err.message).to.equal(
+        'read DB1,INT0: the PLC answered 0x8104: function not supported or access denied: PUT/GET access is not enabled on this S7-1200/1500 (or the block is optimized)',
+      );
     });
 
     it('encodes an ack-data refusal that echoes the function with zero items', () => {
       expect(show(encodeErrorAck(5, 0x85, 0x00, 0x04))).to.equal('0300001502F08032030000000500020000850004' + '00');
-      expect(decodeS7(encodeErrorAck(5, 0x85, 0x00, 0x04))).to.deep.equal({ kind: 'error', pduRef: 5, errorClass: 0x85, errorCode: 0, rosctr: 3, func: 4 });
+      expect(decodeS7(encodeErrorAck(5, 0x85, 0x00, 0x04))).to.deep.equal({
+        kind: 'error',
+        pduRef: 5,
+        errorClass: 0x85,
+        errorCode: 0,
+        rosctr: 3,
+        func: 4,
+      });
     });
   });
 
   describe("snap7's server (an independent peer)", () => {
     it('decodes failed items sent as 05 00 00 04 with no data bytes, as snap7 does', () => {
       // Read ack of 3 items: ok INT (2 bytes), DB missing (0A 00 00 04, no data), ok BYTE. Data length 6 + 4 + 5 = 15.
-      const frame = hex('03 00 00 24 02 F0 80 32 03 00 00 00 07 00 02 00 0F 00 00 04 03' + 'FF 04 00 10 04 D2' + '0A 00 00 04' + 'FF 04 00 08 7E');
+      const frame = hex(
+        '03 00 00 24 02 F0 80 32 03 00 00 00 07 00 02 00 0F 00 00 04 03' + 'FF 04 00 10 04 D2' + '0A 00 00 04' + 'FF 04 00 08 7E',
+      );
       const ack = decodeS7(frame);
       expect(ack.kind).to.equal('read-ack');
       if (ack.kind !== 'read-ack') return;
-      expect(ack.items.map((i) => [i.returnCode, show(i.data)])).to.deep.equal([[0xff, '04D2'], [0x0a, ''], [0xff, '7E']]);
+      expect(ack.items.map((i) => [i.returnCode, show(i.data)])).to.deep.equal([
+        [0xff, '04D2'],
+        [0x0a, ''],
+        [0xff, '7E'],
+      ]);
     });
   });
 
   describe("in place: the client's read path (s7AnswerRef, scanReadAck)", () => {
     const table = (n: number): ReadItemTable => ({ code: new Uint8Array(n), start: new Int32Array(n), length: new Int32Array(n) });
-    const snap7Ack = () => hex('03 00 00 24 02 F0 80 32 03 00 00 00 07 00 02 00 0F 00 00 04 03' + 'FF 04 00 10 04 D2' + '0A 00 00 04' + 'FF 04 00 08 7E');
+    const snap7Ack = () =>
+      hex('03 00 00 24 02 F0 80 32 03 00 00 00 07 00 02 00 0F 00 00 04 03' + 'FF 04 00 10 04 D2' + '0A 00 00 04' + 'FF 04 00 08 7E');
 
     it("locates snap7's items (a failed one without data) where decodeS7 finds them, at an offset in the table", () => {
       const frame = snap7Ack();
@@ -154,11 +198,13 @@ describe('S7 codec', () => {
         ]),
       ];
       const seeds = [...readAcks, DOC.setupAck, HAND.writeAck, CAPTURE.putGetRefused];
-      const mutated = fc.tuple(fc.constantFrom(...seeds), fc.array(fc.tuple(fc.nat(60), fc.nat(255)), { maxLength: 4 }), fc.nat(60)).map(([seed, edits, cut]) => {
-        const b = Buffer.from(seed);
-        for (const [i, v] of edits) if (i < b.length) b[i] = v;
-        return b.subarray(0, Math.min(b.length, cut + 7));
-      });
+      const mutated = fc
+        .tuple(fc.constantFrom(...seeds), fc.array(fc.tuple(fc.nat(60), fc.nat(255)), { maxLength: 4 }), fc.nat(60))
+        .map(([seed, edits, cut]) => {
+          const b = Buffer.from(seed);
+          for (const [i, v] of edits) if (i < b.length) b[i] = v;
+          return b.subarray(0, Math.min(b.length, cut + 7));
+        });
       let taken = 0;
       fc.assert(
         fc.property(fc.oneof(mutated, fc.constantFrom(...readAcks)), fc.nat(6), (frame, count) => {
@@ -193,8 +239,18 @@ describe('S7 codec', () => {
     it('decodes a read ack with a fill byte after an odd item and a failed item', () => {
       const ack = decodeS7(HAND.readAckWithFill);
       if (ack.kind !== 'read-ack') throw new Error(ack.kind);
-      expect(ack.items.map((i) => [i.returnCode, i.transportSize, show(i.data)])).to.deep.equal([[0xff, 4, 'AA'], [0x0a, 0, '']]);
-      expect(show(encodeReadResponse(1, [{ returnCode: 0xff, transportSize: 4, data: hex('AA') }, { returnCode: 0x0a, transportSize: 0, data: Buffer.alloc(0) }]))).to.equal(show(HAND.readAckWithFill));
+      expect(ack.items.map((i) => [i.returnCode, i.transportSize, show(i.data)])).to.deep.equal([
+        [0xff, 4, 'AA'],
+        [0x0a, 0, ''],
+      ]);
+      expect(
+        show(
+          encodeReadResponse(1, [
+            { returnCode: 0xff, transportSize: 4, data: hex('AA') },
+            { returnCode: 0x0a, transportSize: 0, data: Buffer.alloc(0) },
+          ]),
+        ),
+      ).to.equal(show(HAND.readAckWithFill));
     });
 
     it('encodes and decodes a write ack with per-item return codes', () => {
@@ -233,7 +289,12 @@ describe('S7 codec', () => {
       const ack = decodeS7(frame);
       expect(ack.kind).to.equal('read-ack');
       if (ack.kind === 'read-ack') {
-        expect(ack.items.map((i) => [i.returnCode, show(i.data)])).to.deep.equal([[0xff, 'AA'], [0x0a, ''], [0xff, '01'], [0xff, 'BBCCDD']]);
+        expect(ack.items.map((i) => [i.returnCode, show(i.data)])).to.deep.equal([
+          [0xff, 'AA'],
+          [0x0a, ''],
+          [0xff, '01'],
+          [0xff, 'BBCCDD'],
+        ]);
       }
     });
 
@@ -341,7 +402,9 @@ describe('S7 codec', () => {
         }),
         { numRuns: 500 },
       );
-      const writeItem = fc.tuple(item, fc.constantFrom(0x04, 0x09, 0x07), fc.uint8Array({ maxLength: 40 })).map(([i, ts, d]) => ({ ...i, dataTransportSize: ts, data: Buffer.from(d) }));
+      const writeItem = fc
+        .tuple(item, fc.constantFrom(0x04, 0x09, 0x07), fc.uint8Array({ maxLength: 40 }))
+        .map(([i, ts, d]) => ({ ...i, dataTransportSize: ts, data: Buffer.from(d) }));
       fc.assert(
         fc.property(fc.array(writeItem, { maxLength: 10 }), (items: S7WriteItem[]) => {
           const msg = decodeS7(encodeWriteRequest(7, items));
@@ -351,7 +414,9 @@ describe('S7 codec', () => {
         { numRuns: 500 },
       );
       const responseItem = fc.oneof(
-        fc.tuple(fc.constantFrom(0x04, 0x05, 0x07, 0x09), fc.uint8Array({ maxLength: 40 })).map(([ts, d]) => ({ returnCode: 0xff, transportSize: ts, data: Buffer.from(d) })),
+        fc
+          .tuple(fc.constantFrom(0x04, 0x05, 0x07, 0x09), fc.uint8Array({ maxLength: 40 }))
+          .map(([ts, d]) => ({ returnCode: 0xff, transportSize: ts, data: Buffer.from(d) })),
         fc.constantFrom(0x01, 0x03, 0x05, 0x06, 0x07, 0x0a).map((rc) => ({ returnCode: rc, transportSize: 0, data: Buffer.alloc(0) })),
       );
       fc.assert(
@@ -366,25 +431,33 @@ describe('S7 codec', () => {
 
     it('property: any bytes decode to a message or a ProtocolError, never anything else', () => {
       const seeds = [DOC.setupAck, DOC.read, DOC.write, encodeWriteResponse(1, [0xff]), encodeErrorAck(2, 0x85, 0)];
-      const mutated = fc.tuple(fc.constantFrom(...seeds), fc.array(fc.tuple(fc.nat(80), fc.nat(255)), { maxLength: 6 }), fc.nat(90)).map(([seed, edits, cut]) => {
-        const b = Buffer.from(seed);
-        for (const [i, v] of edits) if (i < b.length) b[i] = v;
-        return b.subarray(0, Math.min(b.length, cut + 7));
-      });
+      const mutated = fc
+        .tuple(fc.constantFrom(...seeds), fc.array(fc.tuple(fc.nat(80), fc.nat(255)), { maxLength: 6 }), fc.nat(90))
+        .map(([seed, edits, cut]) => {
+          const b = Buffer.from(seed);
+          for (const [i, v] of edits) if (i < b.length) b[i] = v;
+          return b.subarray(0, Math.min(b.length, cut + 7));
+        });
       fc.assert(
-        fc.property(fc.oneof(mutated, fc.uint8Array({ maxLength: 80 }).map((a) => Buffer.from(a))), (frame) => {
-          try {
-            decodeS7(frame);
-          } catch (err) {
-            if (!(err instanceof PlcError)) throw err;
-          }
-          try {
-            decodeCotp(frame);
-          } catch (err) {
-            if (!(err instanceof PlcError)) throw err;
-          }
-          checkTpkt(frame);
-        }),
+        fc.property(
+          fc.oneof(
+            mutated,
+            fc.uint8Array({ maxLength: 80 }).map((a) => Buffer.from(a)),
+          ),
+          (frame) => {
+            try {
+              decodeS7(frame);
+            } catch (err) {
+              if (!(err instanceof PlcError)) throw err;
+            }
+            try {
+              decodeCotp(frame);
+            } catch (err) {
+              if (!(err instanceof PlcError)) throw err;
+            }
+            checkTpkt(frame);
+          },
+        ),
         { numRuns: 20000 },
       );
     });

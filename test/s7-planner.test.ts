@@ -2,7 +2,16 @@ import { expect } from 'chai';
 import fc from 'fast-check';
 import { parseAddress } from '../lib/address';
 import { S7Area, TransportSize, DataTransportSize } from '../lib/s7/constants';
-import { maxReadItemData, maxReadItems, maxWriteItemData, planRead, planWrite, ReadPlanCache, tagData, type ReadPlan } from '../lib/s7/plan';
+import {
+  maxReadItemData,
+  maxReadItems,
+  maxWriteItemData,
+  planRead,
+  planWrite,
+  ReadPlanCache,
+  tagData,
+  type ReadPlan,
+} from '../lib/s7/plan';
 import { lowerBoundPdus } from '../lib/s7/plan/bound';
 import type { Tag } from '../lib/types';
 
@@ -63,9 +72,15 @@ function checkCoverage(list: readonly Tag[], plan: ReadPlan): void {
 }
 
 const addressArb = fc.oneof(
-  fc.tuple(fc.integer({ min: 1, max: 3 }), fc.integer({ min: 0, max: 3000 }), fc.constantFrom('INT', 'REAL', 'B', 'LREAL', 'DINT')).map(([db, off, t]) => `DB${db},${t}${off}`),
-  fc.tuple(fc.integer({ min: 1, max: 3 }), fc.integer({ min: 0, max: 3000 }), fc.integer({ min: 0, max: 7 })).map(([db, off, bit]) => `DB${db},X${off}.${bit}`),
-  fc.tuple(fc.integer({ min: 1, max: 2 }), fc.integer({ min: 0, max: 3000 }), fc.constantFrom(1, 20, 40, 200, 254)).map(([db, off, n]) => `DB${db},S${off}.${n}`),
+  fc
+    .tuple(fc.integer({ min: 1, max: 3 }), fc.integer({ min: 0, max: 3000 }), fc.constantFrom('INT', 'REAL', 'B', 'LREAL', 'DINT'))
+    .map(([db, off, t]) => `DB${db},${t}${off}`),
+  fc
+    .tuple(fc.integer({ min: 1, max: 3 }), fc.integer({ min: 0, max: 3000 }), fc.integer({ min: 0, max: 7 }))
+    .map(([db, off, bit]) => `DB${db},X${off}.${bit}`),
+  fc
+    .tuple(fc.integer({ min: 1, max: 2 }), fc.integer({ min: 0, max: 3000 }), fc.constantFrom(1, 20, 40, 200, 254))
+    .map(([db, off, n]) => `DB${db},S${off}.${n}`),
   fc.tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: 1, max: 300 })).map(([off, n]) => `DB4,BYTE${off}.${n}`),
   fc.integer({ min: 0, max: 200 }).map((n) => `MW${n}`),
   fc.integer({ min: 0, max: 60 }).map((n) => `I${n}.${n % 8}`),
@@ -92,7 +107,14 @@ describe('S7 planner: reads', () => {
 
   it('read items are shaped for the codec: BYTE transport, bit address, count in bytes', () => {
     const plan = planRead(tags(['DB200,B2']), 240);
-    expect(plan.pdus[0]!.items[0]).to.deep.equal({ area: 0x84, dbNumber: 200, transportSize: TransportSize.BYTE, count: 1, address: 16, length: 1 });
+    expect(plan.pdus[0]!.items[0]).to.deep.equal({
+      area: 0x84,
+      dbNumber: 200,
+      transportSize: TransportSize.BYTE,
+      count: 1,
+      address: 16,
+      length: 1,
+    });
   });
 
   it('counters and timers are read as COUNTER/TIMER items addressed by number, 2 bytes each', () => {
@@ -152,14 +174,20 @@ describe('S7 planner: reads', () => {
   it('property: every plan respects both limits and the item limit, covers each tag exactly once, reassembles its bytes, and needs no fewer PDUs than the lower bound', () => {
     const limits = fc.constantFrom(undefined, 20, 7, 1);
     fc.assert(
-      fc.property(fc.array(addressArb, { minLength: 1, maxLength: 150 }), fc.constantFrom(240, 480, 960), fc.boolean(), limits, (addresses, pdu, merge, maxItems) => {
-        const list = addresses.map(parseAddress);
-        const options = maxItems === undefined ? {} : { maxItems };
-        const plan = planRead(list, pdu, { merge, ...options });
-        checkReadLimits(plan, pdu, maxItems);
-        checkCoverage(list, plan);
-        expect(plan.pdus.length).to.be.at.least(lowerBoundPdus(list, pdu, options));
-      }),
+      fc.property(
+        fc.array(addressArb, { minLength: 1, maxLength: 150 }),
+        fc.constantFrom(240, 480, 960),
+        fc.boolean(),
+        limits,
+        (addresses, pdu, merge, maxItems) => {
+          const list = addresses.map(parseAddress);
+          const options = maxItems === undefined ? {} : { maxItems };
+          const plan = planRead(list, pdu, { merge, ...options });
+          checkReadLimits(plan, pdu, maxItems);
+          checkCoverage(list, plan);
+          expect(plan.pdus.length).to.be.at.least(lowerBoundPdus(list, pdu, options));
+        },
+      ),
       { numRuns: 300 },
     );
   });
@@ -185,7 +213,12 @@ describe('S7 planner: reads', () => {
     let offset = 0;
     const scattered = Array.from({ length: 1000 }, (_, i) => {
       const kind = kinds[i % 4]!;
-      const tag = kind === 'X' ? parseAddress(`DB1,X${offset}.${i % 8}`) : kind === 'S' ? parseAddress(`DB1,S${offset}.20`) : parseAddress(`DB1,${kind}${offset}`);
+      const tag =
+        kind === 'X'
+          ? parseAddress(`DB1,X${offset}.${i % 8}`)
+          : kind === 'S'
+            ? parseAddress(`DB1,S${offset}.20`)
+            : parseAddress(`DB1,${kind}${offset}`);
       offset += tag.byteLength + (i % 3) * 2 + 2;
       return tag;
     });
@@ -198,7 +231,10 @@ describe('S7 planner: reads', () => {
           checkReadLimits(plan, pdu, options.maxItems);
           // The bound may cut a tag across PDUs; the planner never does (its halves could come from two PLC cycles).
           const slack = list === scattered && pdu === 240 ? 1 : 0;
-          expect(plan.pdus.length, `${list.length} tags at PDU ${pdu}, ${options.maxItems ?? 255} items`).to.be.within(bound, bound + slack);
+          expect(plan.pdus.length, `${list.length} tags at PDU ${pdu}, ${options.maxItems ?? 255} items`).to.be.within(
+            bound,
+            bound + slack,
+          );
         }
       }
     }
@@ -226,10 +262,13 @@ describe('S7 planner: packing out of address order', () => {
 
   it('property: on dense scattered tables every plan respects both limits and covers each tag exactly once, in or out of order', () => {
     let reordered = 0;
-    const dense = fc.array(fc.tuple(fc.constantFrom('INT', 'REAL', 'X', 'S', 'B', 'MW', 'C'), fc.integer({ min: 0, max: 14 }), fc.integer({ min: 1, max: 3 })), {
-      minLength: 150,
-      maxLength: 400,
-    });
+    const dense = fc.array(
+      fc.tuple(fc.constantFrom('INT', 'REAL', 'X', 'S', 'B', 'MW', 'C'), fc.integer({ min: 0, max: 14 }), fc.integer({ min: 1, max: 3 })),
+      {
+        minLength: 150,
+        maxLength: 400,
+      },
+    );
     fc.assert(
       fc.property(dense, fc.constantFrom(19, 12), (parts, maxItems) => {
         const at = new Map<string, number>();
@@ -238,7 +277,17 @@ describe('S7 planner: packing out of address order', () => {
           const area = kind === 'MW' ? 'M' : kind === 'C' ? 'C' : `DB${db}`;
           const offset = (at.get(area) ?? 0) + (kind === 'C' ? gap % 3 : gap);
           const address =
-            kind === 'MW' ? `MW${offset}` : kind === 'C' ? `C${offset}` : kind === 'X' ? `DB${db},X${offset}.${i % 8}` : kind === 'S' ? `DB${db},S${offset}.${(gap % 4) * 5 + 1}` : kind === 'B' ? `DB${db},BYTE${offset}` : `DB${db},${kind}${offset}`;
+            kind === 'MW'
+              ? `MW${offset}`
+              : kind === 'C'
+                ? `C${offset}`
+                : kind === 'X'
+                  ? `DB${db},X${offset}.${i % 8}`
+                  : kind === 'S'
+                    ? `DB${db},S${offset}.${(gap % 4) * 5 + 1}`
+                    : kind === 'B'
+                      ? `DB${db},BYTE${offset}`
+                      : `DB${db},${kind}${offset}`;
           const tag = parseAddress(address);
           at.set(area, offset + (kind === 'C' ? tag.count : tag.byteLength));
           return tag;
@@ -259,9 +308,19 @@ describe('S7 planner: lower bound', () => {
   it('counts response bytes per PDU and items per request', () => {
     expect(lowerBoundPdus([], 240)).to.equal(0);
     // 1000 contiguous INTs: 2000 bytes need 10 items of ≤ 222 → 2040 bytes over 226 per PDU → 10.
-    expect(lowerBoundPdus(Array.from({ length: 1000 }, (_, i) => parseAddress(`DB1,INT${i * 2}`)), 240)).to.equal(10);
+    expect(
+      lowerBoundPdus(
+        Array.from({ length: 1000 }, (_, i) => parseAddress(`DB1,INT${i * 2}`)),
+        240,
+      ),
+    ).to.equal(10);
     // 40 INTs in 40 DBs: 40 items, 19 per request → 3.
-    expect(lowerBoundPdus(Array.from({ length: 40 }, (_, i) => parseAddress(`DB${i + 1},INT0`)), 240)).to.equal(3);
+    expect(
+      lowerBoundPdus(
+        Array.from({ length: 40 }, (_, i) => parseAddress(`DB${i + 1},INT0`)),
+        240,
+      ),
+    ).to.equal(3);
     // STRING[254]: 256 bytes need 2 items → 264 bytes > 226.
     expect(lowerBoundPdus(tags(['DB1,S0.254']), 240)).to.equal(2);
     // 100 INTs 10 bytes apart: 3 PDUs hold 57 items, so 43 gaps of 8 bytes are bridged: 200 + 344 + 228 > 3 × 226 → 4.
@@ -292,7 +351,9 @@ describe('S7 planner: lower bound', () => {
         let at = 0;
         const list = parts.map(([kind, gap]) => {
           at += gap;
-          const tag = parseAddress(kind === 'X' ? `DB1,X${at}.${gap % 8}` : kind === 'B' ? `DB1,BYTE${at}` : `DB1,S${at}.${(gap % 5) * 2 + 1}`);
+          const tag = parseAddress(
+            kind === 'X' ? `DB1,X${at}.${gap % 8}` : kind === 'B' ? `DB1,BYTE${at}` : `DB1,S${at}.${(gap % 5) * 2 + 1}`,
+          );
           at += tag.byteLength;
           return tag;
         });
@@ -345,7 +406,13 @@ describe('S7 planner: plan cache', () => {
 
 describe('S7 planner: writes', () => {
   it('writes each bit as its own BIT item, never a byte', () => {
-    const plan = planWrite([{ tag: parseAddress('DB1,X12.2'), value: true }, { tag: parseAddress('DB1.DBX0.6:BOOL[3]'), value: [true, false, true] }], 240);
+    const plan = planWrite(
+      [
+        { tag: parseAddress('DB1,X12.2'), value: true },
+        { tag: parseAddress('DB1.DBX0.6:BOOL[3]'), value: [true, false, true] },
+      ],
+      240,
+    );
     const items = plan.pdus.flatMap((p) => p.items);
     expect(items).to.have.length(4);
     for (const it of items) {
@@ -369,8 +436,14 @@ describe('S7 planner: writes', () => {
     expect(item!.data.toString('hex')).to.equal('03616263');
   });
 
-  it('reports a value that does not fit as that tag\'s error and sends the others', () => {
-    const plan = planWrite([{ tag: parseAddress('DB1,INT0'), value: 70000 }, { tag: parseAddress('DB1,INT2'), value: 5 }], 240);
+  it("reports a value that does not fit as that tag's error and sends the others", () => {
+    const plan = planWrite(
+      [
+        { tag: parseAddress('DB1,INT0'), value: 70000 },
+        { tag: parseAddress('DB1,INT2'), value: 5 },
+      ],
+      240,
+    );
     expect(plan.errors[0]?.code).to.equal('INVALID_VALUE');
     expect(plan.errors[0]?.message).to.contain('DB1,INT0');
     expect(plan.errors[1]).to.equal(undefined);
@@ -390,16 +463,26 @@ describe('S7 planner: writes', () => {
   it('property: write PDUs respect 12 + 12·items + Σ(4 + data + fill) ≤ PDU, 14 + items ≤ PDU and the item limit', () => {
     const writeArb = fc.array(
       fc.oneof(
-        fc.tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: -32768, max: 32767 })).map(([o, v]) => ({ a: `DB1,INT${o}`, v: v as unknown })),
+        fc
+          .tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: -32768, max: 32767 }))
+          .map(([o, v]) => ({ a: `DB1,INT${o}`, v: v as unknown })),
         fc.tuple(fc.integer({ min: 0, max: 500 }), fc.boolean()).map(([o, v]) => ({ a: `DB1,X${o}.3`, v: v as unknown })),
-        fc.tuple(fc.integer({ min: 0, max: 500 }), fc.string({ maxLength: 254 })).map(([o, v]) => ({ a: `DB2,S${o}.254`, v: v.replace(/[^\x20-\x7e]/g, 'x') as unknown })),
-        fc.tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: 1, max: 600 })).map(([o, n]) => ({ a: `DB3,BYTE${o}.${n}`, v: new Array(n).fill(7) as unknown })),
+        fc
+          .tuple(fc.integer({ min: 0, max: 500 }), fc.string({ maxLength: 254 }))
+          .map(([o, v]) => ({ a: `DB2,S${o}.254`, v: v.replace(/[^\x20-\x7e]/g, 'x') as unknown })),
+        fc
+          .tuple(fc.integer({ min: 0, max: 500 }), fc.integer({ min: 1, max: 600 }))
+          .map(([o, n]) => ({ a: `DB3,BYTE${o}.${n}`, v: new Array(n).fill(7) as unknown })),
       ),
       { minLength: 1, maxLength: 80 },
     );
     fc.assert(
       fc.property(writeArb, fc.constantFrom(240, 480, 960), fc.constantFrom(undefined, 20, 3), (writes, pdu, maxItems) => {
-        const plan = planWrite(writes.map((w) => ({ tag: parseAddress(w.a), value: w.v })), pdu, maxItems === undefined ? {} : { maxItems });
+        const plan = planWrite(
+          writes.map((w) => ({ tag: parseAddress(w.a), value: w.v })),
+          pdu,
+          maxItems === undefined ? {} : { maxItems },
+        );
         expect(plan.errors.every((e) => e === undefined)).to.equal(true);
         const perTag = new Map<number, number>();
         for (const p of plan.pdus) {
@@ -409,7 +492,9 @@ describe('S7 planner: writes', () => {
           expect(14 + p.items.length).to.be.at.most(pdu);
           expect(p.items.length).to.be.within(1, maxItems ?? 255);
           expect(p.requestSize).to.equal(request);
-          p.items.forEach((it, i) => perTag.set(p.tags[i]!, (perTag.get(p.tags[i]!) ?? 0) + (it.dataTransportSize === DataTransportSize.BIT ? 1 : it.data.length)));
+          p.items.forEach((it, i) =>
+            perTag.set(p.tags[i]!, (perTag.get(p.tags[i]!) ?? 0) + (it.dataTransportSize === DataTransportSize.BIT ? 1 : it.data.length)),
+          );
         }
         writes.forEach((w, i) => {
           const tag = parseAddress(w.a);

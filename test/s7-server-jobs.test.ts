@@ -18,20 +18,30 @@ describe('S7 simulator job service (properties)', () => {
   });
   const seeds = fc.oneof(
     fc.array(item, { maxLength: 25 }).map((items: S7Item[]) => encodeReadRequest(1, items)),
-    fc
-      .array(fc.tuple(item, fc.constantFrom(0x03, 0x04, 0x05, 0x07, 0x09), fc.uint8Array({ maxLength: 9 })), { maxLength: 10 })
-      .map((xs) => encodeWriteRequest(2, xs.map(([i, ts, d]) => ({ ...i, dataTransportSize: ts, data: Buffer.from(d) })))),
+    fc.array(fc.tuple(item, fc.constantFrom(0x03, 0x04, 0x05, 0x07, 0x09), fc.uint8Array({ maxLength: 9 })), { maxLength: 10 }).map((xs) =>
+      encodeWriteRequest(
+        2,
+        xs.map(([i, ts, d]) => ({ ...i, dataTransportSize: ts, data: Buffer.from(d) })),
+      ),
+    ),
     fc.constant(DOC.read),
     fc.constant(DOC.write),
     // 25 items do not fit a PDU of 240: the header-error path is always in reach
-    fc.constant(encodeReadRequest(3, Array.from({ length: 25 }, (_, i) => ({ area: 0x84, dbNumber: 1, transportSize: 0x02, count: 1, address: i * 8 })))),
+    fc.constant(
+      encodeReadRequest(
+        3,
+        Array.from({ length: 25 }, (_, i) => ({ area: 0x84, dbNumber: 1, transportSize: 0x02, count: 1, address: i * 8 })),
+      ),
+    ),
   );
-  const frames = fc.tuple(seeds, fc.array(fc.tuple(fc.nat(300), fc.nat(255)), { maxLength: 4 }), fc.boolean()).map(([seed, edits, keepHeader]) => {
-    const b = Buffer.from(seed);
-    // keep the first 19 bytes (TPKT, COTP, S7 header, function) when asked, so mutations reach the items
-    for (const [i, v] of edits) if (i < b.length && (!keepHeader || i >= 19)) b[i] = v;
-    return b;
-  });
+  const frames = fc
+    .tuple(seeds, fc.array(fc.tuple(fc.nat(300), fc.nat(255)), { maxLength: 4 }), fc.boolean())
+    .map(([seed, edits, keepHeader]) => {
+      const b = Buffer.from(seed);
+      // keep the first 19 bytes (TPKT, COTP, S7 header, function) when asked, so mutations reach the items
+      for (const [i, v] of edits) if (i < b.length && (!keepHeader || i >= 19)) b[i] = v;
+      return b;
+    });
 
   it('answers every job with a frame decodeS7 accepts (same PDU ref, one result per item), or throws ProtocolError', () => {
     const seen = { 'read-ack': 0, 'write-ack': 0, error: 0, thrown: 0 };

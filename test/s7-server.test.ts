@@ -79,7 +79,10 @@ class RawPeer {
 
   async closedWithin(ms = 2000): Promise<void> {
     let t: NodeJS.Timeout | undefined;
-    await Promise.race([this.closedPromise, new Promise((_, reject) => (t = setTimeout(() => reject(new Error(`still open after ${ms} ms`)), ms)))]);
+    await Promise.race([
+      this.closedPromise,
+      new Promise((_, reject) => (t = setTimeout(() => reject(new Error(`still open after ${ms} ms`)), ms))),
+    ]);
     clearTimeout(t);
   }
 
@@ -95,7 +98,11 @@ interface Handshake {
   amq: number;
 }
 
-async function connectCotp(port: number, calledTsap = remoteTsapFor('pg', 0, 1), tpduSize = 0x0a): Promise<{ peer: RawPeer; cc: CotpMessage }> {
+async function connectCotp(
+  port: number,
+  calledTsap = remoteTsapFor('pg', 0, 1),
+  tpduSize = 0x0a,
+): Promise<{ peer: RawPeer; cc: CotpMessage }> {
   const peer = new RawPeer(port);
   peer.send(encodeConnectionRequest({ sourceRef: 0x0042, callingTsap: 0x0100, calledTsap, tpduSize }));
   return { peer, cc: decodeCotp(await peer.next()) };
@@ -110,7 +117,13 @@ async function handshake(port: number, pduSize = 960, amq = 8, calledTsap?: numb
   return { peer, cc, pduSize: ack.params.pduSize, amq: ack.params.maxAmqCalling };
 }
 
-const db = (dbNumber: number, byte: number, transportSize = 0x02, count = 1, bit = 0): S7Item => ({ area: 0x84, dbNumber, transportSize, count, address: byte * 8 + bit });
+const db = (dbNumber: number, byte: number, transportSize = 0x02, count = 1, bit = 0): S7Item => ({
+  area: 0x84,
+  dbNumber,
+  transportSize,
+  count,
+  address: byte * 8 + bit,
+});
 const write = (item: S7Item, data: Buffer, dataTransportSize = 0x04): S7WriteItem => ({ ...item, dataTransportSize, data });
 
 describe('S7Server', () => {
@@ -122,7 +135,10 @@ describe('S7Server', () => {
     await server.listen();
     return server;
   }
-  async function open(server: S7Server, ...args: Parameters<typeof handshake> extends [number, ...infer R] ? R : never): Promise<Handshake> {
+  async function open(
+    server: S7Server,
+    ...args: Parameters<typeof handshake> extends [number, ...infer R] ? R : never
+  ): Promise<Handshake> {
     const h = await handshake(server.port, ...args);
     peers.push(h.peer);
     return h;
@@ -139,7 +155,14 @@ describe('S7Server', () => {
       const counted = waitFor<number>(server, 'connection');
       const { peer, cc } = await connectCotp(server.port);
       peers.push(peer);
-      expect(cc).to.deep.equal({ type: 'CC', destinationRef: 0x0042, sourceRef: 1, callingTsap: 0x0100, calledTsap: 0x0101, tpduSize: 0x0a });
+      expect(cc).to.deep.equal({
+        type: 'CC',
+        destinationRef: 0x0042,
+        sourceRef: 1,
+        callingTsap: 0x0100,
+        calledTsap: 0x0101,
+        tpduSize: 0x0a,
+      });
       expect(await counted).to.equal(1);
       expect(server.connectionCount).to.equal(1);
     });
@@ -229,8 +252,22 @@ describe('S7Server', () => {
   describe('TSAP-addressed CPUs: s7-200 (CP 243-1) and logo', () => {
     // The TSAP pair each profile accepts, as a client URL gives it (local = calling, remote = called).
     const cases = [
-      { profile: 's7-200', tsaps: 'localTsap=1000&remoteTsap=1001', called: 0x1001, calling: 0x4d57, wrong: ['localTsap=1000&remoteTsap=0301', 'localTsap=1000&remoteTsap=1801'], vBytes: 10240 },
-      { profile: 'logo', tsaps: 'localTsap=0100&remoteTsap=0200', called: 0x0200, calling: 0x0100, wrong: ['localTsap=0100&remoteTsap=0201', 'localTsap=1000&remoteTsap=0200'], vBytes: 1470 },
+      {
+        profile: 's7-200',
+        tsaps: 'localTsap=1000&remoteTsap=1001',
+        called: 0x1001,
+        calling: 0x4d57,
+        wrong: ['localTsap=1000&remoteTsap=0301', 'localTsap=1000&remoteTsap=1801'],
+        vBytes: 10240,
+      },
+      {
+        profile: 'logo',
+        tsaps: 'localTsap=0100&remoteTsap=0200',
+        called: 0x0200,
+        calling: 0x0100,
+        wrong: ['localTsap=0100&remoteTsap=0201', 'localTsap=1000&remoteTsap=0200'],
+        vBytes: 1470,
+      },
     ] as const;
     const clients: S7Client[] = [];
     const client = (port: number, query: string) => {
@@ -248,7 +285,12 @@ describe('S7Server', () => {
       servers.push(server);
       await server.listen();
       await client(server.port, 'localTsap=1000&remoteTsap=2000').connect();
-      const err = await client(server.port, 'localTsap=0100&remoteTsap=0200').connect().then(() => undefined, (e: unknown) => e);
+      const err = await client(server.port, 'localTsap=0100&remoteTsap=0200')
+        .connect()
+        .then(
+          () => undefined,
+          (e: unknown) => e,
+        );
       expect((err as PlcError).code).to.equal('CONNECT_FAILED');
       expect(server.memory.area('DB', 1)!.length).to.equal(1470);
     });
@@ -265,7 +307,11 @@ describe('S7Server', () => {
           expect(v.length).to.equal(vBytes);
           expect([v.readUInt16BE(10), v[20], v.readUInt32BE(30)]).to.deep.equal([64302, 0b1000, 0xdeadbeef]);
           v.writeUInt16BE(4321, vBytes - 2);
-          expect(await c.read([`VW${vBytes - 2}`, 'VW10', 'V20.3'])).to.deep.equal({ [`VW${vBytes - 2}`]: 4321, VW10: 64302, 'V20.3': true });
+          expect(await c.read([`VW${vBytes - 2}`, 'VW10', 'V20.3'])).to.deep.equal({
+            [`VW${vBytes - 2}`]: 4321,
+            VW10: 64302,
+            'V20.3': true,
+          });
         });
 
         it('has V as its only DB and refuses the S5 counters and timers (0x03)', async () => {
@@ -273,8 +319,17 @@ describe('S7Server', () => {
           const c = client(server.port, tsaps);
           await c.connect();
           const r = await c.readDetailed(['DB2,INT0', `VB${vBytes}`, 'C0', 'T0', 'VB0']);
-          const code = (a: string) => { const x = r[a]!; return x.ok ? 'ok' : x.error.code; };
-          expect(['DB2,INT0', `VB${vBytes}`, 'C0', 'T0', 'VB0'].map(code)).to.deep.equal(['OBJECT_DOES_NOT_EXIST', 'ADDRESS_OUT_OF_RANGE', 'ACCESS_DENIED', 'ACCESS_DENIED', 'ok']);
+          const code = (a: string) => {
+            const x = r[a]!;
+            return x.ok ? 'ok' : x.error.code;
+          };
+          expect(['DB2,INT0', `VB${vBytes}`, 'C0', 'T0', 'VB0'].map(code)).to.deep.equal([
+            'OBJECT_DOES_NOT_EXIST',
+            'ADDRESS_OUT_OF_RANGE',
+            'ACCESS_DENIED',
+            'ACCESS_DENIED',
+            'ok',
+          ]);
         });
 
         it('refuses a connection request with other TSAPs (rack/slot ones too) with a COTP DR, address unknown', async () => {
@@ -282,7 +337,12 @@ describe('S7Server', () => {
           const reasons: S7RefusedEvent['reason'][] = [];
           server.on('refused', (e: S7RefusedEvent) => reasons.push(e.reason));
           for (const query of [...wrong, 'rack=0&slot=1', 'rack=0&slot=2']) {
-            const err = await client(server.port, query).connect().then(() => undefined, (e: unknown) => e);
+            const err = await client(server.port, query)
+              .connect()
+              .then(
+                () => undefined,
+                (e: unknown) => e,
+              );
             expect(err, query).to.be.instanceOf(PlcError);
             expect((err as PlcError).code, query).to.equal('CONNECT_FAILED');
           }
@@ -439,8 +499,16 @@ describe('S7Server', () => {
         ),
       );
       expect(show(await peer.next())).to.equal(
-        '03000031' + '02F080' + '320300000005000200' + '1C0000' + '0405' +
-          'FF0900020123' + 'FF09000421000010' + '05000000' + '05000000' + 'FF0900020040',
+        '03000031' +
+          '02F080' +
+          '320300000005000200' +
+          '1C0000' +
+          '0405' +
+          'FF0900020123' +
+          'FF09000421000010' +
+          '05000000' +
+          '05000000' +
+          'FF0900020040',
       );
       peer.send(
         hex(
@@ -458,7 +526,15 @@ describe('S7Server', () => {
     it('uses a JSON layout: only the DBs listed exist, with their sizes', async () => {
       const server = await start('s7-1500', { layout: { dbs: { '1': 16, '7': 4 }, areas: { M: 8 } } });
       const { peer } = await open(server);
-      peer.send(encodeReadRequest(1, [db(1, 15), db(2, 0), db(7, 3), db(7, 4), { area: 0x83, dbNumber: 0, transportSize: 0x02, count: 1, address: 8 * 8 }]));
+      peer.send(
+        encodeReadRequest(1, [
+          db(1, 15),
+          db(2, 0),
+          db(7, 3),
+          db(7, 4),
+          { area: 0x83, dbNumber: 0, transportSize: 0x02, count: 1, address: 8 * 8 },
+        ]),
+      );
       const ack = await peer.nextS7();
       if (ack.kind !== 'read-ack') throw new Error(ack.kind);
       expect(ack.items.map((i) => i.returnCode)).to.deep.equal([0xff, 0x0a, 0xff, 0x05, 0x05]);
@@ -619,27 +695,42 @@ describe('S7Server', () => {
     const hostile: [string, (h: Handshake) => Buffer][] = [
       ['a TPKT version 4', () => hex('04 00 00 10 02 F0 80 32 01 00 00 00 01 00 00 00 00')],
       ['a TPKT length below a COTP header', () => hex('03 00 00 03')],
-      ['an S7 protocol id that is not 0x32', () => {
-        const f = encodeReadRequest(1, [db(1, 0)]);
-        f[7] = 0x72;
-        return f;
-      }],
-      ['parameter lengths that do not add up', () => {
-        const f = encodeReadRequest(1, [db(1, 0)]);
-        f.writeUInt16BE(40, 13);
-        return f;
-      }],
-      ['an item that is not S7ANY', () => {
-        const f = encodeReadRequest(1, [db(1, 0)]);
-        f[19] = 0x11;
-        return f;
-      }],
-      ['a write whose data item is truncated', () => {
-        const f = encodeWriteRequest(1, [write(db(1, 0, 0x02, 2), hex('0102'))]);
-        f.writeUInt16BE(0x0100, f.length - 4); // announces 32 bytes
-        return f;
-      }],
-      ['a second connection request', () => encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x100, calledTsap: 0x101, tpduSize: 0x0a })],
+      [
+        'an S7 protocol id that is not 0x32',
+        () => {
+          const f = encodeReadRequest(1, [db(1, 0)]);
+          f[7] = 0x72;
+          return f;
+        },
+      ],
+      [
+        'parameter lengths that do not add up',
+        () => {
+          const f = encodeReadRequest(1, [db(1, 0)]);
+          f.writeUInt16BE(40, 13);
+          return f;
+        },
+      ],
+      [
+        'an item that is not S7ANY',
+        () => {
+          const f = encodeReadRequest(1, [db(1, 0)]);
+          f[19] = 0x11;
+          return f;
+        },
+      ],
+      [
+        'a write whose data item is truncated',
+        () => {
+          const f = encodeWriteRequest(1, [write(db(1, 0, 0x02, 2), hex('0102'))]);
+          f.writeUInt16BE(0x0100, f.length - 4); // announces 32 bytes
+          return f;
+        },
+      ],
+      [
+        'a second connection request',
+        () => encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x100, calledTsap: 0x101, tpduSize: 0x0a }),
+      ],
       ['a second setup communication', () => encodeSetupCommunication(1, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 240 })],
     ];
     for (const [what, frame] of hostile) {

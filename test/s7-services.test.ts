@@ -23,7 +23,11 @@ describe('S7 system services: client against the simulator', function () {
   const open: { close(): Promise<void> }[] = [];
   let requests: S7RequestEvent[];
 
-  async function start(profile: S7Profile = 's7-300', query = '', layout?: Record<number, number>): Promise<{ server: S7Server; client: S7Client }> {
+  async function start(
+    profile: S7Profile = 's7-300',
+    query = '',
+    layout?: Record<number, number>,
+  ): Promise<{ server: S7Server; client: S7Client }> {
     const server = new S7Server({ port: 0, profile, ...(layout ? { layout: { dataBlocks: layout } } : {}) });
     await server.listen();
     open.push(server);
@@ -60,13 +64,23 @@ describe('S7 system services: client against the simulator', function () {
     });
 
     it('an identity given to the server is what info() reads (S7-1500 profile)', async () => {
-      const server = new S7Server({ port: 0, profile: 's7-1500', identity: { asName: 'LINE 4 PRESS', serialNumber: 'S V-L4P000001', firmware: 'V3.1.0' } });
+      const server = new S7Server({
+        port: 0,
+        profile: 's7-1500',
+        identity: { asName: 'LINE 4 PRESS', serialNumber: 'S V-L4P000001', firmware: 'V3.1.0' },
+      });
       await server.listen();
       open.push(server);
       const client = new S7Client(parseUrl(`s7://127.0.0.1:${server.port}`) as S7Endpoint);
       open.unshift(client);
       await client.connect();
-      expect(await client.info()).to.deep.include({ asName: 'LINE 4 PRESS', serialNumber: 'S V-L4P000001', firmware: 'V3.1.0', orderCode: '6ES7 516-3AN02-0AB0', pduSize: 960 });
+      expect(await client.info()).to.deep.include({
+        asName: 'LINE 4 PRESS',
+        serialNumber: 'S V-L4P000001',
+        firmware: 'V3.1.0',
+        orderCode: '6ES7 516-3AN02-0AB0',
+        pduSize: 960,
+      });
     });
 
     it('readSzl(0) lists the SZL IDs the CPU serves, and each of them reads', async () => {
@@ -94,7 +108,13 @@ describe('S7 system services: client against the simulator', function () {
     it('system services share the AmQ slots with polls: reads and info() at once on an S7-300 (AmQ 1) all succeed', async () => {
       const { server, client } = await start('s7-300');
       server.memory.area('DB', 1)!.writeInt16BE(4711, 0);
-      const results = await Promise.all([client.read(['DB1,INT0']), client.info(), client.read(['DB1,INT0']), client.cpuState(), client.readClock()]);
+      const results = await Promise.all([
+        client.read(['DB1,INT0']),
+        client.info(),
+        client.read(['DB1,INT0']),
+        client.cpuState(),
+        client.readClock(),
+      ]);
       expect(results[0]).to.deep.equal({ 'DB1,INT0': 4711 });
       expect(results[2]).to.deep.equal({ 'DB1,INT0': 4711 });
       expect((results[3] as { mode: string }).mode).to.equal('RUN');
@@ -224,7 +244,11 @@ describe('S7 system services: client against the simulator', function () {
       expect(leds.filter((l) => l.on).map((l) => l.name)).to.deep.equal(['STOP']);
       expect(() => server.stop('nonsense' as never)).to.throw(TypeError);
       server.start();
-      expect(decodeLeds(await client.readSzl(SZL.LEDS)).filter((l) => l.on).map((l) => l.name)).to.deep.equal(['RUN']);
+      expect(
+        decodeLeds(await client.readSzl(SZL.LEDS))
+          .filter((l) => l.on)
+          .map((l) => l.name),
+      ).to.deep.equal(['RUN']);
     });
   });
 
@@ -244,7 +268,15 @@ describe('S7 system services: client against the simulator', function () {
 
     it("blockInfo of a DB gives the DB's true length; a missing block is OBJECT_DOES_NOT_EXIST", async () => {
       const { client } = await start('s7-400', '', { 1: 100, 7: 333 });
-      expect(await client.blockInfo('DB', 7)).to.deep.include({ type: 'DB', number: 7, mc7Size: 333, dataLength: 333, language: 'DB', name: 'DB7', author: 'PLCWIRE' });
+      expect(await client.blockInfo('DB', 7)).to.deep.include({
+        type: 'DB',
+        number: 7,
+        mc7Size: 333,
+        dataLength: 333,
+        language: 'DB',
+        name: 'DB7',
+        author: 'PLCWIRE',
+      });
       expect(await client.blockInfo('OB', 1)).to.deep.include({ type: 'OB', language: 'STL', dataLength: undefined });
       const err = await rejection(client.blockInfo('DB', 8));
       expect(err.code).to.equal('OBJECT_DOES_NOT_EXIST');
@@ -267,7 +299,12 @@ describe('S7 system services: client against the simulator', function () {
 
     it('an S7-1500 has no block functions: NOT_SUPPORTED, the connection stays up', async () => {
       const { client } = await start('s7-1500');
-      for (const call of [() => client.listBlocks(), () => client.blockInfo('DB', 1), () => client.uploadBlock('DB', 1), () => client.setPassword('x')]) {
+      for (const call of [
+        () => client.listBlocks(),
+        () => client.blockInfo('DB', 1),
+        () => client.uploadBlock('DB', 1),
+        () => client.setPassword('x'),
+      ]) {
         expect((await rejection(call())).code).to.equal('NOT_SUPPORTED');
       }
       expect(await client.read(['DB1,BYTE0'])).to.deep.equal({ 'DB1,BYTE0': 0 });

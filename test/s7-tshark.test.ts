@@ -12,7 +12,10 @@ const HAS_TSHARK = spawnSync('tshark', ['--version'], { stdio: 'ignore' }).statu
 
 /** Runs tshark on a capture; returns stdout (stderr's "running as root" notice is dropped). */
 function tshark(file: string, ...args: string[]): string {
-  return execFileSync('tshark', ['-r', file, '-o', 'tcp.check_checksum:TRUE', ...args], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'ignore'] });
+  return execFileSync('tshark', ['-r', file, '-o', 'tcp.check_checksum:TRUE', ...args], {
+    encoding: 'utf8',
+    stdio: ['ignore', 'pipe', 'ignore'],
+  });
 }
 
 describe("Wireshark's s7comm dissector reads every system-service frame we and the simulator send", function () {
@@ -35,8 +38,16 @@ describe("Wireshark's s7comm dissector reads every system-service frame we and t
   });
 
   /** A simulator, a recording proxy in front of it, our client through the proxy; `session` runs the services. */
-  async function capture(profile: S7Profile, slot: number, session: (c: S7Client, s: S7Server) => Promise<void>): Promise<{ file: string; frames: RecordedFrame[] }> {
-    const server = new S7Server({ port: 0, profile, layout: { dbs: Object.fromEntries(Array.from({ length: 80 }, (_, i) => [String(i + 1), 200 + i])) } });
+  async function capture(
+    profile: S7Profile,
+    slot: number,
+    session: (c: S7Client, s: S7Server) => Promise<void>,
+  ): Promise<{ file: string; frames: RecordedFrame[] }> {
+    const server = new S7Server({
+      port: 0,
+      profile,
+      layout: { dbs: Object.fromEntries(Array.from({ length: 80 }, (_, i) => [String(i + 1), 200 + i])) },
+    });
     await server.listen();
     const proxy = new RecordingProxy(server.port);
     await proxy.listen();
@@ -68,7 +79,20 @@ describe("Wireshark's s7comm dissector reads every system-service frame we and t
         s.start(i % 2 ? 'cold' : 'warm');
       }
       await c.info();
-      for (const [id, index] of [[0, 0], [0x0011, 0], [0x0111, 7], [0x001c, 0], [0x011c, 5], [0x0131, 1], [0x0232, 4], [0x0424, 0], [0x0074, 0], [0x0f11, 0], [0x01a0, 3]] as const) await c.readSzl(id, index);
+      for (const [id, index] of [
+        [0, 0],
+        [0x0011, 0],
+        [0x0111, 7],
+        [0x001c, 0],
+        [0x011c, 5],
+        [0x0131, 1],
+        [0x0232, 4],
+        [0x0424, 0],
+        [0x0074, 0],
+        [0x0f11, 0],
+        [0x01a0, 3],
+      ] as const)
+        await c.readSzl(id, index);
       expect((await c.diagnosticBuffer()).length).to.equal(23);
       await c.readSzl(0x0d91, 0).catch(() => undefined);
       await c.setClock(new Date());

@@ -1,7 +1,15 @@
 import { expect } from 'chai';
 import fc from 'fast-check';
 import { PlcError, ProtocolError } from '../lib/errors';
-import { decodeBlockCounts, decodeBlockInfo, decodeLoadBlock, encodeBlockCounts, encodeBlockInfo, encodeLoadBlock, type BlockSpec } from '../lib/s7/blocks';
+import {
+  decodeBlockCounts,
+  decodeBlockInfo,
+  decodeLoadBlock,
+  encodeBlockCounts,
+  encodeBlockInfo,
+  encodeLoadBlock,
+  type BlockSpec,
+} from '../lib/s7/blocks';
 import {
   decodeControl,
   decodeUserdata,
@@ -45,7 +53,9 @@ const list = (id: number, index: number, recordLength: number, bytes: Buffer) =>
 describe('S7 userdata codec', () => {
   describe('frames of the protocol layout', () => {
     it('encodes a read SZL request byte for byte and decodes its parameter head', () => {
-      expect(show(encodeUserdata(5, { method: 0x11, type: 4, group: 4, subfunction: 1, sequence: 0 }, Buffer.of(0x00, 0x11, 0x00, 0x00)))).to.equal(show(UD.szlRequest));
+      expect(
+        show(encodeUserdata(5, { method: 0x11, type: 4, group: 4, subfunction: 1, sequence: 0 }, Buffer.of(0x00, 0x11, 0x00, 0x00))),
+      ).to.equal(show(UD.szlRequest));
       const u = decodeUserdata(UD.szlRequest);
       expect(u).to.deep.include({ pduRef: 5, returnCode: 0xff, transportSize: 0x09 });
       expect(u.params).to.deep.equal({ method: 0x11, type: 4, group: 4, subfunction: 1, sequence: 0 });
@@ -54,7 +64,16 @@ describe('S7 userdata codec', () => {
 
     it('decodes the first part of a multi-part answer: sequence, data unit reference, "more follows"', () => {
       const u = decodeUserdata(UD.szlFirstOfTwo);
-      expect(u.params).to.deep.equal({ method: 0x12, type: 8, group: 4, subfunction: 1, sequence: 3, dataUnitRef: 3, lastDataUnit: false, errorCode: 0 });
+      expect(u.params).to.deep.equal({
+        method: 0x12,
+        type: 8,
+        group: 4,
+        subfunction: 1,
+        sequence: 3,
+        dataUnitRef: 3,
+        lastDataUnit: false,
+        errorCode: 0,
+      });
       expect(u.data.length).to.equal(12);
     });
 
@@ -62,7 +81,16 @@ describe('S7 userdata codec', () => {
       const next = encodeUserdataNext(4, 1, 3, 3);
       next.writeUInt16BE(6, 11);
       expect(show(next)).to.equal(show(UD.szlNext));
-      expect(decodeUserdata(UD.szlNext).params).to.deep.equal({ method: 0x12, type: 4, group: 4, subfunction: 1, sequence: 3, dataUnitRef: 3, lastDataUnit: true, errorCode: 0 });
+      expect(decodeUserdata(UD.szlNext).params).to.deep.equal({
+        method: 0x12,
+        type: 4,
+        group: 4,
+        subfunction: 1,
+        sequence: 3,
+        dataUnitRef: 3,
+        lastDataUnit: true,
+        errorCode: 0,
+      });
     });
 
     it('joins a two-part diagnostic buffer answer into its list and reads both entries with their time stamps', () => {
@@ -77,7 +105,12 @@ describe('S7 userdata codec', () => {
     it('encodes a CPU answer of each kind: data, more parts, an error with the empty item', () => {
       const err = encodeUserdataResponse(7, 4, 1, { errorCode: 0xd401 });
       expect(show(err)).to.equal(show(UD.szlNotAvailable));
-      const first = encodeUserdataResponse(5, 4, 1, { sequence: 3, dataUnitRef: 3, last: false, data: Buffer.concat([Buffer.from('00A0000000140002', 'hex'), CPU315.diagnostics.subarray(0, 4)]) });
+      const first = encodeUserdataResponse(5, 4, 1, {
+        sequence: 3,
+        dataUnitRef: 3,
+        last: false,
+        data: Buffer.concat([Buffer.from('00A0000000140002', 'hex'), CPU315.diagnostics.subarray(0, 4)]),
+      });
       expect(show(first)).to.equal(show(UD.szlFirstOfTwo));
       const clock = encodeUserdataResponse(8, 7, 1, { data: UD.clockAnswer.subarray(33) });
       expect(show(clock)).to.equal(show(UD.clockAnswer));
@@ -108,7 +141,12 @@ describe('S7 userdata codec', () => {
 
     it('every wrong parameter length, data length, item length and parameter length byte is a ProtocolError', () => {
       for (const [name, frame] of frames) {
-        for (const [at, width] of [[13, 2], [15, 2], [20, 1], [17 + frame.readUInt16BE(13) + 2, 2]] as const) {
+        for (const [at, width] of [
+          [13, 2],
+          [15, 2],
+          [20, 1],
+          [17 + frame.readUInt16BE(13) + 2, 2],
+        ] as const) {
           const base = width === 2 ? frame.readUInt16BE(at) : frame[at]!;
           for (const delta of [-4, -1, 1, 4, 0x100]) {
             const bad = Buffer.from(frame);
@@ -136,15 +174,19 @@ describe('S7 userdata codec', () => {
 
     it('property: any bytes decode to a userdata PDU or a ProtocolError, never anything else', () => {
       fc.assert(
-        fc.property(fc.constantFrom(...frames.map(([, f]) => f)), fc.array(fc.tuple(fc.nat(80), fc.integer({ min: 0, max: 255 })), { maxLength: 6 }), (frame, edits) => {
-          const b = Buffer.from(frame);
-          for (const [at, v] of edits) if (at < b.length) b[at] = v;
-          try {
-            decodeUserdata(b);
-          } catch (err) {
-            if (!(err instanceof ProtocolError)) throw err;
-          }
-        }),
+        fc.property(
+          fc.constantFrom(...frames.map(([, f]) => f)),
+          fc.array(fc.tuple(fc.nat(80), fc.integer({ min: 0, max: 255 })), { maxLength: 6 }),
+          (frame, edits) => {
+            const b = Buffer.from(frame);
+            for (const [at, v] of edits) if (at < b.length) b[at] = v;
+            try {
+              decodeUserdata(b);
+            } catch (err) {
+              if (!(err instanceof ProtocolError)) throw err;
+            }
+          },
+        ),
         { numRuns: 3000 },
       );
     });
@@ -165,12 +207,22 @@ describe('S7 userdata codec', () => {
       const m = decodeModuleIdentification(list(0x0011, 0, 28, CPU315.moduleId));
       expect(m).to.deep.include({ orderCode: '6ES7 315-2EH14-0AB0', hardwareVersion: 4, firmware: 'V3.2.6' });
       const back = encodeModuleIdentification('6ES7 315-2EH14-0AB0', 4, 'V3.2.6');
-      expect(decodeModuleIdentification(back)).to.deep.include({ orderCode: '6ES7 315-2EH14-0AB0', hardwareVersion: 4, firmware: 'V3.2.6' });
+      expect(decodeModuleIdentification(back)).to.deep.include({
+        orderCode: '6ES7 315-2EH14-0AB0',
+        hardwareVersion: 4,
+        firmware: 'V3.2.6',
+      });
       expect(show(back.records[2]!)).to.equal(show(CPU315.moduleId.subarray(28)));
     });
 
     it('reads the protection record: level 1, mode selector RUN-P', () => {
-      expect(decodeProtection(list(0x0232, 4, 40, CPU315.protection))).to.deep.equal({ level: 1, switchLevel: 1, configuredLevel: 0, keySwitch: 'RUN-P', startupSwitch: undefined });
+      expect(decodeProtection(list(0x0232, 4, 40, CPU315.protection))).to.deep.equal({
+        level: 1,
+        switchLevel: 1,
+        configuredLevel: 0,
+        keySwitch: 'RUN-P',
+        startupSwitch: undefined,
+      });
     });
 
     it('reads the CPU state record: RUN (code 8), the transition event and its BCD time', () => {
@@ -182,7 +234,14 @@ describe('S7 userdata codec', () => {
     });
 
     it('component identification keeps the record order 1, 2, 3, 4, 5, 7 (clients read fixed offsets) and trims the padding', () => {
-      const c = { asName: 'LINE 4', moduleName: 'PLC_1', plantId: 'PLANT-A', copyright: 'Original Siemens Equipment', serialNumber: 'S C-X1234', moduleTypeName: 'CPU 1516-3 PN/DP' };
+      const c = {
+        asName: 'LINE 4',
+        moduleName: 'PLC_1',
+        plantId: 'PLANT-A',
+        copyright: 'Original Siemens Equipment',
+        serialNumber: 'S C-X1234',
+        moduleTypeName: 'CPU 1516-3 PN/DP',
+      };
       const l = encodeComponentIdentification(c);
       expect(l.records.map((r) => r.readUInt16BE(0))).to.deep.equal([1, 2, 3, 4, 5, 7]);
       const bytes = encodeSzl(l).subarray(4);
@@ -194,7 +253,16 @@ describe('S7 userdata codec', () => {
   describe('diagnostic buffer', () => {
     it('takes the time stamp from the last 8 bytes of each 20-byte entry (BCD), not from the info fields', () => {
       const [a, b] = decodeDiagnosticBuffer(list(0x00a0, 0, 20, CPU315.diagnostics));
-      expect(a).to.deep.include({ eventId: 0x4302, priority: 0xff, ob: 0x68, dataId: 0xc700, info1: 0, info2: 0x0814, info3: 0x7714, description: 'Mode transition STARTUP to RUN' });
+      expect(a).to.deep.include({
+        eventId: 0x4302,
+        priority: 0xff,
+        ob: 0x68,
+        dataId: 0xc700,
+        info1: 0,
+        info2: 0x0814,
+        info3: 0x7714,
+        description: 'Mode transition STARTUP to RUN',
+      });
       expect(a!.time.toISOString()).to.equal('1994-02-04T23:52:16.388Z');
       expect(b).to.deep.include({ eventId: 0x1381, priority: 0xfe, ob: 100, description: 'Manual warm restart requested' });
       expect(b!.time.toISOString()).to.equal('1994-02-04T23:52:16.387Z');
@@ -214,8 +282,17 @@ describe('S7 userdata codec', () => {
 
   describe('blocks', () => {
     const spec: BlockSpec = {
-      type: 'DB', number: 7, languageCode: 5, mc7Size: 10, author: 'PLCWIRE', family: 'SIM', name: 'DB7', version: 0x12, checksum: 0xbeef,
-      codeTime: new Date('2019-11-18T10:11:12.345Z'), interfaceTime: new Date('1999-11-18T00:00:00.000Z'),
+      type: 'DB',
+      number: 7,
+      languageCode: 5,
+      mc7Size: 10,
+      author: 'PLCWIRE',
+      family: 'SIM',
+      name: 'DB7',
+      version: 0x12,
+      checksum: 0xbeef,
+      codeTime: new Date('2019-11-18T10:11:12.345Z'),
+      interfaceTime: new Date('1999-11-18T00:00:00.000Z'),
     };
 
     it('block info round-trips every field; time stamps count days from 1984 and ms of the day', () => {
@@ -223,7 +300,20 @@ describe('S7 userdata codec', () => {
       expect(b.length).to.equal(78);
       // 1999-11-18 is day 5800 after 1984-01-01.
       expect(b.readUInt16BE(28 + 4)).to.equal(5800);
-      expect(decodeBlockInfo(b)).to.deep.include({ type: 'DB', number: 7, language: 'DB', mc7Size: 10, dataLength: 10, loadSize: 102, author: 'PLCWIRE', family: 'SIM', name: 'DB7', version: '1.2', checksum: 0xbeef, protected: false });
+      expect(decodeBlockInfo(b)).to.deep.include({
+        type: 'DB',
+        number: 7,
+        language: 'DB',
+        mc7Size: 10,
+        dataLength: 10,
+        loadSize: 102,
+        author: 'PLCWIRE',
+        family: 'SIM',
+        name: 'DB7',
+        version: '1.2',
+        checksum: 0xbeef,
+        protected: false,
+      });
       expect(decodeBlockInfo(b).codeTime.toISOString()).to.equal('2019-11-18T10:11:12.345Z');
       expect(() => decodeBlockInfo(b.subarray(0, 40))).to.throw(ProtocolError, /78/);
     });

@@ -5,14 +5,20 @@ import { addressWithType, duplicateNames, parseCsv, tagsFromCsv, tagsToCsv } fro
 
 describe('tag tables: CSV', () => {
   it('splits comma, semicolon and tab separated text, with quoted fields, CRLF and a byte-order mark', () => {
-    expect(parseCsv('a,b\r\n"c,1","d ""x"""\n')).to.deep.equal([['a', 'b'], ['c,1', 'd "x"']]);
+    expect(parseCsv('a,b\r\n"c,1","d ""x"""\n')).to.deep.equal([
+      ['a', 'b'],
+      ['c,1', 'd "x"'],
+    ]);
     // A semicolon file (German spreadsheets) keeps the commas of nodes7 addresses unquoted.
-    expect(parseCsv('\uFEFFspeed;DB1,INT6\nlevel;DB1,REAL8')).to.deep.equal([['speed', 'DB1,INT6'], ['level', 'DB1,REAL8']]);
+    expect(parseCsv('\uFEFFspeed;DB1,INT6\nlevel;DB1,REAL8')).to.deep.equal([
+      ['speed', 'DB1,INT6'],
+      ['level', 'DB1,REAL8'],
+    ]);
     expect(parseCsv('speed\tDB1.DBW6\tINT')).to.deep.equal([['speed', 'DB1.DBW6', 'INT']]);
     expect(parseCsv('"multi\nline",x\n\n  \n')).to.deep.equal([['multi\nline', 'x']]);
   });
 
-  it('reads name,address,type; the type column becomes the address\'s :TYPE', () => {
+  it("reads name,address,type; the type column becomes the address's :TYPE", () => {
     const { tags, problems } = tagsFromCsv('speed,DB1.DBW6,INT\nlevel,DB1.DBD8,Real\nflag,M0.1,\n');
     expect(tags).to.deep.equal([
       { name: 'speed', address: 'DB1.DBW6:INT' },
@@ -33,7 +39,10 @@ describe('tag tables: CSV', () => {
   });
 
   it('reads one column as addresses and two as name,address', () => {
-    expect(tagsFromCsv('MW2\nMW4\n').tags).to.deep.equal([{ name: '', address: 'MW2' }, { name: '', address: 'MW4' }]);
+    expect(tagsFromCsv('MW2\nMW4\n').tags).to.deep.equal([
+      { name: '', address: 'MW2' },
+      { name: '', address: 'MW4' },
+    ]);
     expect(tagsFromCsv('a,"DB1,INT2"\nb,\n').tags).to.deep.equal([{ name: 'a', address: 'DB1,INT2' }]);
   });
 
@@ -79,7 +88,11 @@ describe('tag tables: CSV', () => {
   });
 
   it('exports what it imports', () => {
-    const tags = [{ name: 'a', address: 'DB1,INT2' }, { name: 'say "hi"', address: 'DB1.DBW6:INT' }, { name: '', address: 'M0.1' }];
+    const tags = [
+      { name: 'a', address: 'DB1,INT2' },
+      { name: 'say "hi"', address: 'DB1.DBW6:INT' },
+      { name: '', address: 'M0.1' },
+    ];
     const csv = tagsToCsv(tags);
     expect(csv).to.equal('name,address\r\na,"DB1,INT2"\r\n"say ""hi""",DB1.DBW6:INT\r\n,M0.1\r\n');
     expect(tagsFromCsv(csv).tags).to.deep.equal(tags);
@@ -88,10 +101,23 @@ describe('tag tables: CSV', () => {
 
 describe('tag tables: duplicate names', () => {
   it('lists each name given to more than one row, with the rows', () => {
-    expect(duplicateNames([{ name: 'a', address: 'MW0' }, { name: 'b', address: 'MW2' }, { name: ' a ', address: 'MW4' }, { name: '', address: 'MW6' }, { name: 'MW6', address: 'MW8' }])).to.deep.equal([
+    expect(
+      duplicateNames([
+        { name: 'a', address: 'MW0' },
+        { name: 'b', address: 'MW2' },
+        { name: ' a ', address: 'MW4' },
+        { name: '', address: 'MW6' },
+        { name: 'MW6', address: 'MW8' },
+      ]),
+    ).to.deep.equal([
       { name: 'a', rows: [0, 2] },
       { name: 'MW6', rows: [3, 4] },
     ]);
-    expect(duplicateNames([{ name: 'A', address: 'MW0' }, { name: 'a', address: 'MW0' }])).to.deep.equal([]);
+    expect(
+      duplicateNames([
+        { name: 'A', address: 'MW0' },
+        { name: 'a', address: 'MW0' },
+      ]),
+    ).to.deep.equal([]);
   });
 });

@@ -17,8 +17,14 @@ function urlError(text: string): PlcError {
 describe('url: parseUrl', () => {
   it('reads an S7 URL with defaults (port 102, rack 0, slot 1, PG, PDU 960)', () => {
     expect(parseUrl('s7://192.168.0.2?rack=0&slot=1')).to.deep.equal({
-      protocol: 's7', host: '192.168.0.2', port: 102, rack: 0, slot: 1,
-      connectionType: 'pg', pduSize: 960, timeout: 5000,
+      protocol: 's7',
+      host: '192.168.0.2',
+      port: 102,
+      rack: 0,
+      slot: 1,
+      connectionType: 'pg',
+      pduSize: 960,
+      timeout: 5000,
     });
   });
 
@@ -37,7 +43,15 @@ describe('url: parseUrl', () => {
 
   it('reads TSAPs in hex, the connection type, PDU, timeout and an IPv6 host', () => {
     const e = parseUrl('s7://[::1]:1102?localTsap=1000&remoteTsap=4D57&type=OP&pdu=240&timeout=250');
-    expect(e).to.include({ host: '::1', port: 1102, localTsap: 0x1000, remoteTsap: 0x4d57, connectionType: 'op', pduSize: 240, timeout: 250 });
+    expect(e).to.include({
+      host: '::1',
+      port: 1102,
+      localTsap: 0x1000,
+      remoteTsap: 0x4d57,
+      connectionType: 'op',
+      pduSize: 240,
+      timeout: 250,
+    });
   });
 
   it('reads the item limit per S7 job (maxItems, 1–255); without it the client uses 20', () => {
@@ -61,7 +75,11 @@ describe('url: parseUrl', () => {
 
   it('reads FETCH/WRITE with two ports, one port, and the DB unit', () => {
     expect(parseUrl('fetchwrite://10.0.0.5')).to.include({ fetchPort: 2000, writePort: 2001, dbUnit: 'word' });
-    expect(parseUrl('fetchwrite://10.0.0.5?fetchPort=3000&writePort=3001&dbUnit=byte')).to.include({ fetchPort: 3000, writePort: 3001, dbUnit: 'byte' });
+    expect(parseUrl('fetchwrite://10.0.0.5?fetchPort=3000&writePort=3001&dbUnit=byte')).to.include({
+      fetchPort: 3000,
+      writePort: 3001,
+      dbUnit: 'byte',
+    });
     expect(parseUrl('fetchwrite://10.0.0.5?port=2000')).to.include({ fetchPort: 2000, writePort: 2000 });
   });
 
@@ -69,13 +87,16 @@ describe('url: parseUrl', () => {
     const serial = parseUrl('freeport:///dev/ttyUSB0?baud=19200&parity=even&databits=7&stopbits=1&retries=0&gap=5');
     expect(serial).to.deep.include({
       transport: { kind: 'serial', path: '/dev/ttyUSB0', baudRate: 19200, parity: 'even', dataBits: 7, stopBits: 1 },
-      retries: 0, interFrameGapMs: 5, timeout: 1000,
+      retries: 0,
+      interFrameGapMs: 5,
+      timeout: 1000,
     });
     expect(parseUrl('freeport://COM3?baud=9600')).to.deep.include({
       transport: { kind: 'serial', path: 'COM3', baudRate: 9600, parity: 'none', dataBits: 8, stopBits: 1 },
     });
     expect(parseUrl('freeport+tcp://gw.local:4001?timeout=500')).to.deep.include({
-      transport: { kind: 'tcp', host: 'gw.local', port: 4001 }, timeout: 500,
+      transport: { kind: 'tcp', host: 'gw.local', port: 4001 },
+      timeout: 500,
     });
   });
 

@@ -45,7 +45,10 @@ const DOMAINS: Record<DataTypeName, fc.Arbitrary<unknown>> = {
   CHAR: latin1Char,
   WCHAR: utf16Unit,
   STRING: fc.string({ unit: latin1Char, maxLength: 20 }),
-  WSTRING: fc.oneof(fc.string({ unit: utf16Unit, maxLength: 20 }), fc.string({ unit: 'binary', maxLength: 10 }).filter((s) => s.length <= 20)),
+  WSTRING: fc.oneof(
+    fc.string({ unit: utf16Unit, maxLength: 20 }),
+    fc.string({ unit: 'binary', maxLength: 10 }).filter((s) => s.length <= 20),
+  ),
   S5TIME: s5time,
   TIMER: s5time,
   COUNTER: fc.integer({ min: 0, max: 999 }),
@@ -86,10 +89,13 @@ describe('values: properties', () => {
         { numRuns: RUNS },
       );
       fc.assert(
-        fc.property(fc.integer({ min: 1, max: 5 }).chain((n) => fc.array(DOMAINS[type], { minLength: n, maxLength: n })), (vs) => {
-          const tag = shape(type, { count: vs.length, isArray: true });
-          expect(decodeTag(tag, encodeTag(tag, vs))).to.deep.equal(vs);
-        }),
+        fc.property(
+          fc.integer({ min: 1, max: 5 }).chain((n) => fc.array(DOMAINS[type], { minLength: n, maxLength: n })),
+          (vs) => {
+            const tag = shape(type, { count: vs.length, isArray: true });
+            expect(decodeTag(tag, encodeTag(tag, vs))).to.deep.equal(vs);
+          },
+        ),
         { numRuns: RUNS / 4 },
       );
     });
@@ -98,19 +104,21 @@ describe('values: properties', () => {
   it('decoding arbitrary bytes never throws anything but a PlcError, and enough bytes always decode to the documented JS type', () => {
     const tags = fc.oneof(
       fc.constantFrom(...TYPES).map((t) => shape(t)),
-      fc.record({
-        type: fc.constantFrom(...TYPES),
-        count: fc.integer({ min: 1, max: 4 }),
-        stringLength: fc.integer({ min: 0, max: 254 }),
-        bitOffset: fc.integer({ min: 0, max: 7 }),
-      }).map(({ type, count, stringLength, bitOffset }) =>
-        shape(type, {
-          count,
-          isArray: true,
-          stringLength: type === 'STRING' || type === 'WSTRING' ? stringLength : 0,
-          bitOffset: type === 'BOOL' ? bitOffset : 0,
-        }),
-      ),
+      fc
+        .record({
+          type: fc.constantFrom(...TYPES),
+          count: fc.integer({ min: 1, max: 4 }),
+          stringLength: fc.integer({ min: 0, max: 254 }),
+          bitOffset: fc.integer({ min: 0, max: 7 }),
+        })
+        .map(({ type, count, stringLength, bitOffset }) =>
+          shape(type, {
+            count,
+            isArray: true,
+            stringLength: type === 'STRING' || type === 'WSTRING' ? stringLength : 0,
+            bitOffset: type === 'BOOL' ? bitOffset : 0,
+          }),
+        ),
     );
     fc.assert(
       fc.property(tags, fc.uint8Array({ maxLength: 600 }), fc.integer({ min: 0, max: 4 }), (tag, bytes, offset) => {
@@ -136,18 +144,22 @@ describe('values: properties', () => {
 
   it('any JS value either encodes or is a ValueError; what encodes decodes to what re-encodes to the same bytes', () => {
     fc.assert(
-      fc.property(fc.constantFrom(...TYPES), fc.oneof(fc.anything(), fc.double(), fc.bigInt(), fc.date(), fc.string({ maxLength: 3 })), (type, v) => {
-        const tag = shape(type);
-        let bytes: Buffer;
-        try {
-          bytes = encodeTag(tag, v);
-        } catch (err) {
-          expect(err).to.be.instanceOf(ValueError);
-          expect((err as ValueError).tag).to.equal(tag.address);
-          return;
-        }
-        expect(encodeTag(tag, decodeTag(tag, bytes))).to.deep.equal(bytes);
-      }),
+      fc.property(
+        fc.constantFrom(...TYPES),
+        fc.oneof(fc.anything(), fc.double(), fc.bigInt(), fc.date(), fc.string({ maxLength: 3 })),
+        (type, v) => {
+          const tag = shape(type);
+          let bytes: Buffer;
+          try {
+            bytes = encodeTag(tag, v);
+          } catch (err) {
+            expect(err).to.be.instanceOf(ValueError);
+            expect((err as ValueError).tag).to.equal(tag.address);
+            return;
+          }
+          expect(encodeTag(tag, decodeTag(tag, bytes))).to.deep.equal(bytes);
+        },
+      ),
       { numRuns: 3000 },
     );
   });
@@ -178,18 +190,23 @@ describe('values: properties', () => {
 
   it('a STRING write by writeSpan equals encodeInto and keeps the PLC max-length byte', () => {
     fc.assert(
-      fc.property(fc.integer({ min: 0, max: 30 }), fc.uint8Array({ minLength: 34, maxLength: 34 }), fc.string({ unit: latin1Char, maxLength: 30 }), (n, before, s) => {
-        fc.pre(s.length <= n);
-        const tag = shape('STRING', { stringLength: n });
-        const viaInto = Buffer.from(before);
-        encodeInto(tag, s, viaInto);
-        const viaSpan = Buffer.from(before);
-        const { start, data } = writeSpan(tag, s);
-        data.copy(viaSpan, start);
-        expect(viaInto[0]).to.equal(before[0]);
-        expect(viaSpan.subarray(0, 2 + s.length)).to.deep.equal(viaInto.subarray(0, 2 + s.length));
-        expect(decodeTag(tag, viaInto)).to.equal(s.slice(0, Math.min(s.length, before[0]! || n)));
-      }),
+      fc.property(
+        fc.integer({ min: 0, max: 30 }),
+        fc.uint8Array({ minLength: 34, maxLength: 34 }),
+        fc.string({ unit: latin1Char, maxLength: 30 }),
+        (n, before, s) => {
+          fc.pre(s.length <= n);
+          const tag = shape('STRING', { stringLength: n });
+          const viaInto = Buffer.from(before);
+          encodeInto(tag, s, viaInto);
+          const viaSpan = Buffer.from(before);
+          const { start, data } = writeSpan(tag, s);
+          data.copy(viaSpan, start);
+          expect(viaInto[0]).to.equal(before[0]);
+          expect(viaSpan.subarray(0, 2 + s.length)).to.deep.equal(viaInto.subarray(0, 2 + s.length));
+          expect(decodeTag(tag, viaInto)).to.equal(s.slice(0, Math.min(s.length, before[0]! || n)));
+        },
+      ),
       { numRuns: 500 },
     );
   });

@@ -37,9 +37,34 @@ function shape(spec: string, address = `DB1.DBB0:${spec}`): TagShape {
 }
 
 const ALL_TYPES: DataTypeName[] = [
-  'BOOL', 'BYTE', 'WORD', 'DWORD', 'LWORD', 'SINT', 'USINT', 'INT', 'UINT', 'DINT', 'UDINT', 'LINT', 'ULINT',
-  'REAL', 'LREAL', 'CHAR', 'WCHAR', 'STRING', 'WSTRING', 'S5TIME', 'TIME', 'LTIME', 'DATE', 'TIME_OF_DAY',
-  'DATE_AND_TIME', 'DTL', 'COUNTER', 'TIMER',
+  'BOOL',
+  'BYTE',
+  'WORD',
+  'DWORD',
+  'LWORD',
+  'SINT',
+  'USINT',
+  'INT',
+  'UINT',
+  'DINT',
+  'UDINT',
+  'LINT',
+  'ULINT',
+  'REAL',
+  'LREAL',
+  'CHAR',
+  'WCHAR',
+  'STRING',
+  'WSTRING',
+  'S5TIME',
+  'TIME',
+  'LTIME',
+  'DATE',
+  'TIME_OF_DAY',
+  'DATE_AND_TIME',
+  'DTL',
+  'COUNTER',
+  'TIMER',
 ];
 
 const utc = (iso: string) => new Date(iso);
@@ -131,7 +156,11 @@ const FIXTURES: [string, unknown, string][] = [
   ['S5TIME[2]', [10, 9_990_000], '0001 3999'],
   ['COUNTER[2]', [7, 42], '0007 0042'],
   ['DATE[2]', [utc('1990-01-01T00:00:00Z'), utc('1990-01-03T00:00:00Z')], '0000 0002'],
-  ['DTL[2]', [utc('1970-01-01T00:00:00Z'), utc('2024-05-17T13:45:30.123Z')], '07B2 01 01 05 00 00 00 00000000 07E8 05 11 06 0D 2D 1E 0754D4C0'],
+  [
+    'DTL[2]',
+    [utc('1970-01-01T00:00:00Z'), utc('2024-05-17T13:45:30.123Z')],
+    '07B2 01 01 05 00 00 00 00000000 07E8 05 11 06 0D 2D 1E 0754D4C0',
+  ],
   ['BOOL[4]@6', [false, true, false, true], '80 02'],
   ['BOOL[8]', [true, false, false, false, false, false, false, true], '81'],
 ];
@@ -191,11 +220,34 @@ describe('values: byte-exact fixtures for every type', () => {
 describe('values: sizes and the JavaScript mapping', () => {
   it('elementByteLength of every type', () => {
     const sizes: Record<DataTypeName, number> = {
-      BOOL: 1, BYTE: 1, CHAR: 1, SINT: 1, USINT: 1,
-      WORD: 2, INT: 2, UINT: 2, WCHAR: 2, S5TIME: 2, DATE: 2, COUNTER: 2, TIMER: 2,
-      DWORD: 4, DINT: 4, UDINT: 4, REAL: 4, TIME: 4, TIME_OF_DAY: 4,
-      LWORD: 8, LINT: 8, ULINT: 8, LREAL: 8, LTIME: 8, DATE_AND_TIME: 8, DTL: 12,
-      STRING: 32, WSTRING: 64,
+      BOOL: 1,
+      BYTE: 1,
+      CHAR: 1,
+      SINT: 1,
+      USINT: 1,
+      WORD: 2,
+      INT: 2,
+      UINT: 2,
+      WCHAR: 2,
+      S5TIME: 2,
+      DATE: 2,
+      COUNTER: 2,
+      TIMER: 2,
+      DWORD: 4,
+      DINT: 4,
+      UDINT: 4,
+      REAL: 4,
+      TIME: 4,
+      TIME_OF_DAY: 4,
+      LWORD: 8,
+      LINT: 8,
+      ULINT: 8,
+      LREAL: 8,
+      LTIME: 8,
+      DATE_AND_TIME: 8,
+      DTL: 12,
+      STRING: 32,
+      WSTRING: 64,
     };
     for (const type of ALL_TYPES) expect(elementByteLength(type, 30), type).to.equal(sizes[type]);
     expect(elementByteLength('STRING', 254)).to.equal(256);
@@ -270,8 +322,10 @@ describe('values: bits, strings and read-modify-write', () => {
   });
 
   it('writeSpan validates: a too-long STRING is a ValueError naming the tag and the limit', () => {
-    expect(() => writeSpan(shape('STRING[3]', 'DB1,S0.3'), 'abcd'))
-      .to.throw(ValueError, /"DB1,S0\.3": 4 characters do not fit STRING\[3\] \(at most 3\)/);
+    expect(() => writeSpan(shape('STRING[3]', 'DB1,S0.3'), 'abcd')).to.throw(
+      ValueError,
+      /"DB1,S0\.3": 4 characters do not fit STRING\[3\] \(at most 3\)/,
+    );
   });
 
   it('encodeTag of a BOOL sets the bits in zero bytes', () => {
@@ -428,8 +482,13 @@ describe('values: strict validation', () => {
       expect(error).to.be.instanceOf(ValueError);
       expect((error as ValueError).code).to.equal('INVALID_VALUE');
       expect((error as ValueError).tag).to.equal(address);
-      expect((error as ValueError).message).to.include(`"${address}"`).and.match(message);
-      expect(target.every((b) => b === 0x55), 'nothing written').to.equal(true);
+      expect((error as ValueError).message)
+        .to.include(`"${address}"`)
+        .and.match(message);
+      expect(
+        target.every((b) => b === 0x55),
+        'nothing written',
+      ).to.equal(true);
       expect(() => encodeTag(tag, value)).to.throw(ValueError);
       expect(() => validateValue(tag, value)).to.throw(ValueError);
     });
@@ -444,6 +503,9 @@ describe('values: with tags from the address parser', () => {
     expect(decodeTag(parseAddress('DB1,X0.1.3'), buf('0A'))).to.deep.equal([true, false, true]);
     expect(hex(encodeTag(parseAddress('T3'), 2000))).to.equal('0200');
     expect(hex(encodeTag(parseAddress('C5'), 123))).to.equal('0123');
-    expect(() => validateValue(parseAddress('DB1,INT2'), 40000)).to.throw(ValueError, 'invalid value for "DB1,INT2": 40000 is out of range for INT (-32768..32767)');
+    expect(() => validateValue(parseAddress('DB1,INT2'), 40000)).to.throw(
+      ValueError,
+      'invalid value for "DB1,INT2": 40000 is out of range for INT (-32768..32767)',
+    );
   });
 });

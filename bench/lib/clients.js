@@ -36,7 +36,14 @@ const CLIENTS = {
 
   async 'st-one'({ port, pdu, addresses }) {
     const { S7Endpoint, S7ItemGroup } = peer('@st-one-io/nodes7');
-    const plc = new S7Endpoint({ host: '127.0.0.1', port, rack: 0, slot: 1, autoReconnect: 0, s7ConnOpts: { maxPDUSize: pdu, timeout: 10000 } });
+    const plc = new S7Endpoint({
+      host: '127.0.0.1',
+      port,
+      rack: 0,
+      slot: 1,
+      autoReconnect: 0,
+      s7ConnOpts: { maxPDUSize: pdu, timeout: 10000 },
+    });
     plc.on('error', () => undefined);
     const connected = once(plc, 'connect');
     await plc.connect();

@@ -72,11 +72,15 @@ function summarize(file, { top = 30, match } = {}) {
   }
   const wall = prof.endTime - prof.startTime;
   const pct = (us) => `${((100 * us) / prof.totalUs).toFixed(1).padStart(5)} %`;
-  console.log(`${file}: ${(wall / 1e6).toFixed(1)} s profiled, ${(prof.totalUs / 1e3).toFixed(0)} ms sampled${match ? `, ${(counted / 1e3).toFixed(0)} ms under "${match}"` : ''}`);
+  console.log(
+    `${file}: ${(wall / 1e6).toFixed(1)} s profiled, ${(prof.totalUs / 1e3).toFixed(0)} ms sampled${match ? `, ${(counted / 1e3).toFixed(0)} ms under "${match}"` : ''}`,
+  );
   console.log('\nself time by file:');
-  for (const [f, us] of [...files].sort((a, b) => b[1] - a[1]).slice(0, top)) console.log(`${pct(us)}  ${(us / 1e3).toFixed(1).padStart(8)} ms  ${f}`);
+  for (const [f, us] of [...files].sort((a, b) => b[1] - a[1]).slice(0, top))
+    console.log(`${pct(us)}  ${(us / 1e3).toFixed(1).padStart(8)} ms  ${f}`);
   console.log('\nself time by function:');
-  for (const [f, us] of [...fns].sort((a, b) => b[1] - a[1]).slice(0, top)) console.log(`${pct(us)}  ${(us / 1e3).toFixed(1).padStart(8)} ms  ${f}`);
+  for (const [f, us] of [...fns].sort((a, b) => b[1] - a[1]).slice(0, top))
+    console.log(`${pct(us)}  ${(us / 1e3).toFixed(1).padStart(8)} ms  ${f}`);
 }
 
 if (require.main === module) {

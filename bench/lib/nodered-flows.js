@@ -15,7 +15,10 @@ function tagName(k) {
  * polling every `intervalMs` in `output` mode ('object' | 'per-tag' | 'changes').
  */
 function oursFlow({ ports, tags, intervalMs, output }) {
-  const nodes = [{ id: 'tab', type: 'tab', label: 'bench' }, { id: 'count', type: 'bench-count', z: 'tab', ...at }];
+  const nodes = [
+    { id: 'tab', type: 'tab', label: 'bench' },
+    { id: 'count', type: 'bench-count', z: 'tab', ...at },
+  ];
   ports.forEach((port, i) => {
     nodes.push({ id: `conn${i}`, type: 'plcwire-connection', name: `plc${i}`, url: `s7://127.0.0.1:${port}?rack=0&slot=1&pdu=960` });
     nodes.push({
@@ -41,7 +44,10 @@ function oursFlow({ ports, tags, intervalMs, output }) {
  * ('all' = one object, 'all-split' = one message per tag), `diff` = only changes.
  */
 function contribFlow({ ports, tags, intervalMs, mode, diff }) {
-  const nodes = [{ id: 'tab', type: 'tab', label: 'bench' }, { id: 'count', type: 'bench-count', z: 'tab', ...at }];
+  const nodes = [
+    { id: 'tab', type: 'tab', label: 'bench' },
+    { id: 'count', type: 'bench-count', z: 'tab', ...at },
+  ];
   ports.forEach((port, i) => {
     nodes.push({
       id: `ep${i}`,
@@ -63,7 +69,18 @@ function contribFlow({ ports, tags, intervalMs, mode, diff }) {
       name: `plc${i}`,
       vartable: plcTable(tags, i).map((t, k) => ({ addr: t.address, name: tagName(k) })),
     });
-    nodes.push({ id: `in${i}`, type: 's7 in', z: 'tab', endpoint: `ep${i}`, mode, variable: '', diff: !!diff, name: `plc${i}`, wires: [['count']], ...at });
+    nodes.push({
+      id: `in${i}`,
+      type: 's7 in',
+      z: 'tab',
+      endpoint: `ep${i}`,
+      mode,
+      variable: '',
+      diff: !!diff,
+      name: `plc${i}`,
+      wires: [['count']],
+      ...at,
+    });
   });
   return nodes;
 }

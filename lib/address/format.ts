@@ -4,7 +4,16 @@ import { elementBytes, startsAtByte } from './sizes';
 
 export type TagLocation = Pick<Tag, 'area' | 'dbNumber' | 'byteOffset' | 'bitOffset' | 'type' | 'count' | 'isArray' | 'stringLength'>;
 
-const AREA_PREFIX: Readonly<Record<AreaName, string>> = Object.freeze({ I: 'I', Q: 'Q', M: 'M', DB: 'DB', PE: 'PI', PA: 'PQ', C: 'C', T: 'T' });
+const AREA_PREFIX: Readonly<Record<AreaName, string>> = Object.freeze({
+  I: 'I',
+  Q: 'Q',
+  M: 'M',
+  DB: 'DB',
+  PE: 'PI',
+  PA: 'PQ',
+  C: 'C',
+  T: 'T',
+});
 /** Types an IEC width letter names without an override. */
 const NATURAL_WIDTH: Partial<Record<DataTypeName, string>> = Object.freeze({ BYTE: 'B', WORD: 'W', DWORD: 'D' });
 const WIDTH_OF_SIZE: Readonly<Record<number, string>> = Object.freeze({ 1: 'B', 2: 'W', 4: 'D' });

@@ -29,7 +29,15 @@ interface Syntax {
 
 /** Area mnemonics, English and German (E = I, A = Q, PE = PI, PA = PQ). */
 const AREAS: Readonly<Record<string, AreaName>> = Object.freeze({
-  I: 'I', E: 'I', Q: 'Q', A: 'Q', M: 'M', PI: 'PE', PE: 'PE', PQ: 'PA', PA: 'PA',
+  I: 'I',
+  E: 'I',
+  Q: 'Q',
+  A: 'Q',
+  M: 'M',
+  PI: 'PE',
+  PE: 'PE',
+  PQ: 'PA',
+  PA: 'PA',
 });
 /** Width letters of the IEC style and the type each names by default. */
 const WIDTHS: Readonly<Record<string, DataTypeName>> = Object.freeze({ X: 'BOOL', B: 'BYTE', W: 'WORD', D: 'DWORD' });
@@ -126,7 +134,8 @@ export function parseAddress(address: string): Tag {
 
 function dbNumber(digits: string, address: string): number {
   const n = Number(digits);
-  if (n < 1 || n > MAX_DB_NUMBER) throw new AddressError(address, `DB${plain(digits)} is not a valid data block number (1..${MAX_DB_NUMBER})`);
+  if (n < 1 || n > MAX_DB_NUMBER)
+    throw new AddressError(address, `DB${plain(digits)} is not a valid data block number (1..${MAX_DB_NUMBER})`);
   return n;
 }
 
@@ -166,7 +175,8 @@ function nodes7Tag(address: string, loc: Location, type: DataTypeName, second?: 
   if (type === 'STRING' || type === 'WSTRING') {
     return makeTag(address, loc, { type, stringLength: stringLength(type, second, address), ...arrayCount(third, address) });
   }
-  if (third !== undefined) throw new AddressError(address, `unexpected ".${third}": ${type} takes one number after the offset (the array length)`);
+  if (third !== undefined)
+    throw new AddressError(address, `unexpected ".${third}": ${type} takes one number after the offset (the array length)`);
   return makeTag(address, loc, { type, stringLength: 0, ...arrayCount(second, address) });
 }
 
@@ -180,7 +190,8 @@ function iecTag(address: string, loc: Location, widthLabel: string, bitDigits: s
   if (width === 'X') {
     if (bitDigits === undefined) throw new AddressError(address, `a bit address needs .<bit>, e.g. ${widthLabel}0.1`);
     const b = bit(bitDigits, address);
-    if (override && override.type !== 'BOOL') throw new AddressError(address, `${override.type} cannot start at a bit; use a B, W or D address`);
+    if (override && override.type !== 'BOOL')
+      throw new AddressError(address, `${override.type} cannot start at a bit; use a B, W or D address`);
     return makeTag(address, { ...loc, bitOffset: b }, override ?? { type: 'BOOL', count: 1, isArray: false, stringLength: 0 });
   }
   if (bitDigits !== undefined) throw new AddressError(address, `${widthLabel} has no bit; use X for bits (e.g. DBX0.1, M0.1)`);
@@ -190,14 +201,16 @@ function iecTag(address: string, loc: Location, widthLabel: string, bitDigits: s
   if (!override.isArray && !startsAtByte(override.type)) {
     const need = elementBytes(override.type);
     const have = elementBytes(natural);
-    if (need !== have) throw new AddressError(address, `${override.type} needs ${WIDTH_NAMES[need]}, ${widthLabel} is ${WIDTH_NAMES[have]}`);
+    if (need !== have)
+      throw new AddressError(address, `${override.type} needs ${WIDTH_NAMES[need]}, ${widthLabel} is ${WIDTH_NAMES[have]}`);
   }
   return makeTag(address, loc, override);
 }
 
 function timerCounterTag(address: string, area: 'T' | 'C', digits: string, override: TypeSpec | undefined): Tag {
   const type: DataTypeName = area === 'T' ? 'TIMER' : 'COUNTER';
-  if (override && override.type !== type) throw new AddressError(address, `${area === 'T' ? 'a timer' : 'a counter'} is ${type}, not ${override.type}`);
+  if (override && override.type !== type)
+    throw new AddressError(address, `${area === 'T' ? 'a timer' : 'a counter'} is ${type}, not ${override.type}`);
   const number = offset(digits, address);
   const spec = override ?? { type, count: 1, isArray: false, stringLength: 0 };
   const last = number + spec.count - 1;

@@ -8,7 +8,19 @@ import { FREEPORT_BAUD_RATES } from '../url';
 import { UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
 import { EXIT, untilInterrupted, type CliIo } from './io';
 
-export const SERVE_FLAGS = ['port', 'host', 'profile', 'layout', 'fetch-port', 'write-port', 'path', 'baud', 'tcp', 'stations', 'max-items'];
+export const SERVE_FLAGS = [
+  'port',
+  'host',
+  'profile',
+  'layout',
+  'fetch-port',
+  'write-port',
+  'path',
+  'baud',
+  'tcp',
+  'stations',
+  'max-items',
+];
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
 
@@ -36,7 +48,13 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
       const layout = loadLayout(stringFlag(args, 'layout'));
       // --max-items: serve at most N items per job, as snap7's server (20) and the devices built on it.
       const maxItems = args.flags.has('max-items') ? intFlag(args, 'max-items', 20, 1, 255) : undefined;
-      const server = new S7Server({ host, port: intFlag(args, 'port', 102, 0, 65535), profile, ...(layout ? { layout } : {}), ...(maxItems !== undefined ? { maxItems } : {}) });
+      const server = new S7Server({
+        host,
+        port: intFlag(args, 'port', 102, 0, 65535),
+        profile,
+        ...(layout ? { layout } : {}),
+        ...(maxItems !== undefined ? { maxItems } : {}),
+      });
       const port = await listen(() => server.listen(), 'port');
       say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
       say(`try: plcwire read "s7://${urlHost(host)}:${port}?${REACH[profile].query}" ${REACH[profile].addresses}`);
@@ -51,7 +69,8 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
           : { host, fetchPort: intFlag(args, 'fetch-port', 2000, 0, 65535), writePort: intFlag(args, 'write-port', 2001, 0, 65535) },
       );
       const ports = await listen(() => server.listen(), 'port');
-      const query = ports.fetchPort === ports.writePort ? `port=${ports.fetchPort}` : `fetchPort=${ports.fetchPort}&writePort=${ports.writePort}`;
+      const query =
+        ports.fetchPort === ports.writePort ? `port=${ports.fetchPort}` : `fetchPort=${ports.fetchPort}&writePort=${ports.writePort}`;
       say(`FETCH/WRITE simulator listening on ${host}: fetch ${ports.fetchPort}, write ${ports.writePort}`);
       say(`try: plcwire read "fetchwrite://${urlHost(host)}?${query}" DB1,INT0 MB0`);
       close = () => server.close();

@@ -53,7 +53,8 @@ function run<R>(endpoint: S7Endpoint, io: CliIo, work: (c: S7Client) => Promise<
  */
 async function checkControl(endpoint: S7Endpoint, args: ParsedArgs, io: CliIo, what: string): Promise<void> {
   if (endpoint.readOnly) throw new PlcError('WRITE_NOT_ALLOWED', `refusing to ${what}: the connection is read-only`);
-  if (!endpoint.control) throw new PlcError('WRITE_NOT_ALLOWED', `refusing to ${what}: the URL does not allow PLC control (add control=true)`);
+  if (!endpoint.control)
+    throw new PlcError('WRITE_NOT_ALLOWED', `refusing to ${what}: the URL does not allow PLC control (add control=true)`);
   if (args.flags.has('yes') || (io.stdin.isTTY && isLoopback(endpoint))) return;
   if (!io.stdin.isTTY) throw new PlcError('WRITE_NOT_ALLOWED', `refusing to ${what} without --yes when standard input is not a terminal`);
   if (!(await confirm(io, `${what}? [y/N] `))) throw new PlcError('WRITE_NOT_ALLOWED', `${what}: cancelled`);
@@ -115,7 +116,13 @@ export async function szl(rest: string[], args: ParsedArgs, io: CliIo): Promise<
   const list = await run(endpoint, io, (c) => c.readSzl(id, index, { signal: io.signal }));
   const hex = (n: number) => `0x${n.toString(16).padStart(4, '0')}`;
   const decoded = decodeSzl(list);
-  const json = { id: hex(list.id), index: hex(list.index), recordLength: list.recordLength, records: list.records.map((r) => r.toString('hex')), decoded };
+  const json = {
+    id: hex(list.id),
+    index: hex(list.index),
+    recordLength: list.recordLength,
+    records: list.records.map((r) => r.toString('hex')),
+    decoded,
+  };
   print(io, args, json, () => [
     `SZL ${json.id} index ${json.index}: ${list.records.length} record(s) of ${list.recordLength} bytes`,
     ...json.records.map((r, n) => `  ${n}: ${r}`),
@@ -131,7 +138,9 @@ export async function diag(rest: string[], args: ParsedArgs, io: CliIo): Promise
   const entries = await run(endpoint, io, (c) => c.diagnosticBuffer({ signal: io.signal, ...(max !== undefined ? { max } : {}) }));
   const hex = (n: number) => `0x${n.toString(16).padStart(4, '0')}`;
   const json = entries.map((e) => ({ ...e, eventId: hex(e.eventId) }));
-  print(io, args, json, () => json.map((e) => `${Number.isNaN(e.time.getTime()) ? '(no valid time)' : e.time.toISOString()}  ${e.eventId}  ${e.description}`));
+  print(io, args, json, () =>
+    json.map((e) => `${Number.isNaN(e.time.getTime()) ? '(no valid time)' : e.time.toISOString()}  ${e.eventId}  ${e.description}`),
+  );
   return EXIT.OK;
 }
 
@@ -143,7 +152,8 @@ export async function clock(rest: string[], args: ParsedArgs, io: CliIo): Promis
   let date: Date | undefined;
   if (set !== undefined) {
     date = set === 'now' ? new Date() : new Date(set);
-    if (!/^\d{4}-\d\d-\d\d/.test(set) && set !== 'now') throw new UsageError(`--set "${set}" is not now or an ISO 8601 time (e.g. 2024-05-01T12:00:00Z)`);
+    if (!/^\d{4}-\d\d-\d\d/.test(set) && set !== 'now')
+      throw new UsageError(`--set "${set}" is not now or an ISO 8601 time (e.g. 2024-05-01T12:00:00Z)`);
     if (Number.isNaN(date.getTime())) throw new UsageError(`--set "${set}" is not a valid time`);
     await checkControl(endpoint, args, io, `set the clock of ${endpointName(endpoint)}`);
   }
@@ -164,7 +174,8 @@ export async function blocks(rest: string[], args: ParsedArgs, io: CliIo): Promi
   }
   const type = typeText as BlockType | undefined;
   const numberText = rest[2];
-  if (numberText !== undefined && (!/^\d+$/.test(numberText) || Number(numberText) > 65535)) throw new UsageError(`"${numberText}" is not a block number 0..65535`);
+  if (numberText !== undefined && (!/^\d+$/.test(numberText) || Number(numberText) > 65535))
+    throw new UsageError(`"${numberText}" is not a block number 0..65535`);
   if (type === undefined) {
     const counts = await run(endpoint, io, (c) => c.listBlocks({ signal: io.signal }));
     print(io, args, counts, () => Object.entries(counts).map(([t, n]) => `${t}: ${n}`));
@@ -183,7 +194,8 @@ const CPU_ACTIONS = Object.freeze({ stop: 'stop', start: 'hotStart', 'cold-start
 export async function cpu(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const endpoint = s7Endpoint(rest, 'cpu', args);
   const action = rest[1];
-  if (action === undefined || !Object.prototype.hasOwnProperty.call(CPU_ACTIONS, action)) throw new UsageError('cpu needs stop, start or cold-start');
+  if (action === undefined || !Object.prototype.hasOwnProperty.call(CPU_ACTIONS, action))
+    throw new UsageError('cpu needs stop, start or cold-start');
   extra(rest, 2);
   const method = CPU_ACTIONS[action as keyof typeof CPU_ACTIONS];
   await checkControl(endpoint, args, io, `${action} the CPU at ${endpointName(endpoint)}`);
@@ -213,7 +225,11 @@ export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promi
         io.stdout.write(`${s.ok ? 'ok  ' : 'FAIL'} ${s.step}: ${s.detail}\n`);
         if (s.hint) io.stdout.write(`     fix: ${s.hint}\n`);
       };
-  const report = await diagnose(url, rest.slice(1), { signal: io.signal, ...(timeout !== undefined ? { timeout } : {}), ...(onStep ? { onStep } : {}) });
+  const report = await diagnose(url, rest.slice(1), {
+    signal: io.signal,
+    ...(timeout !== undefined ? { timeout } : {}),
+    ...(onStep ? { onStep } : {}),
+  });
   if (json) io.stdout.write(`${toJson(report)}\n`);
   const failed = report.steps.find((s) => !s.ok);
   return failed ? doctorExit(failed) : EXIT.OK;

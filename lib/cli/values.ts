@@ -62,7 +62,6 @@ function scalarFromText(tag: TypedTag, raw: string): PlcScalar {
   return n;
 }
 
-
 /**
  * JSON text where a bigint (LINT, ULINT, LWORD, LTIME) is written as its exact
  * digits, unquoted, and a Date as its ISO text; everything else as

@@ -25,7 +25,21 @@ import { openTcp } from '../link/tcp';
 import type { PlcValue, Protocol, Tag } from '../types';
 import { endpointName, type FetchWriteEndpoint } from '../url';
 import { decodeTag, encodeInto, validateValue, writeSpan } from '../values';
-import { HEADER, MAX_DATA, OpCode, ORG_BY_AREA, ORG_RANGES, Org, byteLength, checkResponse, decodeResponse, encodeRequest, errorFor, type FwResponse, type ResponseExpectation } from './codec';
+import {
+  HEADER,
+  MAX_DATA,
+  OpCode,
+  ORG_BY_AREA,
+  ORG_RANGES,
+  Org,
+  byteLength,
+  checkResponse,
+  decodeResponse,
+  encodeRequest,
+  errorFor,
+  type FwResponse,
+  type ResponseExpectation,
+} from './codec';
 
 /**
  * Tags of one area closer than this are fetched as one job: a CP answers a
@@ -40,11 +54,14 @@ class Channel {
   expect: ResponseExpectation | undefined;
 
   constructor(readonly socket: net.Socket) {
-    this.reader = new FrameReader((buf) => {
-      const verdict = checkResponse(buf, this.expect);
-      if (verdict.kind === 'frame') this.expect = undefined;
-      return verdict;
-    }, MAX_DATA + HEADER + 1);
+    this.reader = new FrameReader(
+      (buf) => {
+        const verdict = checkResponse(buf, this.expect);
+        if (verdict.kind === 'frame') this.expect = undefined;
+        return verdict;
+      },
+      MAX_DATA + HEADER + 1,
+    );
   }
 }
 
@@ -245,7 +262,12 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     return { unreadable, ranges };
   }
 
-  private async readTags(session: FwSession, tags: readonly Tag[], signal?: AbortSignal, prepared = this.prepareRead(tags)): Promise<TagResult<PlcValue>[]> {
+  private async readTags(
+    session: FwSession,
+    tags: readonly Tag[],
+    signal?: AbortSignal,
+    prepared = this.prepareRead(tags),
+  ): Promise<TagResult<PlcValue>[]> {
     const results: TagResult<PlcValue>[] = new Array<TagResult<PlcValue>>(tags.length);
     const { unreadable, ranges } = prepared;
     for (const i of unreadable) results[i] = { ok: false, error: wrongDirection(tags[i]!, 'read') };
@@ -337,7 +359,11 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     return ranges;
   }
 
-  private async writeTags(session: FwSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
+  private async writeTags(
+    session: FwSession,
+    items: readonly { tag: Tag; value: unknown }[],
+    signal?: AbortSignal,
+  ): Promise<TagResult<void>[]> {
     const results: TagResult<void>[] = new Array<TagResult<void>>(items.length);
     const valid: number[] = [];
     items.forEach((it, i) => {
@@ -352,26 +378,28 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
         results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
       }
     });
-    await session.jobs.run(async () => {
-      for (const i of valid) {
-        const { tag, value } = items[i]!;
-        try {
-          await this.writeOne(session, tag, value, signal);
-          results[i] = { ok: true, value: undefined };
-        } catch (err) {
-          const e = toPlcError(err);
-          results[i] = { ok: false, error: tagError(tag.address, e) };
-          // The link is gone: the remaining writes fail with the same error, never silently.
-          if (endsRequest(e)) {
-            for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
-            return;
+    await session.jobs
+      .run(async () => {
+        for (const i of valid) {
+          const { tag, value } = items[i]!;
+          try {
+            await this.writeOne(session, tag, value, signal);
+            results[i] = { ok: true, value: undefined };
+          } catch (err) {
+            const e = toPlcError(err);
+            results[i] = { ok: false, error: tagError(tag.address, e) };
+            // The link is gone: the remaining writes fail with the same error, never silently.
+            if (endsRequest(e)) {
+              for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
+              return;
+            }
           }
         }
-      }
-    }, signal).catch((err: unknown) => {
-      const e = toPlcError(err);
-      for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
-    });
+      }, signal)
+      .catch((err: unknown) => {
+        const e = toPlcError(err);
+        for (const k of valid) results[k] ??= { ok: false, error: tagError(items[k]!.tag.address, e) };
+      });
     return results;
   }
 
@@ -400,7 +428,12 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
   }
 
   /** Fetch the enclosing units, change them, write them back (serialised by the job queue; not atomic against the PLC program). */
-  private async readModifyWrite(session: FwSession, changed: ByteRange, change: (buf: Buffer, offset: number) => void, signal?: AbortSignal): Promise<void> {
+  private async readModifyWrite(
+    session: FwSession,
+    changed: ByteRange,
+    change: (buf: Buffer, offset: number) => void,
+    signal?: AbortSignal,
+  ): Promise<void> {
     const { org, dbNumber } = changed;
     const g = this.granule(org);
     const from = changed.start;
@@ -416,7 +449,11 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     const max = this.maxJobBytes(org);
     for (let o = 0; o < data.length; o += max) {
       const part = data.subarray(o, o + max);
-      await this.job(session, { op: OpCode.WriteRequest, range: { org, dbNumber, start: start + o, length: part.length }, data: part }, signal);
+      await this.job(
+        session,
+        { op: OpCode.WriteRequest, range: { org, dbNumber, start: start + o, length: part.length }, data: part },
+        signal,
+      );
     }
   }
 }
@@ -441,4 +478,3 @@ function wrongDirection(tag: Tag, op: 'read' | 'write'): PlcError {
 function endsRequest(e: PlcError): boolean {
   return isLinkError(e) || e.code === 'TIMEOUT' || e.code === 'ABORTED' || e.code === 'PROTOCOL_ERROR' || e.code === 'QUEUE_FULL';
 }
-

@@ -47,17 +47,18 @@ export const ORG_BY_AREA: Readonly<Record<AreaName, Org>> = Object.freeze({
  * may name (DB: in words). The table permits a length of exactly 1 for
  * counters and timers, so C/T ranges are fetched one cell per job.
  */
-export const ORG_RANGES: Readonly<Record<number, { name: string; unit: 'word' | 'byte'; maxStart: number; maxLength: number }>> = Object.freeze({
-  [Org.DB]: { name: 'DB', unit: 'word', maxStart: 2047, maxLength: 2048 },
-  [Org.M]: { name: 'M', unit: 'byte', maxStart: 255, maxLength: 256 },
-  [Org.I]: { name: 'I', unit: 'byte', maxStart: 127, maxLength: 128 },
-  [Org.Q]: { name: 'Q', unit: 'byte', maxStart: 127, maxLength: 128 },
-  // The ORG table's 0–255 is the S5 I/O range; S7 CPUs put analog modules from byte 256 up (PIW256),
-  // and the start field is 16 bits, so any byte address is allowed here (docs/protocols.md, corrections).
-  [Org.PEPA]: { name: 'PE/PA', unit: 'byte', maxStart: 0xffff, maxLength: 256 },
-  [Org.C]: { name: 'C', unit: 'word', maxStart: 255, maxLength: 1 },
-  [Org.T]: { name: 'T', unit: 'word', maxStart: 255, maxLength: 1 },
-});
+export const ORG_RANGES: Readonly<Record<number, { name: string; unit: 'word' | 'byte'; maxStart: number; maxLength: number }>> =
+  Object.freeze({
+    [Org.DB]: { name: 'DB', unit: 'word', maxStart: 2047, maxLength: 2048 },
+    [Org.M]: { name: 'M', unit: 'byte', maxStart: 255, maxLength: 256 },
+    [Org.I]: { name: 'I', unit: 'byte', maxStart: 127, maxLength: 128 },
+    [Org.Q]: { name: 'Q', unit: 'byte', maxStart: 127, maxLength: 128 },
+    // The ORG table's 0–255 is the S5 I/O range; S7 CPUs put analog modules from byte 256 up (PIW256),
+    // and the start field is 16 bits, so any byte address is allowed here (docs/protocols.md, corrections).
+    [Org.PEPA]: { name: 'PE/PA', unit: 'byte', maxStart: 0xffff, maxLength: 256 },
+    [Org.C]: { name: 'C', unit: 'word', maxStart: 255, maxLength: 1 },
+    [Org.T]: { name: 'T', unit: 'word', maxStart: 255, maxLength: 1 },
+  });
 
 export interface FwRequest {
   op: OpCode.FetchRequest | OpCode.WriteRequest;
@@ -80,7 +81,10 @@ export interface FwResponse {
 /** A request header (and the data of a write) in one Buffer. */
 export function encodeRequest(r: FwRequest): Buffer {
   if (!isU(r.org, 0xff) || !isU(r.dbNumber, 0xff) || !isU(r.start, 0xffff) || !isU(r.length, 0xffff)) {
-    throw new PlcError('INVALID_ADDRESS', `FETCH/WRITE job out of the header's range: ORG ${r.org}, DB ${r.dbNumber}, start ${r.start}, length ${r.length}`);
+    throw new PlcError(
+      'INVALID_ADDRESS',
+      `FETCH/WRITE job out of the header's range: ORG ${r.org}, DB ${r.dbNumber}, start ${r.start}, length ${r.length}`,
+    );
   }
   const data = r.op === OpCode.WriteRequest ? (r.data ?? Buffer.alloc(0)) : Buffer.alloc(0);
   const frame = Buffer.allocUnsafe(HEADER + data.length);
@@ -126,7 +130,8 @@ export function encodeResponse(op: OpCode.FetchResponse | OpCode.WriteAck, error
 }
 
 function checkCommon(buf: Buffer, what: string): void {
-  if (buf[0] !== 0x53 || buf[1] !== 0x35) throw new ProtocolError(`${what}: system id ${buf.subarray(0, 2).toString('hex')}, expected "S5"`);
+  if (buf[0] !== 0x53 || buf[1] !== 0x35)
+    throw new ProtocolError(`${what}: system id ${buf.subarray(0, 2).toString('hex')}, expected "S5"`);
   if (buf[2] !== HEADER) throw new ProtocolError(`${what}: header length ${buf[2]}, expected 16`);
   if (buf[3] !== 0x01 || buf[4] !== 0x03) throw new ProtocolError(`${what}: bad op code field`);
 }
@@ -136,7 +141,8 @@ export function decodeResponse(frame: Buffer): FwResponse {
   if (frame.length < HEADER) throw new ProtocolError(`FETCH/WRITE response of ${frame.length} bytes is shorter than its header`);
   checkCommon(frame, 'response');
   const op = frame[5]!;
-  if (op !== OpCode.FetchResponse && op !== OpCode.WriteAck) throw new ProtocolError(`response op code 0x${op.toString(16).padStart(2, '0')}, expected 06 or 04`);
+  if (op !== OpCode.FetchResponse && op !== OpCode.WriteAck)
+    throw new ProtocolError(`response op code 0x${op.toString(16).padStart(2, '0')}, expected 06 or 04`);
   if (frame[6] !== 0x0f || frame[7] !== 0x03) throw new ProtocolError('response: bad ack field');
   if (frame[9] !== 0xff || frame[10] !== 0x07) throw new ProtocolError('response: bad empty field');
   return { op, error: frame[8]!, data: frame.subarray(HEADER) };
@@ -147,7 +153,8 @@ export function decodeRequest(frame: Buffer): FwRequest {
   if (frame.length < HEADER) throw new ProtocolError(`FETCH/WRITE request of ${frame.length} bytes is shorter than its header`);
   checkCommon(frame, 'request');
   const op = frame[5]!;
-  if (op !== OpCode.FetchRequest && op !== OpCode.WriteRequest) throw new ProtocolError(`request op code 0x${op.toString(16).padStart(2, '0')}, expected 05 or 03`);
+  if (op !== OpCode.FetchRequest && op !== OpCode.WriteRequest)
+    throw new ProtocolError(`request op code 0x${op.toString(16).padStart(2, '0')}, expected 05 or 03`);
   if (frame[6] !== 0x03 || frame[7] !== 0x08) throw new ProtocolError('request: bad ORG field');
   if (frame[14] !== 0xff || frame[15] !== 0x02) throw new ProtocolError('request: bad empty field');
   return {
@@ -212,7 +219,11 @@ export function checkResponse(buffered: Buffer, expected: ResponseExpectation | 
     // Reject a wrong start early rather than waiting for 16 bytes that may never come.
     const prefix = Buffer.from([0x53, 0x35, HEADER, 0x01, 0x03]);
     const n = Math.min(buffered.length, prefix.length);
-    if (!buffered.subarray(0, n).equals(prefix.subarray(0, n))) return { kind: 'bad', error: new ProtocolError(`answer does not start with "S5" 10 01 03: ${buffered.subarray(0, n).toString('hex')}`) };
+    if (!buffered.subarray(0, n).equals(prefix.subarray(0, n)))
+      return {
+        kind: 'bad',
+        error: new ProtocolError(`answer does not start with "S5" 10 01 03: ${buffered.subarray(0, n).toString('hex')}`),
+      };
     return { kind: 'need' };
   }
   let header: FwResponse;
@@ -223,7 +234,10 @@ export function checkResponse(buffered: Buffer, expected: ResponseExpectation | 
   }
   const want = expected.op === OpCode.FetchRequest ? OpCode.FetchResponse : OpCode.WriteAck;
   if (header.op !== want) {
-    return { kind: 'bad', error: new ProtocolError(`answer op code 0x${hex2(header.op)} does not match the job (expected 0x${hex2(want)})`) };
+    return {
+      kind: 'bad',
+      error: new ProtocolError(`answer op code 0x${hex2(header.op)} does not match the job (expected 0x${hex2(want)})`),
+    };
   }
   const length = header.op === OpCode.FetchResponse && header.error === 0 ? HEADER + expected.dataBytes : HEADER;
   return buffered.length >= length ? { kind: 'frame', length } : { kind: 'need' };

@@ -57,7 +57,15 @@ export interface FetchWriteRequestEvent {
 
 type PortMode = 'fetch' | 'write' | 'both';
 
-const AREA_BY_ORG: Readonly<Record<number, AreaName>> = { [Org.DB]: 'DB', [Org.M]: 'M', [Org.I]: 'I', [Org.Q]: 'Q', [Org.PEPA]: 'PE', [Org.C]: 'C', [Org.T]: 'T' };
+const AREA_BY_ORG: Readonly<Record<number, AreaName>> = {
+  [Org.DB]: 'DB',
+  [Org.M]: 'M',
+  [Org.I]: 'I',
+  [Org.Q]: 'Q',
+  [Org.PEPA]: 'PE',
+  [Org.C]: 'C',
+  [Org.T]: 'T',
+};
 
 /**
  * Events: `connection` / `disconnect` (connectionCount), `request`
@@ -200,7 +208,13 @@ export class FetchWriteServer extends EventEmitter {
       socket.destroy();
       return;
     }
-    this.emit('request', { kind: fetch ? 'fetch' : 'write', org: req.org, dbNumber: req.dbNumber, start: req.start, length: req.length } satisfies FetchWriteRequestEvent);
+    this.emit('request', {
+      kind: fetch ? 'fetch' : 'write',
+      org: req.org,
+      dbNumber: req.dbNumber,
+      start: req.start,
+      length: req.length,
+    } satisfies FetchWriteRequestEvent);
     if (this.faults.latencyMs > 0) await new Promise((r) => setTimeout(r, this.faults.latencyMs));
     if (this.faults.silent || socket.destroyed) return;
     const answer = this.answer(req);

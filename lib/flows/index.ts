@@ -4,4 +4,12 @@ export { errorInfo, outcomes, tagFailure, type TagErrorInfo, type TagOutcome, ty
 export { valueChanged, ChangeFilter } from './change-filter';
 export { PolledTable } from './polled-table';
 export { writeRequest, type WriteRequest } from './write-request';
-export { LifeSignWatch, nextLifeSign, LIFE_SIGN_COUNTER_MAX, type LifeSignMode, type LifeSignEvent, type LifeSignState, type LifeSignReport } from './life-sign';
+export {
+  LifeSignWatch,
+  nextLifeSign,
+  LIFE_SIGN_COUNTER_MAX,
+  type LifeSignMode,
+  type LifeSignEvent,
+  type LifeSignState,
+  type LifeSignReport,
+} from './life-sign';

@@ -7,9 +7,16 @@
 
 /** Largest value of a life-sign counter per data type; it wraps to 0 after that. */
 export const LIFE_SIGN_COUNTER_MAX: Readonly<Record<string, number>> = Object.freeze({
-  BYTE: 0xff, USINT: 0xff, SINT: 0x7f, CHAR: 0xff,
-  WORD: 0xffff, UINT: 0xffff, INT: 0x7fff,
-  DWORD: 0xffffffff, UDINT: 0xffffffff, DINT: 0x7fffffff,
+  BYTE: 0xff,
+  USINT: 0xff,
+  SINT: 0x7f,
+  CHAR: 0xff,
+  WORD: 0xffff,
+  UINT: 0xffff,
+  INT: 0x7fff,
+  DWORD: 0xffffffff,
+  UDINT: 0xffffffff,
+  DINT: 0x7fffffff,
 });
 
 export type LifeSignMode = 'counter' | 'toggle';

@@ -14,8 +14,7 @@ export interface TagErrorInfo {
 }
 
 export type TagOutcome =
-  | { name: string; address: string; ok: true; value: unknown }
-  | { name: string; address: string; ok: false; error: TagErrorInfo };
+  { name: string; address: string; ok: true; value: unknown } | { name: string; address: string; ok: false; error: TagErrorInfo };
 
 /** A failed tag: its name, and its error as plain data (which carries the address). */
 export interface TagFailure {

@@ -33,6 +33,7 @@ export function tagsOfMessage(value: unknown): TagRow[] | undefined {
   if (value === undefined || value === null) return undefined;
   if (typeof value === 'string') return tagTable([{ address: value }]);
   if (Array.isArray(value)) return tagTable((value as unknown[]).map((v) => (typeof v === 'string' ? { address: v } : v)));
-  if (typeof value === 'object') return tagTable(Object.entries(value as Record<string, unknown>).map(([name, address]) => ({ name, address })));
+  if (typeof value === 'object')
+    return tagTable(Object.entries(value as Record<string, unknown>).map(([name, address]) => ({ name, address })));
   return undefined;
 }

@@ -20,14 +20,24 @@ export interface FreeportTag extends TagShape {
 /** Type names (nodes7 style, with their short forms) of the types that fit a small data area. */
 const TYPES: Readonly<Record<string, DataTypeName>> = Object.freeze({
   X: 'BOOL',
-  B: 'BYTE', BYTE: 'BYTE',
-  C: 'CHAR', CHAR: 'CHAR',
-  SINT: 'SINT', USINT: 'USINT',
-  I: 'INT', INT: 'INT',
-  W: 'WORD', WORD: 'WORD', UINT: 'UINT',
-  DI: 'DINT', DINT: 'DINT', UDINT: 'UDINT',
-  DW: 'DWORD', DWORD: 'DWORD',
-  R: 'REAL', REAL: 'REAL',
+  B: 'BYTE',
+  BYTE: 'BYTE',
+  C: 'CHAR',
+  CHAR: 'CHAR',
+  SINT: 'SINT',
+  USINT: 'USINT',
+  I: 'INT',
+  INT: 'INT',
+  W: 'WORD',
+  WORD: 'WORD',
+  UINT: 'UINT',
+  DI: 'DINT',
+  DINT: 'DINT',
+  UDINT: 'UDINT',
+  DW: 'DWORD',
+  DWORD: 'DWORD',
+  R: 'REAL',
+  REAL: 'REAL',
 });
 
 const SYNTAX = /^ST(\d{1,5})\s*,\s*([A-Z]+)(\d{1,3})(?:\.(\d{1,3}))?$/i;
@@ -53,7 +63,10 @@ export function parseFreeportAddress(address: string, limits: FreeportAddressLim
   if (station > maxStation) throw new AddressError(address, `station ${station} is beyond the highest address ${maxStation}`);
   const type = TYPES[typeName];
   if (!type) {
-    throw new AddressError(address, `unknown type "${typeName}" (use X, BYTE/B, CHAR, SINT, USINT, INT, WORD, UINT, DINT, UDINT, DWORD, REAL)`);
+    throw new AddressError(
+      address,
+      `unknown type "${typeName}" (use X, BYTE/B, CHAR, SINT, USINT, INT, WORD, UINT, DINT, UDINT, DWORD, REAL)`,
+    );
   }
   let bitOffset = 0;
   let count = 1;

@@ -123,7 +123,10 @@ export class FreeportBus extends EventEmitter {
       this.assertOpen();
     }
     this.serialPorts.add(port);
-    const link = this.addLink((bytes) => port.write(bytes), () => port.destroy());
+    const link = this.addLink(
+      (bytes) => port.write(bytes),
+      () => port.destroy(),
+    );
     port.on('data', (chunk: Buffer) => this.receive(link, chunk));
     port.once('close', () => {
       this.links.delete(link);
@@ -204,7 +207,10 @@ export class FreeportBus extends EventEmitter {
     if (this.closed) return void socket.destroy();
     this.sockets.add(socket);
     socket.setNoDelay(true);
-    const link = this.addLink((bytes) => socket.write(bytes), () => socket.destroy());
+    const link = this.addLink(
+      (bytes) => socket.write(bytes),
+      () => socket.destroy(),
+    );
     socket.on('data', (chunk) => this.receive(link, chunk));
     socket.on('error', () => {});
     socket.once('close', () => {

@@ -85,7 +85,9 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag, Fre
       const session = new FreeportSession(socketTransport(socket), this.profile, discipline);
       socket.on('data', (chunk) => session.receive(chunk));
       socket.on('error', () => {}); // 'close' follows and reports it
-      socket.once('close', () => this.lose(session, new ConnectionError('CONNECTION_LOST', `${this.name}: the serial device server closed the connection`)));
+      socket.once('close', () =>
+        this.lose(session, new ConnectionError('CONNECTION_LOST', `${this.name}: the serial device server closed the connection`)),
+      );
       return session;
     }
     const port = await openSerial({ ...t, ...(this.binding ? { binding: this.binding } : {}), signal });
@@ -94,7 +96,9 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag, Fre
     port.once('close', (err: Error | null) =>
       this.lose(
         session,
-        new ConnectionError('CONNECTION_LOST', `${this.name}: the serial port closed${err ? ` (${err.message})` : ''}`, { cause: err ?? undefined }),
+        new ConnectionError('CONNECTION_LOST', `${this.name}: the serial port closed${err ? ` (${err.message})` : ''}`, {
+          cause: err ?? undefined,
+        }),
       ),
     );
     return session;
@@ -171,7 +175,9 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag, Fre
   ): Promise<void> {
     const only = group.length === 1 ? group[0]! : undefined;
     if (only && only.tag.byteOffset === 0 && only.tag.type !== 'BOOL') {
-      return session.exchange(writeRequest(station, only.bytes, this.profile), signal).then((reply) => this.verify(station, only.bytes, reply));
+      return session
+        .exchange(writeRequest(station, only.bytes, this.profile), signal)
+        .then((reply) => this.verify(station, only.bytes, reply));
     }
     return session.transaction(async (exchange) => {
       const before = await exchange(readRequest(station, this.profile));
@@ -242,5 +248,8 @@ function serialTransport(port: SerialPortStream): FreeportTransport {
 }
 
 function hex(bytes: Buffer): string {
-  return bytes.toString('hex').toUpperCase().replace(/(..)(?!$)/g, '$1 ');
+  return bytes
+    .toString('hex')
+    .toUpperCase()
+    .replace(/(..)(?!$)/g, '$1 ');
 }

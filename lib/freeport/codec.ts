@@ -77,7 +77,7 @@ export function encodeReply(reply: FreeportReply, profile: FreeportProfile = DEF
   const p = profile;
   let body = '';
   if (p.replyEchoesAddress) {
-    if (reply.station === undefined) throw new PlcError('INVALID_VALUE', 'this profile\'s replies carry the station address');
+    if (reply.station === undefined) throw new PlcError('INVALID_VALUE', "this profile's replies carry the station address");
     body += hex(reply.station, p.addressWidth, 'station');
   }
   return frame(p, body + du(reply.data, p), 0);

@@ -109,7 +109,11 @@ export class FreeportSession implements DriverSession {
     }
     const attempts = `${retries + 1} attempt${retries === 0 ? '' : 's'} of ${timeout} ms`;
     if (last instanceof ProtocolError) {
-      return Promise.reject(new ProtocolError(`station ${request.station} on ${name} sent no valid reply (${attempts}; last: ${last.message})`, { cause: last }));
+      return Promise.reject(
+        new ProtocolError(`station ${request.station} on ${name} sent no valid reply (${attempts}; last: ${last.message})`, {
+          cause: last,
+        }),
+      );
     }
     throw new TimeoutError(`station ${request.station} on ${name} did not answer (${attempts})`, { cause: last });
   }

@@ -46,7 +46,6 @@ export function endpointOptions(name: string, endpoint: EndpointOptions, options
   };
 }
 
-
 /** A parsed address list and what the driver prepared for it (behind a PreparedRead, or an array read() sees again). */
 interface ReadList<T, M> {
   /** A copy of the list, to notice a caller that changed its array between polls. */
@@ -118,10 +117,7 @@ const MAX_CACHED_TAGS = 10_000;
  * Requests made while not connected fail fast with NOT_CONNECTED: a stale
  * write executed minutes later, when the link comes back, is worse than an error.
  */
-export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M = undefined>
-  extends EventEmitter
-  implements PlcClient
-{
+export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M = undefined> extends EventEmitter implements PlcClient {
   abstract readonly protocol: Protocol;
   readonly name: string;
   protected readonly timeout: number;
@@ -351,10 +347,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     for (const key of Object.keys(results)) if (!results[key]!.ok) throw new TagErrors(results);
   }
 
-  async writeDetailed(
-    values: Readonly<Record<string, unknown>>,
-    options: RequestOptions = {},
-  ): Promise<Record<string, TagResult<void>>> {
+  async writeDetailed(values: Readonly<Record<string, unknown>>, options: RequestOptions = {}): Promise<Record<string, TagResult<void>>> {
     if (values === null || typeof values !== 'object') {
       throw new PlcError('INVALID_VALUE', 'write() takes an object of { address: value }');
     }

@@ -5,10 +5,7 @@ import { ProtocolError } from '../errors';
  * start at a frame boundary (or at garbage to skip).
  */
 export type FrameCheck =
-  | { kind: 'need' }
-  | { kind: 'frame'; length: number }
-  | { kind: 'skip'; length: number }
-  | { kind: 'bad'; error: ProtocolError };
+  { kind: 'need' } | { kind: 'frame'; length: number } | { kind: 'skip'; length: number } | { kind: 'bad'; error: ProtocolError };
 
 const DEFAULT_MAX_BUFFERED = 1 << 20;
 const EMPTY = Buffer.alloc(0);

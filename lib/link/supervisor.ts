@@ -121,7 +121,10 @@ export class LinkSupervisor<S extends DriverSession> {
       (reason: unknown) => {
         clearTimeout(deadline);
         // A session that opens after its attempt was abandoned is closed at once.
-        opened.then((late) => late.destroy(), () => {});
+        opened.then(
+          (late) => late.destroy(),
+          () => {},
+        );
         if (this.opening !== controller) return;
         this.opening = undefined;
         const err = toPlcError(reason, 'CONNECT_FAILED');
@@ -158,7 +161,7 @@ export class LinkSupervisor<S extends DriverSession> {
   private settleFirst(err?: PlcError): void {
     const waiters = this.firstWaiters;
     this.firstWaiters = [];
-    for (const w of waiters) (err ? w.reject(err) : w.resolve());
+    for (const w of waiters) err ? w.reject(err) : w.resolve();
   }
 }
 

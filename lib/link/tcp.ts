@@ -25,7 +25,8 @@ export function openTcp(options: TcpConnectOptions): Promise<net.Socket> {
     const socket = net.connect({ host, port, noDelay: true });
     const timer = setTimeout(() => fail(new TimeoutError(`connecting to ${where} timed out after ${timeout} ms`)), timeout);
     const onAbort = () => fail(abortError(`connecting to ${where}`, signal!));
-    const onError = (err: NodeJS.ErrnoException) => fail(new ConnectionError('CONNECT_FAILED', connectFailure(host, port, err), { cause: err }));
+    const onError = (err: NodeJS.ErrnoException) =>
+      fail(new ConnectionError('CONNECT_FAILED', connectFailure(host, port, err), { cause: err }));
     const cleanup = () => {
       clearTimeout(timer);
       signal?.removeEventListener('abort', onAbort);

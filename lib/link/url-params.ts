@@ -65,7 +65,10 @@ export class UrlParams {
   list(name: string): string[] | undefined {
     const all = this.search.getAll(name);
     if (all.length === 0) return undefined;
-    return all.flatMap((v) => v.split(',')).map((s) => s.trim()).filter(Boolean);
+    return all
+      .flatMap((v) => v.split(','))
+      .map((s) => s.trim())
+      .filter(Boolean);
   }
 }
 

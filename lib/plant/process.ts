@@ -133,7 +133,8 @@ export class DemoProcess {
     let heater = (db[4]! & HEATER) !== 0;
     if (temperature < THERMAL.heaterOnBelow) heater = true;
     else if (temperature > THERMAL.heaterOffAbove) heater = false;
-    const rise = (heater ? THERMAL.heaterRate : 0) + (THERMAL.motorRate * speed) / MOTOR.fullSpeed - THERMAL.loss * (temperature - THERMAL.ambient);
+    const rise =
+      (heater ? THERMAL.heaterRate : 0) + (THERMAL.motorRate * speed) / MOTOR.fullSpeed - THERMAL.loss * (temperature - THERMAL.ambient);
     temperature += rise * dt;
     db.writeFloatBE(temperature, 16);
     db[4] = (db[4]! & ~(RUNNING | HEATER)) | (running ? RUNNING : 0) | (heater ? HEATER : 0);

@@ -281,6 +281,7 @@ export function decodeLoadBlock(bytes: Buffer): UploadedBlock {
   const entry = (Object.entries(SUBBLOCK_TYPES) as [BlockType, number][]).find(([, v]) => v === sub);
   if (!entry) throw new ProtocolError(`uploaded block: unknown sub-block type 0x${sub.toString(16)}`);
   const mc7 = bytes.readUInt16BE(34);
-  if (BLOCK_HEADER + mc7 > bytes.length) throw new ProtocolError(`uploaded block announces ${mc7} bytes of code, ${bytes.length - BLOCK_HEADER} arrived`);
+  if (BLOCK_HEADER + mc7 > bytes.length)
+    throw new ProtocolError(`uploaded block announces ${mc7} bytes of code, ${bytes.length - BLOCK_HEADER} arrived`);
   return { type: entry[0], number: bytes.readUInt16BE(6), bytes, code: bytes.subarray(BLOCK_HEADER, BLOCK_HEADER + mc7) };
 }

@@ -288,7 +288,10 @@ export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Se
     const cc = decodeCotp(await next());
     if (cc.type !== 'CC') {
       const where = e.remoteTsap !== undefined ? `TSAP 0x${calledTsap.toString(16).padStart(4, '0')}` : `rack ${e.rack}, slot ${e.slot}`;
-      throw new ConnectionError('CONNECT_FAILED', `${o.name} refused the connection (${where}): wrong rack/slot or TSAP, or the PLC's connection limit is reached`);
+      throw new ConnectionError(
+        'CONNECT_FAILED',
+        `${o.name} refused the connection (${where}): wrong rack/slot or TSAP, or the PLC's connection limit is reached`,
+      );
     }
     socket.write(encodeSetupCommunication(0, { maxAmqCalling: REQUESTED_AMQ, maxAmqCalled: REQUESTED_AMQ, pduSize: e.pduSize }));
     const ack = decodeS7(await next());
@@ -346,7 +349,12 @@ function frameWaiter(socket: net.Socket, reader: FrameReader, signal: AbortSigna
     flush();
   };
   const onClose = () =>
-    fail(new ConnectionError('CONNECT_FAILED', `${name} closed the connection during the handshake (wrong rack/slot or TSAP, or the connection limit is reached)`));
+    fail(
+      new ConnectionError(
+        'CONNECT_FAILED',
+        `${name} closed the connection during the handshake (wrong rack/slot or TSAP, or the connection limit is reached)`,
+      ),
+    );
   const onError = (err: Error) => fail(new ConnectionError('CONNECT_FAILED', `${name}: ${err.message}`, { cause: err }));
   const onAbort = () => fail(abortError(`connecting to ${name}`, signal));
   socket.on('data', onData);

@@ -152,7 +152,11 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   planFor(addresses: readonly string[]): ReadPlan {
     const pduSize = this.pduSize;
     if (pduSize === 0) throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name}`);
-    return this.plans.get(addresses.map((a) => this.tag(a)), pduSize, this.planOptions);
+    return this.plans.get(
+      addresses.map((a) => this.tag(a)),
+      pduSize,
+      this.planOptions,
+    );
   }
 
   private openSession(signal: AbortSignal): Promise<S7Session> {
@@ -182,7 +186,12 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
       }
       for (const frame of frames) {
         if ((frame[5]! & 0xf0) === CotpType.DR) {
-          return fail(new ConnectionError('CONNECTION_LOST', `${this.name} disconnected (COTP disconnect request, reason 0x${(frame[10] ?? 0).toString(16)})`));
+          return fail(
+            new ConnectionError(
+              'CONNECTION_LOST',
+              `${this.name} disconnected (COTP disconnect request, reason 0x${(frame[10] ?? 0).toString(16)})`,
+            ),
+          );
         }
         // The headers are checked here (a frame that is not S7 drops the link);
         // the job that asked decodes the rest (S7Client.decode, scanReadAck).
@@ -342,7 +351,12 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
 
   // ---------------------------------------------------------------- reads
 
-  private async readTags(session: S7Session, tags: readonly Tag[], signal?: AbortSignal, prepared?: S7Prepared): Promise<TagResult<PlcValue>[]> {
+  private async readTags(
+    session: S7Session,
+    tags: readonly Tag[],
+    signal?: AbortSignal,
+    prepared?: S7Prepared,
+  ): Promise<TagResult<PlcValue>[]> {
     const { values, errors } = await this.readValues(session, tags, signal, prepared);
     return toResults(values, errors);
   }
@@ -372,7 +386,13 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
    * and the tags are read again with a plan for it (each round plans for
    * fewer items than the one before, so this ends).
    */
-  private async readServed(session: S7Session, tags: readonly Tag[], merge: boolean, signal?: AbortSignal, prepared?: S7Prepared): Promise<CollectedRead> {
+  private async readServed(
+    session: S7Session,
+    tags: readonly Tag[],
+    merge: boolean,
+    signal?: AbortSignal,
+    prepared?: S7Prepared,
+  ): Promise<CollectedRead> {
     for (;;) {
       const c = merge
         ? this.preparedPlan(session.pduSize, tags, prepared ?? { compiled: undefined })
@@ -477,7 +497,9 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
         const unusual = this.unusualReadAnswer(session, frame, count, table, base);
         if (typeof unusual === 'number') {
           served = served === 0 ? unusual : Math.min(served, unusual);
-          (pduErrors ??= new Array<PlcError | undefined>(n))[p] = new ProtocolError(`the PLC answered ${unusual} of the ${count} items of a read`);
+          (pduErrors ??= new Array<PlcError | undefined>(n))[p] = new ProtocolError(
+            `the PLC answered ${unusual} of the ${count} items of a read`,
+          );
           continue;
         }
         if (unusual) {
@@ -493,7 +515,10 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
       try {
         for (let t = 0; t < tags.length; t++) {
           const p = tagPdu[t]!;
-          values[t] = p >= 0 ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!) : this.splitValue(tags[t]!, t, plan, c, answers);
+          values[t] =
+            p >= 0
+              ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!)
+              : this.splitValue(tags[t]!, t, plan, c, answers);
         }
         return { values, errors: undefined, retry: [], served: 0 };
       } catch {
@@ -508,7 +533,8 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
       const k = itemBase[p]! + i;
       const rc = table.code[k]!;
       if (rc !== SUCCESS) return returnCodeError(rc);
-      if (table.length[k] !== itemLength[k]) return new ProtocolError(`asked for ${itemLength[k]} bytes, the PLC returned ${table.length[k]}`);
+      if (table.length[k] !== itemLength[k])
+        return new ProtocolError(`asked for ${itemLength[k]} bytes, the PLC returned ${table.length[k]}`);
       return undefined;
     };
     for (let t = 0; t < tags.length; t++) {
@@ -521,7 +547,8 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
         if (!e) continue;
         err ??= e;
         // Only a return code of an item that also served other tags can be one tag's fault.
-        if (e.plcCode !== undefined && e.plcCode <= 0xff && c.tagsPerItem().get(pieces.pdu[k]! * 256 + pieces.item[k]!)! > 1) retryAlone = true;
+        if (e.plcCode !== undefined && e.plcCode <= 0xff && c.tagsPerItem().get(pieces.pdu[k]! * 256 + pieces.item[k]!)! > 1)
+          retryAlone = true;
       }
       if (err) {
         if (retryAlone) retry.push(t);
@@ -530,7 +557,10 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
       }
       try {
         const p = tagPdu[t]!;
-        values[t] = p >= 0 ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!) : this.splitValue(tag, t, plan, c, answers);
+        values[t] =
+          p >= 0
+            ? decoders[t]!(answers[p]!, table.start[itemBase[p]! + tagItem[t]!]! + tagOffset[t]!)
+            : this.splitValue(tag, t, plan, c, answers);
       } catch (e) {
         errors[t] = tagError(tag, toPlcError(e, 'PROTOCOL_ERROR'));
       }
@@ -545,7 +575,13 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
    * one) returns how many the PLC served; a read ack in an unusual framing
    * fills the table like scanReadAck.
    */
-  private unusualReadAnswer(session: S7Session, frame: Buffer, count: number, table: ReadItemTable, base: number): PlcError | number | undefined {
+  private unusualReadAnswer(
+    session: S7Session,
+    frame: Buffer,
+    count: number,
+    table: ReadItemTable,
+    base: number,
+  ): PlcError | number | undefined {
     const answer = this.decode(session, frame);
     if (answer.kind === 'error') return headerError(answer.errorClass, answer.errorCode, 'read');
     if (answer.kind === 'read-ack' && answer.items.length > 0 && answer.items.length < count) return answer.items.length;
@@ -574,7 +610,11 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
 
   // ---------------------------------------------------------------- writes
 
-  private async writeTags(session: S7Session, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]> {
+  private async writeTags(
+    session: S7Session,
+    items: readonly { tag: Tag; value: unknown }[],
+    signal?: AbortSignal,
+  ): Promise<TagResult<void>[]> {
     this.stats.requests++;
     const plan = planWrite(items, session.pduSize, this.planOptions);
     const errors: (PlcError | undefined)[] = plan.errors.slice();
@@ -594,7 +634,13 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
    * out are sent again in jobs it serves. The items it answered are not
    * sent twice (a second write of a command bit could act twice).
    */
-  private async writeJob(session: S7Session, items: PlannedWriteItem[], tags: number[], errors: (PlcError | undefined)[], signal?: AbortSignal): Promise<void> {
+  private async writeJob(
+    session: S7Session,
+    items: PlannedWriteItem[],
+    tags: number[],
+    errors: (PlcError | undefined)[],
+    signal?: AbortSignal,
+  ): Promise<void> {
     const n = items.length;
     const failAll = (err: PlcError) => tags.forEach((t) => (errors[t] ??= err));
     let answer: S7Message;
@@ -616,7 +662,8 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
     this.learnItemLimit(served);
     const size = this.itemLimit;
     const rest: Promise<void>[] = [];
-    for (let i = served; i < n; i += size) rest.push(this.writeJob(session, items.slice(i, i + size), tags.slice(i, i + size), errors, signal));
+    for (let i = served; i < n; i += size)
+      rest.push(this.writeJob(session, items.slice(i, i + size), tags.slice(i, i + size), errors, signal));
     await Promise.all(rest);
   }
 }

@@ -165,7 +165,11 @@ export function describeReturnCode(code: number): { code: PlcErrorCode; text: st
 export function returnCodeError(returnCode: number, context: string, tag?: string): PlcError {
   const { code, text } = describeReturnCode(returnCode);
   const hex = `0x${returnCode.toString(16).padStart(2, '0').toUpperCase()}`;
-  return new PlcError(code, `${context}: the PLC answered ${hex}: ${text}`, tag === undefined ? { plcCode: returnCode } : { plcCode: returnCode, tag });
+  return new PlcError(
+    code,
+    `${context}: the PLC answered ${hex}: ${text}`,
+    tag === undefined ? { plcCode: returnCode } : { plcCode: returnCode, tag },
+  );
 }
 
 /** Header error class (ack and ack-data PDUs). */
@@ -181,7 +185,10 @@ const ERROR_CLASSES: Readonly<Record<number, string>> = Object.freeze({
 
 /** Well-known header errors (class << 8 | code). */
 const HEADER_ERRORS: Readonly<Record<number, [PlcErrorCode, string]>> = Object.freeze({
-  0x8104: ['ACCESS_DENIED', 'function not supported or access denied: PUT/GET access is not enabled on this S7-1200/1500 (or the block is optimized)'],
+  0x8104: [
+    'ACCESS_DENIED',
+    'function not supported or access denied: PUT/GET access is not enabled on this S7-1200/1500 (or the block is optimized)',
+  ],
   0x8304: ['ACCESS_DENIED', 'no resources / access denied: PUT/GET access is not enabled on this S7-1200/1500'],
   0x8404: ['PROTOCOL_ERROR', 'fatal error in the protocol'],
   0x8500: ['PDU_TOO_LARGE', 'PDU too large for the negotiated size'],
@@ -274,7 +281,15 @@ export function blockTypeName(code: number): BlockType | undefined {
   return (Object.keys(BLOCK_TYPES) as BlockType[]).find((k) => BLOCK_TYPES[k] === code);
 }
 /** Sub-block type byte of block info and of a block's header (OB 0x08, DB 0x0A …), by block type. */
-export const SUBBLOCK_TYPES: Readonly<Record<BlockType, number>> = Object.freeze({ OB: 0x08, DB: 0x0a, SDB: 0x0b, FC: 0x0c, SFC: 0x0d, FB: 0x0e, SFB: 0x0f });
+export const SUBBLOCK_TYPES: Readonly<Record<BlockType, number>> = Object.freeze({
+  OB: 0x08,
+  DB: 0x0a,
+  SDB: 0x0b,
+  FC: 0x0c,
+  SFC: 0x0d,
+  FB: 0x0e,
+  SFB: 0x0f,
+});
 /** Programming languages of a block (block info byte "language"). */
 export const BLOCK_LANGUAGES: Readonly<Record<number, string>> = Object.freeze({
   0x00: 'undefined',

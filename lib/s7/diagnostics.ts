@@ -112,5 +112,10 @@ function encodeDiagnosticEntry(e: DiagnosticEvent): Buffer {
 /** The list of `entries` (newest first); `recent` > 0 gives SZL 0x01A0 with that many. */
 export function encodeDiagnosticBuffer(entries: readonly DiagnosticEvent[], recent = 0): SzlList {
   const chosen = recent > 0 ? entries.slice(0, recent) : entries;
-  return { id: recent > 0 ? 0x01a0 : SZL.DIAGNOSTICS, index: recent, recordLength: DIAGNOSTIC_ENTRY, records: chosen.map(encodeDiagnosticEntry) };
+  return {
+    id: recent > 0 ? 0x01a0 : SZL.DIAGNOSTICS,
+    index: recent,
+    recordLength: DIAGNOSTIC_ENTRY,
+    records: chosen.map(encodeDiagnosticEntry),
+  };
 }

@@ -89,11 +89,23 @@ function addressingOf(e: S7Endpoint): Addressing {
   if (e.remoteTsap !== undefined) {
     return tsapPair(e.localTsap!, e.remoteTsap, '');
   }
-  return { callingTsap: localTsapFor(e.connectionType), calledTsap: remoteTsapFor(e.connectionType, e.rack, e.slot), query: `rack=${e.rack}&slot=${e.slot}`, label: `rack ${e.rack}, slot ${e.slot}`, family: '' };
+  return {
+    callingTsap: localTsapFor(e.connectionType),
+    calledTsap: remoteTsapFor(e.connectionType, e.rack, e.slot),
+    query: `rack=${e.rack}&slot=${e.slot}`,
+    label: `rack ${e.rack}, slot ${e.slot}`,
+    family: '',
+  };
 }
 
 function tsapPair(local: number, remote: number, family: string): Addressing {
-  return { callingTsap: local, calledTsap: remote, query: `localTsap=${hex4(local)}&remoteTsap=${hex4(remote)}`, label: `local TSAP 0x${hex4(local)}, remote TSAP 0x${hex4(remote)}`, family };
+  return {
+    callingTsap: local,
+    calledTsap: remote,
+    query: `localTsap=${hex4(local)}&remoteTsap=${hex4(remote)}`,
+    label: `local TSAP 0x${hex4(local)}, remote TSAP 0x${hex4(remote)}`,
+    family,
+  };
 }
 
 /** The addressings tried when the URL's is refused: the usual slots first (a rack/slot CPU accepts a foreign TSAP too), then the TSAP pairs. */
@@ -167,7 +179,8 @@ class Doctor {
 
   constructor(private readonly options: DiagnoseOptions) {
     const ms = options.timeout ?? DEFAULT_DEADLINE;
-    if (!Number.isFinite(ms) || ms <= 0) throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
+    if (!Number.isFinite(ms) || ms <= 0)
+      throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
     this.deadline = Date.now() + ms;
     this.timer = setTimeout(() => this.ctl.abort(), ms);
     if (options.signal?.aborted) this.ctl.abort();
@@ -214,9 +227,14 @@ class Doctor {
   /** An error inside a step: an abort by the caller ends the walk, the deadline fails the step, anything else is `other`. */
   private failed(step: string, err: unknown, other: (e: PlcError) => never): never {
     if (err instanceof Stop) throw err;
-    if (this.options.signal?.aborted) throw new PlcError('ABORTED', 'the connection doctor was aborted', { cause: this.options.signal.reason });
+    if (this.options.signal?.aborted)
+      throw new PlcError('ABORTED', 'the connection doctor was aborted', { cause: this.options.signal.reason });
     if (this.signal.aborted) {
-      this.fail(step, `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms`, 'Give the doctor more time (the timeout option, or --timeout), or raise the URL\'s timeout on a slow link.');
+      this.fail(
+        step,
+        `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms`,
+        "Give the doctor more time (the timeout option, or --timeout), or raise the URL's timeout on a slow link.",
+      );
     }
     return other(toPlcError(err, 'CONNECT_FAILED'));
   }
@@ -241,7 +259,7 @@ class Doctor {
           step: 'deadline',
           ok: false,
           detail: `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms${after ? ` (after the ${after} step)` : ''}`,
-          hint: 'Give the doctor more time (the timeout option, or --timeout), or raise the URL\'s timeout on a slow link.',
+          hint: "Give the doctor more time (the timeout option, or --timeout), or raise the URL's timeout on a slow link.",
         });
         return;
       }
@@ -275,8 +293,17 @@ class Doctor {
     } catch (err) {
       return this.failed('resolve', err, (p) => {
         const code = (p.cause as NodeJS.ErrnoException | undefined)?.code ?? (err as NodeJS.ErrnoException).code;
-        if (code === 'EAI_AGAIN') this.fail('resolve', `"${host}" could not be looked up (EAI_AGAIN): no DNS server answered`, 'Check this machine\'s DNS settings, or use the PLC\'s IP address in the URL.');
-        this.fail('resolve', `"${host}" does not resolve${code ? ` (${code})` : ''}`, 'Check the spelling of the host name, or use the PLC\'s IP address in the URL (TIA Portal: the CPU\'s Properties → PROFINET interface → Ethernet addresses).');
+        if (code === 'EAI_AGAIN')
+          this.fail(
+            'resolve',
+            `"${host}" could not be looked up (EAI_AGAIN): no DNS server answered`,
+            "Check this machine's DNS settings, or use the PLC's IP address in the URL.",
+          );
+        this.fail(
+          'resolve',
+          `"${host}" does not resolve${code ? ` (${code})` : ''}`,
+          "Check the spelling of the host name, or use the PLC's IP address in the URL (TIA Portal: the CPU's Properties → PROFINET interface → Ethernet addresses).",
+        );
       });
     }
   }
@@ -327,7 +354,10 @@ class Doctor {
       const tried = addressingOf(e);
       const answer = await this.connectionRequest(socket, tried, e);
       if (answer.kind !== 'accepted') await this.cotpFailure(e, address, tried, answer);
-      this.pass('cotp', `the CPU accepted the connection request (${tried.label}: called TSAP 0x${hex4(tried.calledTsap)}, calling TSAP 0x${hex4(tried.callingTsap)})`);
+      this.pass(
+        'cotp',
+        `the CPU accepted the connection request (${tried.label}: called TSAP 0x${hex4(tried.calledTsap)}, calling TSAP 0x${hex4(tried.callingTsap)})`,
+      );
       await this.setup(socket, e);
     } finally {
       socket.destroy();
@@ -352,7 +382,7 @@ class Doctor {
       );
     }
     if (code === 'EHOSTUNREACH' || code === 'ENETUNREACH') {
-      this.fail('tcp', `no route to ${where} (${code})`, 'Check the IP address, this machine\'s subnet and gateway, and the cable.');
+      this.fail('tcp', `no route to ${where} (${code})`, "Check the IP address, this machine's subnet and gateway, and the cable.");
     }
     this.fail('tcp', p.message);
   }
@@ -361,7 +391,9 @@ class Doctor {
   private async connectionRequest(socket: net.Socket, a: Addressing, e: S7Endpoint): Promise<CotpAnswer> {
     const frames = new FrameWaiter(socket, this.signal);
     try {
-      socket.write(encodeConnectionRequest({ sourceRef: 0x0001, callingTsap: a.callingTsap, calledTsap: a.calledTsap, tpduSize: TPDU_SIZE_CODE }));
+      socket.write(
+        encodeConnectionRequest({ sourceRef: 0x0001, callingTsap: a.callingTsap, calledTsap: a.calledTsap, tpduSize: TPDU_SIZE_CODE }),
+      );
       const frame = await frames.next(this.stepTimeout(e));
       if (frame.kind !== 'frame') return frame;
       const m = decodeCotp(frame.frame);
@@ -376,8 +408,14 @@ class Doctor {
     }
   }
 
-  private async cotpFailure(e: S7Endpoint, address: string, tried: Addressing, answer: Exclude<CotpAnswer, { kind: 'accepted' }>): Promise<never> {
-    const asked = (why: string) => `${tried.label} (called TSAP 0x${hex4(tried.calledTsap)}, calling TSAP 0x${hex4(tried.callingTsap)}; ${why})`;
+  private async cotpFailure(
+    e: S7Endpoint,
+    address: string,
+    tried: Addressing,
+    answer: Exclude<CotpAnswer, { kind: 'accepted' }>,
+  ): Promise<never> {
+    const asked = (why: string) =>
+      `${tried.label} (called TSAP 0x${hex4(tried.calledTsap)}, calling TSAP 0x${hex4(tried.callingTsap)}; ${why})`;
     if (answer.kind === 'silent') {
       this.fail(
         'cotp',
@@ -386,7 +424,11 @@ class Doctor {
       );
     }
     if (answer.kind === 'foreign') {
-      this.fail('cotp', `the answer is not an ISO-on-TCP connection confirm: ${answer.message}`, 'Another protocol listens on this port: check the address and the port (S7 uses 102).');
+      this.fail(
+        'cotp',
+        `the answer is not an ISO-on-TCP connection confirm: ${answer.message}`,
+        'Another protocol listens on this port: check the address and the port (S7 uses 102).',
+      );
     }
     if (answer.kind === 'refused' && answer.reason === DR_CONGESTION) {
       this.fail(
@@ -397,7 +439,9 @@ class Doctor {
     }
     const how = answer.kind === 'refused' ? `COTP disconnect, reason ${answer.reason}` : 'it closed the connection without an answer';
     const found = await this.findAddressing(e, address);
-    const fix = found ? `The CPU accepts ${found.label}, which points to ${found.family}: use ?${found.query} in the URL. ` : 'None of the usual rack/slot or TSAP values was accepted either. ';
+    const fix = found
+      ? `The CPU accepts ${found.label}, which points to ${found.family}: use ?${found.query} in the URL. `
+      : 'None of the usual rack/slot or TSAP values was accepted either. ';
     this.fail('cotp', `the CPU refused the connection request for ${asked(how)}: wrong rack/slot or TSAP`, `${fix}${usualAddressing()}`);
   }
 
@@ -423,13 +467,27 @@ class Doctor {
     try {
       socket.write(encodeSetupCommunication(0, { maxAmqCalling: REQUESTED_AMQ, maxAmqCalled: REQUESTED_AMQ, pduSize: e.pduSize }));
       const answer = await frames.next(this.stepTimeout(e));
-      if (answer.kind === 'silent') this.fail('setup', `no answer to setup communication within ${answer.ms} ms`, 'The CPU accepted the connection but does not talk S7: check that the rack/slot or TSAP names the CPU (not a CP or a module without S7 communication).');
-      if (answer.kind === 'closed') this.fail('setup', 'the CPU closed the connection at setup communication', 'The CPU accepted the connection but not the S7 session: check rack/slot or TSAP, and the CPU\'s connection resources.');
+      if (answer.kind === 'silent')
+        this.fail(
+          'setup',
+          `no answer to setup communication within ${answer.ms} ms`,
+          'The CPU accepted the connection but does not talk S7: check that the rack/slot or TSAP names the CPU (not a CP or a module without S7 communication).',
+        );
+      if (answer.kind === 'closed')
+        this.fail(
+          'setup',
+          'the CPU closed the connection at setup communication',
+          "The CPU accepted the connection but not the S7 session: check rack/slot or TSAP, and the CPU's connection resources.",
+        );
       if (answer.kind === 'foreign') this.fail('setup', `the answer to setup communication is malformed: ${answer.message}`);
       const ack = decodeS7(answer.frame);
       if (ack.kind === 'error') {
         const err = headerError(ack.errorClass, ack.errorCode, 'setup communication');
-        this.fail('setup', err.message, 'The CPU refuses the S7 session: check the PDU size asked for (the pdu URL parameter) and the CPU\'s connection settings.');
+        this.fail(
+          'setup',
+          err.message,
+          "The CPU refuses the S7 session: check the PDU size asked for (the pdu URL parameter) and the CPU's connection settings.",
+        );
       }
       if (ack.kind !== 'setup-ack') this.fail('setup', `the answer to setup communication is a ${ack.kind}`);
       const { pduSize, maxAmqCalling, maxAmqCalled } = ack.params;
@@ -453,15 +511,32 @@ class Doctor {
       await client.connect();
       const info = await client.info({ signal: this.signal });
       const family = familyOf(info);
-      const who = [info.moduleTypeName, info.orderCode && `(${info.orderCode})`, info.firmware && `firmware ${info.firmware}`].filter(Boolean).join(' ');
-      const names = [info.asName && `station "${info.asName}"`, info.moduleName && `module "${info.moduleName}"`, info.serialNumber && `serial ${info.serialNumber}`].filter(Boolean).join(', ');
+      const who = [info.moduleTypeName, info.orderCode && `(${info.orderCode})`, info.firmware && `firmware ${info.firmware}`]
+        .filter(Boolean)
+        .join(' ');
+      const names = [
+        info.asName && `station "${info.asName}"`,
+        info.moduleName && `module "${info.moduleName}"`,
+        info.serialNumber && `serial ${info.serialNumber}`,
+      ]
+        .filter(Boolean)
+        .join(', ');
       const state = info.state ? `in ${info.state}` : 'state not reported';
       const detail = `${who || 'the CPU does not say what it is (no identity lists)'}${names ? `; ${names}` : ''}; ${state}${family ? `; family ${family}` : ''}`;
-      const hint = info.state === 'STOP' ? 'The CPU is in STOP: memory can be read and written, but the program does not run (values do not change). Look at the diagnostic buffer (plcwire diag) for why it stopped.' : undefined;
+      const hint =
+        info.state === 'STOP'
+          ? 'The CPU is in STOP: memory can be read and written, but the program does not run (values do not change). Look at the diagnostic buffer (plcwire diag) for why it stopped.'
+          : undefined;
       this.pass('identity', detail, hint);
       return { ...info, family };
     } catch (err) {
-      return this.failed('identity', err, (p) => this.fail('identity', p.message, 'The handshake works but the S7 connection does not: run the doctor again; if it repeats, report it with this output.'));
+      return this.failed('identity', err, (p) =>
+        this.fail(
+          'identity',
+          p.message,
+          'The handshake works but the S7 connection does not: run the doctor again; if it repeats, report it with this output.',
+        ),
+      );
     } finally {
       this.signal.removeEventListener('abort', onAbort);
     }
@@ -471,8 +546,11 @@ class Doctor {
     const p = info.protection;
     const modern = info.family === 'S7-1200' || info.family === 'S7-1500';
     if (!p) return this.pass('protection', 'the CPU does not report its protection level (SZL 0x0232)');
-    if (p.level <= 1) return this.pass('protection', `level ${p.level}: no protection${p.keySwitch ? ` (mode selector ${p.keySwitch})` : ''}`);
-    const where = modern ? 'TIA Portal → the CPU\'s Properties → Protection & Security → Access level ("Full access" for writes)' : 'the CPU\'s protection settings in the hardware configuration, or the mode selector';
+    if (p.level <= 1)
+      return this.pass('protection', `level ${p.level}: no protection${p.keySwitch ? ` (mode selector ${p.keySwitch})` : ''}`);
+    const where = modern
+      ? 'TIA Portal → the CPU\'s Properties → Protection & Security → Access level ("Full access" for writes)'
+      : "the CPU's protection settings in the hardware configuration, or the mode selector";
     if (p.level === 2) {
       return this.pass(
         'protection',
@@ -480,7 +558,11 @@ class Doctor {
         `To write, give the password on the connection (S7Client.setPassword) or lower the protection: ${where}.`,
       );
     }
-    this.fail('protection', `level ${p.level}: read/write protection: the CPU refuses reads of its data without the password`, `Give the password on the connection (S7Client.setPassword) or lower the protection: ${where}.`);
+    this.fail(
+      'protection',
+      `level ${p.level}: read/write protection: the CPU refuses reads of its data without the password`,
+      `Give the password on the connection (S7Client.setPassword) or lower the protection: ${where}.`,
+    );
   }
 
   private async putGet(family: Family | undefined): Promise<void> {
@@ -494,7 +576,12 @@ class Doctor {
       if (e.plcCode !== undefined && PUT_GET_REFUSALS.includes(e.plcCode)) {
         this.fail('putget', `the CPU refuses Read Var as a whole: ${e.message}`, PUT_GET_HINT);
       }
-      if (e.plcCode === PASSWORD_NEEDED) this.fail('putget', `the CPU refuses Read Var: ${e.message}`, 'The protection level forbids reads: give the password (S7Client.setPassword) or lower the protection.');
+      if (e.plcCode === PASSWORD_NEEDED)
+        this.fail(
+          'putget',
+          `the CPU refuses Read Var: ${e.message}`,
+          'The protection level forbids reads: give the password (S7Client.setPassword) or lower the protection.',
+        );
       if (e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'NOT_CONNECTED') this.fail('putget', e.message);
       // An answer per item (MB0 out of range on a CPU without flags) still means Read Var is served.
       this.pass('putget', `the CPU serves Read Var (PUT/GET${needs}); ${probe}: ${e.message}`);
@@ -510,14 +597,25 @@ class Doctor {
     try {
       tag = client.tag(address);
     } catch (err) {
-      this.fail(step, (err as Error).message, 'Write the address in one of the S7 syntaxes (README, "Addresses"), e.g. DB1,INT0 or DB1.DBW0.');
+      this.fail(
+        step,
+        (err as Error).message,
+        'Write the address in one of the S7 syntaxes (README, "Addresses"), e.g. DB1,INT0 or DB1.DBW0.',
+      );
     }
     try {
       if (tag.area === 'DB') await this.dbAddress(step, tag, family);
       else {
         const r = (await client.readDetailed([address], { signal: this.signal }))[address]!;
         if (r.ok) this.pass(step, `${address} = ${valueToText(r.value)}`);
-        else this.fail(step, r.error.message, r.error.code === 'ADDRESS_OUT_OF_RANGE' ? `The ${tag.area} area of this CPU is smaller than the address needs: check the offset.` : undefined);
+        else
+          this.fail(
+            step,
+            r.error.message,
+            r.error.code === 'ADDRESS_OUT_OF_RANGE'
+              ? `The ${tag.area} area of this CPU is smaller than the address needs: check the offset.`
+              : undefined,
+          );
       }
     } catch (err) {
       return this.failed(step, err, (p) => this.fail(step, p.message));
@@ -549,7 +647,11 @@ class Doctor {
     const end = tag.byteOffset + tag.byteLength;
     const needs = `${tag.address} needs bytes ${tag.byteOffset}..${end - 1}`;
     const missing = (how: string) =>
-      this.fail(step, `DB${db} does not exist (${how})`, `Check the DB number in the PLC program and that the DB is downloaded to the CPU (an instance DB counts too).`);
+      this.fail(
+        step,
+        `DB${db} does not exist (${how})`,
+        `Check the DB number in the PLC program and that the DB is downloaded to the CPU (an instance DB counts too).`,
+      );
     let length: number | undefined;
     try {
       length = (await client.blockInfo('DB', db, { signal: this.signal })).mc7Size;
@@ -562,12 +664,17 @@ class Doctor {
       else if (e.code !== 'NOT_SUPPORTED' && e.code !== 'ACCESS_DENIED') throw err;
     }
     if (length !== undefined && end > length) {
-      this.fail(step, `DB${db} has ${length} bytes (block info); ${needs}`, `The address lies past the end of DB${db}: check the offset against the DB (the Offset column of the DB editor), or extend the DB and download it.`);
+      this.fail(
+        step,
+        `DB${db} has ${length} bytes (block info); ${needs}`,
+        `The address lies past the end of DB${db}: check the offset against the DB (the Offset column of the DB editor), or extend the DB and download it.`,
+      );
     }
     const read = async (address: string) => (await client.readDetailed([address], { signal: this.signal }))[address]!;
     const r = await read(tag.address);
     if (r.ok) {
-      const size = length !== undefined ? `${length} bytes (block info)` : 'its length is not known (this CPU offers no block info over S7comm)';
+      const size =
+        length !== undefined ? `${length} bytes (block info)` : 'its length is not known (this CPU offers no block info over S7comm)';
       return this.pass(step, `DB${db} exists, ${size}; ${tag.address} = ${valueToText(r.value)}`);
     }
     if (r.error.code === 'OBJECT_DOES_NOT_EXIST') missing(`the CPU answered the read: ${r.error.message}`);
@@ -581,7 +688,12 @@ class Doctor {
     };
     if (!(await readable(0))) {
       const modern = family === 'S7-1200' || family === 'S7-1500' || family === undefined;
-      if (!modern) this.fail(step, `DB${db} exists but not even its byte 0 can be read: it is empty`, 'Give the DB its variables in the PLC program and download it.');
+      if (!modern)
+        this.fail(
+          step,
+          `DB${db} exists but not even its byte 0 can be read: it is empty`,
+          'Give the DB its variables in the PLC program and download it.',
+        );
       this.fail(
         step,
         `DB${db} exists (the CPU did not answer "object does not exist") but not even its byte 0 can be read: it is probably an optimized DB ` +
@@ -598,12 +710,22 @@ class Doctor {
       if (await readable(mid)) lo = mid;
       else hi = mid;
     }
-    this.fail(step, `DB${db} has ${hi} bytes (found by reading single bytes); ${needs}`, `The address lies past the end of DB${db}: check the offset against the DB (the Offset column of the DB editor), or extend the DB and download it.`);
+    this.fail(
+      step,
+      `DB${db} has ${hi} bytes (found by reading single bytes); ${needs}`,
+      `The address lies past the end of DB${db}: check the offset against the DB (the Offset column of the DB editor), or extend the DB and download it.`,
+    );
   }
 }
 
-type CotpAnswer = { kind: 'accepted' } | { kind: 'refused'; reason: number } | { kind: 'closed' } | { kind: 'silent'; ms: number } | { kind: 'foreign'; message: string };
-type FrameResult = { kind: 'frame'; frame: Buffer } | { kind: 'closed' } | { kind: 'silent'; ms: number } | { kind: 'foreign'; message: string };
+type CotpAnswer =
+  | { kind: 'accepted' }
+  | { kind: 'refused'; reason: number }
+  | { kind: 'closed' }
+  | { kind: 'silent'; ms: number }
+  | { kind: 'foreign'; message: string };
+type FrameResult =
+  { kind: 'frame'; frame: Buffer } | { kind: 'closed' } | { kind: 'silent'; ms: number } | { kind: 'foreign'; message: string };
 
 /** Whole TPKT frames from a raw socket, one at a time, each with its own wait. */
 class FrameWaiter {
@@ -642,8 +764,8 @@ class FrameWaiter {
       };
       const check = () => {
         const frame = this.frames.shift();
-        if (frame) return done(), resolve({ kind: 'frame', frame }), true;
-        if (this.end) return done(), resolve(this.end), true;
+        if (frame) return (done(), resolve({ kind: 'frame', frame }), true);
+        if (this.end) return (done(), resolve(this.end), true);
         return false;
       };
       const onAbort = () => (done(), reject(new ConnectionError('ABORTED', 'aborted')));

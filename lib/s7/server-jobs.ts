@@ -145,7 +145,8 @@ function checkLengths(frame: Buffer): { count: number; paramLength: number; data
     throw new ProtocolError(`S7 lengths (parameters ${paramLength} + data ${dataLength}) do not match the frame (${frame.length} bytes)`);
   }
   const count = frame[PARAMS + 1]!;
-  if (paramLength !== 2 + READ_ITEM * count) throw new ProtocolError(`${count} items need ${2 + READ_ITEM * count} parameter bytes, got ${paramLength}`);
+  if (paramLength !== 2 + READ_ITEM * count)
+    throw new ProtocolError(`${count} items need ${2 + READ_ITEM * count} parameter bytes, got ${paramLength}`);
   return { count, paramLength, dataLength };
 }
 
@@ -154,7 +155,8 @@ function checkLengths(frame: Buffer): { count: number; paramLength: number; data
  * and returns the item's return code (0xFF when it can be served).
  */
 function locate(frame: Buffer, i: number, o: number, ctx: JobContext, forWrite: boolean): number {
-  if (frame[o] !== 0x12 || frame[o + 1] !== 0x0a || frame[o + 2] !== 0x10) throw new ProtocolError(`item ${i + 1}: not an S7ANY address (12 0A 10)`);
+  if (frame[o] !== 0x12 || frame[o + 1] !== 0x0a || frame[o + 2] !== 0x10)
+    throw new ProtocolError(`item ${i + 1}: not an S7ANY address (12 0A 10)`);
   const ts = frame[o + 3]!;
   const count = (frame[o + 4]! << 8) | frame[o + 5]!;
   const db = (frame[o + 6]! << 8) | frame[o + 7]!;
@@ -330,7 +332,15 @@ export function serveWrite(frame: Buffer, ctx: JobContext): Buffer {
 }
 
 /** Memory's 'read'/'write' events (only built when someone listens). */
-function emitAccess(ctx: JobContext, kind: 'read' | 'write', frame: Buffer, i: number, offset: number, length: number, written?: Buffer): void {
+function emitAccess(
+  ctx: JobContext,
+  kind: 'read' | 'write',
+  frame: Buffer,
+  i: number,
+  offset: number,
+  length: number,
+  written?: Buffer,
+): void {
   const o = PARAMS + 2 + READ_ITEM * i;
   const area = areaName(frame[o + 8]!, kind === 'write')!;
   const dbNumber = area === 'DB' ? frame.readUInt16BE(o + 6) : 0;

@@ -52,7 +52,15 @@ const S7_200: CpuProfile = Object.freeze({
   maxConnections: 8,
   slots: Object.freeze([]),
   tsaps: Object.freeze({ called: Object.freeze({ value: 0x1000, mask: 0xf800 }), calling: Object.freeze({ value: 0, mask: 0 }) }),
-  layout: Object.freeze({ dataBlocks: Object.freeze({ 1: 10240 }), inputs: 16, outputs: 16, flags: 32, peripheral: 0, counters: 0, timers: 0 }),
+  layout: Object.freeze({
+    dataBlocks: Object.freeze({ 1: 10240 }),
+    inputs: 16,
+    outputs: 16,
+    flags: 32,
+    peripheral: 0,
+    counters: 0,
+    timers: 0,
+  }),
   s5CountersTimers: false,
 });
 
@@ -145,7 +153,8 @@ export function toMemoryLayout(layout: S7Layout): MemoryLayout {
   const json = layout as S7JsonLayout;
   const out: MemoryLayout = {};
   const size = (what: string, v: unknown): number => {
-    if (typeof v !== 'number' || !Number.isInteger(v) || v < 0 || v > 0x1fffff) throw new TypeError(`layout: ${what} must be a whole number of bytes (0..2097151), got ${JSON.stringify(v)}`);
+    if (typeof v !== 'number' || !Number.isInteger(v) || v < 0 || v > 0x1fffff)
+      throw new TypeError(`layout: ${what} must be a whole number of bytes (0..2097151), got ${JSON.stringify(v)}`);
     return v;
   };
   if (json.dbs !== undefined) {
@@ -198,13 +207,85 @@ const COPYRIGHT = 'Original Siemens Equipment';
 
 /** Identity defaults per profile: catalogue CPUs of each family; serial numbers are made up. */
 export const IDENTITIES: Readonly<Record<S7Profile, Readonly<CpuIdentity>>> = Object.freeze({
-  's7-300': Object.freeze({ orderCode: '6ES7 315-2EH14-0AB0', firmware: 'V3.2.6', hardwareVersion: 4, moduleTypeName: 'CPU 315-2 PN/DP', serialNumber: 'S C-PW0000012019', asName: 'PLCWIRE-SIM', moduleName: 'CPU 315-2 PN/DP', plantId: '', copyright: COPYRIGHT, blockFunctions: true, passwordFunctions: true }),
-  's7-400': Object.freeze({ orderCode: '6ES7 416-3ES07-0AB0', firmware: 'V7.0.1', hardwareVersion: 3, moduleTypeName: 'CPU 416-3 PN/DP', serialNumber: 'S Q-PW0000022019', asName: 'PLCWIRE-SIM', moduleName: 'CPU 416-3 PN/DP', plantId: '', copyright: COPYRIGHT, blockFunctions: true, passwordFunctions: true }),
-  's7-1200': Object.freeze({ orderCode: '6ES7 214-1AG40-0XB0', firmware: 'V4.4.0', hardwareVersion: 5, moduleTypeName: 'CPU 1214C DC/DC/DC', serialNumber: 'S V-PW0000032019', asName: 'PLCWIRE-SIM', moduleName: 'PLC_1', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
-  's7-1500': Object.freeze({ orderCode: '6ES7 516-3AN02-0AB0', firmware: 'V2.9.2', hardwareVersion: 2, moduleTypeName: 'CPU 1516-3 PN/DP', serialNumber: 'S V-PW0000042019', asName: 'PLCWIRE-SIM', moduleName: 'PLC_1', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
+  's7-300': Object.freeze({
+    orderCode: '6ES7 315-2EH14-0AB0',
+    firmware: 'V3.2.6',
+    hardwareVersion: 4,
+    moduleTypeName: 'CPU 315-2 PN/DP',
+    serialNumber: 'S C-PW0000012019',
+    asName: 'PLCWIRE-SIM',
+    moduleName: 'CPU 315-2 PN/DP',
+    plantId: '',
+    copyright: COPYRIGHT,
+    blockFunctions: true,
+    passwordFunctions: true,
+  }),
+  's7-400': Object.freeze({
+    orderCode: '6ES7 416-3ES07-0AB0',
+    firmware: 'V7.0.1',
+    hardwareVersion: 3,
+    moduleTypeName: 'CPU 416-3 PN/DP',
+    serialNumber: 'S Q-PW0000022019',
+    asName: 'PLCWIRE-SIM',
+    moduleName: 'CPU 416-3 PN/DP',
+    plantId: '',
+    copyright: COPYRIGHT,
+    blockFunctions: true,
+    passwordFunctions: true,
+  }),
+  's7-1200': Object.freeze({
+    orderCode: '6ES7 214-1AG40-0XB0',
+    firmware: 'V4.4.0',
+    hardwareVersion: 5,
+    moduleTypeName: 'CPU 1214C DC/DC/DC',
+    serialNumber: 'S V-PW0000032019',
+    asName: 'PLCWIRE-SIM',
+    moduleName: 'PLC_1',
+    plantId: '',
+    copyright: COPYRIGHT,
+    blockFunctions: false,
+    passwordFunctions: false,
+  }),
+  's7-1500': Object.freeze({
+    orderCode: '6ES7 516-3AN02-0AB0',
+    firmware: 'V2.9.2',
+    hardwareVersion: 2,
+    moduleTypeName: 'CPU 1516-3 PN/DP',
+    serialNumber: 'S V-PW0000042019',
+    asName: 'PLCWIRE-SIM',
+    moduleName: 'PLC_1',
+    plantId: '',
+    copyright: COPYRIGHT,
+    blockFunctions: false,
+    passwordFunctions: false,
+  }),
   // S7-200 (through a CP 243-1) and LOGO!: public descriptions cover their data
   // access only; they get no block or password functions here, and SZL, clock
   // and state are answered as the S7-1200 model answers them.
-  's7-200': Object.freeze({ orderCode: '6ES7 214-2BD23-0XB0', firmware: 'V2.2.0', hardwareVersion: 1, moduleTypeName: 'CPU 224XP', serialNumber: 'S C-PW0000052019', asName: 'PLCWIRE-SIM', moduleName: 'CPU 224XP', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
-  logo: Object.freeze({ orderCode: '6ED1052-1MD08-0BA1', firmware: 'V1.83.1', hardwareVersion: 1, moduleTypeName: 'LOGO! 12/24RCE', serialNumber: 'S L-PW0000062019', asName: 'PLCWIRE-SIM', moduleName: 'LOGO!', plantId: '', copyright: COPYRIGHT, blockFunctions: false, passwordFunctions: false }),
+  's7-200': Object.freeze({
+    orderCode: '6ES7 214-2BD23-0XB0',
+    firmware: 'V2.2.0',
+    hardwareVersion: 1,
+    moduleTypeName: 'CPU 224XP',
+    serialNumber: 'S C-PW0000052019',
+    asName: 'PLCWIRE-SIM',
+    moduleName: 'CPU 224XP',
+    plantId: '',
+    copyright: COPYRIGHT,
+    blockFunctions: false,
+    passwordFunctions: false,
+  }),
+  logo: Object.freeze({
+    orderCode: '6ED1052-1MD08-0BA1',
+    firmware: 'V1.83.1',
+    hardwareVersion: 1,
+    moduleTypeName: 'LOGO! 12/24RCE',
+    serialNumber: 'S L-PW0000062019',
+    asName: 'PLCWIRE-SIM',
+    moduleName: 'LOGO!',
+    plantId: '',
+    copyright: COPYRIGHT,
+    blockFunctions: false,
+    passwordFunctions: false,
+  }),
 });

@@ -13,7 +13,15 @@ import { EventEmitter } from 'node:events';
 import { ProtocolError } from '../errors';
 import type { PlcMemory } from '../sim/memory';
 import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
-import { encodeBlockCounts, encodeBlockInfo, encodeBlockListEntries, encodeLoadBlock, decodeBlockInfoRequest, loadSizeOf, type BlockSpec } from './blocks';
+import {
+  encodeBlockCounts,
+  encodeBlockInfo,
+  encodeBlockListEntries,
+  encodeLoadBlock,
+  decodeBlockInfoRequest,
+  loadSizeOf,
+  type BlockSpec,
+} from './blocks';
 import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from './codec/control';
 import { encodeErrorAck } from './codec/pdu';
 import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from './codec/userdata';
@@ -154,7 +162,8 @@ export class CpuServices extends EventEmitter {
   set clockOffset(ms: number) {
     if (!Number.isFinite(ms)) throw new TypeError(`clock offset must be a number of milliseconds, got ${String(ms)}`);
     const at = Date.now() + Math.round(ms);
-    if (at < CLOCK_MIN || at > CLOCK_MAX) throw new RangeError(`the CPU clock runs from 1990 to 2089; ${new Date(at).toISOString()} is outside`);
+    if (at < CLOCK_MIN || at > CLOCK_MAX)
+      throw new RangeError(`the CPU clock runs from 1990 to 2089; ${new Date(at).toISOString()} is outside`);
     this.offset = Math.round(ms);
   }
 
@@ -169,8 +178,22 @@ export class CpuServices extends EventEmitter {
   }
 
   /** Logs an event in the diagnostic buffer (newest first, the oldest dropped beyond 100). */
-  record(eventId: number, priority = 0xff, ob = 0xff, info: Partial<Pick<DiagnosticEvent, 'dataId' | 'info1' | 'info2' | 'info3'>> = {}): void {
-    const e: DiagnosticEvent = { time: this.now(), eventId, priority, ob, dataId: info.dataId ?? 0, info1: info.info1 ?? 0, info2: info.info2 ?? 0, info3: info.info3 ?? 0 };
+  record(
+    eventId: number,
+    priority = 0xff,
+    ob = 0xff,
+    info: Partial<Pick<DiagnosticEvent, 'dataId' | 'info1' | 'info2' | 'info3'>> = {},
+  ): void {
+    const e: DiagnosticEvent = {
+      time: this.now(),
+      eventId,
+      priority,
+      ob,
+      dataId: info.dataId ?? 0,
+      info1: info.info1 ?? 0,
+      info2: info.info2 ?? 0,
+      info3: info.info3 ?? 0,
+    };
     this.log.unshift(e);
     if (this.log.length > DIAGNOSTIC_CAPACITY) this.log.length = DIAGNOSTIC_CAPACITY;
     if (this.listenerCount('diagnostic') > 0) this.emit('diagnostic', { ...e, description: describeEvent(eventId) });
@@ -233,7 +256,8 @@ export class CpuServices extends EventEmitter {
     const u = decodeUserdata(frame);
     const { params } = u;
     if (params.type !== UserdataType.Request) throw new ProtocolError(`userdata of type ${params.type} sent to a CPU (expected a request)`);
-    const answer = (a: Parameters<typeof encodeUserdataResponse>[3]) => encodeUserdataResponse(u.pduRef, params.group, params.subfunction, a);
+    const answer = (a: Parameters<typeof encodeUserdataResponse>[3]) =>
+      encodeUserdataResponse(u.pduRef, params.group, params.subfunction, a);
     // A request for the next part of a multi-part answer.
     if (params.method === UserdataMethod.Response) {
       const p = s.pending;
@@ -242,7 +266,8 @@ export class CpuServices extends EventEmitter {
       }
       return this.part(s, u, pduSize, p.rest, p.sequence);
     }
-    if (params.method !== UserdataMethod.Request) throw new ProtocolError(`userdata method 0x${params.method.toString(16)}, expected 0x11 or 0x12`);
+    if (params.method !== UserdataMethod.Request)
+      throw new ProtocolError(`userdata method 0x${params.method.toString(16)}, expected 0x11 or 0x12`);
     // A new request abandons an unfinished multi-part answer, as a CPU does.
     s.pending = undefined;
     switch (params.group) {
@@ -293,7 +318,12 @@ export class CpuServices extends EventEmitter {
     // Block lists are cut at whole entries.
     const cut = group === UserdataGroup.Block ? room - (room % 4) : room;
     s.pending = { sequence, group, subfunction, rest: bytes.subarray(cut) };
-    return encodeUserdataResponse(u.pduRef, group, subfunction, { sequence, dataUnitRef: sequence, last: false, data: bytes.subarray(0, cut) });
+    return encodeUserdataResponse(u.pduRef, group, subfunction, {
+      sequence,
+      dataUnitRef: sequence,
+      last: false,
+      data: bytes.subarray(0, cut),
+    });
   }
 
   private nextSequence(s: ServiceSession): number {
@@ -340,7 +370,14 @@ export class CpuServices extends EventEmitter {
       }
       case SZL.COMPONENT_ID:
       case 0x011c: {
-        const fields = { asName: i.asName, moduleName: i.moduleName, plantId: i.plantId, copyright: i.copyright, serialNumber: i.serialNumber, moduleTypeName: i.moduleTypeName };
+        const fields = {
+          asName: i.asName,
+          moduleName: i.moduleName,
+          plantId: i.plantId,
+          copyright: i.copyright,
+          serialNumber: i.serialNumber,
+          moduleTypeName: i.moduleTypeName,
+        };
         const list = encodeComponentIdentification(fields, id === 0x011c ? index : 0);
         return list.records.length === 0 ? E.SZL_INDEX : list;
       }

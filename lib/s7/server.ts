@@ -15,7 +15,16 @@ import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from './codec';
 import { firstItems } from './server-items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
-import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuIdentity, type CpuProfile, type S7Layout, type S7Profile } from './server-profiles';
+import {
+  IDENTITIES,
+  PROFILES,
+  toMemoryLayout,
+  tsapRefusal,
+  type CpuIdentity,
+  type CpuProfile,
+  type S7Layout,
+  type S7Profile,
+} from './server-profiles';
 
 export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './server-profiles';
 export { STOP_CAUSES, type SimulatorMode, type StopCause } from './server-services';
@@ -246,7 +255,12 @@ export class S7Server extends EventEmitter {
       reader: new FrameReader(checkTpkt, 0x10000 + 4, { copy: false }),
       stage: 'cotp',
       pduLimit: this.profile.pduSize,
-      ctx: { memory: this.memory, pduSize: this.profile.pduSize, missingDb: undefined, s5CountersTimers: this.profile.s5CountersTimers !== false },
+      ctx: {
+        memory: this.memory,
+        pduSize: this.profile.pduSize,
+        missingDb: undefined,
+        s5CountersTimers: this.profile.s5CountersTimers !== false,
+      },
       services: newServiceSession(),
       maxJobs: 1,
       running: 0,
@@ -295,7 +309,10 @@ export class S7Server extends EventEmitter {
   /** A frame that is not S7 (or breaks the protocol): a real CPU drops the connection. */
   private hostile(conn: Connection, err: unknown): void {
     if (this.listenerCount('refused') > 0) {
-      this.emit('refused', { reason: 'protocol-error', message: err instanceof Error ? err.message : String(err) } satisfies S7RefusedEvent);
+      this.emit('refused', {
+        reason: 'protocol-error',
+        message: err instanceof Error ? err.message : String(err),
+      } satisfies S7RefusedEvent);
     }
     conn.socket.destroy();
   }
@@ -353,7 +370,13 @@ export class S7Server extends EventEmitter {
     conn.counted = true;
     this.counted++;
     conn.socket.write(
-      encodeConnectionConfirm({ sourceRef: CPU_REF, destinationRef: cr.sourceRef, callingTsap: cr.callingTsap, calledTsap: cr.calledTsap, tpduSize: tpdu }),
+      encodeConnectionConfirm({
+        sourceRef: CPU_REF,
+        destinationRef: cr.sourceRef,
+        callingTsap: cr.callingTsap,
+        calledTsap: cr.calledTsap,
+        tpduSize: tpdu,
+      }),
     );
     this.emit('connection', this.counted);
   }

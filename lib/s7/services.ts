@@ -9,8 +9,27 @@ import { PlcError, ProtocolError } from '../errors';
 import type { RequestOptions } from '../types';
 import type { S7Endpoint } from '../url';
 import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
-import { decodeBlockCounts, decodeBlockInfo, decodeBlockListEntries, decodeLoadBlock, encodeBlockInfoRequest, encodeListTypeRequest, type BlockCounts, type BlockInfo, type UploadedBlock } from './blocks';
-import { COLD_START_ARG, decodeControl, encodeEndUpload, encodePlcStart, encodePlcStop, encodeStartUpload, encodeUpload, type ControlMessage } from './codec/control';
+import {
+  decodeBlockCounts,
+  decodeBlockInfo,
+  decodeBlockListEntries,
+  decodeLoadBlock,
+  encodeBlockInfoRequest,
+  encodeListTypeRequest,
+  type BlockCounts,
+  type BlockInfo,
+  type UploadedBlock,
+} from './blocks';
+import {
+  COLD_START_ARG,
+  decodeControl,
+  encodeEndUpload,
+  encodePlcStart,
+  encodePlcStop,
+  encodeStartUpload,
+  encodeUpload,
+  type ControlMessage,
+} from './codec/control';
 import { decodeUserdata, encodePassword, encodeUserdataNext, encodeUserdataRequest, type UserdataPdu } from './codec/userdata';
 import {
   BLOCK_TYPES,
@@ -151,7 +170,8 @@ export class S7Services {
   private controlRefusal(what: string): PlcError | undefined {
     const e = this.host.endpoint;
     if (e.readOnly) return new PlcError('WRITE_NOT_ALLOWED', `${what} refused: the connection is read-only`);
-    if (!e.control) return new PlcError('WRITE_NOT_ALLOWED', `${what} refused: the connection does not allow PLC control (add control=true to the URL)`);
+    if (!e.control)
+      return new PlcError('WRITE_NOT_ALLOWED', `${what} refused: the connection does not allow PLC control (add control=true to the URL)`);
     return undefined;
   }
 
@@ -162,7 +182,11 @@ export class S7Services {
     checkWord('SZL index', index);
     const what = `read SZL 0x${hex4(id)} index 0x${hex4(index)}`;
     const first = await this.request(SERVICE.readSzl, what, options.signal, Buffer.of(id >> 8, id & 0xff, index >> 8, index & 0xff));
-    if (first.returnCode !== 0xff) throw new PlcError('SZL_NOT_AVAILABLE', `${this.host.name} ${what}: the PLC has no such list (return code 0x${first.returnCode.toString(16)})`);
+    if (first.returnCode !== 0xff)
+      throw new PlcError(
+        'SZL_NOT_AVAILABLE',
+        `${this.host.name} ${what}: the PLC has no such list (return code 0x${first.returnCode.toString(16)})`,
+      );
     const bytes = await this.allParts(first, SERVICE.readSzl, what, options.signal);
     try {
       return parseSzl(bytes);
@@ -214,12 +238,15 @@ export class S7Services {
       try {
         return await read();
       } catch (err) {
-        if (err instanceof PlcError && (err.code === 'SZL_NOT_AVAILABLE' || err.code === 'NOT_SUPPORTED' || err.code === 'ACCESS_DENIED')) return undefined;
+        if (err instanceof PlcError && (err.code === 'SZL_NOT_AVAILABLE' || err.code === 'NOT_SUPPORTED' || err.code === 'ACCESS_DENIED'))
+          return undefined;
         throw err;
       }
     };
     const module = await optional(async () => this.decoded(await this.readSzl(SZL.MODULE_ID, 0, options), decodeModuleIdentification));
-    const component = await optional(async () => this.decoded(await this.readSzl(SZL.COMPONENT_ID, 0, options), decodeComponentIdentification));
+    const component = await optional(async () =>
+      this.decoded(await this.readSzl(SZL.COMPONENT_ID, 0, options), decodeComponentIdentification),
+    );
     const state = await optional(() => this.cpuState(options));
     const protection = await optional(() => this.protection(options));
     const clock = await optional(() => this.readClock(options));
@@ -247,10 +274,16 @@ export class S7Services {
     const what = 'read clock';
     const u = await this.request(SERVICE.readClock, what, options.signal);
     if (u.returnCode !== 0xff || u.data.length !== 10) {
-      throw this.host.malformed(new ProtocolError(`${what}: ${u.data.length} data bytes (return code 0x${u.returnCode.toString(16)}), expected 10`));
+      throw this.host.malformed(
+        new ProtocolError(`${what}: ${u.data.length} data bytes (return code 0x${u.returnCode.toString(16)}), expected 10`),
+      );
     }
     const utc = decodeDateAndTime(u.data, 2);
-    if (Number.isNaN(utc.getTime())) throw new PlcError('PLC_ERROR', `${this.host.name} ${what}: the PLC clock holds no valid date (${u.data.subarray(2).toString('hex')})`);
+    if (Number.isNaN(utc.getTime()))
+      throw new PlcError(
+        'PLC_ERROR',
+        `${this.host.name} ${what}: the PLC clock holds no valid date (${u.data.subarray(2).toString('hex')})`,
+      );
     return options.timeZone === 'local' ? fromLocalFields(utc) : utc;
   }
 
@@ -258,7 +291,8 @@ export class S7Services {
     // Setting the clock is a control function: it moves every time stamp the PLC makes.
     const refusal = this.controlRefusal('set clock');
     if (refusal) throw refusal;
-    if (!(date instanceof Date) || Number.isNaN(date.getTime())) throw new PlcError('INVALID_VALUE', `setClock takes a valid Date, got ${String(date)}`);
+    if (!(date instanceof Date) || Number.isNaN(date.getTime()))
+      throw new PlcError('INVALID_VALUE', `setClock takes a valid Date, got ${String(date)}`);
     const fields = options.timeZone === 'local' ? toLocalFields(date) : date;
     const data = Buffer.alloc(10);
     try {
@@ -332,7 +366,10 @@ export class S7Services {
     checkBlockNumber(number);
     const what = `block info of ${type}${number}`;
     const u = await this.request(SERVICE.blockInfo, what, options.signal, encodeBlockInfoRequest(code, number));
-    if (u.returnCode !== 0xff) throw new PlcError('OBJECT_DOES_NOT_EXIST', `${this.host.name} ${what}: no such block (return code 0x${u.returnCode.toString(16)})`, { plcCode: u.returnCode });
+    if (u.returnCode !== 0xff)
+      throw new PlcError('OBJECT_DOES_NOT_EXIST', `${this.host.name} ${what}: no such block (return code 0x${u.returnCode.toString(16)})`, {
+        plcCode: u.returnCode,
+      });
     try {
       return decodeBlockInfo(u.data);
     } catch (err) {
@@ -356,7 +393,8 @@ export class S7Services {
         if (m.kind !== 'upload-ack') throw this.host.malformed(new ProtocolError(`the answer to ${what} is a ${m.kind}`));
         chunks.push(Buffer.from(m.chunk));
         total += m.chunk.length;
-        if (total > start.loadLength) throw this.host.malformed(new ProtocolError(`${what}: ${total} bytes arrived, the block has ${start.loadLength}`));
+        if (total > start.loadLength)
+          throw this.host.malformed(new ProtocolError(`${what}: ${total} bytes arrived, the block has ${start.loadLength}`));
         if (!m.more) break;
         if (m.chunk.length === 0) throw this.host.malformed(new ProtocolError(`${what}: an empty part that says more follow`));
       }
@@ -415,5 +453,13 @@ function toLocalFields(d: Date): Date {
 
 /** The Date whose local fields are `utc`'s UTC fields (to read local wall time). */
 function fromLocalFields(utc: Date): Date {
-  return new Date(utc.getUTCFullYear(), utc.getUTCMonth(), utc.getUTCDate(), utc.getUTCHours(), utc.getUTCMinutes(), utc.getUTCSeconds(), utc.getUTCMilliseconds());
+  return new Date(
+    utc.getUTCFullYear(),
+    utc.getUTCMonth(),
+    utc.getUTCDate(),
+    utc.getUTCHours(),
+    utc.getUTCMinutes(),
+    utc.getUTCSeconds(),
+    utc.getUTCMilliseconds(),
+  );
 }

@@ -60,7 +60,8 @@ export function parseSzl(bytes: Buffer): SzlList {
   }
   if (!headerOnly && count > 0 && recordLength === 0) throw new ProtocolError(`${name} announces ${count} records of 0 bytes`);
   const records: Buffer[] = [];
-  if (!headerOnly) for (let i = 0; i < count; i++) records.push(Buffer.from(bytes.subarray(HEADER + i * recordLength, HEADER + (i + 1) * recordLength)));
+  if (!headerOnly)
+    for (let i = 0; i < count; i++) records.push(Buffer.from(bytes.subarray(HEADER + i * recordLength, HEADER + (i + 1) * recordLength)));
   return { id, index, recordLength, records };
 }
 
@@ -73,7 +74,8 @@ export function encodeSzl(list: SzlList, headerOnly = false): Buffer {
   out.writeUInt16BE(list.records.length, 6);
   if (!headerOnly) {
     list.records.forEach((r, i) => {
-      if (r.length !== list.recordLength) throw new RangeError(`SZL record ${i} has ${r.length} bytes, the list's records ${list.recordLength}`);
+      if (r.length !== list.recordLength)
+        throw new RangeError(`SZL record ${i} has ${r.length} bytes, the list's records ${list.recordLength}`);
       r.copy(out, HEADER + i * list.recordLength);
     });
   }
@@ -85,7 +87,8 @@ function hex4(n: number): string {
 }
 
 function need(list: SzlList, min: number, what: string): void {
-  if (list.recordLength < min) throw new ProtocolError(`SZL 0x${hex4(list.id)} (${what}): records of ${list.recordLength} bytes, expected at least ${min}`);
+  if (list.recordLength < min)
+    throw new ProtocolError(`SZL 0x${hex4(list.id)} (${what}): records of ${list.recordLength} bytes, expected at least ${min}`);
 }
 
 /** Text of a fixed-width field: up to the first NUL, trailing spaces removed. */
@@ -182,7 +185,11 @@ export function encodeModuleIdentification(orderCode: string, hardwareVersion: n
     r.writeUInt16BE(v[1], 26);
     return r;
   };
-  const all = [record(1, orderCode, [hardwareVersion, 1]), record(6, orderCode, [hardwareVersion, 1]), record(7, '', firmwareWords(firmware))];
+  const all = [
+    record(1, orderCode, [hardwareVersion, 1]),
+    record(6, orderCode, [hardwareVersion, 1]),
+    record(7, '', firmwareWords(firmware)),
+  ];
   const wanted = index === 0 ? all : all.filter((r) => r.readUInt16BE(0) === index);
   return { id: index === 0 ? SZL.MODULE_ID : 0x0111, index, recordLength: MODULE_RECORD, records: wanted };
 }
@@ -357,7 +364,13 @@ export function decodeCpuState(list: SzlList): CpuState {
   const r = list.records[0];
   if (!r) throw new ProtocolError('SZL 0x0424 has no record');
   const bzu = r[3]!;
-  return { mode: cpuModeOf(bzu & 0x0f), modeCode: bzu & 0x0f, previousCode: bzu >> 4, eventId: r.readUInt16BE(0), time: decodeDateAndTime(r, 12) };
+  return {
+    mode: cpuModeOf(bzu & 0x0f),
+    modeCode: bzu & 0x0f,
+    previousCode: bzu >> 4,
+    eventId: r.readUInt16BE(0),
+    time: decodeDateAndTime(r, 12),
+  };
 }
 
 /** `previous` 0 leaves the high nibble clear, as the CPUs do that answer RUN with 0x08. */
@@ -410,7 +423,12 @@ export function decodeLeds(list: SzlList): Led[] {
   return list.records.map((r) => {
     const id = r[1]!;
     const blink = r[3]!;
-    return { id, name: LED_NAMES[id] ?? `LED 0x${id.toString(16).padStart(2, '0')}`, on: r[2] === 1, flashing: blink === 1 ? '2Hz' : blink === 2 ? '0.5Hz' : 'no' };
+    return {
+      id,
+      name: LED_NAMES[id] ?? `LED 0x${id.toString(16).padStart(2, '0')}`,
+      on: r[2] === 1,
+      flashing: blink === 1 ? '2Hz' : blink === 2 ? '0.5Hz' : 'no',
+    };
   });
 }
 

@@ -93,7 +93,8 @@ export const S7_URLS: UrlScheme<S7Endpoint> = Object.freeze({
     return `s7://${hostPart(e.host)}${e.port === DEFAULTS.s7Port ? '' : `:${e.port}`}`;
   },
 
-  key: (e: S7Endpoint) => `s7://${e.host.toLowerCase()}:${e.port}/${e.localTsap ?? `${e.connectionType}/${e.rack}/${e.slot}`}/${e.remoteTsap ?? ''}`,
+  key: (e: S7Endpoint) =>
+    `s7://${e.host.toLowerCase()}:${e.port}/${e.localTsap ?? `${e.connectionType}/${e.rack}/${e.slot}`}/${e.remoteTsap ?? ''}`,
   name: (e: S7Endpoint) => `s7://${hostPart(e.host)}:${e.port}`,
   host: (e: S7Endpoint) => e.host,
 });

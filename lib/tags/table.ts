@@ -187,7 +187,8 @@ export function addressWithType(
   if (own && sameShape(own, spec)) return { address };
   const typed = address.includes(':') ? undefined : `${address}:${wanted}`;
   if (typed && tryParse(parse, typed)) return { address: typed };
-  if (own) return { address, problem: { code: 'TYPE_MISMATCH', message: `"${address}" is ${describe(own)}, the type column says ${wanted}` } };
+  if (own)
+    return { address, problem: { code: 'TYPE_MISMATCH', message: `"${address}" is ${describe(own)}, the type column says ${wanted}` } };
   // Invalid either way: keep the type the user gave; validating the address names what is wrong.
   return { address: typed ?? address };
 }
@@ -217,7 +218,13 @@ export function tagsFromCsv(text: string, parse: AddressParser = parseAddress): 
   }
   for (const { name, rows: at } of duplicateNames(tags)) {
     for (const i of at.slice(1)) {
-      problems.push({ line: lines[i]!, code: 'DUPLICATE_NAME', name, address: tags[i]!.address, message: `"${name}" is also the name on line ${lines[at[0]!]}` });
+      problems.push({
+        line: lines[i]!,
+        code: 'DUPLICATE_NAME',
+        name,
+        address: tags[i]!.address,
+        message: `"${name}" is also the name on line ${lines[at[0]!]}`,
+      });
     }
   }
   problems.sort((a, b) => a.line - b.line);
@@ -230,5 +237,7 @@ function csvField(text: string): string {
 
 /** A tag table as CSV (name,address with a header row, CRLF), which tagsFromCsv reads back unchanged. */
 export function tagsToCsv(rows: readonly TagRow[]): string {
-  return ['name,address', ...rows.map((r) => `${csvField(String(r.name ?? ''))},${csvField(String(r.address ?? ''))}`)].join('\r\n') + '\r\n';
+  return (
+    ['name,address', ...rows.map((r) => `${csvField(String(r.name ?? ''))},${csvField(String(r.address ?? ''))}`)].join('\r\n') + '\r\n'
+  );
 }

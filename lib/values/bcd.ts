@@ -12,7 +12,7 @@ const S5TIME_MAX_MS = MAX_UNITS * TIME_BASES_MS[3];
 
 /** Three BCD digits of 0..999. */
 function toBcd3(n: number): number {
-  return (Math.floor(n / 100) << 8) | ((Math.floor(n / 10) % 10) << 4) | n % 10;
+  return (Math.floor(n / 100) << 8) | ((Math.floor(n / 10) % 10) << 4) | (n % 10);
 }
 
 /** Three BCD digits; a non-decimal nibble (only a corrupt word has one) reads as 9, never throws. */
@@ -28,9 +28,7 @@ function encodeS5Time(type: 'S5TIME' | 'TIMER', value: unknown): number {
     const units = ms / TIME_BASES_MS[base]!;
     if (Number.isInteger(units) && units <= MAX_UNITS) return (base << 12) | toBcd3(units);
   }
-  return reject(
-    `${ms} ms cannot be represented exactly in ${type} (999 units of 10 ms, 100 ms, 1 s or 10 s); round it`,
-  );
+  return reject(`${ms} ms cannot be represented exactly in ${type} (999 units of 10 ms, 100 ms, 1 s or 10 s); round it`);
 }
 
 function decodeS5Time(word: number): number {

@@ -86,7 +86,14 @@ export function tagDecoder(tag: TagShape): TagDecoder {
   let decoder = decoders.get(key);
   if (!decoder) {
     if (decoders.size >= MAX_DECODERS) decoders.clear();
-    const shape: TagShape = { address: '', type: tag.type, count: tag.count, isArray: tag.isArray, stringLength: tag.stringLength, bitOffset: tag.bitOffset };
+    const shape: TagShape = {
+      address: '',
+      type: tag.type,
+      count: tag.count,
+      isArray: tag.isArray,
+      stringLength: tag.stringLength,
+      bitOffset: tag.bitOffset,
+    };
     decoder = makeDecoder(shape);
     decoders.set(key, decoder);
   }

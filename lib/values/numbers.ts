@@ -9,8 +9,7 @@ const INT64_MAX = 2n ** 63n - 1n;
 const UINT64_MAX = 2n ** 64n - 1n;
 
 type NumberType =
-  | 'BYTE' | 'USINT' | 'SINT' | 'WORD' | 'UINT' | 'INT' | 'DWORD' | 'UDINT' | 'DINT'
-  | 'LWORD' | 'ULINT' | 'LINT' | 'REAL' | 'LREAL';
+  'BYTE' | 'USINT' | 'SINT' | 'WORD' | 'UINT' | 'INT' | 'DWORD' | 'UDINT' | 'DINT' | 'LWORD' | 'ULINT' | 'LINT' | 'REAL' | 'LREAL';
 
 export const NUMBER_CODECS: CodecTable<NumberType> = {
   BYTE: {

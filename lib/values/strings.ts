@@ -59,7 +59,9 @@ export const STRING_CODECS: CodecTable<'CHAR' | 'WCHAR' | 'STRING' | 'WSTRING'> 
   WCHAR: {
     encode: (_t, v, b, o) => {
       if (typeof v !== 'string' || v.length !== 1) {
-        reject(`expected one UTF-16 code unit for WCHAR, got ${show(v)}${typeof v === 'string' && v.length === 2 ? ' (a surrogate pair)' : ''}`);
+        reject(
+          `expected one UTF-16 code unit for WCHAR, got ${show(v)}${typeof v === 'string' && v.length === 2 ? ' (a surrogate pair)' : ''}`,
+        );
       }
       b.writeUInt16BE(v.charCodeAt(0), o);
     },

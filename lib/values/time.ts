@@ -25,13 +25,17 @@ function utcFields(year: number, month: number, day: number, hour: number, minut
   d.setUTCFullYear(year, month - 1, day);
   d.setUTCHours(hour, minute, second, ms);
   const exact =
-    d.getUTCFullYear() === year && d.getUTCMonth() === month - 1 && d.getUTCDate() === day &&
-    d.getUTCHours() === hour && d.getUTCMinutes() === minute && d.getUTCSeconds() === second;
+    d.getUTCFullYear() === year &&
+    d.getUTCMonth() === month - 1 &&
+    d.getUTCDate() === day &&
+    d.getUTCHours() === hour &&
+    d.getUTCMinutes() === minute &&
+    d.getUTCSeconds() === second;
   return exact ? d : new Date(Number.NaN);
 }
 
 function toBcd2(n: number): number {
-  return (Math.floor(n / 10) << 4) | n % 10;
+  return (Math.floor(n / 10) << 4) | (n % 10);
 }
 
 /** Two BCD digits, or NaN when a nibble is not decimal. */

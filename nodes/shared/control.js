@@ -38,7 +38,14 @@ function plainEntry(e) {
 
 /** cpuState() as the node sends it: `state` in lower case ('run', 'stop' …), the CPU's mode as read, the transition's time as ISO. */
 function plainState(s) {
-  return { state: String(s.mode).toLowerCase(), mode: s.mode, modeCode: s.modeCode, previousCode: s.previousCode, eventId: s.eventId, time: isoOrNull(s.time) };
+  return {
+    state: String(s.mode).toLowerCase(),
+    mode: s.mode,
+    modeCode: s.modeCode,
+    previousCode: s.previousCode,
+    eventId: s.eventId,
+    time: isoOrNull(s.time),
+  };
 }
 
 function keyOf(e) {

@@ -69,4 +69,14 @@ function failedStatus(t, action) {
   return { fill: 'red', shape: 'ring', text: t('plcwire-control.status.failed', { action }) };
 }
 
-module.exports = { linkStatus, tagErrorsStatus, sentStatus, aliveStatus, lostStatus, waitingStatus, cpuStatus, entriesStatus, failedStatus };
+module.exports = {
+  linkStatus,
+  tagErrorsStatus,
+  sentStatus,
+  aliveStatus,
+  lostStatus,
+  waitingStatus,
+  cpuStatus,
+  entriesStatus,
+  failedStatus,
+};

@@ -85,7 +85,8 @@ export function fuzz(target: FuzzTarget, inputs: number, seed = 1): FuzzResult {
       result.accepted++;
     } catch (err) {
       if (err instanceof PlcError) result.typedErrors++;
-      else if (++result.findingCount <= 10) result.findings.push({ input: input.toString('hex'), error: String((err as Error)?.stack ?? err) });
+      else if (++result.findingCount <= 10)
+        result.findings.push({ input: input.toString('hex'), error: String((err as Error)?.stack ?? err) });
     }
   }
   result.ms = Number(process.hrtime.bigint() - started) / 1e6;

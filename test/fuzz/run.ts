@@ -5,7 +5,19 @@
  */
 import { parseAddress } from '../../lib/address';
 import { FrameReader } from '../../lib/link/framer';
-import { checkTpkt, decodeCotp, decodeS7, s7AnswerRef, scanReadAck, encodeReadResponse, encodeSetupAck, encodeWriteResponse, encodeErrorAck, encodeReadRequest, encodeWriteRequest } from '../../lib/s7/codec';
+import {
+  checkTpkt,
+  decodeCotp,
+  decodeS7,
+  s7AnswerRef,
+  scanReadAck,
+  encodeReadResponse,
+  encodeSetupAck,
+  encodeWriteResponse,
+  encodeErrorAck,
+  encodeReadRequest,
+  encodeWriteRequest,
+} from '../../lib/s7/codec';
 import { decodeTag } from '../../lib/values';
 import { fuzz, type FuzzTarget } from './engine';
 import { extraTargets } from './targets';
@@ -26,7 +38,17 @@ const s7Seeds = [
   encodeWriteRequest(6, [{ area: 0x84, dbNumber: 1, transportSize: 2, count: 1, address: 8, dataTransportSize: 4, data: Buffer.of(9) }]),
 ];
 
-const valueTags = ['DB1,S0.20', 'DB1,WSTRING0.8', 'DB1.DBB0:DTL', 'DB1.DBB0:DATE_AND_TIME', 'DB1.DBW0:S5TIME', 'DB1.DBX0.3:BOOL[9]', 'DB1.DBD0:REAL[3]', 'C0', 'DB1.DBB0:LINT'].map(parseAddress);
+const valueTags = [
+  'DB1,S0.20',
+  'DB1,WSTRING0.8',
+  'DB1.DBB0:DTL',
+  'DB1.DBB0:DATE_AND_TIME',
+  'DB1.DBW0:S5TIME',
+  'DB1.DBX0.3:BOOL[9]',
+  'DB1.DBD0:REAL[3]',
+  'C0',
+  'DB1.DBB0:LINT',
+].map(parseAddress);
 
 const targets: FuzzTarget[] = [
   {
@@ -71,10 +93,15 @@ const targets: FuzzTarget[] = [
         if (taken && m === undefined) throw new Error('scanReadAck took a frame decodeS7 refuses');
       }
       if (ref >= 0 && ref !== m.pduRef) throw new Error(`s7AnswerRef ${ref}, decodeS7 ${m.pduRef}`);
-      if (taken !== (m.kind === 'read-ack' && m.items.length === count && b[4] === 2)) throw new Error('scanReadAck and decodeS7 disagree on taking it');
+      if (taken !== (m.kind === 'read-ack' && m.items.length === count && b[4] === 2))
+        throw new Error('scanReadAck and decodeS7 disagree on taking it');
       if (m.kind !== 'read-ack' || !taken) return;
       m.items.forEach((item, i) => {
-        if (table.code[i] !== item.returnCode || table.length[i] !== item.data.length || table.start[i] !== item.data.byteOffset - b.byteOffset) {
+        if (
+          table.code[i] !== item.returnCode ||
+          table.length[i] !== item.data.length ||
+          table.start[i] !== item.data.byteOffset - b.byteOffset
+        ) {
           throw new Error(`item ${i} located differently`);
         }
       });
@@ -89,7 +116,9 @@ const targets: FuzzTarget[] = [
   },
   {
     name: 'address parser',
-    seeds: ['DB1,INT2', 'DB1.DBD4:REAL', 'DB1.DBB0:STRING[30][2]', 'MW10:INT', 'V10.1', 'PIW256', 'T3:TIMER[4]'].map((s) => Buffer.from(s, 'latin1')),
+    seeds: ['DB1,INT2', 'DB1.DBD4:REAL', 'DB1.DBB0:STRING[30][2]', 'MW10:INT', 'V10.1', 'PIW256', 'T3:TIMER[4]'].map((s) =>
+      Buffer.from(s, 'latin1'),
+    ),
     run: (b) => void parseAddress(b.toString('latin1')),
   },
   ...extraTargets(),
@@ -99,7 +128,9 @@ const results = targets.map((t) => fuzz(t, inputs));
 const pad = (s: string | number, n: number) => String(s).padEnd(n);
 console.log(`${pad('decoder', 34)}${pad('inputs', 11)}${pad('accepted', 10)}${pad('typed errors', 14)}${pad('findings', 10)}inputs/s`);
 for (const r of results) {
-  console.log(`${pad(r.name, 34)}${pad(r.inputs, 11)}${pad(r.accepted, 10)}${pad(r.typedErrors, 14)}${pad(r.findingCount, 10)}${Math.round(r.inputs / (r.ms / 1000))}`);
+  console.log(
+    `${pad(r.name, 34)}${pad(r.inputs, 11)}${pad(r.accepted, 10)}${pad(r.typedErrors, 14)}${pad(r.findingCount, 10)}${Math.round(r.inputs / (r.ms / 1000))}`,
+  );
 }
 const findings = results.flatMap((r) => r.findings.map((f) => ({ decoder: r.name, ...f })));
 for (const f of findings) console.error(`FINDING in ${f.decoder}: input ${f.input}\n${f.error}\n`);

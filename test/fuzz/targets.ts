@@ -1,6 +1,13 @@
 /** Fuzz targets of the FETCH/WRITE and freeport decoders. */
 import { OpCode, decodeRequest, decodeResponse, encodeRequest, encodeResponse } from '../../lib/fetchwrite/codec';
-import { decodeReply, decodeRequest as decodeFreeportRequest, encodeReply, encodeRequest as encodeFreeportRequest, readRequest, writeRequest } from '../../lib/freeport/codec';
+import {
+  decodeReply,
+  decodeRequest as decodeFreeportRequest,
+  encodeReply,
+  encodeRequest as encodeFreeportRequest,
+  readRequest,
+  writeRequest,
+} from '../../lib/freeport/codec';
 import { FreeportParser } from '../../lib/freeport/parser';
 import { DEFAULT_FREEPORT_PROFILE } from '../../lib/freeport/profile';
 import { decodeBlockCounts, decodeBlockInfo, decodeBlockListEntries, decodeLoadBlock, encodeBlockInfo } from '../../lib/s7/blocks';
@@ -21,13 +28,24 @@ import {
 import { decodeDiagnosticBuffer } from '../../lib/s7/diagnostics';
 import { IDENTITIES } from '../../lib/s7/server-profiles';
 import { CpuServices, newServiceSession } from '../../lib/s7/server-services';
-import { decodeComponentIdentification, decodeCpuState, decodeLeds, decodeModuleIdentification, decodeProtection, decodeSzlIds, parseSzl } from '../../lib/s7/szl';
+import {
+  decodeComponentIdentification,
+  decodeCpuState,
+  decodeLeds,
+  decodeModuleIdentification,
+  decodeProtection,
+  decodeSzlIds,
+  parseSzl,
+} from '../../lib/s7/szl';
 import { PlcMemory } from '../../lib/sim/memory';
 import type { FuzzTarget } from './engine';
 
 /** Userdata and control frames of both directions: requests (for the simulator) and answers (for the client). */
 export function serviceSeeds(): Buffer[] {
-  const szl = Buffer.from('00A0000000140002' + '4302FF68C7000000081477149402042352163886' + '1381FE64C772430408147714940204235216387' + '6', 'hex');
+  const szl = Buffer.from(
+    '00A0000000140002' + '4302FF68C7000000081477149402042352163886' + '1381FE64C772430408147714940204235216387' + '6',
+    'hex',
+  );
   return [
     encodeUserdataRequest(4, 1, Buffer.from('00110000', 'hex')),
     encodeUserdataNext(4, 1, 3, 3),
@@ -40,7 +58,21 @@ export function serviceSeeds(): Buffer[] {
     encodeUserdataResponse(1, 4, 1, { sequence: 3, dataUnitRef: 3, last: false, data: szl.subarray(0, 20) }),
     encodeUserdataResponse(1, 4, 1, { data: szl }),
     encodeUserdataResponse(1, 4, 1, { errorCode: 0xd401 }),
-    encodeUserdataResponse(2, 3, 3, { data: encodeBlockInfo({ type: 'DB', number: 1, languageCode: 5, mc7Size: 10, author: 'A', family: 'F', name: 'N', version: 0x10, checksum: 1, codeTime: new Date(0), interfaceTime: new Date(0) }) }),
+    encodeUserdataResponse(2, 3, 3, {
+      data: encodeBlockInfo({
+        type: 'DB',
+        number: 1,
+        languageCode: 5,
+        mc7Size: 10,
+        author: 'A',
+        family: 'F',
+        name: 'N',
+        version: 0x10,
+        checksum: 1,
+        codeTime: new Date(0),
+        interfaceTime: new Date(0),
+      }),
+    }),
     encodePlcStop(),
     encodePlcStart(),
     encodePlcStart(COLD_START_ARG),
@@ -62,7 +94,16 @@ function decodeServiceData(b: Buffer): void {
   };
   typed(() => {
     const list = parseSzl(b);
-    for (const decode of [decodeSzlIds, decodeModuleIdentification, decodeComponentIdentification, decodeProtection, decodeCpuState, decodeLeds, decodeDiagnosticBuffer]) typed(() => decode(list));
+    for (const decode of [
+      decodeSzlIds,
+      decodeModuleIdentification,
+      decodeComponentIdentification,
+      decodeProtection,
+      decodeCpuState,
+      decodeLeds,
+      decodeDiagnosticBuffer,
+    ])
+      typed(() => decode(list));
   });
   typed(() => decodeBlockInfo(b));
   typed(() => decodeBlockCounts(b));

@@ -37,7 +37,9 @@ function rawJob(port, job) {
         resolve(Buffer.from(f));
       }
     });
-    socket.on('connect', () => socket.write(s7.encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x0100, calledTsap: 0x0101, tpduSize: 0x0a })));
+    socket.on('connect', () =>
+      socket.write(s7.encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x0100, calledTsap: 0x0101, tpduSize: 0x0a })),
+    );
     socket.on('data', (d) => frames.push(d));
     socket.on('error', reject);
   });

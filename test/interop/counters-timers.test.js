@@ -51,12 +51,16 @@ describe('interop: counters and timers as other clients ask for them', function 
     const NodeS7 = peer('nodes7');
     const conn = new NodeS7({ silent: true });
     await new Promise((resolve, reject) =>
-      conn.initiateConnection({ host: '127.0.0.1', port, rack: 0, slot: 2, timeout: 5000 }, (err) => (err ? reject(new Error(JSON.stringify(err))) : resolve())),
+      conn.initiateConnection({ host: '127.0.0.1', port, rack: 0, slot: 2, timeout: 5000 }, (err) =>
+        err ? reject(new Error(JSON.stringify(err))) : resolve(),
+      ),
     );
     closers.push(() => new Promise((resolve) => conn.dropConnection(() => resolve())));
     conn.setTranslationCB((tag) => tag);
     conn.addItems(['C0', 'T0', 'C5']);
-    const values = await new Promise((resolve, reject) => conn.readAllItems((bad, v) => (bad ? reject(new Error(`bad quality: ${JSON.stringify(v)}`)) : resolve(v))));
+    const values = await new Promise((resolve, reject) =>
+      conn.readAllItems((bad, v) => (bad ? reject(new Error(`bad quality: ${JSON.stringify(v)}`)) : resolve(v))),
+    );
     // nodes7 decodes C/T words as plain integers; its "C5" goes out as address 40 (5 × 8), so it gets C40.
     expect(values).to.deep.equal({ C0: 0x0100, T0: 0x2123, C5: 0x0100 + 40 });
   });

@@ -31,8 +31,21 @@ describe('interop: the connection doctor against snap7 server', function () {
 
   it('passes every step and reads the DB lengths by block info', async () => {
     const r = await doctor('slot=2', ['DB1,INT0', 'DB3,INT298']);
-    expect(r.steps.filter((s) => !s.ok), JSON.stringify(r.steps, null, 1)).to.deep.equal([]);
-    expect(r.steps.map((s) => s.step)).to.deep.equal(['resolve', 'tcp', 'cotp', 'setup', 'identity', 'protection', 'putget', 'address DB1,INT0', 'address DB3,INT298']);
+    expect(
+      r.steps.filter((s) => !s.ok),
+      JSON.stringify(r.steps, null, 1),
+    ).to.deep.equal([]);
+    expect(r.steps.map((s) => s.step)).to.deep.equal([
+      'resolve',
+      'tcp',
+      'cotp',
+      'setup',
+      'identity',
+      'protection',
+      'putget',
+      'address DB1,INT0',
+      'address DB3,INT298',
+    ]);
     const by = Object.fromEntries(r.steps.map((s) => [s.step, s]));
     // snap7's server answers with the canned lists of a CPU 315-2 PN/DP.
     expect(by.identity.detail).to.contain('family S7-300');

@@ -85,7 +85,13 @@ describe('interop: system services of our S7Client against snap7 server', functi
   it('protection (SZL 0x0232 index 4) equals snap7 GetProtection', async () => {
     const p = (await client.info()).protection;
     const g = await peer.call('GetProtection');
-    expect([p.switchLevel, p.configuredLevel, p.level, p.keySwitch, p.startupSwitch]).to.deep.equal([g.sch_schal, g.sch_par, g.sch_rel, 'RUN-P', undefined]);
+    expect([p.switchLevel, p.configuredLevel, p.level, p.keySwitch, p.startupSwitch]).to.deep.equal([
+      g.sch_schal,
+      g.sch_par,
+      g.sch_rel,
+      'RUN-P',
+      undefined,
+    ]);
     expect(g.bart_sch).to.equal(2);
   });
 
@@ -115,12 +121,30 @@ describe('interop: system services of our S7Client against snap7 server', functi
   it('block counts, the DB list and block info of a DB equal snap7 ListBlocks / ListBlocksOfType / GetAgBlockInfo', async () => {
     const counts = await client.listBlocks();
     const theirs = await peer.call('ListBlocks');
-    expect(counts).to.deep.equal({ OB: theirs.OBCount, FB: theirs.FBCount, FC: theirs.FCCount, DB: theirs.DBCount, SDB: theirs.SDBCount, SFC: theirs.SFCCount, SFB: theirs.SFBCount });
+    expect(counts).to.deep.equal({
+      OB: theirs.OBCount,
+      FB: theirs.FBCount,
+      FC: theirs.FCCount,
+      DB: theirs.DBCount,
+      SDB: theirs.SDBCount,
+      SFC: theirs.SFCCount,
+      SFB: theirs.SFBCount,
+    });
     expect(await client.listBlocksOfType('DB')).to.deep.equal(await peer.call('ListBlocksOfType', 0x41));
     expect(await client.listBlocksOfType('OB')).to.deep.equal([]);
     const info = await client.blockInfo('DB', 3);
     const bi = await peer.call('GetAgBlockInfo', 0x41, 3);
-    expect(info).to.deep.include({ number: bi.BlkNumber, languageCode: bi.BlkLang, flags: bi.BlkFlags, mc7Size: bi.MC7Size, dataLength: 300, loadSize: bi.LoadSize, localDataSize: bi.LocalData, sbbLength: bi.SBBLength, checksum: bi.CheckSum });
+    expect(info).to.deep.include({
+      number: bi.BlkNumber,
+      languageCode: bi.BlkLang,
+      flags: bi.BlkFlags,
+      mc7Size: bi.MC7Size,
+      dataLength: 300,
+      loadSize: bi.LoadSize,
+      localDataSize: bi.LocalData,
+      sbbLength: bi.SBBLength,
+      checksum: bi.CheckSum,
+    });
     expect(info.codeTime.toISOString().slice(0, 10).replace(/-/g, '/')).to.equal(bi.CodeDate);
   });
 

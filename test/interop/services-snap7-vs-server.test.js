@@ -34,7 +34,13 @@ describe('interop: snap7 client system functions against our S7Server', function
     const id = support.plcwire.S7_IDENTITIES['s7-300'];
     const cpu = await call('GetCpuInfo');
     // snap7 returns the fixed-width fields as they are; the simulator pads them with NULs, as a CPU does.
-    expect(cpu).to.deep.equal({ ModuleTypeName: id.moduleTypeName, SerialNumber: id.serialNumber, ASName: id.asName, Copyright: id.copyright, ModuleName: id.moduleName });
+    expect(cpu).to.deep.equal({
+      ModuleTypeName: id.moduleTypeName,
+      SerialNumber: id.serialNumber,
+      ASName: id.asName,
+      Copyright: id.copyright,
+      ModuleName: id.moduleName,
+    });
     expect(await call('GetOrderCode')).to.deep.equal({ Code: `${id.orderCode} `, V1: 3, V2: 2, V3: 6 });
     expect(await call('GetCpInfo')).to.deep.include({ MaxPduLength: c.PDULength(), MaxConnections: 16 });
   });
@@ -53,7 +59,12 @@ describe('interop: snap7 client system functions against our S7Server', function
     // snap7 returns LENTHDR and N_DR (little-endian, its own conversion), then the records.
     expect([raw.readUInt16LE(0), raw.readUInt16LE(2)]).to.deep.equal([20, 43]);
     expect(raw.length).to.equal(4 + 43 * 20);
-    const list = { id: 0xa0, index: 0, recordLength: 20, records: Array.from({ length: 43 }, (_, i) => raw.subarray(4 + i * 20, 24 + i * 20)) };
+    const list = {
+      id: 0xa0,
+      index: 0,
+      recordLength: 20,
+      records: Array.from({ length: 43 }, (_, i) => raw.subarray(4 + i * 20, 24 + i * 20)),
+    };
     const entries = support.plcwire.decodeDiagnosticBuffer(list);
     expect(entries.map((e) => [e.eventId, e.time.getTime()])).to.deep.equal(server.diagnostics.map((e) => [e.eventId, e.time.getTime()]));
   });
@@ -74,7 +85,9 @@ describe('interop: snap7 client system functions against our S7Server', function
     await call('PlcStop');
     await call('PlcColdStart');
     expect(server.state).to.equal('RUN');
-    expect(server.diagnostics.slice(0, 8).map((e) => e.eventId)).to.deep.equal([0x4302, 0x4301, 0x1385, 0x4304, 0x4302, 0x4301, 0x1381, 0x4304]);
+    expect(server.diagnostics.slice(0, 8).map((e) => e.eventId)).to.deep.equal([
+      0x4302, 0x4301, 0x1385, 0x4304, 0x4302, 0x4301, 0x1381, 0x4304,
+    ]);
   });
 
   it('SetPlcDateTime sets the simulator clock (the fields snap7 sends), GetPlcDateTime reads it back', async () => {
@@ -84,7 +97,13 @@ describe('interop: snap7 client system functions against our S7Server', function
     await call('SetPlcDateTime', target);
     const fields = server.cpu.now();
     // snap7 sends the Date's local fields; the simulator keeps them as its clock's (UTC) fields.
-    expect([fields.getUTCFullYear(), fields.getUTCMonth(), fields.getUTCDate(), fields.getUTCHours(), fields.getUTCMinutes()]).to.deep.equal([2031, 6, 8, 9, 10]);
+    expect([
+      fields.getUTCFullYear(),
+      fields.getUTCMonth(),
+      fields.getUTCDate(),
+      fields.getUTCHours(),
+      fields.getUTCMinutes(),
+    ]).to.deep.equal([2031, 6, 8, 9, 10]);
     const back = await call('GetPlcDateTime');
     // node-snap7 converts with mktime on a tm whose DST flag it never sets: compare within the hour.
     const diff = Math.abs(back.getTime() - target.getTime()) % 3_600_000;
@@ -97,11 +116,28 @@ describe('interop: snap7 client system functions against our S7Server', function
   it('ListBlocks, ListBlocksOfType (several parts at PDU 240) and GetAgBlockInfo agree with the memory layout', async () => {
     await start({ layout: { dbs: Object.fromEntries(Array.from({ length: 150 }, (_, i) => [String(i + 1), 10 + i])) } });
     const { call } = await client();
-    expect(await call('ListBlocks')).to.deep.equal({ OBCount: 8, FBCount: 1, FCCount: 2, SFBCount: 6, SFCCount: 8, DBCount: 150, SDBCount: 4 });
+    expect(await call('ListBlocks')).to.deep.equal({
+      OBCount: 8,
+      FBCount: 1,
+      FCCount: 2,
+      SFBCount: 6,
+      SFCCount: 8,
+      DBCount: 150,
+      SDBCount: 4,
+    });
     expect(await call('ListBlocksOfType', 0x41)).to.deep.equal(Array.from({ length: 150 }, (_, i) => i + 1));
     expect(await call('ListBlocksOfType', 0x43)).to.deep.equal([1, 2]);
     const info = await call('GetAgBlockInfo', 0x41, 42);
-    expect(info).to.deep.include({ BlkType: 0x0a, BlkNumber: 42, BlkLang: 5, MC7Size: 51, LoadSize: 51 + 92, Author: 'PLCWIRE', Family: 'SIM', Header: 'DB42' });
+    expect(info).to.deep.include({
+      BlkType: 0x0a,
+      BlkNumber: 42,
+      BlkLang: 5,
+      MC7Size: 51,
+      LoadSize: 51 + 92,
+      Author: 'PLCWIRE',
+      Family: 'SIM',
+      Header: 'DB42',
+    });
     expect(await call('GetAgBlockInfo', 0x38, 1)).to.deep.include({ BlkType: 0x08, BlkNumber: 1, BlkLang: 1 });
   });
 

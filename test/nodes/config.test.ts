@@ -15,9 +15,30 @@ function flow(url: string, readName = 'poll'): object[] {
   return [
     TAB,
     { id: 'conn', type: 'plcwire-connection', name: 'press 3', url },
-    { id: 'read', type: 'plcwire-read', ...at, name: readName, connection: 'conn', interval: 100, output: 'object', tags: [{ name: 'a', address: 'DB1.DBW0:INT' }], wires: [[]] },
+    {
+      id: 'read',
+      type: 'plcwire-read',
+      ...at,
+      name: readName,
+      connection: 'conn',
+      interval: 100,
+      output: 'object',
+      tags: [{ name: 'a', address: 'DB1.DBW0:INT' }],
+      wires: [[]],
+    },
     { id: 'write', type: 'plcwire-write', ...at, connection: 'conn', tags: [], wires: [[]] },
-    { id: 'hb', type: 'plcwire-heartbeat', ...at, connection: 'conn', writeAddress: 'DB1.DBW2:INT', writeMode: 'counter', interval: 100, watchAddress: '', timeout: 1000, wires: [[]] },
+    {
+      id: 'hb',
+      type: 'plcwire-heartbeat',
+      ...at,
+      connection: 'conn',
+      writeAddress: 'DB1.DBW2:INT',
+      writeMode: 'counter',
+      interval: 100,
+      watchAddress: '',
+      timeout: 1000,
+      wires: [[]],
+    },
     // One Catch scoped to the three users (the test helper loads a core node's module once per node of its type).
     { id: 'catcher', type: 'catch', ...at, scope: USERS, uncaught: false, wires: [['caught']] },
     { id: 'caught', type: 'helper', ...at },
@@ -34,7 +55,7 @@ describe('nodes: a connection with an invalid URL', function () {
     await helper.stopServer();
   });
 
-  it('reaches the Catch node of every node that uses it, with INVALID_URL and the parser\'s words', async () => {
+  it("reaches the Catch node of every node that uses it, with INVALID_URL and the parser's words", async () => {
     await helper.load(ALL_NODES, flow('s7://127.0.0.1?rack=0&slott=1'));
     const statuses = new Recorder(helper.getNode('statuses'));
     const catches = new Recorder(helper.getNode('caught'));
@@ -47,7 +68,11 @@ describe('nodes: a connection with an invalid URL', function () {
       expect(caught.payload).to.deep.include({ state: 'invalid', code: 'INVALID_URL' });
     }
     for (const id of USERS) {
-      await statuses.next((m) => m.status.source.id === id && m.status.text === 'plcwire.status.badConfig', 3000, `${id} shows bad connection`);
+      await statuses.next(
+        (m) => m.status.source.id === id && m.status.text === 'plcwire.status.badConfig',
+        3000,
+        `${id} shows bad connection`,
+      );
     }
   });
 
@@ -79,9 +104,17 @@ describe('nodes: a tag table with a name used twice', function () {
 
   it('is a warning naming it, from the read and the write node (in object output only one value could arrive)', async () => {
     const catalogs = await loadCatalogs();
-    const tags = [{ name: 'speed', address: 'MW2' }, { name: 'level', address: 'MW4' }, { name: 'speed', address: 'MW6' }];
+    const tags = [
+      { name: 'speed', address: 'MW2' },
+      { name: 'level', address: 'MW4' },
+      { name: 'speed', address: 'MW6' },
+    ];
     await helper.load(
-      [nodes.connection, withCatalog(nodes.read, catalogs.translator('en-US', 'plcwire-read')), withCatalog(nodes.write, catalogs.translator('en-US', 'plcwire-write'))],
+      [
+        nodes.connection,
+        withCatalog(nodes.read, catalogs.translator('en-US', 'plcwire-read')),
+        withCatalog(nodes.write, catalogs.translator('en-US', 'plcwire-write')),
+      ],
       [
         TAB,
         { id: 'conn', type: 'plcwire-connection', url: 's7://127.0.0.1?slott=1' },

@@ -44,12 +44,25 @@ describe('nodes: plcwire-control', function () {
   const url = (extra = '') => `s7://127.0.0.1:${port}?rack=0&slot=2&timeout=1000${extra}`;
 
   /** A flow with the control node `ctl` → `out`, a Catch for it → `caught`; resolves once the node is connected. */
-  async function load(connectionUrl: string, control: Record<string, unknown> = {}): Promise<{ out: Recorder; caught: Recorder; node: any }> {
+  async function load(
+    connectionUrl: string,
+    control: Record<string, unknown> = {},
+  ): Promise<{ out: Recorder; caught: Recorder; node: any }> {
     const at = { z: 'tab', x: 100, y: 100 };
     await helper.load(modules, [
       { id: 'tab', type: 'tab', label: 'control' },
       { id: 'conn', type: 'plcwire-connection', name: 'plc', url: connectionUrl },
-      { id: 'ctl', type: 'plcwire-control', ...at, name: '', connection: 'conn', action: 'info', newOnly: false, wires: [['out']], ...control },
+      {
+        id: 'ctl',
+        type: 'plcwire-control',
+        ...at,
+        name: '',
+        connection: 'conn',
+        action: 'info',
+        newOnly: false,
+        wires: [['out']],
+        ...control,
+      },
       { id: 'out', type: 'helper', ...at },
       { id: 'catcher', type: 'catch', ...at, scope: ['ctl'], uncaught: false, wires: [['caught']] },
       { id: 'caught', type: 'helper', ...at },
@@ -67,7 +80,12 @@ describe('nodes: plcwire-control', function () {
     const msg = await out.next();
     expect(msg.topic).to.equal('info');
     expect(msg.keep).to.equal(7);
-    expect(msg.payload).to.include({ orderCode: server.cpu.identity.orderCode, firmware: server.cpu.identity.firmware, state: 'RUN', pduSize: 240 });
+    expect(msg.payload).to.include({
+      orderCode: server.cpu.identity.orderCode,
+      firmware: server.cpu.identity.firmware,
+      state: 'RUN',
+      pduSize: 240,
+    });
     expect(msg.payload.clock).to.match(ISO);
     expect(Math.abs(Date.parse(msg.payload.clock) - server.cpu.now().getTime())).to.be.lessThan(2000);
     expect(msg.payload.protection).to.include({ level: 1 });
@@ -217,15 +235,26 @@ describe('nodes: plcwire-control', function () {
   });
 });
 
-describe('nodes: the control node\'s logic', () => {
-  const entry = (ms: number, eventId: number) => ({ time: new Date(ms), eventId, priority: 1, ob: 1, dataId: 0, info1: 0, info2: 0, info3: 0 });
+describe("nodes: the control node's logic", () => {
+  const entry = (ms: number, eventId: number) => ({
+    time: new Date(ms),
+    eventId,
+    priority: 1,
+    ob: 1,
+    dataId: 0,
+    info1: 0,
+    info2: 0,
+    info3: 0,
+  });
 
   it('takes msg.action, else msg.topic when it names an action, else the configured action', () => {
     expect(actionOf({ action: 'stop', topic: 'start' }, 'info')).to.equal('stop');
     expect(actionOf({ topic: 'clock-sync' }, 'info')).to.equal('clock-sync');
     expect(actionOf({ topic: 'line 3' }, 'blocks')).to.equal('blocks');
     expect(actionOf({ action: '' }, 'state')).to.equal('state');
-    expect(() => actionOf({ action: 'STOP' }, 'info')).to.throw(/"STOP"/).with.property('code', 'INVALID_VALUE');
+    expect(() => actionOf({ action: 'STOP' }, 'info'))
+      .to.throw(/"STOP"/)
+      .with.property('code', 'INVALID_VALUE');
   });
 
   it('reports every entry first, then those logged since, also entries of the same millisecond', () => {

@@ -33,19 +33,35 @@ describe('nodes: editor endpoints', function () {
 
   it('validates without a URL with the S7 parser, and reports a bad URL', async () => {
     await helper.load(ALL_NODES, []);
-    const plain = await helper.request().post('/plcwire/validate').send({ addresses: ['M0.1'] }).expect(200);
+    const plain = await helper
+      .request()
+      .post('/plcwire/validate')
+      .send({ addresses: ['M0.1'] })
+      .expect(200);
     expect(plain.body.results['M0.1']).to.deep.equal({ ok: true, type: 'BOOL', count: 1 });
-    const bad = await helper.request().post('/plcwire/validate').send({ url: 's7://host?rakc=0', addresses: ['M0.1'] }).expect(200);
+    const bad = await helper
+      .request()
+      .post('/plcwire/validate')
+      .send({ url: 's7://host?rakc=0', addresses: ['M0.1'] })
+      .expect(200);
     expect(bad.body.url.ok).to.equal(false);
     expect(bad.body.url.message).to.include('rakc');
   });
 
   it('parses a URL into the fields of the dialog and formats fields back', async () => {
     await helper.load(ALL_NODES, []);
-    const parsed = await helper.request().post('/plcwire/url').send({ url: 'fetchwrite://10.0.0.2?fetchPort=2000&writePort=2001' }).expect(200);
+    const parsed = await helper
+      .request()
+      .post('/plcwire/url')
+      .send({ url: 'fetchwrite://10.0.0.2?fetchPort=2000&writePort=2001' })
+      .expect(200);
     expect(parsed.body.ok).to.equal(true);
     expect(parsed.body.endpoint).to.include({ protocol: 'fetchwrite', host: '10.0.0.2', fetchPort: 2000, writePort: 2001 });
-    const formatted = await helper.request().post('/plcwire/url').send({ endpoint: { ...parsed.body.endpoint, writePort: 2000 } }).expect(200);
+    const formatted = await helper
+      .request()
+      .post('/plcwire/url')
+      .send({ endpoint: { ...parsed.body.endpoint, writePort: 2000 } })
+      .expect(200);
     expect(formatted.body.url).to.equal('fetchwrite://10.0.0.2?port=2000');
     const wrong = await helper.request().post('/plcwire/url').send({ url: 'modbus://x' }).expect(200);
     expect(wrong.body).to.include({ ok: false, code: 'INVALID_URL' });
@@ -64,8 +80,15 @@ describe('nodes: editor endpoints', function () {
       { name: 'speed', address: 'MW2' },
     ]);
     expect(s7.body.problems.map((p: any) => [p.line, p.code])).to.deep.equal([[4, 'DUPLICATE_NAME']]);
-    const freeport = await helper.request().post('/plcwire/csv').send({ url: 'freeport+tcp://10.0.0.1:4001', text: 'a;ST5,INT2;INT\nb;ST5,BYTE1;INT\n' }).expect(200);
-    expect(freeport.body.tags).to.deep.equal([{ name: 'a', address: 'ST5,INT2' }, { name: 'b', address: 'ST5,BYTE1' }]);
+    const freeport = await helper
+      .request()
+      .post('/plcwire/csv')
+      .send({ url: 'freeport+tcp://10.0.0.1:4001', text: 'a;ST5,INT2;INT\nb;ST5,BYTE1;INT\n' })
+      .expect(200);
+    expect(freeport.body.tags).to.deep.equal([
+      { name: 'a', address: 'ST5,INT2' },
+      { name: 'b', address: 'ST5,BYTE1' },
+    ]);
     expect(freeport.body.problems.map((p: any) => [p.line, p.code])).to.deep.equal([[2, 'TYPE_MISMATCH']]);
     const bad = await helper.request().post('/plcwire/csv').send({ url: 's7://host?rakc=0', text: 'MW2' }).expect(200);
     expect(bad.body.url).to.include({ ok: false, code: 'INVALID_URL' });
@@ -118,12 +141,33 @@ describe('nodes: examples', function () {
       const flow = JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8'));
       const tab = { id: 'ex.tab', type: 'tab', label: f };
       const wired = flow
-        .filter((n: any) => ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'comment'].includes(n.type) || n.type === 'catch' || n.type === 'status')
+        .filter(
+          (n: any) =>
+            ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'comment'].includes(n.type) ||
+            n.type === 'catch' ||
+            n.type === 'status',
+        )
         .map((n: any) => (n.type === 'plcwire-connection' ? n : { ...n, z: 'ex.tab', wires: (n.wires ?? []).map(() => []) }));
-      await helper.load(ALL_NODES.concat(require(path.join(path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red'))] })), 'core/common/90-comment.js'))), [tab, ...wired]);
+      await helper.load(
+        ALL_NODES.concat(
+          require(
+            path.join(
+              path.dirname(
+                require.resolve('@node-red/nodes/package.json', {
+                  paths: [path.dirname(require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red'))],
+                }),
+              ),
+              'core/common/90-comment.js',
+            ),
+          ),
+        ),
+        [tab, ...wired],
+      );
       for (const n of wired.filter((x: any) => x.type.startsWith('plcwire-'))) expect(helper.getNode(n.id), n.id).to.be.ok;
       const conn = flow.find((n: any) => n.type === 'plcwire-connection');
-      const addresses = flow.flatMap((n: any) => [...(n.tags ?? []).map((t: any) => t.address), n.writeAddress, n.watchAddress]).filter(Boolean);
+      const addresses = flow
+        .flatMap((n: any) => [...(n.tags ?? []).map((t: any) => t.address), n.writeAddress, n.watchAddress])
+        .filter(Boolean);
       const res = await helper.request().post('/plcwire/validate').send({ url: conn.url, addresses }).expect(200);
       expect(res.body.url.ok, res.body.url.message).to.equal(true);
       for (const a of addresses) expect(res.body.results[a].ok, `${a}: ${res.body.results[a].message}`).to.equal(true);

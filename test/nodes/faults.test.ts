@@ -21,7 +21,12 @@ const rec = (id: string) => new Recorder(helper.getNode(id));
 /** Waits for a message matching `match` among those `r` received from index `from` on (in any order). */
 async function seen(r: Recorder, from: number, match: (m: any) => boolean, ms: number, what: string): Promise<any> {
   await until(() => r.messages.slice(from).some(match), ms, what).catch(() => {
-    throw new Error(`no ${what} within ${ms} ms; got ${r.messages.slice(from).map((m) => JSON.stringify(m.status ?? m.error ?? m.payload).slice(0, 120)).join(' | ')}`);
+    throw new Error(
+      `no ${what} within ${ms} ms; got ${r.messages
+        .slice(from)
+        .map((m) => JSON.stringify(m.status ?? m.error ?? m.payload).slice(0, 120))
+        .join(' | ')}`,
+    );
   });
   return r.messages.slice(from).find(match);
 }
@@ -31,9 +36,40 @@ function flow(url: string, addr: (i: number) => string) {
   return at([
     TAB,
     { id: 'conn', type: 'plcwire-connection', name: 'plc', url },
-    { id: 'read', type: 'plcwire-read', z: 'tab', name: 'poll', connection: 'conn', interval: 100, output: 'object', deadband: 0, tags: [{ name: 'a', address: addr(0) }], wires: [['out']] },
-    { id: 'write', type: 'plcwire-write', z: 'tab', name: 'w', connection: 'conn', tags: [{ name: 'sp', address: addr(1) }], wires: [['written']] },
-    { id: 'hb', type: 'plcwire-heartbeat', z: 'tab', name: 'hb', connection: 'conn', writeAddress: addr(5), writeMode: 'counter', interval: 100, watchAddress: addr(5), timeout: 700, wires: [['beats']] },
+    {
+      id: 'read',
+      type: 'plcwire-read',
+      z: 'tab',
+      name: 'poll',
+      connection: 'conn',
+      interval: 100,
+      output: 'object',
+      deadband: 0,
+      tags: [{ name: 'a', address: addr(0) }],
+      wires: [['out']],
+    },
+    {
+      id: 'write',
+      type: 'plcwire-write',
+      z: 'tab',
+      name: 'w',
+      connection: 'conn',
+      tags: [{ name: 'sp', address: addr(1) }],
+      wires: [['written']],
+    },
+    {
+      id: 'hb',
+      type: 'plcwire-heartbeat',
+      z: 'tab',
+      name: 'hb',
+      connection: 'conn',
+      writeAddress: addr(5),
+      writeMode: 'counter',
+      interval: 100,
+      watchAddress: addr(5),
+      timeout: 700,
+      wires: [['beats']],
+    },
     { id: 'catcher', type: 'catch', z: 'tab', scope: null, uncaught: false, wires: [['caught']] },
     { id: 'watcher', type: 'status', z: 'tab', scope: null, wires: [['statuses']] },
     ...['out', 'written', 'beats', 'caught', 'statuses'].map((id) => ({ id, type: 'helper', z: 'tab' })),
@@ -150,13 +186,31 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
         expect(writeErr.error.code).to.be.oneOf([...fault.codes, 'TAG_ERRORS']);
         if (fault.linkDown) {
           await seen(statuses, s0, (m) => m.status.source.id === 'read' && m.status.fill === 'red', 4000, 'a red status on the read node');
-          await seen(statuses, s0, (m) => m.status.source.id === 'write' && m.status.fill === 'red', 4000, 'a red status on the write node');
-          const linkErr = await seen(caught, c0, (m) => m.error.source.type === 'plcwire-connection' || m.error.source.id === 'read', 4000, 'the link error at Catch');
+          await seen(
+            statuses,
+            s0,
+            (m) => m.status.source.id === 'write' && m.status.fill === 'red',
+            4000,
+            'a red status on the write node',
+          );
+          const linkErr = await seen(
+            caught,
+            c0,
+            (m) => m.error.source.type === 'plcwire-connection' || m.error.source.id === 'read',
+            4000,
+            'the link error at Catch',
+          );
           expect(linkErr.error.code).to.be.oneOf(fault.codes);
         } else {
           const readErr = await seen(caught, c0, (m) => m.error.source.id === 'read', 4000, 'the read error at Catch');
           expect(readErr.error.code).to.be.oneOf(fault.codes);
-          await seen(statuses, s0, (m) => m.status.source.id === 'read' && m.status.fill === 'yellow', 4000, 'tag errors on the read status');
+          await seen(
+            statuses,
+            s0,
+            (m) => m.status.source.id === 'read' && m.status.fill === 'yellow',
+            4000,
+            'tag errors on the read status',
+          );
           await seen(caught, c0, (m) => m.error.source.id === 'hb', 4000, 'the heartbeat error at Catch');
         }
         await seen(statuses, s0, (m) => m.status.source.id === 'hb' && m.status.fill === 'red', 4000, 'a red status on the heartbeat');
@@ -193,10 +247,14 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
     await ctx.server!().close();
     await caught.next((m) => m.error.source.type === 'plcwire-connection', 4000, 'a link error');
     await new Promise((r) => setTimeout(r, 200));
-    const visible = spy.getCalls().map((c: any) => c.args[0]).filter((e: any) => e && typeof e.level === 'number' && e.level <= 40);
+    const visible = spy
+      .getCalls()
+      .map((c: any) => c.args[0])
+      .filter((e: any) => e && typeof e.level === 'number' && e.level <= 40);
     expect(visible.length, 'something was logged').to.be.greaterThan(0);
     const text = visible.map((e: any) => (typeof e.msg === 'string' ? e.msg : JSON.stringify(e.msg))).join('\n');
-    for (const secret of ['hunter2', 'operator', '31337', '27183', 'bogus-value-77']) expect(text, `log at info level or above`).not.to.include(secret);
+    for (const secret of ['hunter2', 'operator', '31337', '27183', 'bogus-value-77'])
+      expect(text, `log at info level or above`).not.to.include(secret);
     // The credentials do not reach Catch messages either (they go to debug sidebars and files).
     const caughtText = JSON.stringify(caught.messages.map((m) => ({ ...m, error: { message: m.error.message } })));
     expect(caughtText).not.to.include('hunter2');
@@ -234,7 +292,10 @@ describe('admin endpoints of the nodes (Node-RED with adminAuth, in a child proc
     const red = require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red');
     fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
     fs.symlinkSync(ROOT, path.join(dir, 'node_modules', '@plcwire', 'node-red-siemens'), 'dir');
-    fs.writeFileSync(path.join(dir, 'package.json'), JSON.stringify({ name: 'auth-test', dependencies: { '@plcwire/node-red-siemens': '*' } }));
+    fs.writeFileSync(
+      path.join(dir, 'package.json'),
+      JSON.stringify({ name: 'auth-test', dependencies: { '@plcwire/node-red-siemens': '*' } }),
+    );
     fs.writeFileSync(
       script,
       `
@@ -290,7 +351,13 @@ process.on('SIGTERM', () => RED.stop().then(() => process.exit(0)));
     return new Promise((resolve, reject) => {
       const data = body ? JSON.stringify(body) : undefined;
       const req = http.request(
-        { host: '127.0.0.1', port, method, path: url, headers: { ...(data ? { 'content-type': 'application/json' } : {}), ...(token ? { authorization: `Bearer ${token}` } : {}) } },
+        {
+          host: '127.0.0.1',
+          port,
+          method,
+          path: url,
+          headers: { ...(data ? { 'content-type': 'application/json' } : {}), ...(token ? { authorization: `Bearer ${token}` } : {}) },
+        },
         (res) => {
           let text = '';
           res.on('data', (c) => (text += c));
@@ -326,7 +393,13 @@ process.on('SIGTERM', () => RED.stop().then(() => process.exit(0)));
   }
 
   async function login(): Promise<string> {
-    const r = await call('POST', '/admin/auth/token', { client_id: 'node-red-admin', grant_type: 'password', scope: '*', username: 'admin', password: 'pw' });
+    const r = await call('POST', '/admin/auth/token', {
+      client_id: 'node-red-admin',
+      grant_type: 'password',
+      scope: '*',
+      username: 'admin',
+      password: 'pw',
+    });
     expect(r.status).to.equal(200);
     return JSON.parse(r.body).access_token as string;
   }

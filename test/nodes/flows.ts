@@ -13,11 +13,30 @@ function conn(url: string, id = 'conn') {
 }
 
 function readNode(extra: Record<string, unknown>) {
-  return { id: 'read', type: 'plcwire-read', z: 'tab', name: 'poll', connection: 'conn', interval: 100, output: 'object', deadband: 0, tags: [], wires: [['out']], ...extra };
+  return {
+    id: 'read',
+    type: 'plcwire-read',
+    z: 'tab',
+    name: 'poll',
+    connection: 'conn',
+    interval: 100,
+    output: 'object',
+    deadband: 0,
+    tags: [],
+    wires: [['out']],
+    ...extra,
+  };
 }
 
 const out = (id = 'out') => ({ id, type: 'helper', z: 'tab' });
-const catcher = (scope: string[] | null = null) => ({ id: 'catcher', type: 'catch', z: 'tab', scope, uncaught: false, wires: [['caught']] });
+const catcher = (scope: string[] | null = null) => ({
+  id: 'catcher',
+  type: 'catch',
+  z: 'tab',
+  scope,
+  uncaught: false,
+  wires: [['caught']],
+});
 const watcher = (scope: string[] | null = null) => ({ id: 'watcher', type: 'status', z: 'tab', scope, wires: [['statuses']] });
 
 /** Flow nodes need a position: the runtime takes a node without x/y for a config node. */
@@ -52,7 +71,16 @@ export function describeProtocol(title: string, factory: SimFactory): void {
       it('polls in object mode: one message with every tag, quality good', async () => {
         sim.set(0, 11);
         sim.set(1, -22);
-        await load([conn(sim.url), readNode({ tags: [{ name: 'speed', address: sim.addr(0) }, { name: 'level', address: sim.addr(1) }] }), out()]);
+        await load([
+          conn(sim.url),
+          readNode({
+            tags: [
+              { name: 'speed', address: sim.addr(0) },
+              { name: 'level', address: sim.addr(1) },
+            ],
+          }),
+          out(),
+        ]);
         const msg = await recorder('out').next((m) => m.payload.speed === 11);
         expect(msg.payload).to.deep.equal({ speed: 11, level: -22 });
         expect(msg.quality).to.deep.equal({ speed: 'good', level: 'good' });
@@ -64,7 +92,17 @@ export function describeProtocol(title: string, factory: SimFactory): void {
       });
 
       it('polls its table with one address array, so the client keeps its parsed tags and plan for it', async () => {
-        await load([conn(sim.url), readNode({ tags: [{ name: 'a', address: sim.addr(0) }, { name: 'b', address: sim.addr(1) }, { name: 'a2', address: sim.addr(0) }] }), out()]);
+        await load([
+          conn(sim.url),
+          readNode({
+            tags: [
+              { name: 'a', address: sim.addr(0) },
+              { name: 'b', address: sim.addr(1) },
+              { name: 'a2', address: sim.addr(0) },
+            ],
+          }),
+          out(),
+        ]);
         const rec = recorder('out');
         await rec.next(() => true);
         const client = helper.getNode('conn').client;
@@ -86,7 +124,17 @@ export function describeProtocol(title: string, factory: SimFactory): void {
       it('polls in per-tag mode: one message per tag, topic = name', async () => {
         sim.set(0, 5);
         sim.set(1, 6);
-        await load([conn(sim.url), readNode({ output: 'per-tag', tags: [{ name: 'a', address: sim.addr(0) }, { name: 'b', address: sim.addr(1) }] }), out()]);
+        await load([
+          conn(sim.url),
+          readNode({
+            output: 'per-tag',
+            tags: [
+              { name: 'a', address: sim.addr(0) },
+              { name: 'b', address: sim.addr(1) },
+            ],
+          }),
+          out(),
+        ]);
         const rec = recorder('out');
         const a = await rec.next((m) => m.topic === 'a');
         const b = await rec.next((m) => m.topic === 'b');
@@ -97,7 +145,18 @@ export function describeProtocol(title: string, factory: SimFactory): void {
       it('in changes mode sends only tags that moved beyond the deadband', async () => {
         sim.set(0, 100);
         sim.set(1, 200);
-        await load([conn(sim.url), readNode({ output: 'changes', deadband: 5, tags: [{ name: 'a', address: sim.addr(0) }, { name: 'b', address: sim.addr(1) }] }), out()]);
+        await load([
+          conn(sim.url),
+          readNode({
+            output: 'changes',
+            deadband: 5,
+            tags: [
+              { name: 'a', address: sim.addr(0) },
+              { name: 'b', address: sim.addr(1) },
+            ],
+          }),
+          out(),
+        ]);
         const rec = recorder('out');
         await rec.next((m) => m.topic === 'a' && m.payload === 100);
         await rec.next((m) => m.topic === 'b' && m.payload === 200);
@@ -115,7 +174,13 @@ export function describeProtocol(title: string, factory: SimFactory): void {
       it('reads on input, and reads msg.tags on demand, keeping the message', async () => {
         sim.set(2, 77);
         sim.set(3, 88);
-        await load([conn(sim.url), readNode({ interval: 0, tags: [{ name: 'x', address: sim.addr(2) }] }), out(), watcher(['read']), out('statuses')]);
+        await load([
+          conn(sim.url),
+          readNode({ interval: 0, tags: [{ name: 'x', address: sim.addr(2) }] }),
+          out(),
+          watcher(['read']),
+          out('statuses'),
+        ]);
         await recorder('statuses').next((m) => m.status.text === 'plcwire.status.connected', 4000, 'connected status');
         const rec = recorder('out');
         helper.getNode('read').receive({ _msgid: 'm1', correlation: 42 });
@@ -134,7 +199,13 @@ export function describeProtocol(title: string, factory: SimFactory): void {
         sim.set(0, 9);
         await load([
           conn(sim.url),
-          readNode({ tags: [{ name: 'good', address: sim.addr(0) }, { name: 'typo', address: 'XYZ%' }, { name: 'gone', address: sim.missing }] }),
+          readNode({
+            tags: [
+              { name: 'good', address: sim.addr(0) },
+              { name: 'typo', address: 'XYZ%' },
+              { name: 'gone', address: sim.missing },
+            ],
+          }),
           out(),
           catcher(['read']),
           out('caught'),
@@ -156,7 +227,19 @@ export function describeProtocol(title: string, factory: SimFactory): void {
 
       it('sends an input-triggered read with a bad tag to done(err) (Catch) and still outputs the good ones', async () => {
         sim.set(0, 3);
-        await load([conn(sim.url), readNode({ interval: 0, tags: [{ name: 'ok', address: sim.addr(0) }, { name: 'bad', address: 'NOPE' }] }), out(), catcher(['read']), out('caught')]);
+        await load([
+          conn(sim.url),
+          readNode({
+            interval: 0,
+            tags: [
+              { name: 'ok', address: sim.addr(0) },
+              { name: 'bad', address: 'NOPE' },
+            ],
+          }),
+          out(),
+          catcher(['read']),
+          out('caught'),
+        ]);
         await until(() => helper.getNode('read').linkState === 'connected', 4000, 'connected');
         helper.getNode('read').receive({ payload: 'go' });
         const msg = await recorder('out').next();
@@ -168,7 +251,16 @@ export function describeProtocol(title: string, factory: SimFactory): void {
     });
 
     describe('plcwire-write', () => {
-      const writer = (extra: Record<string, unknown> = {}) => ({ id: 'write', type: 'plcwire-write', z: 'tab', name: 'w', connection: 'conn', tags: [{ name: 'setpoint', address: sim.addr(4) }], wires: [['out']], ...extra });
+      const writer = (extra: Record<string, unknown> = {}) => ({
+        id: 'write',
+        type: 'plcwire-write',
+        z: 'tab',
+        name: 'w',
+        connection: 'conn',
+        tags: [{ name: 'setpoint', address: sim.addr(4) }],
+        wires: [['out']],
+        ...extra,
+      });
 
       async function connected(): Promise<void> {
         await until(() => helper.getNode('write').linkState === 'connected', 4000, 'write node connected');
@@ -179,7 +271,10 @@ export function describeProtocol(title: string, factory: SimFactory): void {
         await connected();
         helper.getNode('write').receive({ payload: { setpoint: 1234, [sim.addr(5)]: -5 } });
         const msg = await recorder('out').next();
-        expect(msg.results).to.deep.equal({ setpoint: { ok: true, address: sim.addr(4) }, [sim.addr(5)]: { ok: true, address: sim.addr(5) } });
+        expect(msg.results).to.deep.equal({
+          setpoint: { ok: true, address: sim.addr(4) },
+          [sim.addr(5)]: { ok: true, address: sim.addr(5) },
+        });
         expect(sim.get(4)).to.equal(1234);
         expect(sim.get(5)).to.equal(-5);
       });
@@ -217,7 +312,19 @@ export function describeProtocol(title: string, factory: SimFactory): void {
         await load([
           conn(sim.url),
           // The PLC's life sign is our own counter read back: it keeps changing exactly while the link works.
-          { id: 'hb', type: 'plcwire-heartbeat', z: 'tab', name: 'hb', connection: 'conn', writeAddress: sim.addr(5), writeMode: 'counter', interval: 100, watchAddress: sim.addr(5), timeout: 600, wires: [['out']] },
+          {
+            id: 'hb',
+            type: 'plcwire-heartbeat',
+            z: 'tab',
+            name: 'hb',
+            connection: 'conn',
+            writeAddress: sim.addr(5),
+            writeMode: 'counter',
+            interval: 100,
+            watchAddress: sim.addr(5),
+            timeout: 600,
+            wires: [['out']],
+          },
           out(),
         ]);
         const rec = recorder('out');
@@ -237,7 +344,19 @@ export function describeProtocol(title: string, factory: SimFactory): void {
       it('toggles a life sign and shows it on its status', async () => {
         await load([
           conn(sim.url),
-          { id: 'hb', type: 'plcwire-heartbeat', z: 'tab', name: 'hb', connection: 'conn', writeAddress: sim.addr(3), writeMode: 'toggle', interval: 100, watchAddress: '', timeout: 1000, wires: [['out']] },
+          {
+            id: 'hb',
+            type: 'plcwire-heartbeat',
+            z: 'tab',
+            name: 'hb',
+            connection: 'conn',
+            writeAddress: sim.addr(3),
+            writeMode: 'toggle',
+            interval: 100,
+            watchAddress: '',
+            timeout: 1000,
+            wires: [['out']],
+          },
           watcher(['hb']),
           out('statuses'),
         ]);
@@ -250,7 +369,15 @@ export function describeProtocol(title: string, factory: SimFactory): void {
     describe('connection', () => {
       it('Status nodes see connecting then connected; Catch sees connection errors from a PLC that is off', async () => {
         await sim.stop();
-        await load([conn(sim.url), readNode({ tags: [{ name: 'a', address: sim.addr(0) }] }), out(), catcher(['read']), out('caught'), watcher(['read']), out('statuses')]);
+        await load([
+          conn(sim.url),
+          readNode({ tags: [{ name: 'a', address: sim.addr(0) }] }),
+          out(),
+          catcher(['read']),
+          out('caught'),
+          watcher(['read']),
+          out('statuses'),
+        ]);
         const caught = await recorder('caught').next(() => true, 4000, 'connection error');
         expect(caught.error.source.type).to.equal('plcwire-connection');
         expect(caught.error.code).to.be.oneOf(['CONNECT_FAILED', 'TIMEOUT', 'CONNECTION_LOST']);
@@ -267,7 +394,18 @@ export function describeProtocol(title: string, factory: SimFactory): void {
           conn(sim.url.replace('timeout=1000', 'timeout=2000'), 'conn2'),
           readNode({ tags: [{ name: 'a', address: sim.addr(0) }] }),
           { id: 'write', type: 'plcwire-write', z: 'tab', connection: 'conn2', tags: [], wires: [[]] },
-          { id: 'hb', type: 'plcwire-heartbeat', z: 'tab', connection: 'conn2', writeAddress: sim.addr(5), writeMode: 'counter', interval: 100, watchAddress: '', timeout: 1000, wires: [[]] },
+          {
+            id: 'hb',
+            type: 'plcwire-heartbeat',
+            z: 'tab',
+            connection: 'conn2',
+            writeAddress: sim.addr(5),
+            writeMode: 'counter',
+            interval: 100,
+            watchAddress: '',
+            timeout: 1000,
+            wires: [[]],
+          },
           out(),
         ]);
         await recorder('out').next();
@@ -306,7 +444,18 @@ export function describeProtocol(title: string, factory: SimFactory): void {
           await load([
             conn(sim.url),
             readNode({ interval: 10, tags: [{ name: 'a', address: sim.addr(0) }] }),
-            { id: 'hb', type: 'plcwire-heartbeat', z: 'tab', connection: 'conn', writeAddress: sim.addr(5), writeMode: 'counter', interval: 100, watchAddress: sim.addr(5), timeout: 500, wires: [[]] },
+            {
+              id: 'hb',
+              type: 'plcwire-heartbeat',
+              z: 'tab',
+              connection: 'conn',
+              writeAddress: sim.addr(5),
+              writeMode: 'counter',
+              interval: 100,
+              watchAddress: sim.addr(5),
+              timeout: 500,
+              wires: [[]],
+            },
             out(),
           ]);
           await recorder('out').next();

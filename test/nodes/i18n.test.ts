@@ -39,7 +39,11 @@ interface Shown {
 /** Every status the nodes of `type` show, built with `t`, and the numbers each must show. */
 function everyStatus(t: (key: string, params?: object) => string, type: string): Shown[] {
   const list: Shown[] = [
-    ...['connected', 'connecting', 'closed', 'invalid', 'unconfigured'].map((state) => ({ what: state, status: status.linkStatus(t, { state }), numbers: [] })),
+    ...['connected', 'connecting', 'closed', 'invalid', 'unconfigured'].map((state) => ({
+      what: state,
+      status: status.linkStatus(t, { state }),
+      numbers: [],
+    })),
     { what: 'reconnecting 0.5 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 500 }), numbers: [1] },
     { what: 'reconnecting 30 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 30_000 }), numbers: [30] },
     { what: 'waiting', status: status.waitingStatus(t), numbers: [] },
@@ -54,7 +58,8 @@ function everyStatus(t: (key: string, params?: object) => string, type: string):
   if (type !== 'plcwire-control') return list;
   // The README's table has a row for RUN, STOP and STARTUP, and names the rarer modes in the text.
   for (const mode of ['RUN', 'STOP', 'STARTUP']) list.push({ what: `CPU ${mode}`, status: status.cpuStatus(t, mode), numbers: [] });
-  for (const mode of ['HOLD', 'DEFECT', 'UNKNOWN', undefined]) list.push({ what: `CPU ${mode}`, status: status.cpuStatus(t, mode), numbers: [], readme: false });
+  for (const mode of ['HOLD', 'DEFECT', 'UNKNOWN', undefined])
+    list.push({ what: `CPU ${mode}`, status: status.cpuStatus(t, mode), numbers: [], readme: false });
   // An S7-1500 holds up to 3200 diagnostic entries.
   for (const n of [1, 3200]) {
     list.push({ what: `${n} entries`, status: status.entriesStatus(t, n, false), numbers: [n] });
@@ -62,7 +67,8 @@ function everyStatus(t: (key: string, params?: object) => string, type: string):
   }
   // The README writes the action as ACTION; the longest action name must fit too.
   list.push({ what: 'ACTION failed', status: status.failedStatus(t, 'ACTION'), numbers: [] });
-  for (const action of ['diagnostics', 'clock-sync']) list.push({ what: `${action} failed`, status: status.failedStatus(t, action), numbers: [], readme: false });
+  for (const action of ['diagnostics', 'clock-sync'])
+    list.push({ what: `${action} failed`, status: status.failedStatus(t, action), numbers: [], readme: false });
   return list;
 }
 
@@ -92,7 +98,10 @@ describe('nodes: message catalogs', () => {
 
   it('every key the nodes and dialogs name exists in the catalog that renders it', () => {
     const dir = path.join(ROOT, 'nodes');
-    const sources = [...fs.readdirSync(dir).filter((f) => /\.(js|html)$/.test(f)), ...fs.readdirSync(path.join(dir, 'shared')).map((f) => `shared/${f}`)];
+    const sources = [
+      ...fs.readdirSync(dir).filter((f) => /\.(js|html)$/.test(f)),
+      ...fs.readdirSync(path.join(dir, 'shared')).map((f) => `shared/${f}`),
+    ];
     const types = ['plcwire-connection', ...SHOWN_BY];
     let checked = 0;
     for (const file of sources) {
@@ -140,7 +149,8 @@ describe('nodes: status texts as Node-RED renders them', function () {
     const shown = new Set<string>();
     for (const type of SHOWN_BY) {
       const t = catalogs.translator('en-US', type);
-      for (const { status: s } of everyStatus(t, type).filter((x) => x.readme !== false)) shown.add(`${s.fill} ${s.shape} ${(isKey(s.text) ? t(s.text) : s.text).replace(/\d+/g, 'N')}`);
+      for (const { status: s } of everyStatus(t, type).filter((x) => x.readme !== false))
+        shown.add(`${s.fill} ${s.shape} ${(isKey(s.text) ? t(s.text) : s.text).replace(/\d+/g, 'N')}`);
     }
     expect([...documented].sort()).to.deep.equal([...shown].sort());
   });
@@ -188,10 +198,53 @@ describe('nodes: status texts on Status nodes, with the real catalogs', function
         { id: 'tab', type: 'tab', label: 'i18n' },
         { id: 'conn', type: 'plcwire-connection', url: sim.url },
         { id: 'down', type: 'plcwire-connection', url: `s7://127.0.0.1:${off}?rack=0&slot=1&timeout=500` },
-        { id: 'alive', type: 'plcwire-heartbeat', ...at, connection: 'conn', writeAddress: sim.addr(5), writeMode: 'counter', interval: 100, watchAddress: sim.addr(5), timeout: 1000, wires: [[]] },
-        { id: 'sent', type: 'plcwire-heartbeat', ...at, connection: 'conn', writeAddress: sim.addr(4), writeMode: 'counter', interval: 100, watchAddress: '', timeout: 1000, wires: [[]] },
-        { id: 'read', type: 'plcwire-read', ...at, connection: 'conn', interval: 100, output: 'object', tags: [{ name: 'ok', address: sim.addr(0) }, { name: 'gone', address: sim.missing }], wires: [[]] },
-        { id: 'retry', type: 'plcwire-read', ...at, connection: 'down', interval: 100, output: 'object', tags: [{ name: 'a', address: sim.addr(0) }], wires: [[]] },
+        {
+          id: 'alive',
+          type: 'plcwire-heartbeat',
+          ...at,
+          connection: 'conn',
+          writeAddress: sim.addr(5),
+          writeMode: 'counter',
+          interval: 100,
+          watchAddress: sim.addr(5),
+          timeout: 1000,
+          wires: [[]],
+        },
+        {
+          id: 'sent',
+          type: 'plcwire-heartbeat',
+          ...at,
+          connection: 'conn',
+          writeAddress: sim.addr(4),
+          writeMode: 'counter',
+          interval: 100,
+          watchAddress: '',
+          timeout: 1000,
+          wires: [[]],
+        },
+        {
+          id: 'read',
+          type: 'plcwire-read',
+          ...at,
+          connection: 'conn',
+          interval: 100,
+          output: 'object',
+          tags: [
+            { name: 'ok', address: sim.addr(0) },
+            { name: 'gone', address: sim.missing },
+          ],
+          wires: [[]],
+        },
+        {
+          id: 'retry',
+          type: 'plcwire-read',
+          ...at,
+          connection: 'down',
+          interval: 100,
+          output: 'object',
+          tags: [{ name: 'a', address: sim.addr(0) }],
+          wires: [[]],
+        },
         { id: 'ctl', type: 'plcwire-control', ...at, connection: 'conn', action: 'diagnostics', newOnly: false, wires: [[]] },
         { id: 'watcher', type: 'status', ...at, scope: null, wires: [['statuses']] },
         { id: 'statuses', type: 'helper', ...at },

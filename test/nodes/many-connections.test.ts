@@ -38,10 +38,25 @@ describe('nodes: 100 connections in one runtime', function () {
 
   function flow(n: number): object[] {
     const at = { x: 100, y: 100 };
-    const nodes: object[] = [{ id: 'tab', type: 'tab', label: 'many' }, { id: 'out', type: 'helper', z: 'tab', ...at }];
+    const nodes: object[] = [
+      { id: 'tab', type: 'tab', label: 'many' },
+      { id: 'out', type: 'helper', z: 'tab', ...at },
+    ];
     ports.forEach((port, i) => {
       nodes.push({ id: `conn${i}`, type: 'plcwire-connection', name: `plc${i}`, url: `s7://127.0.0.1:${port}?rack=0&slot=1&timeout=2000` });
-      nodes.push({ id: `read${i}`, type: 'plcwire-read', z: 'tab', name: `plc${i} ${n}`, connection: `conn${i}`, interval: 200, output: 'object', deadband: 0, tags: [{ name: 'id', address: 'DB1.DBW0:INT' }], wires: [['out']], ...at });
+      nodes.push({
+        id: `read${i}`,
+        type: 'plcwire-read',
+        z: 'tab',
+        name: `plc${i} ${n}`,
+        connection: `conn${i}`,
+        interval: 200,
+        output: 'object',
+        deadband: 0,
+        tags: [{ name: 'id', address: 'DB1.DBW0:INT' }],
+        wires: [['out']],
+        ...at,
+      });
     });
     return nodes;
   }
@@ -52,7 +67,11 @@ describe('nodes: 100 connections in one runtime', function () {
     helper.getNode('out').on('input', (msg: any) => seen.add(`${msg.topic}=${msg.payload.id}`));
     await until(() => seen.size >= PLCS, 15000, `${what}: every read node polled (${seen.size} of ${PLCS})`);
     for (let i = 0; i < PLCS; i++) expect(seen.has(`plc${i} ${n}=${i}`), `plc${i} ${n} read its own PLC`).to.equal(true);
-    await until(() => servers.every((s) => s.connectionCount === 1), 5000, `${what}: one connection per PLC (${servers.map((s) => s.connectionCount).join(',')})`);
+    await until(
+      () => servers.every((s) => s.connectionCount === 1),
+      5000,
+      `${what}: one connection per PLC (${servers.map((s) => s.connectionCount).join(',')})`,
+    );
   }
 
   it('keeps exactly one connection per PLC through the deploy and full redeploys, and none after unloading', async () => {

@@ -64,13 +64,18 @@ class Client {
   }
 
   /** The first message (received so far or later) that satisfies `match`. */
-  async next(match: (m: { topic: string; payload: any; retain: boolean }) => boolean, ms = 6000, what = 'a message'): Promise<{ topic: string; payload: any; retain: boolean }> {
+  async next(
+    match: (m: { topic: string; payload: any; retain: boolean }) => boolean,
+    ms = 6000,
+    what = 'a message',
+  ): Promise<{ topic: string; payload: any; retain: boolean }> {
     const deadline = Date.now() + ms;
     for (;;) {
       const found = this.messages.find(match);
       if (found) return found;
       const left = deadline - Date.now();
-      if (left <= 0) throw new Error(`no ${what} within ${ms} ms (got ${this.messages.length}: ${JSON.stringify(this.messages.slice(-3))})`);
+      if (left <= 0)
+        throw new Error(`no ${what} within ${ms} ms (got ${this.messages.length}: ${JSON.stringify(this.messages.slice(-3))})`);
       await new Promise<void>((resolve) => {
         const timer = setTimeout(resolve, left);
         this.wake = () => {
@@ -141,7 +146,9 @@ describe('MQTT gateway example: one poller per PLC publishes, everyone else subs
     expect([retained.retain, retained.payload.value]).to.deep.equal([true, 1300]);
     expect(sim.connectionCount()).to.equal(1);
     // The gateway announces itself (its will says "offline" if it dies).
-    const status = await late.mq.subscribeAsync('plant/gateways/+', { qos: 1 }).then(() => late.next((m) => m.topic === `plant/gateways/${GATEWAY}`));
+    const status = await late.mq
+      .subscribeAsync('plant/gateways/+', { qos: 1 })
+      .then(() => late.next((m) => m.topic === `plant/gateways/${GATEWAY}`));
     expect(status.payload).to.equal('online');
   });
 

@@ -86,7 +86,16 @@ describe('nodes: read messages downstream', function () {
   });
 
   it('object mode: every poll sends new objects, so a node that changes one message changes no later one', async () => {
-    await helper.load(ALL_NODES, flow(sim, { output: 'object', tags: [{ name: 'list', address: ARRAY }, { name: 'word', address: sim.addr(4) }] }));
+    await helper.load(
+      ALL_NODES,
+      flow(sim, {
+        output: 'object',
+        tags: [
+          { name: 'list', address: ARRAY },
+          { name: 'word', address: sim.addr(4) },
+        ],
+      }),
+    );
     const rec = new Recorder(helper.getNode('out'));
     const one = await rec.next();
     one.payload.list[0] = -1;
@@ -125,7 +134,10 @@ describe('nodes: read messages downstream', function () {
 
   it('sends its status when it changes, not on every poll', async () => {
     const watcher = { id: 'watcher', type: 'status', ...at, scope: ['read'], wires: [['statuses']] };
-    await helper.load(ALL_NODES, flow(sim, { output: 'object', tags: [{ name: 'word', address: sim.addr(4) }] }, [watcher, { id: 'statuses', type: 'helper', ...at }]));
+    await helper.load(
+      ALL_NODES,
+      flow(sim, { output: 'object', tags: [{ name: 'word', address: sim.addr(4) }] }, [watcher, { id: 'statuses', type: 'helper', ...at }]),
+    );
     const rec = new Recorder(helper.getNode('out'));
     const statuses = new Recorder(helper.getNode('statuses'));
     for (let i = 0; i < 3; i++) await rec.next();

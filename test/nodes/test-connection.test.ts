@@ -66,12 +66,17 @@ describe('nodes: Test connection (the doctor behind the connection dialog)', fun
     const steps = res.body.steps.map((s: any) => s.step);
     expect(steps).to.include.members(['tcp', 'cotp']);
     expect(steps[steps.length - 1]).to.match(/DB1\.DBW0:INT/);
-    for (const s of res.body.steps) expect(s).to.have.keys(s.hint === undefined ? ['step', 'ok', 'detail'] : ['step', 'ok', 'detail', 'hint']);
+    for (const s of res.body.steps)
+      expect(s).to.have.keys(s.hint === undefined ? ['step', 'ok', 'detail'] : ['step', 'ok', 'detail', 'hint']);
     await until(() => server.connectionCount === 0, 2000, `no connection left (have ${server.connectionCount})`);
   });
 
   it('on a wrong slot: the failing step with what to change, and no connection left', async () => {
-    const res = await helper.request().post('/plcwire/doctor').send({ url: `s7://127.0.0.1:${port}?rack=0&slot=5&timeout=1000` }).expect(200);
+    const res = await helper
+      .request()
+      .post('/plcwire/doctor')
+      .send({ url: `s7://127.0.0.1:${port}?rack=0&slot=5&timeout=1000` })
+      .expect(200);
     expect(res.body.ok).to.equal(false);
     const last = res.body.steps[res.body.steps.length - 1];
     expect(last.ok).to.equal(false);
@@ -92,7 +97,11 @@ describe('nodes: Test connection (the doctor behind the connection dialog)', fun
     const peer = await silentPeer();
     try {
       const t0 = Date.now();
-      const res = await helper.request().post('/plcwire/doctor').send({ url: `s7://127.0.0.1:${peer.port}?rack=0&slot=1&timeout=10000`, timeout: 500 }).expect(200);
+      const res = await helper
+        .request()
+        .post('/plcwire/doctor')
+        .send({ url: `s7://127.0.0.1:${peer.port}?rack=0&slot=1&timeout=10000`, timeout: 500 })
+        .expect(200);
       expect(Date.now() - t0).to.be.lessThan(3000);
       expect(res.body.ok).to.equal(false);
       const last = res.body.steps[res.body.steps.length - 1];
@@ -105,7 +114,7 @@ describe('nodes: Test connection (the doctor behind the connection dialog)', fun
     }
   });
 
-  it('stops the doctor and closes its socket when the editor\'s request goes away', async () => {
+  it("stops the doctor and closes its socket when the editor's request goes away", async () => {
     const peer = await silentPeer();
     try {
       // The helper's admin app (what helper.request() drives) on a socket of its own, so the test can hang up mid-request.
@@ -113,7 +122,10 @@ describe('nodes: Test connection (the doctor behind the connection dialog)', fun
       await new Promise<void>((r) => admin.listen(0, '127.0.0.1', r));
       after.push(() => new Promise<void>((r) => admin.close(() => r())));
       const body = JSON.stringify({ url: `s7://127.0.0.1:${peer.port}?rack=0&slot=1&timeout=10000` });
-      const req = http.request(`http://127.0.0.1:${(admin.address() as net.AddressInfo).port}/plcwire/doctor`, { method: 'POST', headers: { 'content-type': 'application/json', 'content-length': Buffer.byteLength(body) } });
+      const req = http.request(`http://127.0.0.1:${(admin.address() as net.AddressInfo).port}/plcwire/doctor`, {
+        method: 'POST',
+        headers: { 'content-type': 'application/json', 'content-length': Buffer.byteLength(body) },
+      });
       req.on('error', () => undefined);
       req.end(body);
       await until(() => peer.open > 0, 4000, 'the doctor reached the peer');

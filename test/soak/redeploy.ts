@@ -21,9 +21,34 @@ function flow(url: string, n: number): object[] {
     { id: 'tab', type: 'tab', label: 'soak' },
     { id: 'conn', type: 'plcwire-connection', name: 'plc', url },
     // The name changes every time so a 'nodes' deploy restarts the read node.
-    { id: 'read', type: 'plcwire-read', z: 'tab', name: `poll ${n}`, connection: 'conn', interval: INTERVAL, output: 'object', deadband: 0, tags: [{ name: 'a', address: 'DB1.DBW0:INT' }], wires: [['out']], ...at },
+    {
+      id: 'read',
+      type: 'plcwire-read',
+      z: 'tab',
+      name: `poll ${n}`,
+      connection: 'conn',
+      interval: INTERVAL,
+      output: 'object',
+      deadband: 0,
+      tags: [{ name: 'a', address: 'DB1.DBW0:INT' }],
+      wires: [['out']],
+      ...at,
+    },
     { id: 'write', type: 'plcwire-write', z: 'tab', name: `w ${n % 2}`, connection: 'conn', tags: [], wires: [[]], ...at },
-    { id: 'hb', type: 'plcwire-heartbeat', z: 'tab', name: 'hb', connection: 'conn', writeAddress: 'DB1.DBW10:INT', writeMode: 'counter', interval: 200, watchAddress: '', timeout: 1000, wires: [[]], ...at },
+    {
+      id: 'hb',
+      type: 'plcwire-heartbeat',
+      z: 'tab',
+      name: 'hb',
+      connection: 'conn',
+      writeAddress: 'DB1.DBW10:INT',
+      writeMode: 'counter',
+      interval: 200,
+      watchAddress: '',
+      timeout: 1000,
+      wires: [[]],
+      ...at,
+    },
     { id: 'out', type: 'helper', z: 'tab', ...at },
   ];
 }
@@ -94,10 +119,14 @@ async function main(): Promise<void> {
   if (afterUnload !== 0) failures.push(`${afterUnload} connections left after the flows stopped`);
   if (closeMs > 2000) failures.push(`closing took ${closeMs} ms`);
 
-  console.log(`redeploys:               ${REDEPLOYS} (${TYPES.join('/')} in turn) in ${(redeployMs / 1000).toFixed(1)} s, slowest ${slowest.ms} ms (#${slowest.n})`);
+  console.log(
+    `redeploys:               ${REDEPLOYS} (${TYPES.join('/')} in turn) in ${(redeployMs / 1000).toFixed(1)} s, slowest ${slowest.ms} ms (#${slowest.n})`,
+  );
   console.log(`connections opened:      ${connections} over the run`);
   console.log(`connections afterwards:  ${connected} (want 1); after unload ${afterUnload} (want 0), unload took ${closeMs} ms`);
-  console.log(`pollers:                 ${pollsPerInterval.toFixed(2)} poll messages and ${readsPerInterval.toFixed(2)} read jobs per ${INTERVAL} ms interval (want ≈1)`);
+  console.log(
+    `pollers:                 ${pollsPerInterval.toFixed(2)} poll messages and ${readsPerInterval.toFixed(2)} read jobs per ${INTERVAL} ms interval (want ≈1)`,
+  );
   console.log(`"Close timed out":       ${closeTimeouts.length}`);
   console.log(`log entries:             ${logged.length}`);
   if (failures.length > 0) {

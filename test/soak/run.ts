@@ -79,7 +79,9 @@ async function main(): Promise<void> {
     );
   }
   await plant.close();
-  console.log(`${'protocol'.padEnd(16)}${'polls'.padEnd(9)}${'polls/s'.padEnd(10)}${'reconnects'.padEnd(12)}${'heap start → polls → reconnects'.padEnd(28)}handles`);
+  console.log(
+    `${'protocol'.padEnd(16)}${'polls'.padEnd(9)}${'polls/s'.padEnd(10)}${'reconnects'.padEnd(12)}${'heap start → polls → reconnects'.padEnd(28)}handles`,
+  );
   for (const r of rows) console.log(r);
   process.exitCode = failed ? 1 : 0;
 }

@@ -159,12 +159,14 @@ export function dashboardProblems(flow: FlowNode[]): string[] {
       const page = byId.get(String(n.page));
       const width = Number(n.width);
       if (!page || page.type !== 'ui-page') problems.push(`group "${n.name}" is on no page`);
-      else if (!(width >= 1 && width <= pageColumns(page))) problems.push(`group "${n.name}" is ${n.width} wide on a page of ${pageColumns(page)} columns`);
+      else if (!(width >= 1 && width <= pageColumns(page)))
+        problems.push(`group "${n.name}" is ${n.width} wide on a page of ${pageColumns(page)} columns`);
     } else if (n.type.startsWith('ui-') && typeof n.group === 'string' && n.group !== '') {
       const group = byId.get(n.group);
       const width = Number(n.width) || 0;
       if (!group || group.type !== 'ui-group') problems.push(`widget "${n.name}" (${n.id}) is in no group`);
-      else if (width > Number(group.width)) problems.push(`widget "${n.name}" (${n.id}) is ${width} wide in group "${group.name}" of ${group.width}`);
+      else if (width > Number(group.width))
+        problems.push(`widget "${n.name}" (${n.id}) is ${width} wide in group "${group.name}" of ${group.width}`);
     }
   }
   return problems;

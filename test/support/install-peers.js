@@ -14,7 +14,10 @@ const path = require('node:path');
 
 const ROOT = path.resolve(__dirname, '../..');
 const PEERS = {
-  interop: { dir: 'test/interop', has: ['node-snap7', 'nodes7', '@st-one-io/nodes7', 'node-red-contrib-s7'].map((p) => `node_modules/${p}/package.json`) },
+  interop: {
+    dir: 'test/interop',
+    has: ['node-snap7', 'nodes7', '@st-one-io/nodes7', 'node-red-contrib-s7'].map((p) => `node_modules/${p}/package.json`),
+  },
   nr5: { dir: 'test/nr5', has: ['node_modules/node/bin/node', 'node_modules/node-red/package.json'] },
 };
 

@@ -83,7 +83,13 @@ function packet(fromClient: boolean, seq: number, ack: number, flags: number, pa
   tcp[12] = 5 << 4;
   tcp[13] = flags;
   tcp.writeUInt16BE(65535, 14);
-  const pseudo = Buffer.concat([Buffer.from(src.ip), Buffer.from(dst.ip), Buffer.of(0, 6, (20 + payload.length) >> 8, (20 + payload.length) & 0xff), tcp, payload]);
+  const pseudo = Buffer.concat([
+    Buffer.from(src.ip),
+    Buffer.from(dst.ip),
+    Buffer.of(0, 6, (20 + payload.length) >> 8, (20 + payload.length) & 0xff),
+    tcp,
+    payload,
+  ]);
   tcp.writeUInt16BE(checksum(pseudo), 16);
   const ip = Buffer.alloc(20);
   ip[0] = 0x45;

@@ -31,7 +31,8 @@ const BINARY_PACKAGE = `@lydell/node-pty-${process.platform}-${process.arch}`;
 /** Why no pty pair can be made on this machine, or undefined when it can. */
 export function ptyUnavailable(): string | undefined {
   if (process.platform === 'win32') return 'Windows has no pseudo-terminals for the serialport bindings to open';
-  const shipped = (require('@lydell/node-pty/package.json') as { optionalDependencies?: Record<string, string> }).optionalDependencies ?? {};
+  const shipped =
+    (require('@lydell/node-pty/package.json') as { optionalDependencies?: Record<string, string> }).optionalDependencies ?? {};
   if (!(BINARY_PACKAGE in shipped)) return `@lydell/node-pty ships no prebuilt binary for ${process.platform}-${process.arch}`;
   return undefined;
 }
@@ -42,9 +43,12 @@ function loadNative(): NativePty {
   try {
     native = require(`${BINARY_PACKAGE}/pty.node`) as NativePty;
   } catch (err) {
-    throw new Error(`cannot load ${BINARY_PACKAGE}/pty.node (installed with @lydell/node-pty unless npm ran with --omit=optional): ${(err as Error).message}`, {
-      cause: err,
-    });
+    throw new Error(
+      `cannot load ${BINARY_PACKAGE}/pty.node (installed with @lydell/node-pty unless npm ran with --omit=optional): ${(err as Error).message}`,
+      {
+        cause: err,
+      },
+    );
   }
   return native;
 }

@@ -17,7 +17,8 @@ export function skipBecause(ctx: Context, reason: string): never {
   if (!runnable) throw new Error('skipBecause: call it from a test or a hook');
   // A test skips itself, "before each" skips the test it runs for, "before all" its whole suite.
   let target: Runnable | Suite = runnable;
-  if (runnable.type === 'hook') target = /^"before each" hook/.test(runnable.originalTitle ?? runnable.title) ? ctx.currentTest! : runnable.parent!;
+  if (runnable.type === 'hook')
+    target = /^"before each" hook/.test(runnable.originalTitle ?? runnable.title) ? ctx.currentTest! : runnable.parent!;
   (target as unknown as Record<symbol, string>)[SKIP_REASON] = reason;
   return ctx.skip();
 }

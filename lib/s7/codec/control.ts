@@ -13,7 +13,16 @@
  *   end upload:  1F 00 00 00 | upload id (4)   answer: 1F
  */
 import { ProtocolError } from '../../errors';
-import { COTP_DT_HEADER, ControlFunction, CotpType, FRAME_OVERHEAD, Rosctr, S7_ACK_HEADER, S7_JOB_HEADER, S7_PROTOCOL_ID } from '../constants';
+import {
+  COTP_DT_HEADER,
+  ControlFunction,
+  CotpType,
+  FRAME_OVERHEAD,
+  Rosctr,
+  S7_ACK_HEADER,
+  S7_JOB_HEADER,
+  S7_PROTOCOL_ID,
+} from '../constants';
 import { decodeS7 } from './pdu';
 import { tpktFrame } from './tpkt';
 
@@ -118,7 +127,9 @@ const JOB_FUNC = FRAME_OVERHEAD + S7_JOB_HEADER;
 export function isControlJob(frame: Buffer): boolean {
   if (frame.length <= JOB_FUNC || frame[7] !== S7_PROTOCOL_ID || frame[8] !== Rosctr.Job) return false;
   const f = frame[JOB_FUNC]!;
-  return f === ControlFunction.PlcStop || f === ControlFunction.PiService || (f >= ControlFunction.StartUpload && f <= ControlFunction.EndUpload);
+  return (
+    f === ControlFunction.PlcStop || f === ControlFunction.PiService || (f >= ControlFunction.StartUpload && f <= ControlFunction.EndUpload)
+  );
 }
 
 /** Decodes a control job (simulator) or the ack-data answering one (client). Throws ProtocolError. */
@@ -137,7 +148,8 @@ export function decodeControl(frame: Buffer): ControlMessage {
     if (p.length === 0) return { kind: 'control-ack', pduRef, func: 0, status: undefined, error };
     const func = p[0]!;
     if (error === 0 && func === ControlFunction.StartUpload) {
-      if (p.length < 9 || p.length !== 9 + p[8]!) throw new ProtocolError(`start upload answer: ${p.length} parameter bytes do not match its length string`);
+      if (p.length < 9 || p.length !== 9 + p[8]!)
+        throw new ProtocolError(`start upload answer: ${p.length} parameter bytes do not match its length string`);
       const text = p.subarray(9).toString('latin1');
       if (!/^[0-9]+$/.test(text)) throw new ProtocolError(`start upload answer: block length "${text}" is not a number`);
       return { kind: 'start-upload-ack', pduRef, uploadId: p.readUInt32BE(4), loadLength: Number(text) };
@@ -155,14 +167,16 @@ export function decodeControl(frame: Buffer): ControlMessage {
   if (m.kind !== 'other' || rosctr !== Rosctr.Job || p.length === 0) throw new ProtocolError(`not a control job (${m.kind})`);
   const func = p[0]!;
   if (func === ControlFunction.PlcStop) {
-    if (p.length < 7 || p.length !== 7 + p[6]!) throw new ProtocolError(`PLC stop: ${p.length} parameter bytes do not match its service name`);
+    if (p.length < 7 || p.length !== 7 + p[6]!)
+      throw new ProtocolError(`PLC stop: ${p.length} parameter bytes do not match its service name`);
     return { kind: 'stop', pduRef };
   }
   if (func === ControlFunction.PiService) {
     if (p.length < 11) throw new ProtocolError(`PI service of ${p.length} parameter bytes is too short`);
     const argLen = p.readUInt16BE(8);
     const nameAt = 10 + argLen;
-    if (nameAt >= p.length || nameAt + 1 + p[nameAt]! !== p.length) throw new ProtocolError('PI service: argument and service name lengths do not match the parameters');
+    if (nameAt >= p.length || nameAt + 1 + p[nameAt]! !== p.length)
+      throw new ProtocolError('PI service: argument and service name lengths do not match the parameters');
     const arg = p.subarray(10, nameAt);
     return { kind: 'start', pduRef, cold: arg.equals(COLD_START_ARG), service: p.subarray(nameAt + 1).toString('latin1') };
   }

@@ -179,7 +179,13 @@ export function encodeReadRequest(pduRef: number, items: readonly S7Item[]): Buf
 }
 
 /** Writes data items (return code/reserved, transport size, length, data, fill) from `p`. */
-function writeDataItems(frame: Buffer, p: number, items: readonly { data: Buffer }[], code: (i: number) => number, size: (i: number) => number): void {
+function writeDataItems(
+  frame: Buffer,
+  p: number,
+  items: readonly { data: Buffer }[],
+  code: (i: number) => number,
+  size: (i: number) => number,
+): void {
   const last = items.length - 1;
   for (let i = 0; i <= last; i++) {
     const data = items[i]!.data;
@@ -202,7 +208,13 @@ export function encodeWriteRequest(pduRef: number, items: readonly S7WriteItem[]
   frame[JOB_PARAMS] = S7Function.WriteVar;
   frame[JOB_PARAMS + 1] = items.length;
   for (let i = 0; i < items.length; i++) writeItem(frame, JOB_PARAMS + 2 + READ_ITEM * i, items[i]!);
-  writeDataItems(frame, JOB_PARAMS + paramLength, items, () => 0, (i) => items[i]!.dataTransportSize);
+  writeDataItems(
+    frame,
+    JOB_PARAMS + paramLength,
+    items,
+    () => 0,
+    (i) => items[i]!.dataTransportSize,
+  );
   return frame;
 }
 
@@ -212,7 +224,13 @@ export function encodeReadResponse(pduRef: number, items: readonly ReadResponseI
   const frame = s7Frame(Rosctr.AckData, pduRef, 2, dataPartLength(items));
   frame[ACK_PARAMS] = S7Function.ReadVar;
   frame[ACK_PARAMS + 1] = items.length;
-  writeDataItems(frame, ACK_PARAMS + 2, items, (i) => items[i]!.returnCode, (i) => items[i]!.transportSize);
+  writeDataItems(
+    frame,
+    ACK_PARAMS + 2,
+    items,
+    (i) => items[i]!.returnCode,
+    (i) => items[i]!.transportSize,
+  );
   return frame;
 }
 
@@ -269,7 +287,9 @@ export function decodeS7(frame: Buffer): S7Message {
   const header = ack ? S7_ACK_HEADER : S7_JOB_HEADER;
   if (pdu.length < header) throw new ProtocolError(`S7 ack of ${pdu.length} bytes is too short`);
   if (header + paramLength + dataLength !== pdu.length) {
-    throw new ProtocolError(`S7 lengths (header ${header} + parameters ${paramLength} + data ${dataLength}) do not match the PDU (${pdu.length})`);
+    throw new ProtocolError(
+      `S7 lengths (header ${header} + parameters ${paramLength} + data ${dataLength}) do not match the PDU (${pdu.length})`,
+    );
   }
   const params = pdu.subarray(header, header + paramLength);
   const data = pdu.subarray(header + paramLength);
@@ -317,7 +337,13 @@ const PLAIN_S7_AT = FRAME_OVERHEAD;
  */
 export function s7AnswerRef(frame: Buffer): number {
   const at = PLAIN_S7_AT;
-  if (frame.length < at + S7_JOB_HEADER || frame[4] !== COTP_DT_HEADER - 1 || (frame[5]! & 0xf0) !== CotpType.DT || (frame[6]! & 0x80) === 0) return -1;
+  if (
+    frame.length < at + S7_JOB_HEADER ||
+    frame[4] !== COTP_DT_HEADER - 1 ||
+    (frame[5]! & 0xf0) !== CotpType.DT ||
+    (frame[6]! & 0x80) === 0
+  )
+    return -1;
   if (frame[0] !== TPKT_VERSION || ((frame[2]! << 8) | frame[3]!) !== frame.length || frame[at] !== S7_PROTOCOL_ID) return -1;
   const rosctr = frame[at + 1]!;
   const header = rosctr === Rosctr.Ack || rosctr === Rosctr.AckData ? S7_ACK_HEADER : S7_JOB_HEADER;
@@ -378,7 +404,8 @@ function decodeSetup(params: Buffer): SetupParams {
 function decodeItems(params: Buffer): S7Item[] {
   if (params.length < 2) throw new ProtocolError('request parameters too short');
   const count = params[1]!;
-  if (params.length !== 2 + READ_ITEM * count) throw new ProtocolError(`${count} items need ${2 + READ_ITEM * count} parameter bytes, got ${params.length}`);
+  if (params.length !== 2 + READ_ITEM * count)
+    throw new ProtocolError(`${count} items need ${2 + READ_ITEM * count} parameter bytes, got ${params.length}`);
   const items: S7Item[] = new Array<S7Item>(count);
   for (let i = 0; i < count; i++) {
     const o = 2 + READ_ITEM * i;

@@ -24,7 +24,19 @@
  * (09 octet string), length in bytes, data.
  */
 import { PlcError, ProtocolError } from '../../errors';
-import { COTP_DT_HEADER, CotpType, DataTransportSize, FRAME_OVERHEAD, LAST_DATA_UNIT, MORE_DATA_UNITS, Rosctr, S7_JOB_HEADER, S7_PROTOCOL_ID, UserdataMethod, UserdataType } from '../constants';
+import {
+  COTP_DT_HEADER,
+  CotpType,
+  DataTransportSize,
+  FRAME_OVERHEAD,
+  LAST_DATA_UNIT,
+  MORE_DATA_UNITS,
+  Rosctr,
+  S7_JOB_HEADER,
+  S7_PROTOCOL_ID,
+  UserdataMethod,
+  UserdataType,
+} from '../constants';
 import { decodeCotp } from './cotp';
 import { dataLengthBytes } from './pdu';
 import { tpktFrame } from './tpkt';
@@ -206,7 +218,7 @@ export function decodeUserdataParts(pduRef: number, p: Buffer, d: Buffer): Userd
  */
 export function encodePassword(password: string): Buffer {
   if (typeof password !== 'string' || password.length === 0 || password.length > 8 || !/^[\x20-\x7e]+$/.test(password)) {
-    throw new PlcError('INVALID_VALUE', "a PLC password is 1 to 8 printable ASCII characters");
+    throw new PlcError('INVALID_VALUE', 'a PLC password is 1 to 8 printable ASCII characters');
   }
   const plain = Buffer.from(password.padEnd(8, ' '), 'latin1');
   const out = Buffer.alloc(8);

@@ -35,7 +35,8 @@ export function isCounterOrTimer(area: number): boolean {
 
 export function areaCode(tag: Tag): number {
   const code = AREA_CODES[tag.area];
-  if (code === undefined) throw new PlcError('INVALID_ADDRESS', `${tag.address}: area ${tag.area} cannot be read over S7`, { tag: tag.address });
+  if (code === undefined)
+    throw new PlcError('INVALID_ADDRESS', `${tag.address}: area ${tag.area} cannot be read over S7`, { tag: tag.address });
   return code;
 }
 

@@ -19,7 +19,12 @@ export class ReadPlanCache {
 
   get(tags: readonly Tag[], pduSize: number, options: PlanOptions = {}): ReadPlan {
     const same = this.byArray.get(tags);
-    if (same && same.pduSize === pduSize && same.maxItems === maxReadItems(pduSize, options.maxItems) && same.merged === (options.merge ?? true)) {
+    if (
+      same &&
+      same.pduSize === pduSize &&
+      same.maxItems === maxReadItems(pduSize, options.maxItems) &&
+      same.merged === (options.merge ?? true)
+    ) {
       this.hits++;
       return same;
     }

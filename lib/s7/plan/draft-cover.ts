@@ -61,7 +61,13 @@ function coverRuns(atoms: readonly Atom[], from: readonly Int32Array[], end: num
 }
 
 /** Runs packed into `pdus` PDUs of at most maxItems items and `capacity` response bytes each, or undefined. */
-function packRuns(atoms: readonly Atom[], runs: readonly { first: number; last: number }[], pdus: number, maxItems: number, capacity: number): Draft | undefined {
+function packRuns(
+  atoms: readonly Atom[],
+  runs: readonly { first: number; last: number }[],
+  pdus: number,
+  maxItems: number,
+  capacity: number,
+): Draft | undefined {
   const r = runs.length;
   if (r > pdus * maxItems) return undefined;
   const len = runs.map((run) => atoms[run.last]!.end - atoms[run.first]!.start);
@@ -147,4 +153,3 @@ function draftOf(atoms: readonly Atom[], runs: readonly { first: number; last: n
   }
   return { bins, placements };
 }
-

@@ -44,7 +44,14 @@ class SegmentLayout {
   grow(): boolean {
     const from = new Int32Array(2 * this.width);
     const prev = this.rows[this.rows.length - 1]!;
-    const row = bridgeOrSplit({ prev, a: this.atoms[this.j]!, b: this.atoms[this.j + 1]!, most: this.maxItems, reached: this.maxItems, from });
+    const row = bridgeOrSplit({
+      prev,
+      a: this.atoms[this.j]!,
+      b: this.atoms[this.j + 1]!,
+      most: this.maxItems,
+      reached: this.maxItems,
+      from,
+    });
     if (this.best(row) === undefined) return false;
     this.rows.push(row);
     this.from.push(from);
@@ -97,9 +104,16 @@ export function packSegments(atoms: readonly Atom[], pduSize: number, maxItems: 
     if (atom.end - atom.start > maxItem) {
       const even = (n: number) => n - (n % atom.unit);
       const pieces: { bin: Bin; item: DraftItem }[] = [];
-      for (let at = atom.start; at < atom.end; ) {
+      for (let at = atom.start; at < atom.end;) {
         const length = Math.min(even(maxItem), atom.end - at);
-        const item: DraftItem = { group: atom.group, area: atom.area, dbNumber: atom.dbNumber, unit: atom.unit, start: at, end: at + length };
+        const item: DraftItem = {
+          group: atom.group,
+          area: atom.area,
+          dbNumber: atom.dbNumber,
+          unit: atom.unit,
+          start: at,
+          end: at + length,
+        };
         const bin: Bin = { items: [item], response: VAR_RESPONSE_BASE + READ_RESPONSE_ITEM_HEADER + length };
         bins.push(bin);
         pieces.push({ bin, item });

@@ -120,4 +120,3 @@ export function wireBytes(draft: Draft): number {
   for (const b of draft.bins) n += VAR_REQUEST_BASE + READ_ITEM * b.items.length + b.response;
   return n;
 }
-

@@ -1,7 +1,16 @@
 import { toPlcError, type PlcError } from '../../errors';
 import type { Tag } from '../../types';
 import { validateValue, writeSpan } from '../../values';
-import { DataTransportSize, MAX_ITEMS, READ_ITEM, S7Area, TransportSize, VAR_REQUEST_BASE, VAR_RESPONSE_BASE, WRITE_DATA_HEADER } from '../constants';
+import {
+  DataTransportSize,
+  MAX_ITEMS,
+  READ_ITEM,
+  S7Area,
+  TransportSize,
+  VAR_REQUEST_BASE,
+  VAR_RESPONSE_BASE,
+  WRITE_DATA_HEADER,
+} from '../constants';
 import { areaCode, isCounterOrTimer } from './atoms';
 import { checkPduSize, maxWriteItemData, type PlanOptions } from './limits';
 
@@ -40,7 +49,11 @@ export interface WritePlan {
  * decreasing. A value that does not fit its tag is reported in `errors` and
  * not sent.
  */
-export function planWrite(writes: readonly { tag: Tag; value: unknown }[], pduSize: number, options: Pick<PlanOptions, 'maxItems'> = {}): WritePlan {
+export function planWrite(
+  writes: readonly { tag: Tag; value: unknown }[],
+  pduSize: number,
+  options: Pick<PlanOptions, 'maxItems'> = {},
+): WritePlan {
   checkPduSize(pduSize);
   const maxData = maxWriteItemData(pduSize);
   const maxItems = Math.min(options.maxItems ?? MAX_ITEMS, MAX_ITEMS, pduSize - VAR_RESPONSE_BASE);
@@ -98,7 +111,15 @@ function writeItems(tag: Tag, value: unknown, maxData: number): PlannedWriteItem
     const transportSize = area === S7Area.C ? TransportSize.COUNTER : TransportSize.TIMER;
     for (let o = 0; o < data.length; o += step) {
       const part = data.subarray(o, o + step);
-      items.push({ area, dbNumber: 0, transportSize, count: part.length / 2, address: tag.byteOffset + o / 2, dataTransportSize: DataTransportSize.OCTET_STRING, data: part });
+      items.push({
+        area,
+        dbNumber: 0,
+        transportSize,
+        count: part.length / 2,
+        address: tag.byteOffset + o / 2,
+        dataTransportSize: DataTransportSize.OCTET_STRING,
+        data: part,
+      });
     }
     return items;
   }
