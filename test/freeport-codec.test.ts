@@ -9,7 +9,7 @@ const ascii = (s: string) => Buffer.from(s, 'latin1');
 const text = (b: Buffer) => b.toString('latin1');
 const E627A1C3 = Buffer.from([0xe6, 0x27, 0xa1, 0xc3]);
 
-describe('freeport codec (PROTOCOLS.md §3, seeds/004)', () => {
+describe('freeport codec (docs/protocols.md, "S7-200 freeport")', () => {
   describe('the default frame profile (docs/protocols.md)', () => {
     it('writes E6 27 A1 C3 to station 5 as exactly qR0504E627A1C325Q', () => {
       expect(text(encodeRequest(writeRequest(5, E627A1C3)))).to.equal('qR0504E627A1C325Q');
