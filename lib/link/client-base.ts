@@ -67,8 +67,8 @@ const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) a
 /**
  * A function returning `{ "DB1,INT2": read[0], … }` for a polled list.
  * Adding hundreds of string keys to an object one by one turns it into a
- * hash table: measured on 1000-tag polls, 5–30 % fewer polls/s than this
- * literal, which is built in one step. Keys are JSON-quoted
+ * hash table, slower to build and to read than this literal, which is built
+ * in one step (the figure: bench/README.md, "Figures that used to be in comments"). Keys are JSON-quoted
  * address strings. Falls back to the loop (null) where code generation is
  * disabled or a key would be special in a literal.
  */

@@ -63,8 +63,8 @@ export class S7Session {
    * Map: a Map that jobs enter and leave rehashes every few jobs, and V8 links
    * each dropped table to its successor; once one of them is in the old
    * generation, the chain keeps every later table, with the answers and values
-   * its jobs reached, alive through minor GCs (measured: ~20 KB per
-   * 1000-tag poll promoted, scavenges of 3-5 ms instead of 0.1 ms).
+   * its jobs reached, alive through minor GCs (the figures: bench/README.md,
+   * "Figures that used to be in comments").
    */
   private readonly slots: (InFlight | undefined)[];
   private running = 0;
