@@ -13,40 +13,18 @@
  *   end upload:  1F 00 00 00 | upload id (4)   answer: 1F
  */
 import { ProtocolError } from '../../errors';
-import {
-  COTP_DT_HEADER,
-  ControlFunction,
-  CotpType,
-  FRAME_OVERHEAD,
-  Rosctr,
-  S7_ACK_HEADER,
-  S7_JOB_HEADER,
-  S7_PROTOCOL_ID,
-} from '../constants';
-import { decodeS7 } from './pdu';
-import { tpktFrame } from './tpkt';
+import { ControlFunction, FRAME_OVERHEAD, Rosctr, S7_ACK_HEADER, S7_JOB_HEADER, S7_PROTOCOL_ID } from '../constants';
+import { decodeS7, s7Frame } from './pdu';
 
 const P_PROGRAM = Buffer.from('P_PROGRAM', 'latin1');
 /** PI argument of a cold start. */
 export const COLD_START_ARG = Buffer.from('C ', 'latin1');
 
 function frame(rosctr: number, pduRef: number, params: Buffer, data: Buffer = Buffer.alloc(0), error = 0): Buffer {
-  const ack = rosctr === Rosctr.Ack || rosctr === Rosctr.AckData;
-  const header = ack ? S7_ACK_HEADER : S7_JOB_HEADER;
-  const f = tpktFrame(COTP_DT_HEADER + header + params.length + data.length);
-  f[4] = 2;
-  f[5] = CotpType.DT;
-  f[6] = 0x80;
-  f[7] = S7_PROTOCOL_ID;
-  f[8] = rosctr;
-  f[9] = 0;
-  f[10] = 0;
-  f.writeUInt16BE(pduRef & 0xffff, 11);
-  f.writeUInt16BE(params.length, 13);
-  f.writeUInt16BE(data.length, 15);
-  if (ack) f.writeUInt16BE(error, 17);
-  params.copy(f, FRAME_OVERHEAD + header);
-  data.copy(f, FRAME_OVERHEAD + header + params.length);
+  const f = s7Frame(rosctr, pduRef, params.length, data.length, error);
+  const at = FRAME_OVERHEAD + (rosctr === Rosctr.Ack || rosctr === Rosctr.AckData ? S7_ACK_HEADER : S7_JOB_HEADER);
+  params.copy(f, at);
+  data.copy(f, at + params.length);
   return f;
 }
 

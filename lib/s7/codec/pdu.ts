@@ -107,8 +107,12 @@ export function readRequestPduSize(items: number): number {
 
 // ---------------------------------------------------------------- encoders
 
-/** Starts a frame: TPKT, COTP DT (EOT), S7 header; returns the frame and where the parameters start. */
-function s7Frame(rosctr: number, pduRef: number, paramLength: number, dataLength: number): Buffer {
+/**
+ * Starts a frame: TPKT, COTP DT (EOT), S7 header (an ack's with `error`,
+ * class << 8 | code); the parameters start at FRAME_OVERHEAD + the header.
+ * The one writer of the S7 header, for jobs, userdata and control jobs alike.
+ */
+export function s7Frame(rosctr: number, pduRef: number, paramLength: number, dataLength: number, error = 0): Buffer {
   const ack = rosctr === Rosctr.Ack || rosctr === Rosctr.AckData;
   const header = ack ? S7_ACK_HEADER : S7_JOB_HEADER;
   const frame = tpktFrame(COTP_DT_HEADER + header + paramLength + dataLength);
@@ -122,10 +126,7 @@ function s7Frame(rosctr: number, pduRef: number, paramLength: number, dataLength
   frame.writeUInt16BE(pduRef & 0xffff, 11);
   frame.writeUInt16BE(paramLength, 13);
   frame.writeUInt16BE(dataLength, 15);
-  if (ack) {
-    frame[17] = 0;
-    frame[18] = 0;
-  }
+  if (ack) frame.writeUInt16BE(error, 17);
   return frame;
 }
 

@@ -25,8 +25,6 @@
  */
 import { PlcError, ProtocolError } from '../../errors';
 import {
-  COTP_DT_HEADER,
-  CotpType,
   DataTransportSize,
   FRAME_OVERHEAD,
   LAST_DATA_UNIT,
@@ -38,8 +36,7 @@ import {
   UserdataType,
 } from '../constants';
 import { decodeCotp } from './cotp';
-import { dataLengthBytes } from './pdu';
-import { tpktFrame } from './tpkt';
+import { dataLengthBytes, s7Frame } from './pdu';
 
 /** The parameter part of a userdata PDU. */
 export interface UserdataParams {
@@ -86,17 +83,7 @@ export function encodeUserdata(pduRef: number, p: UserdataParams, data?: Buffer,
   const empty = data === undefined;
   const dlen = 4 + (empty ? 0 : data.length);
   if (dlen > 0xffff) throw new RangeError(`userdata of ${dlen} bytes does not fit an S7 PDU`);
-  const frame = tpktFrame(COTP_DT_HEADER + S7_JOB_HEADER + plen + dlen);
-  frame[4] = 2;
-  frame[5] = CotpType.DT;
-  frame[6] = 0x80;
-  frame[7] = S7_PROTOCOL_ID;
-  frame[8] = Rosctr.UserData;
-  frame[9] = 0;
-  frame[10] = 0;
-  frame.writeUInt16BE(pduRef & 0xffff, 11);
-  frame.writeUInt16BE(plen, 13);
-  frame.writeUInt16BE(dlen, 15);
+  const frame = s7Frame(Rosctr.UserData, pduRef, plen, dlen);
   let o = FRAME_OVERHEAD + S7_JOB_HEADER;
   frame[o] = 0x00;
   frame[o + 1] = 0x01;
