@@ -153,16 +153,8 @@ async function startNodeRed(flow: object[]): Promise<NodeRed> {
     JSON.stringify({ name: 'editor-test', private: true, dependencies: { '@plcwire/node-red-siemens': '*' } }),
   );
   fs.writeFileSync(path.join(dir, 'flows.json'), JSON.stringify(flow));
-  const settings = {
-    uiHost: '127.0.0.1',
-    uiPort: port,
-    flowFile: 'flows.json',
-    credentialSecret: false,
-    diagnostics: { enabled: false },
-    telemetry: { enabled: false },
-    editorTheme: { tours: false, projects: { enabled: false } },
-    logging: { console: { level: 'info', metrics: false, audit: false } },
-  };
+  const { localSettings } = require(path.join(ROOT, 'demo/start.js')) as { localSettings(port: number): object };
+  const settings = localSettings(port);
   fs.writeFileSync(path.join(dir, 'settings.js'), `module.exports = ${JSON.stringify(settings)};\n`);
   const red = require.resolve('node-red/red.js', { paths: [ROOT] });
   const child: ChildProcess = spawn(process.execPath, [red, '--userDir', dir, '--settings', path.join(dir, 'settings.js')], {
