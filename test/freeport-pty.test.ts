@@ -140,8 +140,9 @@ describe('freeport end to end over a real pseudo-terminal pair (real serialport 
       expect(err.code).to.equal('CONNECTION_LOST');
       expect(err.message).to.include(`${pty.master} disappeared`);
       expect(held.ports.map((p) => p.isOpen)).to.deep.equal([false]); // its descriptor closed: nothing reads it any more
-      // A measuring window, not a wait: a read looping on the dead descriptor would take most of a core.
-      const cpu = await cpuShare(300);
+      // Measuring windows, not a wait: a read looping on the dead descriptor takes most of a core in every
+      // window, while the rest of the process (GC, timers of the suite) may fill one of them: the quietest of three.
+      const cpu = Math.min(await cpuShare(300), await cpuShare(300), await cpuShare(300));
       expect(cpu, 'share of one core used by this process after the loss').to.be.below(0.3);
     } finally {
       held.release();
