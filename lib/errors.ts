@@ -9,6 +9,8 @@ export type PlcErrorCode =
   | 'INVALID_ADDRESS'
   | 'INVALID_VALUE'
   | 'INVALID_URL'
+  /** A DB/UDT source or a symbol table could not be compiled (syntax, unknown type, optimized block). */
+  | 'INVALID_SOURCE'
   | 'WRITE_NOT_ALLOWED'
   // link state
   | 'NOT_CONNECTED'
@@ -27,6 +29,8 @@ export type PlcErrorCode =
   | 'OBJECT_DOES_NOT_EXIST'
   | 'PDU_TOO_LARGE'
   | 'TYPE_NOT_SUPPORTED'
+  /** The PLC's data block no longer has the length its sources declare (with strictSymbols). */
+  | 'LAYOUT_MISMATCH'
   /** The CPU has no such SZL list (ID or index). */
   | 'SZL_NOT_AVAILABLE'
   /** The CPU family does not offer the service at all. */
@@ -60,6 +64,23 @@ export class PlcError extends Error {
 export class AddressError extends PlcError {
   constructor(address: string, problem: string) {
     super('INVALID_ADDRESS', `invalid address "${address}": ${problem}`, { tag: address });
+  }
+}
+
+/**
+ * A source file (DB, UDT, symbol table) that cannot be compiled. The message
+ * starts with `file:line:column`; the fields say the same for programs.
+ */
+export class SourceError extends PlcError {
+  readonly file: string;
+  readonly line: number;
+  readonly column: number;
+
+  constructor(at: { file: string; line: number; column: number }, problem: string) {
+    super('INVALID_SOURCE', `${at.file}:${at.line}:${at.column}: ${problem}`);
+    this.file = at.file;
+    this.line = at.line;
+    this.column = at.column;
   }
 }
 
