@@ -231,6 +231,101 @@ describe('symbols: TIA Portal sources (parseBlockSource)', () => {
   });
 });
 
+describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
+  const blocks = parse(fixture('step7-tank.awl'), 'step7-tank.awl');
+
+  it('reads numbered and symbolic blocks of a Windows-1252 source with CRLF line ends', () => {
+    expect(blocks.map((b) => `${b.kind} ${b.name} ${b.number ?? '-'}`)).to.deep.equal([
+      'type UDT1 1',
+      'db DB10 10',
+      'db DB11 11',
+      'db DB12 12',
+      'db Recipe -',
+    ]);
+    expect(blocks.filter((b) => b.kind === 'db').map((b) => (b as DataBlockDecl).optimized)).to.deep.equal([false, false, false, false]);
+    const udt1 = udt(blocks, 'UDT1');
+    expect(udt1.attributes).to.deep.equal({ TITLE: '', VERSION: '0.0' });
+    expect(shape(udt1.body)).to.deep.equal({ Speed: 'REAL', Run: 'BOOL', Name: 'STRING[20]' });
+    expect(member(udt1.body, 'Speed').comment).to.equal('Drehzahl-Sollwert für den Motor');
+  });
+
+  it('reads a DB: header, spaced brackets, UDT references and the start value literals STEP 7 writes', () => {
+    const db10 = db(blocks, 'DB10');
+    expect(db10.attributes).to.deep.equal({ TITLE: 'Tank data', AUTHOR: 'PLANT', FAMILY: 'TANKS', NAME: 'TANK10', VERSION: '0.1' });
+    expect(db10.retain).to.equal(undefined);
+    expect(shape(db10.body)).to.deep.equal({
+      Level: 'REAL',
+      Count: 'DINT',
+      Flags: 'WORD',
+      Mask: 'DWORD',
+      Small: 'BYTE',
+      Delay: 'S5TIME',
+      Run_Time: 'TIME',
+      Stamp: 'DATE_AND_TIME',
+      Text: 'STRING[20]',
+      Valves: { array: '1..10', of: 'BOOL' },
+      Motor: 'UDT1#1',
+      Motors: { array: '1..2', of: 'UDT1#1' },
+      Pair: 'WORD',
+      Grid: { array: '-2..2,1..3', of: 'INT' },
+      Data: { A: 'INT', B: 'CHAR' },
+      Table: { array: '1..3', of: 'INT' },
+      Zeros: { array: '1..8', of: 'INT' },
+    });
+    const initial = (name: string) => value(member(db10.body, name).initial);
+    expect(['Level', 'Count', 'Flags', 'Mask', 'Small', 'Delay', 'Run_Time', 'Stamp', 'Text', 'Pair'].map(initial)).to.deep.equal([
+      '1.000000e+000',
+      'L#10',
+      'W#16#FF',
+      'DW#16#FFFF0000',
+      'B#16#FF',
+      'S5T#1S',
+      'T#1S',
+      'DT#90-1-1-0:0:0.000',
+      "'abc'",
+      'B#(1, 2)',
+    ]);
+    expect(initial('Table'), 'a list without brackets').to.equal('[1, 2, 3]');
+    expect(initial('Zeros'), 'a repeat without brackets').to.equal('[8(0)]');
+    expect(member(db10.body, 'Level').comment).to.equal('Level in %');
+    expect(member(db10.body, 'Data').comment).to.equal('a nested structure');
+    expect(member(db10.body, 'Valves').comment).to.equal('');
+  });
+
+  it('reads the BEGIN section of a STEP 7 DB', () => {
+    expect(db(blocks, 'DB10').startValues.map((s) => `${s.path} := ${value(s.value)}`)).to.deep.equal([
+      'Level := 1.000000e+000',
+      'Count := L#10',
+      'Valves[1] := TRUE',
+      'Valves[2] := FALSE',
+      'Motor.Speed := 0.000000e+000',
+      'Motors[2].Run := TRUE',
+      'Grid[-2,1] := 4',
+    ]);
+  });
+
+  it('reads instance DBs of UDT n and FB n, and a symbolic DB with a symbolic UDT', () => {
+    expect(shape(db(blocks, 'DB11').body)).to.equal('UDT1#1');
+    expect(db(blocks, 'DB11').startValues.map((s) => s.path)).to.deep.equal(['Speed', 'Run', 'Name']);
+    expect(shape(db(blocks, 'DB12').body)).to.equal('FB5#5');
+    expect(shape(db(blocks, 'Recipe').body)).to.deep.equal({ Steps: { array: '1..3', of: '"Step"' }, Name: 'STRING[16]' });
+  });
+
+  it('takes the glued forms DB10, UDT1 and the type aliases DT and TOD', () => {
+    const [t, d] = parse('TYPE UDT2 STRUCT a : DT ; b : tod ; END_STRUCT END_TYPE DATA_BLOCK DB10 UDT2 BEGIN END_DATA_BLOCK');
+    expect([t!.name, t!.number, d!.name, d!.number]).to.deep.equal(['UDT2', 2, 'DB10', 10]);
+    expect(shape((t as TypeDecl).body)).to.deep.equal({ a: 'DATE_AND_TIME', b: 'TIME_OF_DAY' });
+    expect(shape((d as DataBlockDecl).body)).to.equal('UDT2#2');
+  });
+
+  it('keeps system types (IEC timers, DB_ANY) and TIMER/COUNTER as types for the layout to judge', () => {
+    const [b] = parse('DATA_BLOCK "D" STRUCT t : IEC_TIMER; a : DB_ANY; c : Counter; d : Timer; END_STRUCT; BEGIN END_DATA_BLOCK');
+    expect(shape((b as DataBlockDecl).body)).to.deep.equal({ t: '"IEC_TIMER"', a: '"DB_ANY"', c: 'COUNTER', d: 'TIMER' });
+    const [inst] = parse('DATA_BLOCK "T1" TON_TIME BEGIN END_DATA_BLOCK');
+    expect(shape((inst as DataBlockDecl).body)).to.equal('"TON_TIME"');
+  });
+});
+
 describe('symbols: source errors name the place and the problem', () => {
   const cases: [name: string, source: string, line: number, column: number, message: RegExp][] = [
     [
@@ -422,7 +517,7 @@ describe('symbols: broken sources throw SourceError and nothing else', () => {
   ];
 
   it('20,000 random truncations and mutations of valid sources', () => {
-    const sources = [fixture('tia-plant.db').toString('utf8'), fixture('tia-mixed.scl').toString('utf8')];
+    const sources = [fixture('tia-plant.db'), fixture('tia-mixed.scl'), fixture('step7-tank.awl')].map((b) => b.toString('latin1'));
     const random = rng(0x5eed);
     const pick = (n: number) => Math.floor(random() * n);
     let parsed = 0;
