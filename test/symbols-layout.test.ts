@@ -1,0 +1,371 @@
+/**
+ * The layout engine against known offsets: each rule of docs/symbols.md
+ * ("Layout rules") on a block built by hand, and the refusals, each naming
+ * the declaration it stops at.
+ */
+import { expect } from 'chai';
+import { SourceError } from '../lib/errors';
+import { elementIndex, layoutBlocks, memberRef, type LayoutNode } from '../lib/symbols/layout';
+import type { BlockDecl } from '../lib/symbols/model';
+import { arr, at, db, el, m, named, str, struct, udt, udtNumber, wstr } from './fixtures/symbols/golden/build';
+
+/** Every node of a block as [path, byte, bit, size], parents before children. */
+function rows(node: LayoutNode, path = ''): [string, number, number | null, number][] {
+  const out: [string, number, number | null, number][] = path === '' ? [] : [[path, node.byte, node.bit, node.size]];
+  if (node.kind === 'struct') for (const c of node.members) out.push(...rows(c.node, `${path}.${memberRef(c.name)}`));
+  if (node.kind === 'array') node.elements.forEach((e, k) => out.push(...rows(e, `${path}[${elementIndex(node.dims, k)}]`)));
+  return out;
+}
+
+function layoutOf(...blocks: BlockDecl[]) {
+  const [first] = layoutBlocks(blocks);
+  return { length: first!.length, rows: rows(first!.root) };
+}
+
+function refusal(blocks: BlockDecl[]): SourceError {
+  try {
+    layoutBlocks(blocks);
+  } catch (err) {
+    expect(err).to.be.instanceOf(SourceError);
+    return err as SourceError;
+  }
+  throw new Error('expected a SourceError');
+}
+
+describe('symbols layout: standard access offsets', () => {
+  it('packs a run of nine BOOLs into bits, the ninth in the next byte, and an INT after them on the next even byte', () => {
+    const bits = Array.from({ length: 9 }, (_, i) => m(`b${i}`, el('BOOL')));
+    expect(layoutOf(db('Bits', [...bits, m('n', el('INT'))]))).to.deep.equal({
+      length: 4,
+      rows: [
+        ...Array.from({ length: 8 }, (_, i): [string, number, number, number] => [`.b${i}`, 0, i, 1]),
+        ['.b8', 1, 0, 1],
+        ['.n', 2, null, 2],
+      ],
+    });
+  });
+
+  it('puts a BYTE after a BOOL on the next byte, a BOOL after it on the byte after, and a WORD on the next even byte', () => {
+    const decl = db('Mixed', [m('x', el('BOOL')), m('y', el('BYTE')), m('z', el('BOOL')), m('w', el('WORD')), m('c', el('CHAR'))]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 8,
+      rows: [
+        ['.x', 0, 0, 1],
+        ['.y', 1, null, 1],
+        ['.z', 2, 0, 1],
+        ['.w', 4, null, 2],
+        ['.c', 6, null, 1],
+      ],
+    });
+  });
+
+  it('gives a STRING[11] 13 bytes on an even byte and starts what follows (INT or BYTE) on the next even byte', () => {
+    const decl = db('Text', [m('b', el('BYTE')), m('s', str(11)), m('n', el('INT')), m('t', str(11)), m('after', el('BYTE'))]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 34,
+      rows: [
+        ['.b', 0, null, 1],
+        ['.s', 2, null, 13],
+        ['.n', 16, null, 2],
+        ['.t', 18, null, 13],
+        ['.after', 32, null, 1],
+      ],
+    });
+  });
+
+  it('ends an Array[1..10] of Bool at a word limit: the next BOOL starts on byte 2', () => {
+    const decl = db('Flags', [m('f', arr([[1, 10]], el('BOOL'))), m('after', el('BOOL'))]);
+    const { length, rows: r } = layoutOf(decl);
+    expect(length).to.equal(4);
+    expect(r[0]).to.deep.equal(['.f', 0, 0, 2]);
+    expect(r.slice(1, 11).map((x) => `${x[0]}@${x[1]}.${x[2]}`)).to.deep.equal([
+      '.f[1]@0.0',
+      '.f[2]@0.1',
+      '.f[3]@0.2',
+      '.f[4]@0.3',
+      '.f[5]@0.4',
+      '.f[6]@0.5',
+      '.f[7]@0.6',
+      '.f[8]@0.7',
+      '.f[9]@1.0',
+      '.f[10]@1.1',
+    ]);
+    expect(r[11]).to.deep.equal(['.after', 2, 0, 1]);
+  });
+
+  it('lays out 2-D arrays row by row (last index fastest); a BOOL array starts each row on a new byte', () => {
+    const decl = db('Grid', [
+      m(
+        'i',
+        arr(
+          [
+            [1, 2],
+            [1, 3],
+          ],
+          el('INT'),
+        ),
+      ),
+      m(
+        'b',
+        arr(
+          [
+            [1, 2],
+            [1, 3],
+          ],
+          el('BOOL'),
+        ),
+      ),
+      m('n', el('BYTE')),
+    ]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 16,
+      rows: [
+        ['.i', 0, null, 12],
+        ['.i[1,1]', 0, null, 2],
+        ['.i[1,2]', 2, null, 2],
+        ['.i[1,3]', 4, null, 2],
+        ['.i[2,1]', 6, null, 2],
+        ['.i[2,2]', 8, null, 2],
+        ['.i[2,3]', 10, null, 2],
+        ['.b', 12, 0, 2],
+        ['.b[1,1]', 12, 0, 1],
+        ['.b[1,2]', 12, 1, 1],
+        ['.b[1,3]', 12, 2, 1],
+        ['.b[2,1]', 13, 0, 1],
+        ['.b[2,2]', 13, 1, 1],
+        ['.b[2,3]', 13, 2, 1],
+        ['.n', 14, null, 1],
+      ],
+    });
+  });
+
+  it('pads each element of an array of a UDT that ends in a BOOL to an even length', () => {
+    const point = udt('Point', [m('x', el('REAL')), m('ok', el('BOOL'))]);
+    const decl = db('Track', [m('p', arr([[0, 2]], named('Point'))), m('n', el('INT'))]);
+    expect(layoutOf(decl, point)).to.deep.equal({
+      length: 20,
+      rows: [
+        ['.p', 0, null, 18],
+        ['.p[0]', 0, null, 6],
+        ['.p[0].x', 0, null, 4],
+        ['.p[0].ok', 4, 0, 1],
+        ['.p[1]', 6, null, 6],
+        ['.p[1].x', 6, null, 4],
+        ['.p[1].ok', 10, 0, 1],
+        ['.p[2]', 12, null, 6],
+        ['.p[2].x', 12, null, 4],
+        ['.p[2].ok', 16, 0, 1],
+        ['.n', 18, null, 2],
+      ],
+    });
+  });
+
+  it('starts nested structs on even bytes and pads each to an even length', () => {
+    const decl = db('Nest', [
+      m('a', el('BOOL')),
+      m('s1', struct([m('b', el('BOOL')), m('s2', struct([m('c', el('BYTE'))])), m('d', el('BYTE'))])),
+      m('e', el('BYTE')),
+    ]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 10,
+      rows: [
+        ['.a', 0, 0, 1],
+        ['.s1', 2, null, 6],
+        ['.s1.b', 2, 0, 1],
+        ['.s1.s2', 4, null, 2],
+        ['.s1.s2.c', 4, null, 1],
+        ['.s1.d', 6, null, 1],
+        ['.e', 8, null, 1],
+      ],
+    });
+  });
+
+  it('lays out a UDT that uses a UDT, as the block body (an instance DB of a UDT)', () => {
+    const inner = udt('Inner', [m('v', el('INT')), m('f', el('BOOL'))]);
+    const outer = udt('Outer', [m('flag', el('BOOL')), m('inner', named('Inner')), m('n', el('BYTE'))]);
+    const [layout] = layoutBlocks([inner, outer, db('Inst', named('Outer'))]);
+    expect(layout!.instanceOf).to.equal('"Outer"');
+    expect(layout!.length).to.equal(8);
+    expect(rows(layout!.root)).to.deep.equal([
+      ['.flag', 0, 0, 1],
+      ['.inner', 2, null, 4],
+      ['.inner.v', 2, null, 2],
+      ['.inner.f', 4, 0, 1],
+      ['.n', 6, null, 1],
+    ]);
+  });
+
+  it('places WSTRING, DTL, DATE_AND_TIME and LREAL on the next even byte with their sizes', () => {
+    const decl = db('Wide', [
+      m('a', el('BYTE')),
+      m('w', wstr(10)),
+      m('b', el('BOOL')),
+      m('t', el('DTL')),
+      m('c', el('CHAR')),
+      m('dt', el('DATE_AND_TIME')),
+      m('d', el('BYTE')),
+      m('r', el('LREAL')),
+    ]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 60,
+      rows: [
+        ['.a', 0, null, 1],
+        ['.w', 2, null, 24],
+        ['.b', 26, 0, 1],
+        ['.t', 28, null, 12],
+        ['.c', 40, null, 1],
+        ['.dt', 42, null, 8],
+        ['.d', 50, null, 1],
+        ['.r', 52, null, 8],
+      ],
+    });
+  });
+
+  it('indexes an Array[-2..2] from its low bound', () => {
+    const { rows: r } = layoutOf(db('Neg', [m('a', arr([[-2, 2]], el('INT')))]));
+    expect(r.map((x) => `${x[0]}@${x[1]}`)).to.deep.equal(['.a@0', '.a[-2]@0', '.a[-1]@2', '.a[0]@4', '.a[1]@6', '.a[2]@8']);
+  });
+
+  it('starts a STRUCT after a BOOL on the next even byte; an empty STRUCT takes no bytes', () => {
+    const decl = db('Empty', [m('b', el('BOOL')), m('s', struct([m('x', el('BYTE'))])), m('e', struct([])), m('c', el('BOOL'))]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 6,
+      rows: [
+        ['.b', 0, 0, 1],
+        ['.s', 2, null, 2],
+        ['.s.x', 2, null, 1],
+        ['.e', 4, null, 0],
+        ['.c', 4, 0, 1],
+      ],
+    });
+  });
+
+  it('gives a block whose last member is a BYTE at offset 4 a length of 6 (the block is a STRUCT)', () => {
+    expect(layoutOf(db('Odd', [m('a', el('DINT')), m('b', el('BYTE'))])).length).to.equal(6);
+    expect(layoutOf(db('NoMembers', [])).length).to.equal(0);
+  });
+
+  it('ends byte arrays at a word limit and pads STRING elements of odd length to an even one', () => {
+    const decl = db('Bytes', [m('a', arr([[1, 3]], el('BYTE'))), m('b', el('BYTE')), m('s', arr([[1, 3]], str(5))), m('c', el('BYTE'))]);
+    const [layout] = layoutBlocks([decl]);
+    expect(rows(layout!.root)).to.deep.equal([
+      ['.a', 0, null, 3],
+      ['.a[1]', 0, null, 1],
+      ['.a[2]', 1, null, 1],
+      ['.a[3]', 2, null, 1],
+      ['.b', 4, null, 1],
+      ['.s', 6, null, 23],
+      ['.s[1]', 6, null, 7],
+      ['.s[2]', 14, null, 7],
+      ['.s[3]', 22, null, 7],
+      ['.c', 30, null, 1],
+    ]);
+    const [a, , s] = layout!.root.members.map((x) => x.node);
+    expect(a!.kind === 'array' && a.contiguous).to.equal(true);
+    expect(s!.kind === 'array' && s.contiguous).to.equal(false);
+  });
+
+  it('finds a STEP 7 UDT by number, and by the symbol a symbol table gives it', () => {
+    const u5 = udt('UDT5', [m('v', el('INT'))], { number: 5 });
+    const blocks = [u5, db('DB10', [m('a', udtNumber(5)), m('b', named('Valve'))], { number: 10 })];
+    const [layout] = layoutBlocks(blocks, { typeNumbers: new Map([['valve', 5]]) });
+    expect(rows(layout!.root)).to.deep.equal([
+      ['.a', 0, null, 2],
+      ['.a.v', 0, null, 2],
+      ['.b', 2, null, 2],
+      ['.b.v', 2, null, 2],
+    ]);
+    expect(layout!.root.members[0]!.node.typeText).to.equal('UDT 5');
+  });
+
+  it('shows types as TIA does', () => {
+    const decl = db('Types', [
+      m('a', arr([[1, 10]], el('BOOL'))),
+      m('b', str(20)),
+      m(
+        'c',
+        arr(
+          [
+            [0, 1],
+            [-1, 1],
+          ],
+          el('TIME_OF_DAY'),
+        ),
+      ),
+      m('d', struct([m('x', el('UDINT'))])),
+    ]);
+    expect(layoutBlocks([decl])[0]!.root.members.map((x) => x.node.typeText)).to.deep.equal([
+      'Array[1..10] of Bool',
+      'String[20]',
+      'Array[0..1, -1..1] of Time_Of_Day',
+      'Struct',
+    ]);
+  });
+});
+
+describe('symbols layout: refusals', () => {
+  it('refuses a block with optimized access, named, with how to make it readable', () => {
+    const err = refusal([db('Tank', [m('a', el('INT'))], { optimized: true, at: at(1, 1, 'Tank.db') })]);
+    expect(err.message).to.match(/^Tank\.db:1:1: DB "Tank" has optimized block access/);
+    expect(err.message).to.contain("uncheck 'Optimized block access'");
+    expect(err.code).to.equal('INVALID_SOURCE');
+    expect([err.file, err.line, err.column]).to.deep.equal(['Tank.db', 1, 1]);
+  });
+
+  it('refuses an unknown type, naming it and the member that uses it, at the type', () => {
+    const err = refusal([db('Tank', [m('Inlet', struct([m('v', named('Valve', at(4, 12)))]))])]);
+    expect(err.message).to.equal('hand.db:4:12: unknown type "Valve" (used by "Tank".Inlet.v): no UDT of that name is among the sources');
+  });
+
+  it('refuses a UDT that contains itself, directly or through another, naming the chain', () => {
+    expect(refusal([udt('Loop', [m('me', named('Loop'))], { at: at(2) })]).message).to.equal(
+      'hand.db:2:1: UDT "Loop" contains itself ("Loop" → "Loop"): a type cannot be laid out inside itself',
+    );
+    const a = udt('A', [m('b', arr([[1, 2]], named('B')))], { at: at(1) });
+    const b = udt('B', [m('a', named('A'))], { at: at(5) });
+    expect(refusal([a, b]).message).to.contain('UDT "A" contains itself ("A" → "B" → "A")');
+  });
+
+  it('refuses an instance DB of a function block that is not among the sources', () => {
+    const err = refusal([db('Pump_DB', named('FB_Pump'), { at: at(3, 1, 'Pump_DB.db') })]);
+    expect(err.message).to.match(/^Pump_DB\.db:3:1: DB "Pump_DB" is an instance of "FB_Pump", which is not a UDT of the sources/);
+  });
+
+  it('refuses array bounds low > high, arrays over 65535 elements and blocks over 64 KB', () => {
+    expect(refusal([db('A', [m('x', arr([[5, 1]], el('INT'), at(7, 9)))])]).message).to.equal(
+      'hand.db:7:9: "A".x: array bounds 5..1: the low bound is above the high bound',
+    );
+    expect(refusal([db('B', [m('x', arr([[0, 65535]], el('BOOL')))])]).message).to.contain('more than 65535 elements');
+    expect(
+      refusal([
+        db('C', [
+          m(
+            'x',
+            arr(
+              [
+                [1, 300],
+                [1, 300],
+              ],
+              el('BYTE'),
+            ),
+          ),
+        ]),
+      ]).message,
+    ).to.contain('more than 65535 elements');
+    expect(layoutBlocks([db('D', [m('x', arr([[1, 32768]], el('INT')))])])[0]!.length).to.equal(65536);
+    expect(refusal([db('E', [m('x', arr([[1, 32768]], el('INT'))), m('y', el('BOOL'), { at: at(8) })])]).message).to.equal(
+      'hand.db:8:1: "E".y ends beyond byte 65535: a block with standard access holds at most 65536 bytes (64 KB)',
+    );
+    // Refused while it is built, not after 40 million elements.
+    const huge = Array.from({ length: 1000 }, (_, i) => m(`a${i}`, arr([[1, 65535]], el('LREAL'))));
+    expect(refusal([db('F', huge)]).message).to.contain('"F".a0 ends beyond byte 65535');
+  });
+
+  it('refuses a member declared twice, a UDT declared twice, and timers in a DB', () => {
+    expect(refusal([db('A', [m('x', el('INT')), m('X', el('INT'), { at: at(3) })])]).message).to.match(
+      /^hand\.db:3:1: "A"\.X is declared twice/,
+    );
+    expect(refusal([udt('T', []), udt('t', [], { at: at(9) })]).message).to.match(/^hand\.db:9:1: UDT "t" is declared twice/);
+    expect(refusal([db('A', [m('x', el('TIMER'))])]).message).to.contain('Timer is a block parameter type');
+  });
+});
