@@ -5,9 +5,10 @@
  */
 import { expect } from 'chai';
 import { SourceError } from '../lib/errors';
+import { compileDeclarations, pathKey, type EvaluateLiteral } from '../lib/symbols/compile';
 import { elementIndex, layoutBlocks, memberRef, type LayoutNode } from '../lib/symbols/layout';
-import type { BlockDecl } from '../lib/symbols/model';
-import { arr, at, db, el, m, named, str, struct, udt, udtNumber, wstr } from './fixtures/symbols/golden/build';
+import type { BlockDecl, CompileOptions, SymbolTableRow } from '../lib/symbols/model';
+import { arr, at, db, el, list, lit, m, named, str, struct, udt, udtNumber, wstr } from './fixtures/symbols/golden/build';
 
 /** Every node of a block as [path, byte, bit, size], parents before children. */
 function rows(node: LayoutNode, path = ''): [string, number, number | null, number][] {
@@ -367,5 +368,173 @@ describe('symbols layout: refusals', () => {
     );
     expect(refusal([udt('T', []), udt('t', [], { at: at(9) })]).message).to.match(/^hand\.db:9:1: UDT "t" is declared twice/);
     expect(refusal([db('A', [m('x', el('TIMER'))])]).message).to.contain('Timer is a block parameter type');
+  });
+});
+
+/** Until the literal evaluator is wired in: the literal's text, so a test sees which start value won. */
+const asText: EvaluateLiteral = (literal) => literal.text;
+
+function compiled(blocks: BlockDecl[], options: CompileOptions = {}, rows: SymbolTableRow[] = []) {
+  return compileDeclarations(blocks, rows, options, asText);
+}
+
+function compileRefusal(blocks: BlockDecl[], options: CompileOptions = {}, rows: SymbolTableRow[] = []): SourceError {
+  try {
+    compiled(blocks, options, rows);
+  } catch (err) {
+    expect(err).to.be.instanceOf(SourceError);
+    return err as SourceError;
+  }
+  throw new Error('expected a SourceError');
+}
+
+function row(name: string, address: string, dataType = '', line = 1): SymbolTableRow {
+  return { name, address, dataType, comment: '', at: at(line, 1, 'Symbols.sdf') };
+}
+
+describe('symbols compile: names, numbers, addresses, start values', () => {
+  it('names members as TIA writes them, quoting what is not a plain identifier, with addresses that read back', () => {
+    const motor = udt('Motor', [m('Run', el('BOOL')), m('Speed.Set', el('REAL'))]);
+    const recipe = db('Recipe', [m('Step', arr([[1, 3]], struct([m('Temp', el('REAL'))])))]);
+    const table = compiled([motor, db('Motor 1', named('Motor')), recipe], { db: { '"Motor 1"': 2, recipe: 3 } });
+    expect(table.entries.map((e) => [e.name, e.type, e.address, e.byte, e.bit, e.size])).to.deep.equal([
+      ['"Motor 1".Run', 'Bool', 'DB2.DBX0.0', 0, 0, 1],
+      ['"Motor 1"."Speed.Set"', 'Real', 'DB2.DBD2:REAL', 2, null, 4],
+      ['"Recipe".Step', 'Array[1..3] of Struct', 'DB3.DBB0:BYTE[12]', 0, null, 12],
+      ['"Recipe".Step[1]', 'Struct', 'DB3.DBB0:BYTE[4]', 0, null, 4],
+      ['"Recipe".Step[1].Temp', 'Real', 'DB3.DBD0:REAL', 0, null, 4],
+      ['"Recipe".Step[2]', 'Struct', 'DB3.DBB4:BYTE[4]', 4, null, 4],
+      ['"Recipe".Step[2].Temp', 'Real', 'DB3.DBD4:REAL', 4, null, 4],
+      ['"Recipe".Step[3]', 'Struct', 'DB3.DBB8:BYTE[4]', 8, null, 4],
+      ['"Recipe".Step[3].Temp', 'Real', 'DB3.DBD8:REAL', 8, null, 4],
+    ]);
+    expect(table.entries[2]!.children).to.deep.equal(['"Recipe".Step[1]', '"Recipe".Step[2]', '"Recipe".Step[3]']);
+    expect(table.blocks).to.deep.equal([
+      { name: 'Motor 1', db: 2, length: 6, file: 'hand.db', instanceOf: '"Motor"' },
+      { name: 'Recipe', db: 3, length: 12, file: 'hand.db' },
+    ]);
+    expect(table.types).to.deep.equal(['Motor']);
+    expect(table.lookup('"recipe".step[2].temp')?.address).to.equal('DB3.DBD4:REAL');
+  });
+
+  it('gives whole arrays of elementary types one address of their elements, and gapped ones their bytes', () => {
+    const table = compiled([
+      db(
+        'A',
+        [
+          m('f', arr([[1, 10]], el('BOOL'))),
+          m('s', arr([[0, 1]], str(4))),
+          m('o', arr([[0, 1]], str(5))),
+          m(
+            'g',
+            arr(
+              [
+                [1, 2],
+                [1, 3],
+              ],
+              el('BOOL'),
+            ),
+          ),
+        ],
+        {
+          number: 4,
+        },
+      ),
+    ]);
+    const whole = table.entries.filter((e) => e.kind === 'array').map((e) => [e.name, e.address]);
+    expect(whole).to.deep.equal([
+      ['"A".f', 'DB4.DBX0.0:BOOL[10]'],
+      ['"A".s', 'DB4.DBB2:STRING[4][2]'],
+      ['"A".o', 'DB4.DBB14:BYTE[15]'],
+      ['"A".g', 'DB4.DBB30:BYTE[2]'],
+    ]);
+  });
+
+  it('names a STEP 7 DB without symbol DB10, and by its symbol when a symbol table gives one', () => {
+    const decl = db('DB10', [m('x', el('INT'))], { number: 10 });
+    expect(compiled([decl]).entries.map((e) => e.name)).to.deep.equal(['DB10.x']);
+    const named10 = compiled([decl], {}, [row('Tank', 'DB10', 'DB10')]);
+    expect(named10.entries.map((e) => e.name)).to.deep.equal(['"Tank".x']);
+    expect(named10.blocks[0]!.name).to.equal('Tank');
+  });
+
+  it('numbers a TIA block from the db option (keys as users type them) or from a symbol table row', () => {
+    expect(compiled([db('Tank', [])], { db: { TANK: 7 } }).blocks[0]!.db).to.equal(7);
+    expect(compiled([db('Tank', [])], { db: { '"Tank"': 8 } }).blocks[0]!.db).to.equal(8);
+    expect(compiled([db('Tank', [])], {}, [row('tank', 'DB9')]).blocks[0]!.db).to.equal(9);
+    // The option wins over the table.
+    expect(compiled([db('Tank', [])], { db: { Tank: 1 } }, [row('Tank', 'DB9')]).blocks[0]!.db).to.equal(1);
+  });
+
+  it('refuses a block without number, two blocks with one number, and a number for a block not in the sources', () => {
+    expect(compileRefusal([db('Tank', [], { at: at(1, 1, 'Tank.db') })]).message).to.match(
+      /^Tank\.db:1:1: DB "Tank" has no number: .*--db "Tank"=1/,
+    );
+    expect(compileRefusal([db('A', []), db('B', [], { at: at(4) })], { db: { A: 1, B: 1 } }).message).to.match(
+      /^hand\.db:4:1: DB "B" and DB "A" \(hand\.db:1:1\) both have the number 1/,
+    );
+    expect(compileRefusal([db('A', [])], { db: { A: 1, Tnk: 2 } }).message).to.contain(
+      'a number is given for "Tnk", which is not a DB of the sources (DBs: "A")',
+    );
+    expect(compileRefusal([db('A', [])], { db: { A: 0 } }).message).to.contain('a DB number is 1..65535');
+    expect(compileRefusal([db('DB10', [], { number: 10 })], { db: { DB10: 11 } }).message).to.contain('is DB 10 in its source');
+  });
+
+  it('makes I/Q/M rows of a symbol table entries with db null, skipping other blocks', () => {
+    const table = compiled([], {}, [
+      row('Start button', 'I0.0', 'BOOL'),
+      row('Level', 'MW10:INT', 'INT'),
+      row('Main', 'OB1'),
+      row('Motor', 'UDT5'),
+    ]);
+    expect(table.entries.map((e) => [e.name, e.area, e.db, e.byte, e.bit, e.address, e.type])).to.deep.equal([
+      ['"Start button"', 'I', null, 0, 0, 'I0.0', 'BOOL'],
+      ['"Level"', 'M', null, 10, null, 'MW10:INT', 'INT'],
+    ]);
+    expect(compileRefusal([], {}, [row('Bad', 'X7', '', 3)]).message).to.match(/^Symbols\.sdf:3:1: symbol "Bad": invalid address/);
+  });
+
+  it('takes start values from the declarations, the UDT for every instance, and the BEGIN section, which wins', () => {
+    const motor = udt('Motor', [m('Speed', el('REAL'), { initial: lit('1.5') }), m('On', el('BOOL'))]);
+    const decl = db(
+      'Line',
+      [
+        m('M', arr([[1, 2]], named('Motor'))),
+        m('Count', el('INT'), { initial: lit('3') }),
+        m('Steps', arr([[0, 4]], el('INT')), { initial: list([2, lit('7')], lit('8')) }),
+        m('Speed.Set', el('REAL')),
+      ],
+      {
+        startValues: [
+          { path: 'M[2].Speed', value: lit('9.5') },
+          { path: 'steps[1]', value: lit('70') },
+          { path: '"Speed.Set"', value: lit('4.0') },
+        ],
+      },
+    );
+    const table = compiled([motor, decl], { db: { Line: 5 } });
+    const initial = Object.fromEntries(table.entries.filter((e) => e.initial !== undefined).map((e) => [e.name, e.initial]));
+    expect(initial).to.deep.equal({
+      '"Line".M[1].Speed': '1.5',
+      '"Line".M[2].Speed': '9.5',
+      '"Line".Count': '3',
+      '"Line".Steps[0]': '7',
+      '"Line".Steps[1]': '70',
+      '"Line".Steps[2]': '8',
+      '"Line"."Speed.Set"': '4.0',
+    });
+  });
+
+  it('refuses a start value for a member that does not exist, and more values than an array has elements', () => {
+    const a = db('A', [m('x', el('INT'))], { number: 1, startValues: [{ path: 'y', value: lit('1'), at: at(9, 3) }] });
+    expect(compileRefusal([a]).message).to.equal('hand.db:9:3: start value for "A".y: DB "A" has no such member');
+    const b = db('B', [m('x', arr([[1, 2]], el('INT')), { initial: list([3, lit('0')]), at: at(2, 5) })], { number: 2 });
+    expect(compileRefusal([b]).message).to.equal('hand.db:2:5: start value for "B".x: more values than its 2 elements');
+  });
+
+  it('reads BEGIN paths written with spaces, quotes and several indices', () => {
+    expect(pathKey('Motor.Speed')).to.equal('.motor.speed');
+    expect(pathKey(' Grid[1, -2] . "Speed.Set" ')).to.equal('.grid[1,-2]."speed.set"');
+    expect(pathKey('Step[x]')).to.equal(undefined);
   });
 });

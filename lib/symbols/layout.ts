@@ -381,7 +381,7 @@ class Engine {
       const { node, next } = this.place(element, cursor, { parent: where, segment: `[${elementIndex(type.dims, k)}]` }, undefined);
       elements[k] = node;
       if (next > BLOCK_BITS) throw tooLong(type.at, where);
-      dataEnd = node.bit === null ? (node.byte + node.size) * 8 : node.byte * 8 + node.bit + 1;
+      dataEnd = node.kind === 'elementary' && node.bit !== null ? node.byte * 8 + node.bit + 1 : (node.byte + node.size) * 8;
       cursor = next;
     }
     const elementText = this.typeText(element);
