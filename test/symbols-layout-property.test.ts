@@ -73,7 +73,8 @@ class Generator {
         const low = this.int(-3, 3);
         return [low, low + this.int(0, 4)];
       });
-      return arr(dims, this.random() < 0.3 ? this.type(depth + 1, udts) : this.elementary());
+      const element = this.random() < 0.3 ? this.type(depth + 1, udts) : this.elementary();
+      return arr(dims, element.kind === 'array' ? struct([m('inner', element)]) : element);
     }
     if (udts.length > 0 && r < 0.3) return named(this.pick(udts));
     return this.elementary();

@@ -333,6 +333,9 @@ describe('symbols layout: refusals', () => {
   });
 
   it('refuses array bounds low > high, arrays over 65535 elements and blocks over 64 KB', () => {
+    expect(refusal([db('G', [m('x', arr([[1, 2]], arr([[1, 2]], el('INT'), at(6, 20))))])]).message).to.match(
+      /^hand\.db:6:20: "G"\.x: an array of arrays is not an S7 type/,
+    );
     expect(refusal([db('A', [m('x', arr([[5, 1]], el('INT'), at(7, 9)))])]).message).to.equal(
       'hand.db:7:9: "A".x: array bounds 5..1: the low bound is above the high bound',
     );

@@ -9,6 +9,7 @@
 import { formatAddress, parseAddress } from '../address';
 import { PlcError, SourceError } from '../errors';
 import type { DataTypeName, PlcScalar } from '../types';
+import { NameIndex } from './names';
 import { blockRef, elementIndex, layoutBlocks, memberRef, type BlockLayout, type LayoutNode } from './layout';
 import type {
   BlockDecl,
@@ -357,20 +358,15 @@ export function compileDeclarations(
       }),
     );
   }
-  const entries = [...builder.finish(), ...facts.areaRows.map(areaEntry)];
-  const byName = new Map<string, SymbolEntry>();
-  for (const e of entries) {
-    const k = key(e.name);
-    const before = byName.get(k);
-    if (before) throw new SourceError(e.at ?? OPTIONS_AT, `${e.name} is defined twice (first at ${before.at?.file}:${before.at?.line})`);
-    byName.set(k, e);
-  }
+  const entries = Object.freeze([...builder.finish(), ...facts.areaRows.map(areaEntry)]);
+  // Refuses two entries whose names differ only by case or quotes, as TIA does.
+  const index = new NameIndex(entries);
   const types = blocks.filter((b) => b.kind === 'type').map((t) => t.name);
   return Object.freeze({
-    entries: Object.freeze(entries),
+    entries,
     blocks: Object.freeze(summaries),
     types: Object.freeze(types),
-    lookup: (name: string) => byName.get(key(name.trim())),
-    suggest: () => [],
+    lookup: (name: string) => index.lookup(name),
+    suggest: (name: string, max?: number) => index.suggest(name, max),
   });
 }

@@ -138,8 +138,8 @@ export interface LayoutOptions {
 
 // ---------------------------------------------------------------- names as TIA writes them
 
-/** A name needs no quotes when it is a plain identifier. */
-const PLAIN_NAME = /^[A-Za-z_][A-Za-z0-9_]*$/;
+/** A name needs no quotes when it is a plain identifier (letters, umlauts included, digits, `_`), as names.ts reads them. */
+const PLAIN_NAME = /^[\p{L}_][\p{L}\p{M}\p{N}_]*$/u;
 
 /** A block as TIA writes it: `"Tank"`; a STEP 7 DB without symbol as STEP 7 does: `DB10`. */
 export function blockRef(decl: { readonly name: string; readonly number?: number }): string {
@@ -368,8 +368,13 @@ class Engine {
           `${whereText(where)}: the array has more than ${MAX_ARRAY_ELEMENTS} elements (at most ${MAX_ARRAY_ELEMENTS})`,
         );
     }
-    const start = nextWord(pos);
     const element = type.element;
+    if (element.kind === 'array')
+      throw new SourceError(
+        element.at,
+        `${whereText(where)}: an array of arrays is not an S7 type; declare one array of several dimensions (Array[1..3, 1..2] of …)`,
+      );
+    const start = nextWord(pos);
     const isBool = element.kind === 'elementary' && element.type === 'BOOL';
     const rowLength = type.dims[type.dims.length - 1]!.high - type.dims[type.dims.length - 1]!.low + 1;
     const elements: LayoutNode[] = new Array<LayoutNode>(count);
