@@ -4,10 +4,14 @@
  * the declaration it stops at.
  */
 import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+import { parseAddress } from '../lib/address';
 import { SourceError } from '../lib/errors';
 import { compileDeclarations, pathKey, type EvaluateLiteral } from '../lib/symbols/compile';
 import { elementIndex, layoutBlocks, memberRef, type LayoutNode } from '../lib/symbols/layout';
-import type { BlockDecl, CompileOptions, SymbolTableRow } from '../lib/symbols/model';
+import type { BlockDecl, CompileOptions, SymbolTable, SymbolTableRow } from '../lib/symbols/model';
+import { parseBlockSource } from '../lib/symbols/source-parser';
 import { arr, at, db, el, list, lit, m, named, str, struct, udt, udtNumber, wstr } from './fixtures/symbols/golden/build';
 
 /** Every node of a block as [path, byte, bit, size], parents before children. */
@@ -540,4 +544,42 @@ describe('symbols compile: names, numbers, addresses, start values', () => {
     expect(pathKey(' Grid[1, -2] . "Speed.Set" ')).to.equal('.grid[1,-2]."speed.set"');
     expect(pathKey('Step[x]')).to.equal(undefined);
   });
+});
+
+// ---------------------------------------------------------------- goldens from source files
+
+const GOLDEN = path.join(__dirname, '../../test/fixtures/symbols/golden');
+/** The numbers the golden TIA blocks get (a STEP 7 block carries its own). */
+const GOLDEN_NUMBERS: Record<string, number> = { Guideline: 1, TestStruct: 1, Corners: 3 };
+
+/** A compiled table as the golden files write it: one line per block, then one per entry. */
+function goldenText(table: SymbolTable): string {
+  const lines = table.blocks.map((b) => `# DB ${b.db} "${b.name}" length ${b.length}${b.instanceOf ? ` instance of ${b.instanceOf}` : ''}`);
+  for (const e of table.entries) lines.push([e.name, e.type, e.address, e.byte, e.bit ?? '-', e.size].join(' | '));
+  return `${lines.join('\n')}\n`;
+}
+
+describe('symbols layout: golden tables from source files', () => {
+  const sources = fs.readdirSync(GOLDEN).filter((f) => /\.(db|udt|scl|awl)$/.test(f));
+
+  it('has the golden sources', () => {
+    expect(sources).to.include.members(['siemens-guideline.db', 's7netplus-teststruct.db', 'corners.db', 'step7.awl']);
+  });
+
+  for (const file of sources) {
+    it(`${file}: every entry at the byte, bit and size of ${file}.expected, with an address that reads back`, () => {
+      const blocks = parseBlockSource({ name: file, content: fs.readFileSync(path.join(GOLDEN, file)) });
+      const names = blocks.filter((b) => b.kind === 'db' && b.number === undefined).map((b) => b.name);
+      const table = compileDeclarations(blocks, [], { db: Object.fromEntries(names.map((n) => [n, GOLDEN_NUMBERS[n]!])) }, asText);
+      const expected = path.join(GOLDEN, `${file}.expected`);
+      if (process.env.UPDATE_GOLDEN === '1') fs.writeFileSync(expected, goldenText(table));
+      expect(goldenText(table)).to.equal(fs.readFileSync(expected, 'utf8'));
+      for (const e of table.entries) {
+        const tag = parseAddress(e.address);
+        expect([tag.dbNumber, tag.byteOffset, tag.bitOffset, tag.byteLength], e.name).to.deep.equal([e.db, e.byte, e.bit ?? 0, e.size]);
+        if (e.kind === 'elementary') expect([tag.type, tag.stringLength], e.name).to.deep.equal([e.dataType, e.stringLength]);
+        expect(table.lookup(e.name), e.name).to.equal(e);
+      }
+    });
+  }
 });
