@@ -307,7 +307,8 @@ describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
   it('reads instance DBs of UDT n and FB n, and a symbolic DB with a symbolic UDT', () => {
     expect(shape(db(blocks, 'DB11').body)).to.equal('UDT1#1');
     expect(db(blocks, 'DB11').startValues.map((s) => s.path)).to.deep.equal(['Speed', 'Run', 'Name']);
-    expect(shape(db(blocks, 'DB12').body)).to.equal('FB5#5');
+    // No number: a numbered named type is a UDT, and DB 12 is no instance of UDT 5.
+    expect(db(blocks, 'DB12').body).to.deep.equal({ kind: 'named', name: 'FB5', at: { file: 'step7-tank.awl', line: 68, column: 2 } });
     expect(shape(db(blocks, 'Recipe').body)).to.deep.equal({ Steps: { array: '1..3', of: '"Step"' }, Name: 'STRING[16]' });
   });
 

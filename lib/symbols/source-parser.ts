@@ -407,7 +407,13 @@ class Parser {
     throw this.error(t, `expected STRUCT, or the UDT or FB that DATA_BLOCK ${name} is an instance of, found ${describe(t)}`);
   }
 
-  /** `UDT 5`, `FB 3`, `SFB 4` (or glued, `UDT5`) as a named type `UDT5` with its number; undefined when the next token is none. */
+  /**
+   * `UDT 5` (or glued, `UDT5`) as the named type `UDT5` with its number;
+   * `FB 3` / `SFB 4` as the named type `FB3` / `SFB4` WITHOUT a number,
+   * since a number on a named type means a UDT (model.ts) and an instance
+   * DB of FB 5 must not be laid out as UDT 5. Undefined when the next token
+   * is none of these.
+   */
   private numberedType(): TypeRef | undefined {
     const t = this.peek();
     const glued = /^(UDT|FB|SFB)(\d+)$/i.exec(t.text);
@@ -417,7 +423,7 @@ class Parser {
     const prefix = (glued ? glued[1]! : t.text).toUpperCase();
     const digits = glued ? glued[2]! : this.next().text;
     const { name, number } = this.numbered(prefix, digits, t);
-    return { kind: 'named', name, number, at: this.pos(t) };
+    return prefix === 'UDT' ? { kind: 'named', name, number, at: this.pos(t) } : { kind: 'named', name, at: this.pos(t) };
   }
 
   private skipBlock(end: string): void {
