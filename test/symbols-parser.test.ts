@@ -207,6 +207,10 @@ describe('symbols: TIA Portal sources (parseBlockSource)', () => {
       `TYPE UDT 1 STRUCT x : INT; END_STRUCT; END_TYPE DATA_BLOCK "Sym" STRUCT x : INT; END_STRUCT; BEGIN END_DATA_BLOCK`,
     );
     expect((mixed[1] as DataBlockDecl).optimized, 'a STEP 7 file (numbers in its headers)').to.equal(false);
+    const symbolic = `DATA_BLOCK "Sym" STRUCT x : INT; END_STRUCT; BEGIN END_DATA_BLOCK`;
+    const awl = parseBlockSource({ name: 'Sym.AWL', content: symbolic })[0] as DataBlockDecl;
+    expect(awl.optimized, 'a STEP 7 file (named .awl)').to.equal(false);
+    expect((parseBlockSource({ name: 'Sym.db', content: symbolic })[0] as DataBlockDecl).optimized).to.equal(true);
   });
 
   it('reads UTF-16LE with BOM, tabs and a source given as a string with a BOM alike', () => {

@@ -154,13 +154,14 @@ const HEADER_FLAGS = new Set(['KNOW_HOW_PROTECT', 'READ_ONLY', 'UNLINKED', 'DB_S
  * quoted name counts as optimized, TIA's default for a new block (and what
  * importing such a source creates on an S7-1500); a `DB n` block counts as
  * standard, since STEP 7 knows no other access. A file whose headers use a
- * number anywhere (`DB 10`, `UDT 1`) is a STEP 7 source: its symbolic
+ * number anywhere (`DB 10`, `UDT 1`), or named `*.awl` (STEP 7's
+ * extension for sources), is a STEP 7 source: its symbolic
  * `DATA_BLOCK "Tank"` blocks count as standard too.
  */
 export function parseBlockSource(source: SymbolSource): BlockDecl[] {
   const parser = new Parser(tokenize(sourceText(source.content), source.name), source.name);
   const blocks = parser.blocks();
-  const step7 = blocks.some((b) => b.number !== undefined);
+  const step7 = /\.awl$/i.test(source.name) || blocks.some((b) => b.number !== undefined);
   return blocks.map((b) => {
     if (b.kind !== 'db') return b;
     if (optimizedAttribute(b.attributes) !== undefined) return b;
