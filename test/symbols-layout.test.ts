@@ -607,3 +607,20 @@ describe('symbols compileSymbols: files by extension', () => {
     );
   });
 });
+
+describe('symbols compileSymbols: start values evaluated', () => {
+  it('evaluates declarations, UDT defaults and BEGIN (which wins) for the member types', () => {
+    const table = compileSymbols([{ name: 'corners.db', content: fs.readFileSync(path.join(GOLDEN, 'corners.db')) }], {
+      db: { Corners: 3 },
+    });
+    const initial = (name: string) => table.lookup(name)?.initial;
+    expect(initial('"Corners".Name')).to.equal('corner');
+    expect(initial('"Corners".Count')).to.equal(8);
+    expect(initial('"Corners".Points[0].X')).to.equal(1.5);
+    expect(initial('"Corners".Points[1].X')).to.equal(2.5);
+    expect(initial('"Corners".Axis.Target.X')).to.equal(1.5);
+    expect([1, 2, 3].map((j) => initial(`"Corners".Matrix[1,${j}]`))).to.deep.equal([1, 2, 3]);
+    expect([1, 2, 3].map((j) => initial(`"Corners".Matrix[2,${j}]`))).to.deep.equal([0, 0, 23]);
+    expect(initial('"Corners".Flag')).to.equal(undefined);
+  });
+});

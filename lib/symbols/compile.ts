@@ -9,6 +9,7 @@
 import { formatAddress, parseAddress } from '../address';
 import { PlcError, SourceError } from '../errors';
 import type { DataTypeName, PlcScalar } from '../types';
+import { literalValue } from './literals';
 import { NameIndex } from './names';
 import { parseBlockSource } from './source-parser';
 import { readSymbolTable } from './symbol-files';
@@ -407,6 +408,5 @@ export function compileSymbols(sources: readonly SymbolSource[], options: Compil
         `not a source this compiler reads: DB and UDT sources end in ${[...BLOCK_SOURCES].join(' ')}, symbol tables in ${[...SYMBOL_TABLES].join(' ')}`,
       );
   }
-  // The start values are evaluated once lib/symbols/literals.ts (literalValue) is on this branch: until then they are checked only.
-  return compileDeclarations(blocks, rows, options);
+  return compileDeclarations(blocks, rows, options, literalValue);
 }
