@@ -326,6 +326,45 @@ describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
   });
 });
 
+describe('symbols: declarations in detail', () => {
+  it('takes RETAIN / NON_RETAIN before a member, and a member named Retain', () => {
+    const [t] = parse('TYPE "T" STRUCT RETAIN a : Int; NON_RETAIN "b c" : Bool; Retain : Bool; END_STRUCT; END_TYPE') as TypeDecl[];
+    expect(shape(t!.body)).to.deep.equal({ a: 'INT', 'b c': 'BOOL', Retain: 'BOOL' });
+  });
+
+  it('reads lists, nested lists and repeats of lists in BEGIN and in declarations', () => {
+    const source = `DATA_BLOCK "D"
+STRUCT
+  A : Array[1..6] of Int := [2(1, 2), 2(0)];
+  B : Array[1..2, 1..2] of Int := [[1, 2], [3, 4]];
+END_STRUCT;
+BEGIN
+  A := [6(7)];
+  B[1, 2] := -16#10;
+END_DATA_BLOCK`;
+    const [d] = parse(source) as DataBlockDecl[];
+    expect(value(member(d!.body, 'A').initial)).to.equal('[2([1, 2]), 2(0)]');
+    expect(value(member(d!.body, 'B').initial)).to.equal('[[1, 2], [3, 4]]');
+    expect(d!.startValues.map((s) => `${s.path} := ${value(s.value)}`)).to.deep.equal(['A := [6(7)]', 'B[1,2] := -16#10']);
+  });
+
+  it('refuses nesting deeper than 64 levels with a SourceError, not a stack overflow', () => {
+    const deep = `TYPE "T" STRUCT ${'a : Struct '.repeat(100_000)}`;
+    expect(failure(deep).message).to.match(/a is nested deeper than 64 levels/);
+    expect(failure(`TYPE "T" STRUCT a : Array[1..2] of Int := ${'['.repeat(100_000)}`).message).to.match(/nested deeper than 64 levels/);
+    expect(failure(`TYPE "T" STRUCT a : Array[1..2] of Int := ${'2('.repeat(100_000)}`).message).to.match(/nested deeper than 64 levels/);
+    const fine = `TYPE "T" STRUCT ${'a : Struct '.repeat(60)}x : Int; ${'END_STRUCT; '.repeat(60)}END_STRUCT; END_TYPE`;
+    expect(parse(fine)).to.have.length(1);
+  });
+
+  it('reads a 10,000-member DB without trouble', () => {
+    const lines = Array.from({ length: 10_000 }, (_, i) => `   m${i} : Real := ${i}.5;   // member ${i}`);
+    const [d] = parse(`DATA_BLOCK "Big"\nSTRUCT\n${lines.join('\n')}\nEND_STRUCT;\nBEGIN\nEND_DATA_BLOCK`) as DataBlockDecl[];
+    expect(members(d!.body)).to.have.length(10_000);
+    expect(member(d!.body, 'm9999').comment).to.equal('member 9999');
+  });
+});
+
 describe('symbols: source errors name the place and the problem', () => {
   const cases: [name: string, source: string, line: number, column: number, message: RegExp][] = [
     [
