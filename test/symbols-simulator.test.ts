@@ -12,8 +12,11 @@ import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer } from '../lib/fetchwrite/server';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
+import { compileDeclarations } from '../lib/symbols/compile';
+import { literalValue } from '../lib/symbols/literals';
 import { dataBlockImages, memoryFromSymbols } from '../lib/symbols/memory';
 import type { SymbolEntry, SymbolTable } from '../lib/symbols/model';
+import { parseBlockSource } from '../lib/symbols/source-parser';
 import type { DataTypeName, PlcValue } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';
 
@@ -105,13 +108,19 @@ describe('simulators built from DB sources', function () {
 
   it('the fixture hex covers the 70 bytes Tank.db declares', () => {
     expect(TANK_HEX).to.have.length(140);
-    expect(fs.readFileSync(path.join(FIXTURES, 'Tank.db'), 'utf8')).to.include('DATA_BLOCK "Tank"');
   });
 
   it('a data block holds the start values, string headers and DTL initial values a CPU holds after download', () => {
     const images = dataBlockImages(tankTable());
     expect([...images.keys()]).to.deep.equal([1]);
     expect(images.get(1)!.toString('hex')).to.equal(TANK_HEX);
+  });
+
+  it('the data block compiled from Tank.db holds the same bytes', () => {
+    const blocks = parseBlockSource({ name: 'Tank.db', content: fs.readFileSync(path.join(FIXTURES, 'Tank.db')) });
+    const table = compileDeclarations(blocks, [], { db: { Tank: 1 } }, literalValue);
+    expect(table.blocks.map((b) => [b.db, b.length])).to.deep.equal([[1, 70]]);
+    expect(dataBlockImages(table).get(1)!.toString('hex')).to.equal(TANK_HEX);
   });
 
   it('a start value that does not fit its member names the member', () => {
