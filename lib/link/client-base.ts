@@ -288,6 +288,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
             return driver.blockLength!(session, db, signal);
           }
         : undefined,
+      dbNumbers: driver.dbNumbers ? (signal) => driver.dbNumbers!(this.liveSession(), signal) : undefined,
       unsupported: driver.noBlockLength ?? `${this.name}: the protocol has no service that tells the length of a data block`,
       parallel: () => LAYOUT_PARALLEL,
     }));

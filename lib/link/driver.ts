@@ -119,6 +119,8 @@ export interface Driver<S extends DriverSession, T extends DriverTag, M = undefi
    * `layoutUnknown` event).
    */
   blockLength?(session: S, db: number, signal?: AbortSignal): Promise<number | null>;
+  /** Optional, with blockLength: the numbers of the data blocks the PLC has (the check asks only for those). */
+  dbNumbers?(session: S, signal?: AbortSignal): Promise<number[]>;
   readonly noBlockLength?: string;
 
   /**

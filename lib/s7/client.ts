@@ -106,6 +106,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
     readValues: (session, tags, signal, prepared) => this.readValues(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
     blockLength: (_session, db, signal) => this.dbLength(db, signal),
+    dbNumbers: (_session, signal) => this.services.listBlocksOfType('DB', signal ? { signal } : {}),
     isLinkError,
   };
 

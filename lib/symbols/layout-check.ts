@@ -27,6 +27,8 @@ export interface LayoutMonitorOptions {
   events: EventEmitter;
   /** Absent: the protocol cannot tell block lengths (`unsupported` says why). */
   blockLength: BlockLength | undefined;
+  /** The numbers of the DBs the PLC has, when it can list them: a DB it does not list is not asked for. */
+  dbNumbers?: ((signal: AbortSignal | undefined) => Promise<number[]>) | undefined;
   unsupported: string;
   /** Block infos asked at once (the PLC's parallel jobs). */
   parallel: () => number;
@@ -44,6 +46,13 @@ export class LayoutMonitor {
   private readonly reported = new Map<number, string>();
   private okReported = false;
   private unknownReported = false;
+  /**
+   * Blocks whose block info the PLC answered with a frame the client could
+   * not read (which drops the link): not asked again by this client, or
+   * every reconnect would drop the link again. snap7's server answers
+   * block info of a DB it does not have so.
+   */
+  private readonly unreadable = new Map<number, PlcError>();
 
   constructor(private readonly o: LayoutMonitorOptions) {}
 
@@ -125,6 +134,7 @@ export class LayoutMonitor {
       return blocks.map((b) => unknown(b, error));
     }
     const checks = new Array<LayoutCheck>(blocks.length);
+    const present = await this.listed(signal);
     let refused: PlcError | undefined;
     let next = 0;
     const worker = async (): Promise<void> => {
@@ -132,8 +142,13 @@ export class LayoutMonitor {
         const i = next++;
         const b = blocks[i]!;
         if (generation !== this.generation) throw new PlcError('CLOSED', 'the connection the layout check ran on ended');
-        if (refused) {
-          checks[i] = unknown(b, refused);
+        const known = refused ?? this.unreadable.get(b.db);
+        if (known) {
+          checks[i] = unknown(b, known);
+          continue;
+        }
+        if (present && !present.has(b.db)) {
+          checks[i] = { block: b.name, db: b.db, declared: b.length, actual: null, status: 'mismatch' };
           continue;
         }
         try {
@@ -141,6 +156,7 @@ export class LayoutMonitor {
           checks[i] = { block: b.name, db: b.db, declared: b.length, actual, status: actual === b.length ? 'ok' : 'mismatch' };
         } catch (err) {
           const e = toPlcError(err);
+          if (e.code === 'PROTOCOL_ERROR') this.unreadable.set(b.db, e);
           // The link went, or the caller gave up: no verdict (a reconnect checks again).
           if (isLinkError(e) || e.code === 'ABORTED' || e.code === 'TIMEOUT') throw e;
           if (SERVICE_REFUSED.has(e.code)) refused = e;
@@ -151,6 +167,18 @@ export class LayoutMonitor {
     const n = Math.max(1, Math.min(this.o.parallel(), blocks.length));
     await Promise.all(Array.from({ length: n }, worker));
     return checks;
+  }
+
+  /** The DBs the PLC lists, or undefined when it cannot list them (each is then asked for). */
+  private async listed(signal: AbortSignal | undefined): Promise<Set<number> | undefined> {
+    if (!this.o.dbNumbers) return undefined;
+    try {
+      return new Set(await this.o.dbNumbers(signal));
+    } catch (err) {
+      const e = toPlcError(err);
+      if (isLinkError(e) || e.code === 'ABORTED' || e.code === 'TIMEOUT') throw e;
+      return undefined;
+    }
   }
 
   /** Keeps the mismatches (for strictSymbols) and emits what this connection has not been told yet. */
