@@ -19,7 +19,7 @@ import type { LayoutCheck, LayoutMismatchEvent, LayoutOkEvent, LayoutUnknownEven
 import type { BlockSummary, SymbolTable } from './model';
 
 /** A DB's length as the PLC reports it; null when it has no such block; throws when it cannot tell. */
-export type BlockLength = (db: number, signal: AbortSignal | undefined) => Promise<number | null>;
+type BlockLength = (db: number, signal: AbortSignal | undefined) => Promise<number | null>;
 
 export interface LayoutMonitorOptions {
   table: SymbolTable;
