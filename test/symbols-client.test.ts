@@ -10,7 +10,10 @@ import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer, type FetchWriteRequestEvent } from '../lib/fetchwrite/server';
 import { S7Client } from '../lib/s7/client';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
+import { compileDeclarations } from '../lib/symbols/compile';
+import { literalValue } from '../lib/symbols/literals';
 import type { SymbolTable } from '../lib/symbols/model';
+import { parseBlockSource } from '../lib/symbols/source-parser';
 import type { PlcData, PlcStruct } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';
 import { symbolTable, type Block } from './support/symbol-table';
@@ -352,5 +355,70 @@ describe('symbols and the protocols', () => {
     expect(fw.tag('"Recipe".Setpoint')).to.include({ dbNumber: 2, byteOffset: 0, type: 'REAL' });
     expect((s7 as unknown as { strictSymbols: boolean }).strictSymbols).to.equal(true);
     await Promise.all([s7.close(), fw.close()]);
+  });
+});
+
+describe('reading and writing by symbol: a table compiled from TIA sources (S7 simulator)', function () {
+  this.timeout(10000);
+  const SOURCE = [
+    'TYPE "Motor"',
+    'VERSION : 0.1',
+    '   STRUCT',
+    '      Run : Bool;',
+    '      Fault : Bool;',
+    '      Speed : Int;',
+    '   END_STRUCT;',
+    'END_TYPE',
+    '',
+    'DATA_BLOCK "Tank"',
+    "{ S7_Optimized_Access := 'FALSE' }",
+    'VERSION : 0.1',
+    'NON_RETAIN',
+    '   STRUCT',
+    '      Level : Real;',
+    '      Motor : "Motor";',
+    '      Pumps : Array[1..2] of "Motor";',
+    '      Label : String[8];',
+    '   END_STRUCT;',
+    'BEGIN',
+    'END_DATA_BLOCK',
+  ].join('\n');
+
+  it('reads and writes members, UDT instances and arrays of them at the offsets the layout gives; the layout check matches', async () => {
+    const table = compileDeclarations(parseBlockSource({ name: 'Tank.db', content: SOURCE }), [], { db: { Tank: 1 } }, literalValue);
+    const server = new S7Server({ port: 0, profile: 's7-300', layout: { dbs: { 1: table.blocks[0]!.length } } });
+    await server.listen();
+    const client = new S7Client(parseUrl(`s7://127.0.0.1:${server.port}?rack=0&slot=2&strictSymbols=true`) as S7Endpoint, {
+      symbols: table,
+    });
+    try {
+      const ok = new Promise((resolve) => client.once('layoutOk', resolve));
+      await client.connect();
+      await ok;
+      // Values put by absolute address at the entries' offsets, read back by name.
+      const speed = table.lookup('"Tank".Pumps[2].Speed')!;
+      await client.write({
+        [speed.address]: 1234,
+        [table.lookup('"Tank".Motor.Fault')!.address]: true,
+        [table.lookup('"Tank".Level')!.address]: 2.5,
+      });
+      expect(await client.read<PlcData>(['"Tank".Level', '"Tank".Motor', '"Tank".Pumps'])).to.deep.equal({
+        '"Tank".Level': 2.5,
+        '"Tank".Motor': { Run: false, Fault: true, Speed: 0 },
+        '"Tank".Pumps': [
+          { Run: false, Fault: false, Speed: 0 },
+          { Run: false, Fault: false, Speed: 1234 },
+        ],
+      });
+      await client.write({ '"Tank".Pumps': [{ Run: true }, undefined], '"Tank".Label': 'ok' });
+      expect(await client.read([table.lookup('"Tank".Pumps[1].Run')!.address, speed.address, '"Tank".Label'])).to.deep.equal({
+        [table.lookup('"Tank".Pumps[1].Run')!.address]: true,
+        [speed.address]: 1234,
+        '"Tank".Label': 'ok',
+      });
+    } finally {
+      await client.close();
+      await server.close();
+    }
   });
 });
