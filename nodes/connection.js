@@ -1,11 +1,16 @@
 'use strict';
 const { acquire, release, plc } = require('./shared/links');
 const { settleWithin } = require('./shared/user');
+const symbols = require('./shared/symbols');
 
 /**
- * plcwire-connection (config): property `url`. Opens the shared link on its
- * first user, gives it back after the last; forwards link errors to the users'
- * Catch nodes through `this.users` (the runtime's convention for config nodes).
+ * plcwire-connection (config): properties `url`, and for tags by name
+ * `symbolSources` [{ name, content, encoding? }], `dbNumbers` [{ block, db }]
+ * and `strictSymbols`. Compiles the sources when it starts (a failed compile
+ * is reported and leaves absolute addresses working), opens the shared link on
+ * its first user, gives it back after the last; forwards link errors to the
+ * users' Catch nodes through `this.users` (the runtime's convention for config
+ * nodes).
  */
 /** The URL without a user:password@ part. */
 function withoutCredentials(url) {
@@ -21,15 +26,68 @@ module.exports = function (RED) {
     node.users = {};
     node.linkStatus = { state: 'connecting' };
     node.problem = undefined;
+    const compiled = symbols.compile(config);
+    /** The compiled symbol table, or undefined (no sources, or they did not compile). */
+    node.symbols = compiled.table;
+    /** Why the sources did not compile: [{ code, message, file?, line?, column? }]. */
+    node.symbolProblems = compiled.problems || [];
+    const symbolsOf = { key: symbols.symbolsKey(config), table: node.symbols, strict: !!config.strictSymbols };
+    /** Data blocks whose length on the PLC differs from their source's, by DB number, since the link came up. */
+    const mismatches = new Map();
     let link;
     let lastError = '';
+    let linkState = node.linkStatus;
 
     Object.defineProperty(node, 'client', { get: () => link && link.client });
 
+    /** The link's status with what the users show instead of "connected": a layout mismatch, or sources that did not compile. */
+    function shown(status) {
+      if (status.state !== 'connected') return status;
+      const mismatch = mismatches.values().next().value;
+      if (mismatch) return { ...status, notice: { kind: 'layout', db: mismatch.db, declared: mismatch.declared, actual: mismatch.actual } };
+      if (node.symbolProblems.length > 0) return { ...status, notice: { kind: 'sources' } };
+      return status;
+    }
+
     function broadcast(status) {
-      node.linkStatus = status;
+      linkState = status;
+      // A mismatch is the PLC's answer on one connection: a new connection checks again.
+      if (status.state !== 'connected') mismatches.clear();
+      node.linkStatus = shown(status);
       if (status.state === 'connected') lastError = '';
-      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
+      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(node.linkStatus);
+    }
+
+    function onMismatch(event) {
+      const known = mismatches.get(event.db);
+      if (known && known.declared === event.declared && known.actual === event.actual) return;
+      mismatches.set(event.db, event);
+      node.warn(
+        RED._('plcwire-connection.errors.layoutMismatch', {
+          block: event.block,
+          db: event.db,
+          declared: event.declared,
+          actual: event.actual,
+        }),
+      );
+      broadcast(linkState);
+    }
+
+    if (node.symbolProblems.length > 0) {
+      // Once the flows have started, so the users' Catch nodes hear it too (the log has it either way).
+      const problems = node.symbolProblems;
+      const report = () => {
+        const more = problems.length > 1 ? RED._('plcwire-connection.errors.more', { n: problems.length - 1 }) : '';
+        const text =
+          RED._('plcwire-connection.errors.sources', { name: node.name || withoutCredentials(node.url), problem: problems[0].message }) +
+          more;
+        node.error(new plc.PlcError(problems[0].code || 'INVALID_SOURCE', text), {
+          topic: node.name || withoutCredentials(node.url),
+          payload: { problems },
+        });
+      };
+      RED.events.once('flows:started', report);
+      node.on('close', () => RED.events.removeListener('flows:started', report));
     }
 
     /** Reported once per distinct error between two connections, so a PLC that is off does not flood the log. */
@@ -46,7 +104,7 @@ module.exports = function (RED) {
 
     function open() {
       try {
-        link = acquire(node.url, node);
+        link = acquire(node.url, node, symbolsOf);
       } catch (err) {
         // Each user reports this to its own Catch nodes once the flows have started (see problemReport).
         node.problem = err;
@@ -56,6 +114,7 @@ module.exports = function (RED) {
       node.problem = undefined;
       link.on('status', onStatus);
       link.on('link-error', reportError);
+      link.on('layout-mismatch', onMismatch);
       broadcast(link.status);
     }
 
@@ -65,6 +124,7 @@ module.exports = function (RED) {
       if (!held) return Promise.resolve();
       held.off('status', onStatus);
       held.off('link-error', reportError);
+      held.off('layout-mismatch', onMismatch);
       return release(held, node);
     }
 
@@ -102,6 +162,11 @@ module.exports = function (RED) {
 
   RED.nodes.registerType('plcwire-connection', PlcwireConnection);
 
+  /** The sources of a request body, the way a connection node's config carries them. */
+  function symbolConfig(body) {
+    return { symbolSources: body.symbolSources, dbNumbers: body.dbNumbers, strictSymbols: false };
+  }
+
   const canRead = RED.auth.needsPermission('plcwire.read');
 
   /**
@@ -123,8 +188,10 @@ module.exports = function (RED) {
 
   /**
    * Address validation for the editor with the library's own parser (the
-   * driver of the URL's protocol): POST { url?, addresses: [...] } →
-   * { results: { address: { ok, type, count } | { ok: false, code, message } } }.
+   * driver of the URL's protocol) and, when the connection has symbol
+   * sources, its compiled table: POST { url?, addresses: [...],
+   * symbolSources?, dbNumbers? } → { url, symbols: { ok } | { ok: false, errors },
+   * results: { address: { ok, type, count } | { ok, symbol, address, type, kind } | { ok: false, code, message } } }.
    */
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
     const body = req.body || {};
@@ -134,17 +201,23 @@ module.exports = function (RED) {
       res.json({ url: urlAnswer(parser.error), results: {} });
       return;
     }
+    const compiledSources = symbols.compileCached(symbolConfig(body));
     const results = {};
-    for (const address of addresses) {
-      try {
-        const tag = parser.parse(address);
-        results[address] = { ok: true, type: tag.type, count: tag.count };
-      } catch (err) {
-        results[address] = { ok: false, code: err.code || 'INVALID_ADDRESS', message: err.message };
-      }
-    }
+    for (const address of addresses) results[address] = symbols.resolveAddress(address, parser.parse, compiledSources.table);
     parser.done();
-    res.json({ url: { ok: true }, results });
+    const symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
+    res.json({ url: { ok: true }, symbols: symbolAnswer, results });
+  });
+
+  /**
+   * The connection dialog's compile of its sources, and the tag tables'
+   * completion: POST { symbolSources, dbNumbers } → { blocks: [{ name, db,
+   * length, file, instanceOf? }], entries: [{ name, address, type, kind,
+   * children? }], types, errors: [{ code, message, file?, line?, column? }] },
+   * compiled with the library's compileSymbols().
+   */
+  RED.httpAdmin.post('/plcwire/symbols', canRead, function (req, res) {
+    res.json(symbols.describe(symbols.compileCached(symbolConfig(req.body || {}))));
   });
 
   /**
