@@ -311,7 +311,7 @@
    * problem in `hint`. Returns { check, dispose }; dispose (on Done and Cancel)
    * stops a pending validation, which would otherwise outlive the dialog.
    */
-  editor.watchAddress = function (input, hint, urlOf) {
+  editor.watchAddress = function (input, hint, urlOf, symbolsOf) {
     var timer;
     var closed = false;
     function check() {
@@ -320,15 +320,21 @@
       input.removeClass('plcwire-invalid');
       hint.text('').removeClass('plcwire-bad');
       if (!address) return;
-      editor.validate(urlOf(), [address], function (results) {
-        var r = results[address];
-        if (closed || !r) return;
-        if (r.ok) hint.text(r.type + (r.count > 1 ? '[' + r.count + ']' : ''));
-        else {
-          input.addClass('plcwire-invalid');
-          hint.text(r.message).addClass('plcwire-bad');
-        }
-      });
+      editor.validate(
+        urlOf(),
+        [address],
+        function (results) {
+          var r = results[address];
+          if (closed || !r) return;
+          // A name: its type and the absolute address it stands for.
+          if (r.ok) hint.text(r.type + (r.count > 1 ? '[' + r.count + ']' : '') + (r.symbol ? ' = ' + r.address : ''));
+          else {
+            input.addClass('plcwire-invalid');
+            hint.text(r.message).addClass('plcwire-bad');
+          }
+        },
+        symbolsOf ? symbolsOf() : undefined,
+      );
     }
     input.on('input change', function () {
       clearTimeout(timer);
