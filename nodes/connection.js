@@ -51,8 +51,6 @@ module.exports = function (RED) {
 
     function broadcast(status) {
       linkState = status;
-      // A mismatch is the PLC's answer on one connection: a new connection checks again.
-      if (status.state !== 'connected') mismatches.clear();
       node.linkStatus = shown(status);
       if (status.state === 'connected') lastError = '';
       for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(node.linkStatus);
@@ -62,14 +60,14 @@ module.exports = function (RED) {
       const known = mismatches.get(event.db);
       if (known && known.declared === event.declared && known.actual === event.actual) return;
       mismatches.set(event.db, event);
-      node.warn(
-        RED._('plcwire-connection.errors.layoutMismatch', {
-          block: event.block,
-          db: event.db,
-          declared: event.declared,
-          actual: event.actual,
-        }),
-      );
+      const key = event.actual === null ? 'plcwire-connection.errors.layoutMissing' : 'plcwire-connection.errors.layoutMismatch';
+      node.warn(RED._(key, { block: event.block, db: event.db, declared: event.declared, actual: event.actual }));
+      broadcast(linkState);
+    }
+
+    function onLayoutOk() {
+      if (mismatches.size === 0) return;
+      mismatches.clear();
       broadcast(linkState);
     }
 
@@ -100,7 +98,11 @@ module.exports = function (RED) {
       node.error(err, { topic: link ? link.name : url, payload: { url, state: node.linkStatus.state, code: err && err.code } });
     }
 
-    const onStatus = (status) => broadcast(status);
+    const onStatus = (status) => {
+      // A mismatch is the PLC's answer on one connection: the client checks again on the next.
+      if (status.state !== 'connected') mismatches.clear();
+      broadcast(status);
+    };
 
     function open() {
       try {
@@ -115,6 +117,7 @@ module.exports = function (RED) {
       link.on('status', onStatus);
       link.on('link-error', reportError);
       link.on('layout-mismatch', onMismatch);
+      link.on('layout-ok', onLayoutOk);
       broadcast(link.status);
     }
 
@@ -125,6 +128,7 @@ module.exports = function (RED) {
       held.off('status', onStatus);
       held.off('link-error', reportError);
       held.off('layout-mismatch', onMismatch);
+      held.off('layout-ok', onLayoutOk);
       return release(held, node);
     }
 
@@ -202,10 +206,22 @@ module.exports = function (RED) {
       return;
     }
     const compiledSources = symbols.compileCached(symbolConfig(body));
+    let symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
+    // The client's own resolution of names, when there is a table and a URL: a protocol may refuse symbols (freeport).
+    let named;
+    if (compiledSources.table && body.url) {
+      try {
+        named = plc.createClient(String(body.url), { symbols: compiledSources.table });
+      } catch (err) {
+        symbolAnswer = { ok: false, errors: [{ code: err.code, message: err.message }] };
+      }
+    }
     const results = {};
-    for (const address of addresses) results[address] = symbols.resolveAddress(address, parser.parse, compiledSources.table);
+    for (const address of addresses) {
+      results[address] = symbols.resolveAddress(address, parser.parse, compiledSources.table, named && ((a) => named.tag(a)));
+    }
     parser.done();
-    const symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
+    if (named) named.close().catch(() => undefined);
     res.json({ url: { ok: true }, symbols: symbolAnswer, results });
   });
 

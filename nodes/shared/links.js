@@ -31,8 +31,10 @@ class Link extends EventEmitter {
     this.client.on('reconnecting', ({ delay, error }) => this.update({ state: 'reconnecting', delay, error }));
     // A listener on 'error' keeps an error event from ever throwing; errors reach users via 'status'.
     this.client.on('error', (error) => this.emit('link-error', error));
-    // A data block whose length on the PLC is not the one its source declares: { block, db, declared, actual }.
+    // The layout check of the symbol table's DBs, on each connect (docs/symbols.md, "Stale layouts"): a block
+    // whose length on the PLC is not its source's ({ block, db, declared, actual }, actual null: no such DB), or all fine.
     this.client.on('layoutMismatch', (event) => this.emit('layout-mismatch', event));
+    this.client.on('layoutOk', (event) => this.emit('layout-ok', event));
     this.client.start();
   }
 

@@ -34,8 +34,9 @@ function linkStatus(t, status) {
   }
 }
 
-/** A data block's length on the PLC (`actual`) is not what its source declares (`declared`). */
+/** A data block's length on the PLC (`actual`; null: the PLC has no such DB) is not what its source declares (`declared`). */
 function layoutStatus(t, { db, declared, actual }) {
+  if (actual === null) return { fill: 'red', shape: 'ring', text: t('plcwire.status.layoutMissing', { db }) };
   return { fill: 'red', shape: 'ring', text: t('plcwire.status.layoutMismatch', { db, declared, actual }) };
 }
 

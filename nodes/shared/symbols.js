@@ -128,23 +128,37 @@ function describe(result) {
 }
 
 /**
- * A tag row's address against a compiled table (or none) and the protocol's
- * parser: a symbol → { ok, symbol, address, type, kind }; an absolute
- * address → { ok, type, count }; neither → { ok: false, code, message }
- * (an unknown name with the closest names the table has).
+ * A tag row's address, as the client will take it (docs/symbols.md, "Reading
+ * and writing by name": text that parses as an absolute address is that
+ * address; anything else is looked up in the table). `parse` is the
+ * protocol's address parser, `named` the parser of a client given the table
+ * (its reach checks and its words for an unknown name), undefined without a
+ * URL. An absolute address → { ok, type, count }; a name → { ok, symbol,
+ * address, type, kind } (the entry's own name, absolute address and IEC
+ * type); neither → { ok: false, code, message }.
  */
-function resolveAddress(address, parse, table) {
-  const entry = table ? table.lookup(address) : undefined;
-  if (entry) return { ok: true, symbol: entry.name, address: entry.address, type: entry.type, kind: entry.kind };
+function resolveAddress(address, parse, table, named) {
+  let asAddress;
   try {
     const tag = parse(address);
     return { ok: true, type: tag.type, count: tag.count };
   } catch (err) {
-    if (!table) return { ok: false, code: err.code || 'INVALID_ADDRESS', message: err.message };
-    const close = table.suggest(address);
-    const message = close.length > 0 ? `${err.message}; did you mean ${close.map((n) => `"${n}"`).join(', ')}?` : err.message;
-    return { ok: false, code: err.code || 'INVALID_ADDRESS', message, suggestions: close };
+    asAddress = err;
   }
+  const failed = (err) => ({ ok: false, code: err.code || 'INVALID_ADDRESS', message: err.message });
+  if (!table) return failed(asAddress);
+  if (named) {
+    try {
+      named(address);
+    } catch (err) {
+      return failed(err);
+    }
+  }
+  const entry = table.lookup(address);
+  if (entry) return { ok: true, symbol: entry.name, address: entry.address, type: entry.type, kind: entry.kind };
+  const close = table.suggest(address);
+  const hint = close.length > 0 ? `; did you mean ${close.join(', ')}?` : '';
+  return { ok: false, code: 'INVALID_ADDRESS', message: `unknown symbol ${address}${hint} (nor an address: ${asAddress.message})` };
 }
 
 module.exports = {
