@@ -8,7 +8,7 @@ import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { parseAddress } from '../lib/address';
 import { SourceError } from '../lib/errors';
-import { compileDeclarations, pathKey, type EvaluateLiteral } from '../lib/symbols/compile';
+import { compileDeclarations, compileSymbols, pathKey, type EvaluateLiteral } from '../lib/symbols/compile';
 import { elementIndex, layoutBlocks, memberRef, type LayoutNode } from '../lib/symbols/layout';
 import type { BlockDecl, CompileOptions, SymbolTable, SymbolTableRow } from '../lib/symbols/model';
 import { parseBlockSource } from '../lib/symbols/source-parser';
@@ -582,4 +582,45 @@ describe('symbols layout: golden tables from source files', () => {
       }
     });
   }
+});
+
+describe('symbols compileSymbols: files by extension', () => {
+  it('compiles a STEP 7 source with a symbol table that names its DB and gives its I/Q/M symbols', () => {
+    const sdf = [
+      '"Tank                    ","DB     10   ","DB     10  ","tank data"',
+      '"Start                   ","E       0.0 ","BOOL      ","start"',
+    ].join('\r\n');
+    const table = compileSymbols([
+      { name: 'step7.awl', content: fs.readFileSync(path.join(GOLDEN, 'step7.awl')) },
+      { name: 'Symbols.sdf', content: `${sdf}\r\n` },
+    ]);
+    expect(table.blocks).to.deep.equal([{ name: 'Tank', db: 10, length: 24, file: 'step7.awl' }]);
+    expect(table.lookup('Tank.Motor.Run')?.address).to.equal('DB10.DBX10.0');
+    expect(table.lookup('"Start"')?.address).to.equal('I0.0');
+    expect(table.suggest('"Tank".Levle')).to.deep.equal(['"Tank".Level']);
+  });
+
+  it('refuses a file of a kind it does not read, naming the kinds it does', () => {
+    expect(() => compileSymbols([{ name: 'notes.txt', content: '' }])).to.throw(
+      SourceError,
+      /^notes\.txt:1:1: not a source this compiler reads: .*\.awl.*\.xlsx/,
+    );
+  });
+});
+
+describe('symbols compileSymbols: start values evaluated', () => {
+  it('evaluates declarations, UDT defaults and BEGIN (which wins) for the member types', () => {
+    const table = compileSymbols([{ name: 'corners.db', content: fs.readFileSync(path.join(GOLDEN, 'corners.db')) }], {
+      db: { Corners: 3 },
+    });
+    const initial = (name: string) => table.lookup(name)?.initial;
+    expect(initial('"Corners".Name')).to.equal('corner');
+    expect(initial('"Corners".Count')).to.equal(8);
+    expect(initial('"Corners".Points[0].X')).to.equal(1.5);
+    expect(initial('"Corners".Points[1].X')).to.equal(2.5);
+    expect(initial('"Corners".Axis.Target.X')).to.equal(1.5);
+    expect([1, 2, 3].map((j) => initial(`"Corners".Matrix[1,${j}]`))).to.deep.equal([1, 2, 3]);
+    expect([1, 2, 3].map((j) => initial(`"Corners".Matrix[2,${j}]`))).to.deep.equal([0, 0, 23]);
+    expect(initial('"Corners".Flag')).to.equal(undefined);
+  });
 });

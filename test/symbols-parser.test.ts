@@ -207,6 +207,10 @@ describe('symbols: TIA Portal sources (parseBlockSource)', () => {
       `TYPE UDT 1 STRUCT x : INT; END_STRUCT; END_TYPE DATA_BLOCK "Sym" STRUCT x : INT; END_STRUCT; BEGIN END_DATA_BLOCK`,
     );
     expect((mixed[1] as DataBlockDecl).optimized, 'a STEP 7 file (numbers in its headers)').to.equal(false);
+    const symbolic = `DATA_BLOCK "Sym" STRUCT x : INT; END_STRUCT; BEGIN END_DATA_BLOCK`;
+    const awl = parseBlockSource({ name: 'Sym.AWL', content: symbolic })[0] as DataBlockDecl;
+    expect(awl.optimized, 'a STEP 7 file (named .awl)').to.equal(false);
+    expect((parseBlockSource({ name: 'Sym.db', content: symbolic })[0] as DataBlockDecl).optimized).to.equal(true);
   });
 
   it('reads UTF-16LE with BOM, tabs and a source given as a string with a BOM alike', () => {
@@ -307,7 +311,8 @@ describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
   it('reads instance DBs of UDT n and FB n, and a symbolic DB with a symbolic UDT', () => {
     expect(shape(db(blocks, 'DB11').body)).to.equal('UDT1#1');
     expect(db(blocks, 'DB11').startValues.map((s) => s.path)).to.deep.equal(['Speed', 'Run', 'Name']);
-    expect(shape(db(blocks, 'DB12').body)).to.equal('FB5#5');
+    // No number: a numbered named type is a UDT, and DB 12 is no instance of UDT 5.
+    expect(db(blocks, 'DB12').body).to.deep.equal({ kind: 'named', name: 'FB5', at: { file: 'step7-tank.awl', line: 68, column: 2 } });
     expect(shape(db(blocks, 'Recipe').body)).to.deep.equal({ Steps: { array: '1..3', of: '"Step"' }, Name: 'STRING[16]' });
   });
 

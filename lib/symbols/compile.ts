@@ -9,7 +9,10 @@
 import { formatAddress, parseAddress } from '../address';
 import { PlcError, SourceError } from '../errors';
 import type { DataTypeName, PlcScalar } from '../types';
+import { literalValue } from './literals';
 import { NameIndex } from './names';
+import { parseBlockSource } from './source-parser';
+import { readSymbolTable } from './symbol-files';
 import { blockRef, elementIndex, layoutBlocks, memberRef, type BlockLayout, type LayoutNode } from './layout';
 import type {
   BlockDecl,
@@ -20,6 +23,7 @@ import type {
   SourcePosition,
   StartValue,
   SymbolEntry,
+  SymbolSource,
   SymbolTable,
   SymbolTableRow,
 } from './model';
@@ -101,7 +105,7 @@ class TableBuilder {
   /** Entry index by name after the block (`.motor.speed`), for the BEGIN section of the block being built. */
   private relative = new Map<string, number>();
 
-  constructor(private readonly evaluate: EvaluateLiteral) {}
+  constructor(private readonly evaluate: EvaluateLiteral | undefined) {}
 
   block(layout: BlockLayout, name: string, db: number): void {
     this.relative = new Map();
@@ -119,7 +123,7 @@ class TableBuilder {
   finish(): SymbolEntry[] {
     return this.entries.map((e, i) => {
       const literal = this.literals[i];
-      if (literal === undefined) return Object.freeze(e);
+      if (literal === undefined || !this.evaluate) return Object.freeze(e);
       return Object.freeze({ ...e, initial: this.evaluate(literal, e.dataType!, e.stringLength) });
     });
   }
@@ -325,12 +329,14 @@ function numberBlocks(dbs: readonly DataBlockDecl[], facts: TableFacts, options:
 /**
  * Compiles parsed declarations and symbol-table rows into a table (what
  * compileSymbols() does once the files are read). Throws SourceError.
+ * Without `evaluate` the start values are checked (their paths, their
+ * counts) but not evaluated: the entries carry no `initial`.
  */
 export function compileDeclarations(
   blocks: readonly BlockDecl[],
   rows: readonly SymbolTableRow[],
   options: CompileOptions,
-  evaluate: EvaluateLiteral,
+  evaluate?: EvaluateLiteral,
 ): SymbolTable {
   const facts = readRows(rows);
   const layouts = layoutBlocks(blocks, { typeNumbers: facts.typeNumbers });
@@ -369,4 +375,38 @@ export function compileDeclarations(
     lookup: (name: string) => index.lookup(name),
     suggest: (name: string, max?: number) => index.suggest(name, max),
   });
+}
+
+/** DB and UDT sources: TIA Portal's generated sources and STEP 7's AWL sources. */
+const BLOCK_SOURCES = new Set(['.db', '.udt', '.scl', '.awl']);
+/** Symbol tables: STEP 7's exports (.sdf, .asc, .seq) and TIA Portal's PLC tag tables (.xlsx, .csv). */
+const SYMBOL_TABLES = new Set(['.sdf', '.asc', '.seq', '.xlsx', '.csv']);
+
+function extensionOf(name: string): string {
+  const dot = name.lastIndexOf('.');
+  return dot < 0 ? '' : name.slice(dot).toLowerCase();
+}
+
+/**
+ * Compiles a PLC's DB and UDT sources (`.db .udt .scl .awl`) and symbol
+ * tables (`.sdf .asc .seq .xlsx .csv`) into a table of every member with
+ * its standard-access address, found by name as users type it. Throws
+ * SourceError (code INVALID_SOURCE, `file:line:column: problem`) for what
+ * cannot be compiled: a syntax error, an optimized block, an unknown type, a
+ * block without number, … (docs/symbols.md).
+ */
+export function compileSymbols(sources: readonly SymbolSource[], options: CompileOptions = {}): SymbolTable {
+  const blocks: BlockDecl[] = [];
+  const rows: SymbolTableRow[] = [];
+  for (const source of sources) {
+    const ext = extensionOf(source.name);
+    if (BLOCK_SOURCES.has(ext)) blocks.push(...parseBlockSource(source));
+    else if (SYMBOL_TABLES.has(ext)) rows.push(...readSymbolTable(source));
+    else
+      throw new SourceError(
+        { file: source.name, line: 1, column: 1 },
+        `not a source this compiler reads: DB and UDT sources end in ${[...BLOCK_SOURCES].join(' ')}, symbol tables in ${[...SYMBOL_TABLES].join(' ')}`,
+      );
+  }
+  return compileDeclarations(blocks, rows, options, literalValue);
 }

@@ -27,9 +27,9 @@ import { elementByteLength } from '../values/types-table';
 import type { BlockDecl, DataBlockDecl, MemberDecl, SourcePosition, TypeDecl, TypeRef } from './model';
 
 /** Bytes a data block with standard access can hold: 64 KB (S7-300/400 and S7-1200/1500 with standard access); the last byte, 65535, is the last our addresses reach. */
-export const MAX_BLOCK_BYTES = 65536;
+const MAX_BLOCK_BYTES = 65536;
 /** Elements of one array: the element count of an address (`:BOOL[65535]`) and of an S7-300 array indexed by INT. */
-export const MAX_ARRAY_ELEMENTS = 65535;
+const MAX_ARRAY_ELEMENTS = 65535;
 
 const BLOCK_BITS = MAX_BLOCK_BYTES * 8;
 
@@ -92,7 +92,7 @@ interface Placed {
   readonly at: SourcePosition;
 }
 
-export interface ElementaryNode extends Placed {
+interface ElementaryNode extends Placed {
   readonly kind: 'elementary';
   readonly dataType: DataTypeName;
   readonly stringLength: number;
@@ -109,7 +109,7 @@ export interface ArrayNode extends Placed {
   readonly contiguous: boolean;
 }
 
-export interface StructNode extends Placed {
+interface StructNode extends Placed {
   readonly kind: 'struct';
   readonly members: readonly { readonly name: string; readonly node: LayoutNode }[];
   /** The UDT it is an instance of (its declared name), when it is one. */

@@ -154,13 +154,14 @@ const HEADER_FLAGS = new Set(['KNOW_HOW_PROTECT', 'READ_ONLY', 'UNLINKED', 'DB_S
  * quoted name counts as optimized, TIA's default for a new block (and what
  * importing such a source creates on an S7-1500); a `DB n` block counts as
  * standard, since STEP 7 knows no other access. A file whose headers use a
- * number anywhere (`DB 10`, `UDT 1`) is a STEP 7 source: its symbolic
+ * number anywhere (`DB 10`, `UDT 1`), or named `*.awl` (STEP 7's
+ * extension for sources), is a STEP 7 source: its symbolic
  * `DATA_BLOCK "Tank"` blocks count as standard too.
  */
 export function parseBlockSource(source: SymbolSource): BlockDecl[] {
   const parser = new Parser(tokenize(sourceText(source.content), source.name), source.name);
   const blocks = parser.blocks();
-  const step7 = blocks.some((b) => b.number !== undefined);
+  const step7 = /\.awl$/i.test(source.name) || blocks.some((b) => b.number !== undefined);
   return blocks.map((b) => {
     if (b.kind !== 'db') return b;
     if (optimizedAttribute(b.attributes) !== undefined) return b;
@@ -407,7 +408,13 @@ class Parser {
     throw this.error(t, `expected STRUCT, or the UDT or FB that DATA_BLOCK ${name} is an instance of, found ${describe(t)}`);
   }
 
-  /** `UDT 5`, `FB 3`, `SFB 4` (or glued, `UDT5`) as a named type `UDT5` with its number; undefined when the next token is none. */
+  /**
+   * `UDT 5` (or glued, `UDT5`) as the named type `UDT5` with its number;
+   * `FB 3` / `SFB 4` as the named type `FB3` / `SFB4` WITHOUT a number,
+   * since a number on a named type means a UDT (model.ts) and an instance
+   * DB of FB 5 must not be laid out as UDT 5. Undefined when the next token
+   * is none of these.
+   */
   private numberedType(): TypeRef | undefined {
     const t = this.peek();
     const glued = /^(UDT|FB|SFB)(\d+)$/i.exec(t.text);
@@ -417,7 +424,7 @@ class Parser {
     const prefix = (glued ? glued[1]! : t.text).toUpperCase();
     const digits = glued ? glued[2]! : this.next().text;
     const { name, number } = this.numbered(prefix, digits, t);
-    return { kind: 'named', name, number, at: this.pos(t) };
+    return prefix === 'UDT' ? { kind: 'named', name, number, at: this.pos(t) } : { kind: 'named', name, at: this.pos(t) };
   }
 
   private skipBlock(end: string): void {
