@@ -73,7 +73,7 @@ function testFlow(url: string): object[] {
     { id: 'conn-sym', type: 'plcwire-connection', name: 'tank', url, symbolSources: SOURCES, dbNumbers: [{ block: 'Tank', db: 1 }] },
     { id: 'conn-new', type: 'plcwire-connection', name: 'new', url, symbolSources: [], dbNumbers: [] },
     read('read-sym', 40, 'conn-sym', [{ name: 'level', address: 'Tank.Level' }]),
-    read('read-badsym', 100, 'conn-sym', [{ name: 'x', address: 'Tank.Nope' }]),
+    read('read-badsym', 100, 'conn-sym', [{ name: 'x', address: 'Tank.Levl' }]),
     read('read-abs', 160, 'conn-sym', [{ name: 'raw', address: 'DB1.DBW4:INT' }]),
   ];
 }
@@ -353,7 +353,7 @@ describe('editor: tags by name in headless Chromium', function () {
         ),
       );
       expect(state['read-badsym'].triangle).to.equal(true);
-      expect(state['read-badsym'].errors).to.include('Tank.Nope');
+      expect(state['read-badsym'].errors).to.include('unknown symbol Tank.Levl; did you mean "Tank".Level?');
       for (const id of ['read-sym', 'read-abs', 'conn-sym']) expect(state[id].valid, `${id}: ${state[id].errors}`).to.equal(true);
       for (const id of ['read-sym', 'read-abs']) expect(state[id].triangle, `${id} has no red triangle`).to.equal(false);
       expect(errors).to.deep.equal([]);

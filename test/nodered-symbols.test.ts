@@ -95,11 +95,16 @@ interface Plc {
   db(): Buffer;
 }
 
+/**
+ * The simulated CPU: an S7-300 (slot 2), whose block functions tell DB
+ * lengths (an S7-1500 over PUT/GET cannot, and the client's layout check
+ * then reports layoutUnknown).
+ */
 async function startPlc(dbLength = TANK_LENGTH): Promise<Plc> {
   const memory = new lib.PlcMemory({ dataBlocks: { 1: dbLength, 2: 16 } });
-  const server = new lib.S7Server({ port: 0, memory, profile: 's7-1500' });
+  const server = new lib.S7Server({ port: 0, memory, profile: 's7-300' });
   const port: number = await server.listen();
-  return { server, memory, url: `s7://127.0.0.1:${port}?rack=0&slot=1&timeout=1000`, db: () => memory.area('DB', 1) as Buffer };
+  return { server, memory, url: `s7://127.0.0.1:${port}?rack=0&slot=2&timeout=1000`, db: () => memory.area('DB', 1) as Buffer };
 }
 
 /** The library's own message for sources that do not compile. */
@@ -202,9 +207,7 @@ describe('nodes: tags by name (symbol sources in the connection node)', function
   });
 
   for (const locale of LOCALES) {
-    it(`${locale}: a data block longer on the PLC than in its source shows the DB and both lengths on the users' status`, async () => {
-      await plc.server.close();
-      plc = await startPlc(TANK_LENGTH + 4);
+    it(`${locale}: a data block resized on the PLC shows the DB and both lengths on the users' status until it fits again`, async () => {
       const modules = [
         withCatalog(nodes.connection, catalogs.translator(locale, 'plcwire-connection')),
         withCatalog(nodes.read, catalogs.translator(locale, 'plcwire-read')),
@@ -219,35 +222,67 @@ describe('nodes: tags by name (symbol sources in the connection node)', function
         helperNode('statuses'),
       ]);
       const statuses = new Recorder(helper.getNode('statuses'));
-      await until(() => helper.getNode('read').linkState === 'connected', 4000, 'read node connected');
-      helper.getNode('read').receive({});
+      const connected = catalogText(locale, 'plcwire-read', 'plcwire.status.connected', {});
+      const shows = (text: string) => (m: any) => m.status.source.id === 'read' && m.status.text === text;
+      await statuses.next(shows(connected), 4000, `"${connected}" on the read node`);
+
+      // The PLC gets another DB1 (a download nobody compiled the sources for); the client checks again on its next connection.
+      plc.memory.createDataBlock(1, TANK_LENGTH + 4);
+      plc.server.dropConnections();
       const text = catalogText(locale, 'plcwire-read', 'plcwire.status.layoutMismatch', {
         db: 1,
         declared: TANK_LENGTH,
         actual: TANK_LENGTH + 4,
       });
-      const seen = await statuses.next((m) => m.status.source.id === 'read' && m.status.text === text, 6000, `"${text}" on the read node`);
-      expect(seen.status).to.include({ fill: 'red', shape: 'ring' });
       expect(text)
         .to.include('DB1')
         .and.to.include(String(TANK_LENGTH))
         .and.to.include(String(TANK_LENGTH + 4));
+      const seen = await statuses.next(shows(text), 6000, `"${text}" on the read node`);
+      expect(seen.status).to.include({ fill: 'red', shape: 'ring' });
       // The log names the block and both lengths in words.
       const warnings = helper
         .log()
         .getCalls()
         .map((c: any) => c.args[0])
-        .filter((e: any) => e && e.level === 30 && e.id === 'conn');
-      expect(warnings.map((w: any) => w.msg)).to.deep.include(
+        .filter((e: any) => e && e.level === 30 && e.id === 'conn')
+        .map((w: any) => w.msg);
+      expect(warnings).to.deep.equal([
         catalogText(locale, 'plcwire-connection', 'plcwire-connection.errors.layoutMismatch', {
           block: 'Tank',
           db: 1,
           declared: TANK_LENGTH,
           actual: TANK_LENGTH + 4,
         }),
-      );
+      ]);
+
+      // Downloaded back to the sources' length: a check on the same connection (no reconnect to clear
+      // anything) finds it fine, and the status says connected again.
+      plc.memory.createDataBlock(1, TANK_LENGTH);
+      statuses.skip();
+      await helper.getNode('conn').client.checkLayout();
+      await statuses.next(shows(connected), 6000, `"${connected}" again`);
     });
   }
+
+  it('a data block the PLC does not have shows as missing', async () => {
+    const modules = [
+      withCatalog(nodes.connection, catalogs.translator('en-US', 'plcwire-connection')),
+      withCatalog(nodes.read, catalogs.translator('en-US', 'plcwire-read')),
+      nodes.status,
+    ];
+    plc.memory.deleteDataBlock(1);
+    await helper.load(modules, [
+      TAB,
+      conn(plc.url),
+      readNode([{ name: 'level', address: 'Tank.Level' }]),
+      helperNode('out'),
+      watcher(),
+      helperNode('statuses'),
+    ]);
+    const text = catalogText('en-US', 'plcwire-read', 'plcwire.status.layoutMissing', { db: 1 });
+    await new Recorder(helper.getNode('statuses')).next((m) => m.status.source.id === 'read' && m.status.text === text, 6000, `"${text}"`);
+  });
 
   it('with strict layout, a read of the mismatching DB is refused with LAYOUT_MISMATCH', async () => {
     await plc.server.close();

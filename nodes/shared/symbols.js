@@ -10,8 +10,6 @@
 const crypto = require('node:crypto');
 const plc = require('../..');
 
-/** The file kinds the dialog offers (the library picks its reader by the extension). */
-const SOURCE_EXTENSIONS = Object.freeze(['.db', '.udt', '.scl', '.awl', '.sdf', '.asc', '.seq', '.csv', '.xlsx']);
 /** Compile errors given to the editor and written to the log at most. */
 const MAX_ERRORS = 50;
 /** Compiled tables kept for the editor's questions (the same sources are asked about while a dialog is open). */
@@ -162,10 +160,6 @@ function resolveAddress(address, parse, table, named) {
 }
 
 module.exports = {
-  SOURCE_EXTENSIONS,
-  sourcesOf,
-  dbNumbersOf,
-  hasSources,
   symbolsKey,
   compile,
   compileCached,
