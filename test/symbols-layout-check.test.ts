@@ -239,7 +239,15 @@ describe('layout check over FETCH/WRITE', function () {
       await client.connect();
       const event = await unknown;
       expect(event.error.code).to.equal('NOT_SUPPORTED');
-      expect(event.error.message).to.contain('the protocol has no service that tells the length of a data block');
+      expect(event.error.message).to.equal(
+        `${client.name}: FETCH/WRITE has no service that tells the length of a data block, so the symbols' layout cannot be ` +
+          'checked against the PLC: names are read and written at the offsets of the sources, unchecked (strictSymbols refuses nothing)',
+      );
+      expect(client.name).to.contain(String(fetchPort));
+      expect(event.checks.map((c) => [c.block, c.status, c.error?.message])).to.deep.equal([
+        ['Tank', 'unknown', event.error.message],
+        ['Recipe', 'unknown', event.error.message],
+      ]);
       server.memory.area('DB', 2)!.writeInt16BE(4, 4);
       expect(await client.read(['"Recipe".Mode'])).to.deep.equal({ '"Recipe".Mode': 4 });
     } finally {
