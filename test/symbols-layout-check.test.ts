@@ -5,6 +5,7 @@
  * strictSymbols refuses names in a block that does not match.
  */
 import { expect } from 'chai';
+import * as net from 'node:net';
 import { PlcError, TagErrors } from '../lib/errors';
 import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer } from '../lib/fetchwrite/server';
@@ -13,6 +14,7 @@ import { S7Server, type S7RequestEvent } from '../lib/s7/server';
 import type { LayoutMismatchEvent, LayoutOkEvent, LayoutUnknownEvent } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';
 import { symbolTable, type Block } from './support/symbol-table';
+import { SNAP7 } from './fixtures/s7-userdata';
 import { settle, until, waitFor } from './support/wait';
 
 const FAST = { backoff: { initialDelay: 20, maxDelay: 100, factor: 2, jitter: 0 } };
@@ -222,6 +224,113 @@ describe('layout check of the symbol table against the S7 simulator', function (
     } finally {
       await plain.close();
     }
+  });
+});
+
+/**
+ * A TCP proxy in front of `port` that answers the block info request of DB
+ * `db` itself with `answer` (its PDU reference set to the request's) and
+ * forwards everything else; `asked` counts those requests.
+ */
+async function blockInfoProxy(
+  port: number,
+  db: number,
+  answer: Buffer,
+): Promise<{ port: number; asked: () => number; close: () => Promise<void> }> {
+  const request = Buffer.from(`0A${String(db).padStart(5, '0')}A`, 'latin1');
+  const sockets = new Set<net.Socket>();
+  let asked = 0;
+  const proxy = net.createServer((client) => {
+    const plc = net.connect(port, '127.0.0.1');
+    for (const s of [client, plc]) {
+      sockets.add(s);
+      s.on('error', () => undefined);
+      s.on('close', () => (client.destroy(), plc.destroy()));
+    }
+    plc.on('data', (chunk) => client.write(chunk));
+    let pending = Buffer.alloc(0);
+    client.on('data', (chunk) => {
+      pending = Buffer.concat([pending, chunk]);
+      while (pending.length >= 4 && pending.length >= pending.readUInt16BE(2)) {
+        const frame = pending.subarray(0, pending.readUInt16BE(2));
+        pending = pending.subarray(frame.length);
+        // A userdata (ROSCTR 7) request whose data is '0' 'A' (DB), the block number in 5 digits, 'A'.
+        if (frame[8] === 0x07 && frame.subarray(frame.length - 8).equals(request)) {
+          asked++;
+          const reply = Buffer.from(answer);
+          frame.copy(reply, 11, 11, 13);
+          client.write(reply);
+        } else plc.write(frame);
+      }
+    });
+  });
+  await new Promise<void>((resolve) => proxy.listen(0, '127.0.0.1', resolve));
+  return {
+    port: (proxy.address() as net.AddressInfo).port,
+    asked: () => asked,
+    close: async () => {
+      for (const s of sockets) s.destroy();
+      await new Promise((resolve) => proxy.close(resolve));
+    },
+  };
+}
+
+describe("layout check against snap7's answer to block info of a DB it does not have", function () {
+  this.timeout(10000);
+  let server: S7Server;
+  let proxy: Awaited<ReturnType<typeof blockInfoProxy>>;
+  let client: S7Client;
+  // DB 2 is listed (so the check asks for it), and its block info is answered as snap7 answers a DB it does not have.
+  const connect = async (answer: Buffer) => {
+    server = new S7Server({ port: 0, profile: 's7-300', layout: { dbs: { 1: 20, 2: 8 } } });
+    await server.listen();
+    proxy = await blockInfoProxy(server.port, 2, answer);
+    client = new S7Client(parseUrl(`s7://127.0.0.1:${proxy.port}?rack=0&slot=2&timeout=1500&strictSymbols=true`) as S7Endpoint, {
+      ...FAST,
+      symbols: TABLE,
+    });
+  };
+
+  afterEach(async () => {
+    await client.close();
+    await proxy.close();
+    await server.close();
+  });
+
+  it("snap7's frame (78 bytes beyond its S7 lengths) drops the link with PROTOCOL_ERROR once; the block is then unknown and not asked again", async () => {
+    await connect(SNAP7.blockInfoMissingAfterAnswer);
+    const seen = record(client);
+    const dropped = waitFor<PlcError>(client, 'disconnected');
+    await client.connect();
+    const err = await dropped;
+    expect(err.code).to.equal('PROTOCOL_ERROR');
+    expect(err.message).to.contain('S7 lengths (header 10 + parameters 12 + data 4) do not match the PDU (104)');
+    await waitFor(client, 'connected');
+    // One layoutUnknown per connection: the one the frame dropped, and the next, which does not ask for the block again.
+    await until(() => seen.length === 2, 3000, 'layoutUnknown on both connections');
+    for (const { name, event } of seen) {
+      expect(name).to.equal('layoutUnknown');
+      expect((event as LayoutUnknownEvent).checks.map((c) => [c.db, c.status, c.error?.code])).to.deep.equal([
+        [2, 'unknown', 'PROTOCOL_ERROR'],
+      ]);
+    }
+    expect(proxy.asked()).to.equal(1);
+    expect(await client.read(['"Recipe".Mode', '"Tank".Level'])).to.deep.equal({ '"Recipe".Mode': 0, '"Tank".Level': 0 });
+    expect((await client.checkLayout()).map((c) => [c.db, c.status])).to.deep.equal([
+      [1, 'ok'],
+      [2, 'unknown'],
+    ]);
+    expect(proxy.asked()).to.equal(1);
+  });
+
+  it('the same error answer framed as its S7 header says reads as no such block: a mismatch with actual null, the link stays up', async () => {
+    await connect(SNAP7.blockInfoMissingWellFormed);
+    const disconnects: unknown[] = [];
+    client.on('disconnected', (e: unknown) => disconnects.push(e));
+    const mismatch = waitFor<LayoutMismatchEvent>(client, 'layoutMismatch');
+    await client.connect();
+    expect(await mismatch).to.deep.equal({ block: 'Recipe', db: 2, declared: 8, actual: null });
+    expect([client.state, disconnects.length, proxy.asked()]).to.deep.equal(['connected', 0, 1]);
   });
 });
 

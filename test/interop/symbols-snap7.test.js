@@ -4,9 +4,37 @@
 // snap7's own client; our client reads and writes them by name, and checks
 // their lengths with snap7's block info.
 const { expect } = require('chai');
+const net = require('node:net');
+const path = require('node:path');
 const support = require('./support');
 const { startSnap7Server, snap7Client, eventWithin } = support;
 const { symbolTable } = require('../../dist/test/support/symbol-table.js');
+const dist = (file) => require(path.resolve(__dirname, '../../dist', file));
+
+/** A bare ISO-on-TCP connection to `port` (COTP connect, setup communication): `ask(frame)` resolves the next answer, as sent. */
+async function rawS7(port) {
+  const { encodeConnectionRequest, encodeSetupCommunication } = dist('lib/s7/codec/index.js');
+  const socket = net.connect(port, '127.0.0.1');
+  await new Promise((resolve, reject) => socket.once('connect', resolve).once('error', reject));
+  let pending = Buffer.alloc(0);
+  const waiting = [];
+  socket.on('data', (chunk) => {
+    pending = Buffer.concat([pending, chunk]);
+    while (pending.length >= 4 && pending.length >= pending.readUInt16BE(2)) {
+      const n = pending.readUInt16BE(2);
+      waiting.shift()?.(Buffer.from(pending.subarray(0, n)));
+      pending = pending.subarray(n);
+    }
+  });
+  const ask = (frame) =>
+    new Promise((resolve) => {
+      waiting.push(resolve);
+      socket.write(frame);
+    });
+  await ask(encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x0100, calledTsap: 0x0101, tpduSize: 0x0a }));
+  await ask(encodeSetupCommunication(1, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 480 }));
+  return { ask, close: () => socket.destroy() };
+}
 
 /** DB1 "Tank": Level REAL 0, Count INT 4, Motor { Run 6.0, Fault 6.1, Speed INT 8 }, Temps REAL[3] 10, Steps[0..1] { Temp INT, On BOOL } 22. */
 const TANK = {
@@ -135,6 +163,30 @@ describe('interop: reading and writing by symbol against snap7 server', function
     expect(checks[0]).to.deep.equal({ block: 'Tank', db: 1, declared: 28, actual: 30, status: 'mismatch' });
     const r = (await plc.readDetailed(['"Tank".Level', 'DB1.DBD0:REAL']))['"Tank".Level'];
     expect(r.ok === false && r.error.code).to.equal('LAYOUT_MISMATCH');
+  });
+
+  it("snap7's answer to block info of a DB it does not have, as recorded in test/fixtures/s7-userdata.ts: a TPKT frame 78 bytes longer than its S7 lengths, its header left over from earlier answers", async () => {
+    const { encodeUserdataRequest, decodeUserdata } = dist('lib/s7/codec/index.js');
+    const { encodeBlockInfoRequest, decodeBlockInfo } = dist('lib/s7/blocks.js');
+    const { SNAP7 } = dist('test/fixtures/s7-userdata.js');
+    const blockInfo = (db) => encodeUserdataRequest(3, 3, encodeBlockInfoRequest(0x41, db));
+    const raw = await rawS7(peer.port);
+    try {
+      const first = await raw.ask(blockInfo(9));
+      // What snap7 writes on that path: the S7 data length 4, the error D2 09, the item 0A 00 0000, then 78 zeros.
+      expect([first.length, first.readUInt16BE(2), first.readUInt16BE(15), first.readUInt16BE(27)]).to.deep.equal([111, 111, 4, 0xd209]);
+      expect(first.subarray(29).equals(Buffer.concat([Buffer.from('0a000000', 'hex'), Buffer.alloc(78)]))).to.equal(true);
+      // The rest of its header is left from earlier answers of the process (the fixture is the first of a fresh one): never a frame.
+      expect(() => decodeUserdata(first)).to.throw(/S7 protocol id|S7 lengths/);
+      expect(first.subarray(29).equals(SNAP7.blockInfoMissingFirst.subarray(29))).to.equal(true);
+      const known = await raw.ask(blockInfo(2));
+      expect(decodeBlockInfo(decodeUserdata(known).data)).to.deep.include({ type: 'DB', number: 2, mc7Size: 8 });
+      const after = await raw.ask(blockInfo(9));
+      expect(after.toString('hex')).to.equal(SNAP7.blockInfoMissingAfterAnswer.toString('hex'));
+      expect(() => decodeUserdata(after)).to.throw(/S7 lengths \(header 10 \+ parameters 12 \+ data 4\) do not match the PDU \(104\)/);
+    } finally {
+      raw.close();
+    }
   });
 
   it("a DB snap7 does not have: a mismatch with actual null from snap7's block list, asked without its block info; the link stays up", async () => {
