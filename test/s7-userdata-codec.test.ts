@@ -41,7 +41,7 @@ import {
   parseSzl,
 } from '../lib/s7/szl';
 import { show } from './fixtures/s7';
-import { CONTROL, CPU315, UD } from './fixtures/s7-userdata';
+import { CONTROL, CPU315, SNAP7, UD } from './fixtures/s7-userdata';
 
 const list = (id: number, index: number, recordLength: number, bytes: Buffer) => ({
   id,
@@ -332,6 +332,27 @@ describe('S7 userdata codec', () => {
       expect(decodeLoadBlock(block)).to.deep.include({ type: 'DB', number: 7 });
       expect(show(decodeLoadBlock(block).code)).to.equal(show(code));
       expect(() => decodeLoadBlock(block.subarray(0, 40))).to.throw(ProtocolError, /announces 10 bytes/);
+    });
+
+    it("snap7's answer to block info of a DB it does not have is malformed: a TPKT frame 78 bytes longer than its S7 lengths, and with no answer before it not even an S7 header", () => {
+      const after = SNAP7.blockInfoMissingAfterAnswer;
+      const first = SNAP7.blockInfoMissingFirst;
+      expect([after.length, after.readUInt16BE(2), first.readUInt16BE(2)]).to.deep.equal([111, 111, 111]);
+      // The S7 header counts 10 + 12 + 4 bytes of the 104 after the COTP header; the rest is zeros.
+      expect(after.subarray(33).equals(Buffer.alloc(78))).to.equal(true);
+      expect(() => decodeUserdata(after)).to.throw(
+        ProtocolError,
+        'S7 lengths (header 10 + parameters 12 + data 4) do not match the PDU (104)',
+      );
+      expect(() => decodeUserdata(first)).to.throw(ProtocolError, 'S7 protocol id 0x0, expected 0x32');
+      // The same answer framed as its S7 header says is a legitimate error answer: block not found.
+      const framed = Buffer.from(after.subarray(0, 33));
+      framed.writeUInt16BE(33, 2);
+      expect(show(framed)).to.equal(show(SNAP7.blockInfoMissingWellFormed));
+      const u = decodeUserdata(SNAP7.blockInfoMissingWellFormed);
+      expect(u).to.deep.include({ returnCode: 0x0a, transportSize: 0 });
+      expect(u.params).to.deep.include({ type: 8, group: 3, subfunction: 3, errorCode: 0xd209, lastDataUnit: true });
+      expect(serviceError(u.params.errorCode!, 'x').code).to.equal('OBJECT_DOES_NOT_EXIST');
     });
   });
 

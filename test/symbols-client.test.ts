@@ -1,7 +1,8 @@
 /**
  * Reading and writing by name (docs/symbols.md, "Reading and writing by
- * name") end to end: a symbol table given to the client, the S7 and
- * FETCH/WRITE simulators holding the DBs at the offsets the table declares.
+ * name") end to end: a symbol table compiled by compileSymbols from the
+ * sources of test/fixtures/symbols/client/, given to the client; the S7 and
+ * FETCH/WRITE simulators built from the same sources.
  */
 import { expect } from 'chai';
 import { createClient } from '../lib/connect';
@@ -10,64 +11,25 @@ import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer, type FetchWriteRequestEvent } from '../lib/fetchwrite/server';
 import { S7Client } from '../lib/s7/client';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
-import { compileDeclarations } from '../lib/symbols/compile';
-import { literalValue } from '../lib/symbols/literals';
+import { compileSymbols } from '../lib/symbols';
 import type { SymbolTable } from '../lib/symbols/model';
-import { parseBlockSource } from '../lib/symbols/source-parser';
 import type { PlcData, PlcStruct } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';
-import { symbolTable, type Block } from './support/symbol-table';
+import { compileClientSources } from './support/symbol-sources';
 
 const FAST = { backoff: { initialDelay: 20, maxDelay: 100, factor: 2, jitter: 0 } };
 
-/** DB1 "Tank" (40 bytes) and DB2 "Recipe" (8 bytes), laid out as standard access places them. */
-export const TANK: Block = {
-  name: 'Tank',
-  db: 1,
-  length: 40,
-  members: [
-    { name: 'Level', type: 'REAL', byte: 0 },
-    { name: 'Count', type: 'INT', byte: 4 },
-    {
-      name: 'Motor',
-      byte: 6,
-      size: 4,
-      struct: [
-        { name: 'Run', type: 'BOOL', byte: 6, bit: 0 },
-        { name: 'Fault', type: 'BOOL', byte: 6, bit: 1 },
-        { name: 'Speed', type: 'INT', byte: 8 },
-      ],
-    },
-    { name: 'Temps', type: 'REAL', byte: 10, count: 3 },
-    { name: 'Label', type: 'STRING', byte: 22, stringLength: 8 },
-    {
-      name: 'Steps',
-      byte: 32,
-      size: 4,
-      count: 2,
-      structArray: [
-        { name: 'Temp', type: 'INT', byte: 32 },
-        { name: 'On', type: 'BOOL', byte: 34, bit: 0 },
-      ],
-    },
-  ],
-};
+/** DB1 "Tank" (Tank.db with the UDTs "Motor" and "Step", 40 bytes), DB2 "Recipe" (Recipe.awl, numbered by Symbols.asc, 8 bytes). */
+const PLANT = ['Motor.udt', 'Step.udt', 'Tank.db', 'Recipe.awl', 'Symbols.asc'];
+/** DB3, a block whose name reads as an absolute address (flag word 10). */
+const WITH_MW10 = [...PLANT, 'MW10.db'];
 
-export const RECIPE: Block = {
-  name: 'Recipe',
-  db: 2,
-  length: 8,
-  members: [
-    { name: 'Setpoint', type: 'REAL', byte: 0 },
-    { name: 'Mode', type: 'INT', byte: 4 },
-    { name: 'Spare', type: 'INT', byte: 6 },
-  ],
-};
-
-/** A block whose name reads as an absolute address (flag word 10). */
-const MW10: Block = { name: 'MW10', db: 3, length: 2, members: [{ name: 'Word', type: 'WORD', byte: 0 }] };
-
-/** Fills DB1/DB2 of a memory with known values at the table's offsets. */
+/**
+ * Fills DB1/DB2 of a memory with known values at the offsets the layout
+ * rules give by hand (docs/symbols.md): Level REAL 0, Count INT 4, Motor at
+ * 6 (Run 6.0, Fault 6.1, Speed INT 8), Temps REAL[3] 10, Label STRING[8]
+ * 22, Steps[0..1] of "Step" at 32 and 36 (Temp INT, On BOOL at +2).
+ */
 function fill(db1: Buffer, db2: Buffer): void {
   db1.writeFloatBE(12.5, 0);
   db1.writeInt16BE(-7, 4);
@@ -111,10 +73,10 @@ describe('reading and writing by symbol (S7 simulator)', function () {
   const writes = () => requests.filter((r) => r.kind === 'write');
 
   beforeEach(async () => {
-    server = new S7Server({ port: 0, profile: 's7-300', layout: { dbs: { 1: 40, 2: 8, 3: 2 } } });
+    table = compileClientSources(...WITH_MW10);
+    server = new S7Server({ port: 0, profile: 's7-300', symbols: table });
     await server.listen();
     fill(server.memory.area('DB', 1)!, server.memory.area('DB', 2)!);
-    table = symbolTable([TANK, RECIPE, MW10]);
     client = new S7Client(parseUrl(`s7://127.0.0.1:${server.port}?rack=0&slot=2&timeout=1500`) as S7Endpoint, { ...FAST, symbols: table });
     await client.connect();
     requests = [];
@@ -171,6 +133,9 @@ describe('reading and writing by symbol (S7 simulator)', function () {
     const tank = (await client.read<PlcStruct>(['"Tank"']))['"Tank"']!;
     expect(reads().map((r) => r.items)).to.deep.equal([1]);
     expect(tank).to.deep.equal({ Level: 12.5, Count: -7, Motor: MOTOR, Temps: [1.5, 2.5, 3.5], Label: 'abc', Steps: STEPS });
+    // The block named as the table's names are: any case, quotes optional; its bytes are the declared length.
+    expect((await client.read<PlcData>(['tank'])).tank).to.deep.equal(tank);
+    expect(client.tag('"Recipe"')).to.include({ dbNumber: 2, byteOffset: 0, count: 8 });
   });
 
   it('a struct read equals the reads of its members', async () => {
@@ -298,12 +263,13 @@ describe('reading and writing by symbol (FETCH/WRITE simulator)', function () {
   let jobs: FetchWriteRequestEvent[];
 
   beforeEach(async () => {
-    server = new FetchWriteServer({ port: 0, layout: { dataBlocks: { 1: 40, 2: 8 } } });
+    const symbols = compileClientSources(...PLANT);
+    server = new FetchWriteServer({ port: 0, symbols });
     const { fetchPort } = await server.listen();
     fill(server.memory.area('DB', 1)!, server.memory.area('DB', 2)!);
     client = new FetchWriteClient(parseUrl(`fetchwrite://127.0.0.1?port=${fetchPort}&timeout=1500`) as FetchWriteEndpoint, {
       ...FAST,
-      symbols: symbolTable([TANK, RECIPE]),
+      symbols,
     });
     await client.connect();
     jobs = [];
@@ -339,7 +305,7 @@ describe('symbols and the protocols', () => {
   it('freeport refuses a symbol table, saying why', () => {
     let err: unknown;
     try {
-      createClient('freeport+tcp://127.0.0.1:4001', { symbols: symbolTable([RECIPE]) });
+      createClient('freeport+tcp://127.0.0.1:4001', { symbols: compileClientSources('Recipe.awl', 'Symbols.asc') });
     } catch (e) {
       err = e;
     }
@@ -349,8 +315,9 @@ describe('symbols and the protocols', () => {
   });
 
   it('createClient passes symbols and the URL strictSymbols to S7 and FETCH/WRITE clients', async () => {
-    const s7 = createClient('s7://127.0.0.1:1?strictSymbols=true', { symbols: symbolTable([RECIPE]) });
-    const fw = createClient('fetchwrite://127.0.0.1?port=1', { symbols: symbolTable([RECIPE]) });
+    const symbols = compileClientSources('Recipe.awl', 'Symbols.asc');
+    const s7 = createClient('s7://127.0.0.1:1?strictSymbols=true', { symbols });
+    const fw = createClient('fetchwrite://127.0.0.1?port=1', { symbols });
     expect(s7.tag('"Recipe".Mode')).to.include({ address: '"Recipe".Mode', area: 'DB', dbNumber: 2, byteOffset: 4, type: 'INT' });
     expect(fw.tag('"Recipe".Setpoint')).to.include({ dbNumber: 2, byteOffset: 0, type: 'REAL' });
     expect((s7 as unknown as { strictSymbols: boolean }).strictSymbols).to.equal(true);
@@ -385,8 +352,8 @@ describe('reading and writing by symbol: a table compiled from TIA sources (S7 s
   ].join('\n');
 
   it('reads and writes members, UDT instances and arrays of them at the offsets the layout gives; the layout check matches', async () => {
-    const table = compileDeclarations(parseBlockSource({ name: 'Tank.db', content: SOURCE }), [], { db: { Tank: 1 } }, literalValue);
-    const server = new S7Server({ port: 0, profile: 's7-300', layout: { dbs: { 1: table.blocks[0]!.length } } });
+    const table = compileSymbols([{ name: 'Tank.db', content: SOURCE }], { db: { Tank: 1 } });
+    const server = new S7Server({ port: 0, profile: 's7-300', symbols: table });
     await server.listen();
     const client = new S7Client(parseUrl(`s7://127.0.0.1:${server.port}?rack=0&slot=2&strictSymbols=true`) as S7Endpoint, {
       symbols: table,

@@ -5,6 +5,7 @@
  * strictSymbols refuses names in a block that does not match.
  */
 import { expect } from 'chai';
+import * as net from 'node:net';
 import { PlcError, TagErrors } from '../lib/errors';
 import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer } from '../lib/fetchwrite/server';
@@ -12,22 +13,14 @@ import { S7Client } from '../lib/s7/client';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
 import type { LayoutMismatchEvent, LayoutOkEvent, LayoutUnknownEvent } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';
-import { symbolTable, type Block } from './support/symbol-table';
+import { compileClientSources } from './support/symbol-sources';
+import { SNAP7 } from './fixtures/s7-userdata';
 import { settle, until, waitFor } from './support/wait';
 
 const FAST = { backoff: { initialDelay: 20, maxDelay: 100, factor: 2, jitter: 0 } };
 
-const TANK: Block = {
-  name: 'Tank',
-  db: 1,
-  length: 20,
-  members: [
-    { name: 'Level', type: 'REAL', byte: 0 },
-    { name: 'Count', type: 'INT', byte: 4 },
-  ],
-};
-const RECIPE: Block = { name: 'Recipe', db: 2, length: 8, members: [{ name: 'Mode', type: 'INT', byte: 4 }] };
-const TABLE = symbolTable([TANK, RECIPE]);
+/** DB1 "Tank" (40 bytes) and DB2 "Recipe" (8 bytes), compiled from test/fixtures/symbols/client/. */
+const TABLE = compileClientSources('Motor.udt', 'Step.udt', 'Tank.db', 'Recipe.awl', 'Symbols.asc');
 
 async function failure(p: Promise<unknown>): Promise<PlcError> {
   const outcome = await p.then(
@@ -59,7 +52,9 @@ describe('layout check of the symbol table against the S7 simulator', function (
   };
 
   beforeEach(async () => {
-    server = new S7Server({ port: 0, profile: 's7-300', layout: { dbs: { 1: 20, 2: 8, 3: 16 } } });
+    // The blocks of the sources, and DB3 the sources do not declare.
+    server = new S7Server({ port: 0, profile: 's7-300', symbols: TABLE });
+    server.memory.createDataBlock(3, 16);
     await server.listen();
     server.memory.area('DB', 1)!.writeFloatBE(12.5, 0);
     server.memory.area('DB', 1)!.writeInt16BE(3, 4);
@@ -82,24 +77,24 @@ describe('layout check of the symbol table against the S7 simulator', function (
     ]);
     const checks = await client.checkLayout();
     expect(checks).to.deep.equal([
-      { block: 'Tank', db: 1, declared: 20, actual: 20, status: 'ok' },
+      { block: 'Tank', db: 1, declared: 40, actual: 40, status: 'ok' },
       { block: 'Recipe', db: 2, declared: 8, actual: 8, status: 'ok' },
     ]);
     expect(seen.map((s) => s.name)).to.deep.equal(['layoutOk']);
   });
 
   it('a block of another length: layoutMismatch; without strictSymbols the names still read', async () => {
-    server.memory.createDataBlock(1, 24);
+    server.memory.createDataBlock(1, 44);
     server.memory.area('DB', 1)!.writeFloatBE(12.5, 0);
     client = open();
     const mismatch = waitFor<LayoutMismatchEvent>(client, 'layoutMismatch');
     await client.connect();
-    expect(await mismatch).to.deep.equal({ block: 'Tank', db: 1, declared: 20, actual: 24 });
+    expect(await mismatch).to.deep.equal({ block: 'Tank', db: 1, declared: 40, actual: 44 });
     expect(await client.read(['"Tank".Level'])).to.deep.equal({ '"Tank".Level': 12.5 });
   });
 
   it('strictSymbols: names in a block that does not match fail with LAYOUT_MISMATCH; its addresses and other blocks stay allowed', async () => {
-    server.memory.createDataBlock(1, 24);
+    server.memory.createDataBlock(1, 44);
     client = open('&strictSymbols=true');
     await client.connect();
     // No wait for the event: a read by name waits for the check under way.
@@ -110,7 +105,7 @@ describe('layout check of the symbol table against the S7 simulator', function (
     expect(level.error.code).to.equal('LAYOUT_MISMATCH');
     expect(level.error.tag).to.equal('"Tank".Level');
     expect(level.error.message).to.equal(
-      '"Tank".Level: DB1 "Tank": the PLC\'s block is 24 bytes, the sources declare 20; recompile the sources or download the block',
+      '"Tank".Level: DB1 "Tank": the PLC\'s block is 44 bytes, the sources declare 40; recompile the sources or download the block',
     );
     expect(results['DB1.DBW4']).to.deep.equal({ ok: true, value: 0 });
     expect(results['"Recipe".Mode']).to.deep.equal({ ok: true, value: 0 });
@@ -140,18 +135,18 @@ describe('layout check of the symbol table against the S7 simulator', function (
     const seen = record(client);
     await client.connect();
     await until(() => seen.length === 1, 3000, 'layoutOk');
-    server.memory.createDataBlock(1, 22);
+    server.memory.createDataBlock(1, 42);
     // Still the connection the check found in order: nothing refused until checked again.
     expect((await client.readDetailed(['"Tank".Level']))['"Tank".Level']!.ok).to.equal(true);
     const checks = await client.checkLayout();
-    expect(checks[0]).to.deep.equal({ block: 'Tank', db: 1, declared: 20, actual: 22, status: 'mismatch' });
+    expect(checks[0]).to.deep.equal({ block: 'Tank', db: 1, declared: 40, actual: 42, status: 'mismatch' });
     await client.checkLayout();
     expect(seen.map((s) => s.name)).to.deep.equal(['layoutOk', 'layoutMismatch']);
     const again = waitFor<LayoutMismatchEvent>(client, 'layoutMismatch');
     server.faults.dropConnections();
-    expect(await again).to.deep.equal({ block: 'Tank', db: 1, declared: 20, actual: 22 });
+    expect(await again).to.deep.equal({ block: 'Tank', db: 1, declared: 40, actual: 42 });
     expect((await client.readDetailed(['"Tank".Level']))['"Tank".Level']!.ok).to.equal(false);
-    server.memory.createDataBlock(1, 20);
+    server.memory.createDataBlock(1, 40);
     const ok = waitFor<LayoutOkEvent>(client, 'layoutOk');
     await client.checkLayout();
     await ok;
@@ -161,7 +156,8 @@ describe('layout check of the symbol table against the S7 simulator', function (
 
   it('a CPU without block functions (S7-1500 over PUT/GET): layoutUnknown once, nothing refused even with strictSymbols', async () => {
     await server.close();
-    server = new S7Server({ port: 0, profile: 's7-1500', layout: { dbs: { 1: 24, 2: 8 } } });
+    server = new S7Server({ port: 0, profile: 's7-1500', symbols: TABLE });
+    server.memory.createDataBlock(1, 44);
     await server.listen();
     const userdata: S7RequestEvent[] = [];
     server.on('request', (r: S7RequestEvent) => r.kind === 'userdata' && userdata.push(r));
@@ -225,10 +221,117 @@ describe('layout check of the symbol table against the S7 simulator', function (
   });
 });
 
+/**
+ * A TCP proxy in front of `port` that answers the block info request of DB
+ * `db` itself with `answer` (its PDU reference set to the request's) and
+ * forwards everything else; `asked` counts those requests.
+ */
+async function blockInfoProxy(
+  port: number,
+  db: number,
+  answer: Buffer,
+): Promise<{ port: number; asked: () => number; close: () => Promise<void> }> {
+  const request = Buffer.from(`0A${String(db).padStart(5, '0')}A`, 'latin1');
+  const sockets = new Set<net.Socket>();
+  let asked = 0;
+  const proxy = net.createServer((client) => {
+    const plc = net.connect(port, '127.0.0.1');
+    for (const s of [client, plc]) {
+      sockets.add(s);
+      s.on('error', () => undefined);
+      s.on('close', () => (client.destroy(), plc.destroy()));
+    }
+    plc.on('data', (chunk) => client.write(chunk));
+    let pending = Buffer.alloc(0);
+    client.on('data', (chunk) => {
+      pending = Buffer.concat([pending, chunk]);
+      while (pending.length >= 4 && pending.length >= pending.readUInt16BE(2)) {
+        const frame = pending.subarray(0, pending.readUInt16BE(2));
+        pending = pending.subarray(frame.length);
+        // A userdata (ROSCTR 7) request whose data is '0' 'A' (DB), the block number in 5 digits, 'A'.
+        if (frame[8] === 0x07 && frame.subarray(frame.length - 8).equals(request)) {
+          asked++;
+          const reply = Buffer.from(answer);
+          frame.copy(reply, 11, 11, 13);
+          client.write(reply);
+        } else plc.write(frame);
+      }
+    });
+  });
+  await new Promise<void>((resolve) => proxy.listen(0, '127.0.0.1', resolve));
+  return {
+    port: (proxy.address() as net.AddressInfo).port,
+    asked: () => asked,
+    close: async () => {
+      for (const s of sockets) s.destroy();
+      await new Promise((resolve) => proxy.close(resolve));
+    },
+  };
+}
+
+describe("layout check against snap7's answer to block info of a DB it does not have", function () {
+  this.timeout(10000);
+  let server: S7Server;
+  let proxy: Awaited<ReturnType<typeof blockInfoProxy>>;
+  let client: S7Client;
+  // DB 2 is listed (so the check asks for it), and its block info is answered as snap7 answers a DB it does not have.
+  const connect = async (answer: Buffer) => {
+    server = new S7Server({ port: 0, profile: 's7-300', symbols: TABLE });
+    await server.listen();
+    proxy = await blockInfoProxy(server.port, 2, answer);
+    client = new S7Client(parseUrl(`s7://127.0.0.1:${proxy.port}?rack=0&slot=2&timeout=1500&strictSymbols=true`) as S7Endpoint, {
+      ...FAST,
+      symbols: TABLE,
+    });
+  };
+
+  afterEach(async () => {
+    await client.close();
+    await proxy.close();
+    await server.close();
+  });
+
+  it("snap7's frame (78 bytes beyond its S7 lengths) drops the link with PROTOCOL_ERROR once; the block is then unknown and not asked again", async () => {
+    await connect(SNAP7.blockInfoMissingAfterAnswer);
+    const seen = record(client);
+    const dropped = waitFor<PlcError>(client, 'disconnected');
+    await client.connect();
+    const err = await dropped;
+    expect(err.code).to.equal('PROTOCOL_ERROR');
+    expect(err.message).to.contain('S7 lengths (header 10 + parameters 12 + data 4) do not match the PDU (104)');
+    await waitFor(client, 'connected');
+    // One layoutUnknown per connection: the one the frame dropped, and the next, which does not ask for the block again.
+    await until(() => seen.length === 2, 3000, 'layoutUnknown on both connections');
+    for (const { name, event } of seen) {
+      expect(name).to.equal('layoutUnknown');
+      expect((event as LayoutUnknownEvent).checks.map((c) => [c.db, c.status, c.error?.code])).to.deep.equal([
+        [2, 'unknown', 'PROTOCOL_ERROR'],
+      ]);
+    }
+    expect(proxy.asked()).to.equal(1);
+    expect(await client.read(['"Recipe".Mode', '"Tank".Level'])).to.deep.equal({ '"Recipe".Mode': 0, '"Tank".Level': 0 });
+    expect((await client.checkLayout()).map((c) => [c.db, c.status])).to.deep.equal([
+      [1, 'ok'],
+      [2, 'unknown'],
+    ]);
+    expect(proxy.asked()).to.equal(1);
+  });
+
+  it('the same error answer framed as its S7 header says reads as no such block: a mismatch with actual null, the link stays up', async () => {
+    await connect(SNAP7.blockInfoMissingWellFormed);
+    const disconnects: unknown[] = [];
+    client.on('disconnected', (e: unknown) => disconnects.push(e));
+    const mismatch = waitFor<LayoutMismatchEvent>(client, 'layoutMismatch');
+    await client.connect();
+    expect(await mismatch).to.deep.equal({ block: 'Recipe', db: 2, declared: 8, actual: null });
+    expect([client.state, disconnects.length, proxy.asked()]).to.deep.equal(['connected', 0, 1]);
+  });
+});
+
 describe('layout check over FETCH/WRITE', function () {
   this.timeout(10000);
   it('FETCH/WRITE cannot tell block lengths: layoutUnknown, and strictSymbols refuses nothing', async () => {
-    const server = new FetchWriteServer({ port: 0, layout: { dataBlocks: { 1: 20, 2: 8 } } });
+    const server = new FetchWriteServer({ port: 0, symbols: TABLE });
     const { fetchPort } = await server.listen();
     const client = new FetchWriteClient(
       parseUrl(`fetchwrite://127.0.0.1?port=${fetchPort}&timeout=1500&strictSymbols=true`) as FetchWriteEndpoint,
@@ -239,7 +342,15 @@ describe('layout check over FETCH/WRITE', function () {
       await client.connect();
       const event = await unknown;
       expect(event.error.code).to.equal('NOT_SUPPORTED');
-      expect(event.error.message).to.contain('the protocol has no service that tells the length of a data block');
+      expect(event.error.message).to.equal(
+        `${client.name}: FETCH/WRITE has no service that tells the length of a data block, so the symbols' layout cannot be ` +
+          'checked against the PLC: names are read and written at the offsets of the sources, unchecked (strictSymbols refuses nothing)',
+      );
+      expect(client.name).to.contain(String(fetchPort));
+      expect(event.checks.map((c) => [c.block, c.status, c.error?.message])).to.deep.equal([
+        ['Tank', 'unknown', event.error.message],
+        ['Recipe', 'unknown', event.error.message],
+      ]);
       server.memory.area('DB', 2)!.writeInt16BE(4, 4);
       expect(await client.read(['"Recipe".Mode'])).to.deep.equal({ '"Recipe".Mode': 4 });
     } finally {

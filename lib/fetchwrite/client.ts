@@ -125,6 +125,9 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     prepareRead: (tags) => this.prepareRead(tags),
     readTags: (session, tags, signal, prepared) => this.readTags(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
+    noBlockLength:
+      `${this.name}: FETCH/WRITE has no service that tells the length of a data block, so the symbols' layout cannot be ` +
+      'checked against the PLC: names are read and written at the offsets of the sources, unchecked (strictSymbols refuses nothing)',
     isLinkError: endsRequest,
   };
 

@@ -50,7 +50,9 @@ export class LayoutMonitor {
    * Blocks whose block info the PLC answered with a frame the client could
    * not read (which drops the link): not asked again by this client, or
    * every reconnect would drop the link again. snap7's server answers
-   * block info of a DB it does not have so.
+   * block info of a DB it does not have so: a TPKT frame 78 bytes longer
+   * than its S7 lengths, its header left over from earlier answers
+   * (test/fixtures/s7-userdata.ts, SNAP7).
    */
   private readonly unreadable = new Map<number, PlcError>();
 

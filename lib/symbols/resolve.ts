@@ -18,6 +18,7 @@ import type { DriverTag } from '../link/driver';
 import type { PlcData, PlcStruct, PlcValue, Tag } from '../types';
 import { tagDecoder, validateValue, type TagDecoder } from '../values';
 import type { SymbolEntry, SymbolTable } from './model';
+import { canonicalName, splitSymbol } from './names';
 
 /**
  * How the bytes of a struct (or of an array of structs) become a value, and
@@ -77,7 +78,7 @@ export function resolveSymbol<T extends DriverTag>(
   name: string,
   parse: (address: string) => T,
 ): ResolvedSymbol<T> | undefined {
-  const entry = table.lookup(name);
+  const entry = table.lookup(name) ?? wholeBlock(table, name);
   if (!entry) return undefined;
   const named = (address: string, as: string): T => {
     let tag: T;
@@ -92,6 +93,58 @@ export function resolveSymbol<T extends DriverTag>(
   if (isElementary(entry)) return { entry, tag: named(entry.address, name) };
   const shape = shapeOf(table, entry, entry, named);
   return { entry, tag: named(spanAddress(entry), name), shape };
+}
+
+/** Per table: each data block's first entry and the names of its top-level members (wholeBlock). */
+const blockMembers = new WeakMap<SymbolTable, Map<number, { first: SymbolEntry; top: string[] }>>();
+
+/**
+ * A whole data block named alone (`"Tank"`, `tank`, `DB10`) as a struct
+ * entry over its declared length, whose children are its top-level members:
+ * compileSymbols lists the members of a block but no entry for the block
+ * itself. The name is matched with the table's own rules: it names the
+ * block when it finds the block's first member with that member's part
+ * after it. Undefined when it names no block.
+ */
+function wholeBlock(table: SymbolTable, name: string): SymbolEntry | undefined {
+  const parts = splitSymbol(name);
+  if (parts?.length !== 1 || parts[0]!.index) return undefined;
+  let members = blockMembers.get(table);
+  if (!members) {
+    members = new Map();
+    const children = new Set<string>();
+    for (const e of table.entries) for (const c of e.children ?? []) children.add(c);
+    for (const e of table.entries) {
+      if (e.area !== 'DB' || e.db === null) continue;
+      const m = members.get(e.db) ?? { first: e, top: [] };
+      members.set(e.db, m);
+      if (!children.has(e.name)) m.top.push(e.name);
+    }
+    blockMembers.set(table, members);
+  }
+  for (const block of table.blocks) {
+    const m = members.get(block.db);
+    const own = m && splitSymbol(m.first.name);
+    if (!own || own.length < 2) continue;
+    const blockName = canonicalName(own.slice(0, 1));
+    const rest = canonicalName(own).slice(blockName.length);
+    if (table.lookup(`${name.trim()}${rest}`) !== m.first) continue;
+    return {
+      name: blockName,
+      type: block.instanceOf ? `"${block.instanceOf}"` : 'Struct',
+      kind: 'struct',
+      stringLength: 0,
+      area: 'DB',
+      db: block.db,
+      byte: 0,
+      bit: null,
+      size: block.length,
+      address: `DB${block.db}.DBB0:BYTE[${block.length}]`,
+      children: m.top,
+      comment: '',
+    };
+  }
+  return undefined;
 }
 
 /** Elementary entries and arrays of elementary types are one tag of the driver (its value: a scalar or an array). */
