@@ -175,7 +175,7 @@ describe('reading and writing by symbol (S7 simulator)', function () {
     expect(err).to.be.instanceOf(TagErrors);
     expect((err as TagErrors).results['"Tank".Level']).to.deep.equal({ ok: true, value: 12.5 });
     expect((err as TagErrors).errors['"Tank".Nothing_like_it']!.message).to.equal(
-      'unknown symbol "Tank".Nothing_like_it; the sources declare no such name',
+      'unknown symbol "Tank".Nothing_like_it; "Tank" has no such member (its members: Level, Count, Motor, Temps, Label, Steps)',
     );
   });
 

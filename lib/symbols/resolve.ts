@@ -56,11 +56,46 @@ export function unknownSymbol(table: SymbolTable, name: string, asAddress: PlcEr
   } catch {
     // A table without suggestions still names the symbol.
   }
-  if (!quoted && suggestions.length === 0) return asAddress;
-  const hint = suggestions.length > 0 ? `; did you mean ${orList(suggestions)}?` : '; the sources declare no such name';
+  const parent = suggestions.length === 0 ? knownParent(table, name) : undefined;
+  if (!quoted && suggestions.length === 0 && !parent) return asAddress;
+  const hint =
+    suggestions.length > 0
+      ? `; did you mean ${orList(suggestions)}?`
+      : parent
+        ? `; ${parent.name} has no such member${membersOf(parent)}`
+        : '; the sources declare no such name';
   // An unquoted name may have been meant as an address: say what is wrong with it as one too.
   const address = quoted ? '' : ` (nor an address: ${asAddress.message.replace(/^invalid address "[^"]*": /, '')})`;
   return new PlcError('INVALID_ADDRESS', `unknown symbol ${name}${hint}${address}`, { tag: name, cause: asAddress });
+}
+
+/** The longest leading part of a name that the table knows (`"Tank".Motor` of `Tank.Motor.Nope`), when there is one. */
+function knownParent(table: SymbolTable, name: string): Pick<SymbolEntry, 'name' | 'children'> | undefined {
+  const parts = splitSymbol(name);
+  if (!parts) return undefined;
+  for (let k = parts.length - 1; k >= 1; k--) {
+    const entry = table.lookup(canonicalName(parts.slice(0, k)));
+    if (entry) return entry;
+  }
+  // The block itself has no entry: its members are the entries one part below it.
+  const first = parts[0]!;
+  if (parts.length < 2 || first.index) return undefined;
+  const wanted = first.name.toLowerCase();
+  // `DB1.DBW` is a broken address, not a member of DB1: it keeps the address parser's words.
+  const looksAbsolute = /^DB[XBWD]?\d*$/i.test(parts[1]!.name);
+  const block = table.blocks.find((b) => b.name.toLowerCase() === wanted || (!looksAbsolute && `db${b.db}` === wanted));
+  if (!block) return undefined;
+  const prefix = `"${block.name}".`;
+  const children = table.entries.filter((e) => e.name.startsWith(prefix) && splitSymbol(e.name)?.length === 2 && !/\]$/.test(e.name));
+  return { name: `"${block.name}"`, children: children.map((e) => e.name) };
+}
+
+/** ` (its members: Level, Motor)`, at most 8 named; '' for an entry without children. */
+function membersOf(entry: Pick<SymbolEntry, 'name' | 'children'>): string {
+  const children = entry.children ?? [];
+  if (children.length === 0) return '';
+  const names = children.slice(0, 8).map((c) => c.slice(entry.name.length).replace(/^\./, ''));
+  return ` (its members: ${names.join(', ')}${children.length > 8 ? `, … ${children.length - 8} more` : ''})`;
 }
 
 function orList(names: readonly string[]): string {
