@@ -59,6 +59,21 @@ describe('flows: change detection', () => {
     expect(f.filter([bad]).length).to.equal(0);
     expect(f.filter([good('b', 11n)]).length).to.equal(1);
   });
+
+  it('compares a struct read by name member by member, with the deadband, nested structs and arrays of structs too', () => {
+    const f = new ChangeFilter(0.5);
+    const motor = (speed: number, run: boolean) => ({ Run: run, Speed: speed, Drive: { Temp: 40 } });
+    expect(f.filter([good('m', motor(10, true)), good('s', [{ x: 1 }, { x: 2 }])]).length).to.equal(2);
+    // A new object each poll with the same members is no change; one within the deadband neither.
+    expect(f.filter([good('m', motor(10.4, true)), good('s', [{ x: 1 }, { x: 2 }])])).to.deep.equal([]);
+    expect(f.filter([good('m', motor(10, false))]).map((o) => o.name)).to.deep.equal(['m']);
+    expect(f.filter([good('m', { ...motor(10, false), Drive: { Temp: 41 } })]).length).to.equal(1);
+    expect(f.filter([good('s', [{ x: 1 }, { x: 3 }])]).length).to.equal(1);
+    // The reported value is a copy: a flow changing it in place does not hide the next change.
+    const sent = (f.filter([good('t', { a: 1 })])[0] as { value: { a: number } }).value;
+    sent.a = 2;
+    expect(f.filter([good('t', { a: 2 })]).length).to.equal(1);
+  });
 });
 
 describe('flows: write requests', () => {

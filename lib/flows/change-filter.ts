@@ -6,7 +6,11 @@ function toNumber(v: number | bigint): number {
   return typeof v === 'bigint' ? Number(v) : v;
 }
 
-/** True when two PLC values differ (numbers: by more than `deadband`; arrays element by element; dates by time). */
+/**
+ * True when two PLC values differ (numbers: by more than `deadband`; arrays
+ * element by element; dates by time; a struct read by name member by member,
+ * so a struct whose members all stay within the deadband has not changed).
+ */
 export function valueChanged(before: unknown, after: unknown, deadband: number): boolean {
   if (typeof after === 'number' || typeof after === 'bigint') {
     if (typeof before !== 'number' && typeof before !== 'bigint') return true;
@@ -19,13 +23,25 @@ export function valueChanged(before: unknown, after: unknown, deadband: number):
     if (!Array.isArray(before) || before.length !== after.length) return true;
     return after.some((v, i) => valueChanged(before[i], v, deadband));
   }
+  if (isStruct(after)) {
+    if (!isStruct(before)) return true;
+    const keys = Object.keys(after);
+    if (keys.length !== Object.keys(before).length) return true;
+    return keys.some((k) => !Object.prototype.hasOwnProperty.call(before, k) || valueChanged(before[k], after[k], deadband));
+  }
   return before !== after;
+}
+
+/** A struct's value as the client builds it: a plain object of its members. */
+function isStruct(value: unknown): value is Record<string, unknown> {
+  return typeof value === 'object' && value !== null && !Array.isArray(value) && !(value instanceof Date);
 }
 
 /** A copy of what a value is now: the reported value goes out on a message, and a flow may change it in place. */
 function snapshot(value: unknown): unknown {
   if (Array.isArray(value)) return value.map(snapshot);
   if (value instanceof Date) return new Date(value.getTime());
+  if (isStruct(value)) return Object.fromEntries(Object.entries(value).map(([k, v]) => [k, snapshot(v)]));
   return value;
 }
 
