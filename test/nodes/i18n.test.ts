@@ -47,6 +47,21 @@ function everyStatus(t: (key: string, params?: object) => string, type: string):
     { what: 'reconnecting 0.5 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 500 }), numbers: [1] },
     { what: 'reconnecting 30 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 30_000 }), numbers: [30] },
     { what: 'waiting', status: status.waitingStatus(t), numbers: [] },
+    { what: 'source error', status: status.linkStatus(t, { state: 'connected', notice: { kind: 'sources' } }), numbers: [] },
+    // The widest a layout status gets: the highest DB number and the longest lengths of a standard block.
+    ...[
+      { db: 1, declared: 20, actual: 24 },
+      { db: 65535, declared: 65536, actual: 65534 },
+    ].map((n) => ({
+      what: `DB${n.db} ${n.declared}≠${n.actual}`,
+      status: status.linkStatus(t, { state: 'connected', notice: { kind: 'layout', ...n } }),
+      numbers: [n.db, n.declared, n.actual],
+    })),
+    {
+      what: 'DB65535 missing',
+      status: status.linkStatus(t, { state: 'connected', notice: { kind: 'layout', db: 65535, declared: 20, actual: null } }),
+      numbers: [65535],
+    },
   ];
   for (const n of [1, 999]) list.push({ what: `${n} tag errors`, status: status.tagErrorsStatus(t, n), numbers: [n] });
   // A year of one life sign per second.
