@@ -12,11 +12,9 @@ import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer } from '../lib/fetchwrite/server';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
-import { compileDeclarations } from '../lib/symbols/compile';
-import { literalValue } from '../lib/symbols/literals';
+import { compileSymbols } from '../lib/symbols/compile';
 import { dataBlockImages, memoryFromSymbols } from '../lib/symbols/memory';
 import type { SymbolEntry, SymbolTable } from '../lib/symbols/model';
-import { parseBlockSource } from '../lib/symbols/source-parser';
 import type { DataTypeName, PlcValue } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';
 
@@ -117,8 +115,7 @@ describe('simulators built from DB sources', function () {
   });
 
   it('the data block compiled from Tank.db holds the same bytes', () => {
-    const blocks = parseBlockSource({ name: 'Tank.db', content: fs.readFileSync(path.join(FIXTURES, 'Tank.db')) });
-    const table = compileDeclarations(blocks, [], { db: { Tank: 1 } }, literalValue);
+    const table = compileSymbols([{ name: 'Tank.db', content: fs.readFileSync(path.join(FIXTURES, 'Tank.db')) }], { db: { Tank: 1 } });
     expect(table.blocks.map((b) => [b.db, b.length])).to.deep.equal([[1, 70]]);
     expect(dataBlockImages(table).get(1)!.toString('hex')).to.equal(TANK_HEX);
   });

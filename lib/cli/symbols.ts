@@ -8,10 +8,7 @@
 import { readFileSync } from 'node:fs';
 import { parseAddress } from '../address';
 import { PlcError, ValueError, type TagResult } from '../errors';
-import { compileDeclarations } from '../symbols/compile';
-import { literalValue } from '../symbols/literals';
-import { parseBlockSource } from '../symbols/source-parser';
-import { readSymbolTable } from '../symbols/symbol-files';
+import { compileSymbols } from '../symbols/compile';
 import type { SymbolEntry, SymbolSource, SymbolTable } from '../symbols/model';
 import type { PlcValue, Tag } from '../types';
 import { validateValue } from '../values';
@@ -53,9 +50,6 @@ function dbNumbers(args: ParsedArgs): Record<string, number> {
   return out;
 }
 
-/** Symbol table exports (lib/symbols/symbol-files.ts); any other file is a DB/UDT source. */
-const SYMBOL_TABLE = /\.(sdf|asc|seq|xlsx|csv)$/i;
-
 function readSource(file: string): SymbolSource {
   try {
     // Bytes: the readers tell UTF-8 from UTF-16 by the byte order mark, and .xlsx is binary.
@@ -65,13 +59,14 @@ function readSource(file: string): SymbolSource {
   }
 }
 
-/** Compiles the files (DB/UDT sources, symbol tables) with the --db numbers; a SourceError names file:line:column. */
+/**
+ * Compiles the files (DB/UDT sources, symbol tables, told apart by their
+ * extension as compileSymbols() does) with the --db numbers; a SourceError
+ * names file:line:column.
+ */
 function loadSymbols(files: readonly string[], args: ParsedArgs): SymbolTable {
   const db = dbNumbers(args);
-  const sources = files.map(readSource);
-  const tables = sources.filter((s) => SYMBOL_TABLE.test(s.name));
-  const blocks = sources.filter((s) => !SYMBOL_TABLE.test(s.name)).flatMap((s) => parseBlockSource(s));
-  return compileDeclarations(blocks, tables.flatMap(readSymbolTable), { db }, literalValue);
+  return compileSymbols(files.map(readSource), { db });
 }
 
 /** The table of the files given with `--<flag>` (repeatable), or undefined when none was given. */
