@@ -55,16 +55,17 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
       const by = new Map(rows.map((row) => [row.name, row]));
       expect(by.get('"Tank".Level')).to.deep.equal({
         name: '"Tank".Level',
-        type: by.get('"Tank".Level')!.type,
+        type: 'REAL',
         db: 1,
         byte: 0,
         bit: null,
         address: 'DB1.DBD0:REAL',
       });
-      expect(by.get('"Tank".Level')!.type).to.match(/^real$/i);
       expect(by.get('"Tank".Valve')).to.include({ db: 1, byte: 4, bit: 2, address: 'DB1.DBX4.2' });
       expect(by.get('"Tank".Name')).to.include({ byte: 8, bit: null, address: 'DB1.DBB8:STRING[6]' });
-      expect(by.get('"Tank".Name')!.type).to.match(/^string\[6\]$/i);
+      expect(by.get('"Tank".Name')!.type).to.equal('STRING[6]');
+      expect(by.get('"Tank".Flags')!.type).to.equal('ARRAY[0..9] OF BOOL');
+      expect(by.get('"Tank".Motor')!.type).to.equal('STRUCT');
       expect(by.get('"Tank".Label')).to.include({ byte: 22, address: 'DB1.DBB22:WSTRING[3]' });
       expect(by.get('"Tank".Flags[9]')).to.include({ byte: 63, bit: 1 });
       expect(by.get('"Tank".Motor')).to.include({ byte: 64, bit: null });
@@ -95,7 +96,7 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
       const lines = r.out.split('\r\n');
       expect(lines[0]).to.equal('name,address,type,db,byte,bit');
       expect(lines.at(-1)).to.equal('');
-      expect(lines.find((l) => l.startsWith('"""Tank"".Level"'))).to.match(/^"""Tank""\.Level",DB1\.DBD0:REAL,\w+,1,0,$/);
+      expect(lines.find((l) => l.startsWith('"""Tank"".Level"'))).to.match(/^"""Tank""\.Level",DB1\.DBD0:REAL,REAL,1,0,$/);
       expect(lines.find((l) => l.startsWith('"""Tank"".Running"'))).to.match(/,1,4,0$/);
       expect(lines.find((l) => l.startsWith('"""Mix"".Ratio"'))).to.match(/^"""Mix""\.Ratio",DB2\.DBD0:REAL,\w+,2,0,$/);
       expect(r.out).not.to.match(/[^\r]\n/);
