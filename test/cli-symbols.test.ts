@@ -55,16 +55,17 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
       const by = new Map(rows.map((row) => [row.name, row]));
       expect(by.get('"Tank".Level')).to.deep.equal({
         name: '"Tank".Level',
-        type: by.get('"Tank".Level')!.type,
+        type: 'REAL',
         db: 1,
         byte: 0,
         bit: null,
         address: 'DB1.DBD0:REAL',
       });
-      expect(by.get('"Tank".Level')!.type).to.match(/^real$/i);
       expect(by.get('"Tank".Valve')).to.include({ db: 1, byte: 4, bit: 2, address: 'DB1.DBX4.2' });
       expect(by.get('"Tank".Name')).to.include({ byte: 8, bit: null, address: 'DB1.DBB8:STRING[6]' });
-      expect(by.get('"Tank".Name')!.type).to.match(/^string\[6\]$/i);
+      expect(by.get('"Tank".Name')!.type).to.equal('STRING[6]');
+      expect(by.get('"Tank".Flags')!.type).to.equal('ARRAY[0..9] OF BOOL');
+      expect(by.get('"Tank".Motor')!.type).to.equal('STRUCT');
       expect(by.get('"Tank".Label')).to.include({ byte: 22, address: 'DB1.DBB22:WSTRING[3]' });
       expect(by.get('"Tank".Flags[9]')).to.include({ byte: 63, bit: 1 });
       expect(by.get('"Tank".Motor')).to.include({ byte: 64, bit: null });
@@ -95,7 +96,7 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
       const lines = r.out.split('\r\n');
       expect(lines[0]).to.equal('name,address,type,db,byte,bit');
       expect(lines.at(-1)).to.equal('');
-      expect(lines.find((l) => l.startsWith('"""Tank"".Level"'))).to.match(/^"""Tank""\.Level",DB1\.DBD0:REAL,\w+,1,0,$/);
+      expect(lines.find((l) => l.startsWith('"""Tank"".Level"'))).to.match(/^"""Tank""\.Level",DB1\.DBD0:REAL,REAL,1,0,$/);
       expect(lines.find((l) => l.startsWith('"""Tank"".Running"'))).to.match(/,1,4,0$/);
       expect(lines.find((l) => l.startsWith('"""Mix"".Ratio"'))).to.match(/^"""Mix""\.Ratio",DB2\.DBD0:REAL,\w+,2,0,$/);
       expect(r.out).not.to.match(/[^\r]\n/);
@@ -217,14 +218,14 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
       expect(w.err).to.match(/Tank\.Count/);
       const bad = await done(['write', url, '"Tank".Motor={"Speed":1,"Of":true}', ...symbols]);
       expect(bad.code).to.equal(EXIT.USAGE);
-      expect(bad.err).to.match(/no member "Of" \(members: Speed, On\)/);
+      expect(bad.err).to.match(/"Tank"\.Motor.*no member "Of" \(its members: Speed, On\)/);
     });
 
     it('an unknown name exits 2 before connecting and suggests the closest names', async () => {
       const r = await done(['read', url, 'Tank.Levle', ...symbols]);
       expect(r.code).to.equal(EXIT.USAGE);
       expect(r.out).to.equal('');
-      expect(r.err).to.match(/"Tank\.Levle" is no symbol of the --symbols files and no address \(did you mean .*"Tank"\.Level/);
+      expect(r.err).to.match(/unknown symbol Tank\.Levle; did you mean "Tank"\.Level\b/);
       const without = await done(['read', url, '"Tank".Level']);
       expect(without.code).to.equal(EXIT.USAGE);
       const dbAlone = await done(['read', url, 'MW0', '--db', 'Tank=1']);
@@ -249,6 +250,162 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
         .map((l) => JSON.parse(l) as { values: Record<string, unknown> });
       expect(lines[0]!.values['"Tank".Motor']).to.have.keys('Speed', 'On');
       expect(lines.at(-1)!.values).to.deep.equal({ 'Tank.Level': 77.5 });
+    });
+
+    it('watch of a STRUCT prints the whole object again when one member changes, and no layout warning when the block matches', async () => {
+      const w = run(['watch', url, '"Tank".Motor', ...symbols, '--interval', '50']);
+      try {
+        await until(() => w.output().out.includes('"Tank".Motor = {'), 10000, 'first line');
+        const set = await done(['write', url, 'Tank.Motor.Speed=3.25', ...symbols]);
+        expect(set.code, set.err).to.equal(0);
+        await until(() => w.output().out.includes('Speed: 3.25'), 10000, 'the change');
+      } finally {
+        w.child.kill('SIGINT');
+      }
+      expect(await w.exit).to.equal(0);
+      const lines = w.output().out.trim().split('\n');
+      expect(lines.at(-1)).to.match(/^\S+ "Tank"\.Motor = \{ Speed: 3\.25, On: (true|false) \}$/);
+      expect(w.output().err).not.to.match(/warning|note/);
+    });
+  });
+
+  describe('a PLC whose data block no longer matches the sources (served from v2/Tank.db, read with Tank.db)', () => {
+    // v2/Tank.db inserts a REAL after Level: the PLC's DB1 is 74 bytes, the sources declare 70, and every member after Level moved by 4.
+    let srv: ReturnType<typeof run>;
+    let url: string;
+    const stale = ['--symbols', 'Tank.db', '--db', 'Tank=1'];
+    const warning = /^warning: DB1 "Tank" is 74 bytes in the PLC, the sources declare 70: /m;
+
+    before(async () => {
+      const port = await freePort();
+      srv = run(['serve', 's7', '--port', String(port), '--profile', 's7-300', '--source', 'v2/Tank.db', '--db', 'Tank=1']);
+      await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+      expect(srv.output().out).to.match(/^serving DB1 "Tank" of 74 bytes \(v2\/Tank\.db\)$/m);
+      url = `s7://127.0.0.1:${port}?rack=0&slot=2`;
+    });
+
+    after(async () => {
+      srv.child.kill('SIGINT');
+      expect(await srv.exit).to.equal(0);
+    });
+
+    it("a read by name warns on stderr and still gives the values at the sources' offsets", async () => {
+      const r = await done(['read', url, 'Tank.Level', 'Tank.Count', ...stale, '--json']);
+      expect(r.code, r.err).to.equal(0);
+      // Count's old offset (DBW6) is now the low half of Pressure (2.5 = 0x40200000): the shifted value the warning is about.
+      expect(JSON.parse(r.out)).to.deep.equal({ 'Tank.Level': 12.5, 'Tank.Count': 0 });
+      expect(r.err).to.match(warning);
+      expect(r.err).to.match(/names in it are read at the offsets of the sources .*; recompile the sources or download the block$/m);
+      expect(r.err.trim().split('\n')).to.have.length(1);
+    });
+
+    it("the sources of the PLC's own version read without a warning", async () => {
+      const r = await done(['read', url, 'Tank.Count', '--symbols', 'v2/Tank.db', '--db', 'Tank=1', '--strict-symbols']);
+      expect(r.code, r.err).to.equal(0);
+      expect(r.out).to.equal('Tank.Count = -2\n');
+      expect(r.err).to.equal('');
+    });
+
+    it('--strict-symbols: reads by name in the block fail with LAYOUT_MISMATCH (exit 1), absolute addresses of it still read', async () => {
+      const r = await done(['read', url, 'Tank.Level', '"Tank".Motor', 'DB1.DBW10:INT', ...stale, '--strict-symbols', '--json']);
+      expect(r.code).to.equal(EXIT.TAG_ERROR);
+      expect(JSON.parse(r.out)).to.deep.equal({ 'Tank.Level': null, '"Tank".Motor': null, 'DB1.DBW10:INT': -2 });
+      expect(r.err).to.match(
+        /^warning: DB1 "Tank" is 74 bytes in the PLC, the sources declare 70: reads and writes by name in it are refused \(--strict-symbols\)/m,
+      );
+      expect(r.err).to.match(/^plcwire: .*Tank\.Level.*DB1 "Tank": the PLC's block is 74 bytes, the sources declare 70/m);
+      expect(r.err).to.match(/^plcwire: .*"Tank"\.Motor.*the PLC's block is 74 bytes/m);
+    });
+
+    it('--strict-symbols: a write by name is refused and the PLC keeps its bytes', async () => {
+      const w = await done(['write', url, 'Tank.Count=99', ...stale, '--strict-symbols']);
+      expect(w.code).to.equal(EXIT.TAG_ERROR);
+      expect(w.out).to.equal('');
+      expect(w.err).to.match(/^plcwire: .*Tank\.Count.*the PLC's block is 74 bytes/m);
+      const r = await done(['read', url, 'DB1.DBW6:INT', 'DB1.DBW10:INT', '--json']);
+      expect(JSON.parse(r.out)).to.deep.equal({ 'DB1.DBW6:INT': 0, 'DB1.DBW10:INT': -2 });
+    });
+
+    it('--strict-symbols without --symbols is a usage error', async () => {
+      const r = await done(['read', url, 'MW0', '--strict-symbols']);
+      expect(r.code).to.equal(EXIT.USAGE);
+      expect(r.err).to.match(/--strict-symbols checks the names of --symbols files: give --symbols too/);
+    });
+
+    it('watch keeps running, says the mismatch once for its connection, and reports the refused name once', async () => {
+      const w = run(['watch', url, 'Tank.Level', 'DB1.DBD0:REAL', ...stale, '--strict-symbols', '--interval', '20', '--json']);
+      try {
+        await until(() => w.output().out.includes('"DB1.DBD0:REAL":12.5'), 10000, 'the absolute address');
+        await until(() => /Tank\.Level: /.test(w.output().err), 10000, 'the refusal');
+        // Several more polls: nothing is said again while the connection lasts.
+        const polls = w.output().err.length;
+        const set = await done(['write', url, 'DB1.DBD0:REAL=13.5']);
+        expect(set.code, set.err).to.equal(0);
+        await until(() => w.output().out.includes('"DB1.DBD0:REAL":13.5'), 10000, 'a later poll');
+        expect(w.output().err.length).to.equal(polls);
+      } finally {
+        w.child.kill('SIGINT');
+      }
+      expect(await w.exit).to.equal(0);
+      const err = w.output().err;
+      expect(err.match(/^warning: /gm)).to.have.length(1);
+      expect(err).to.match(warning);
+      expect(err.match(/Tank\.Level: /g)).to.have.length(1);
+    });
+  });
+
+  it('watch says a mismatch again on each reconnect, and keeps running', async () => {
+    const port = await freePort();
+    const serveV2 = () => run(['serve', 's7', '--port', String(port), '--profile', 's7-300', '--source', 'v2/Tank.db', '--db', 'Tank=1']);
+    let srv = serveV2();
+    await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+    const w = run([
+      'watch',
+      `s7://127.0.0.1:${port}?rack=0&slot=2`,
+      'Tank.Level',
+      '--symbols',
+      'Tank.db',
+      '--db',
+      'Tank=1',
+      '--interval',
+      '20',
+    ]);
+    const warnings = () => w.output().err.match(/^warning: DB1 "Tank" is 74 bytes in the PLC/gm)?.length ?? 0;
+    try {
+      await until(() => warnings() === 1, 10000, 'the first warning');
+      srv.child.kill('SIGINT');
+      expect(await srv.exit).to.equal(0);
+      await until(() => /disconnected/.test(w.output().err), 10000, 'the link loss');
+      srv = serveV2();
+      await until(() => w.output().err.match(/^plcwire: connected/gm)?.length === 2, 20000, 'the reconnect');
+      await until(() => warnings() === 2, 10000, 'the warning of the new connection');
+      expect(w.child.exitCode).to.equal(null);
+    } finally {
+      w.child.kill('SIGINT');
+      srv.child.kill('SIGINT');
+      await srv.exit;
+    }
+    expect(await w.exit).to.equal(0);
+  });
+
+  describe("a PLC that cannot tell its blocks' lengths (FETCH/WRITE)", () => {
+    it('a read by name prints a one-line note and the values', async () => {
+      const port = await freePort();
+      const srv = run(['serve', 'fetchwrite', '--port', String(port), '--source', 'Tank.db', '--db', 'Tank=1']);
+      try {
+        await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+        const url = /^try: plcwire read "([^"]+)"/m.exec(srv.output().out)![1]!;
+        const r = await done(['read', url, 'Tank.Level', '--symbols', 'Tank.db', '--db', 'Tank=1']);
+        expect(r.code, r.err).to.equal(0);
+        expect(r.out).to.equal('Tank.Level = 12.5\n');
+        expect(r.err).to.match(
+          /^note: the length of DB1 "Tank" could not be checked against the sources: .*no service that tells the length of a data block$/m,
+        );
+        expect(r.err.trim().split('\n')).to.have.length(1);
+      } finally {
+        srv.child.kill('SIGINT');
+        await srv.exit;
+      }
     });
   });
 });

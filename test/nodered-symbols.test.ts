@@ -433,7 +433,7 @@ describe('nodes: the symbol endpoints of the editor', function () {
     expect(res.body.errors).to.deep.equal([]);
     expect(res.body.blocks).to.deep.equal([{ name: 'Tank', db: 1, length: TANK_LENGTH, file: 'Tank.db' }]);
     const byName = Object.fromEntries(res.body.entries.map((e: any) => [e.name, e]));
-    expect(byName['"Tank".Level']).to.deep.include({ address: 'DB1.DBD0:REAL', type: 'Real', kind: 'elementary' });
+    expect(byName['"Tank".Level']).to.deep.include({ address: 'DB1.DBD0:REAL', type: 'REAL', kind: 'elementary' });
     expect(byName['"Tank".Motor.Run']).to.deep.include({ address: 'DB1.DBX10.0', kind: 'elementary' });
     expect(byName['"Tank".Motor']).to.deep.include({ kind: 'struct', children: ['"Tank".Motor.Speed', '"Tank".Motor.Run'] });
     expect(res.body.types).to.deep.equal(['Motor']);

@@ -405,15 +405,15 @@ describe('symbols compile: names, numbers, addresses, start values', () => {
     const recipe = db('Recipe', [m('Step', arr([[1, 3]], struct([m('Temp', el('REAL'))])))]);
     const table = compiled([motor, db('Motor 1', named('Motor')), recipe], { db: { '"Motor 1"': 2, recipe: 3 } });
     expect(table.entries.map((e) => [e.name, e.type, e.address, e.byte, e.bit, e.size])).to.deep.equal([
-      ['"Motor 1".Run', 'Bool', 'DB2.DBX0.0', 0, 0, 1],
-      ['"Motor 1"."Speed.Set"', 'Real', 'DB2.DBD2:REAL', 2, null, 4],
-      ['"Recipe".Step', 'Array[1..3] of Struct', 'DB3.DBB0:BYTE[12]', 0, null, 12],
-      ['"Recipe".Step[1]', 'Struct', 'DB3.DBB0:BYTE[4]', 0, null, 4],
-      ['"Recipe".Step[1].Temp', 'Real', 'DB3.DBD0:REAL', 0, null, 4],
-      ['"Recipe".Step[2]', 'Struct', 'DB3.DBB4:BYTE[4]', 4, null, 4],
-      ['"Recipe".Step[2].Temp', 'Real', 'DB3.DBD4:REAL', 4, null, 4],
-      ['"Recipe".Step[3]', 'Struct', 'DB3.DBB8:BYTE[4]', 8, null, 4],
-      ['"Recipe".Step[3].Temp', 'Real', 'DB3.DBD8:REAL', 8, null, 4],
+      ['"Motor 1".Run', 'BOOL', 'DB2.DBX0.0', 0, 0, 1],
+      ['"Motor 1"."Speed.Set"', 'REAL', 'DB2.DBD2:REAL', 2, null, 4],
+      ['"Recipe".Step', 'ARRAY[1..3] OF STRUCT', 'DB3.DBB0:BYTE[12]', 0, null, 12],
+      ['"Recipe".Step[1]', 'STRUCT', 'DB3.DBB0:BYTE[4]', 0, null, 4],
+      ['"Recipe".Step[1].Temp', 'REAL', 'DB3.DBD0:REAL', 0, null, 4],
+      ['"Recipe".Step[2]', 'STRUCT', 'DB3.DBB4:BYTE[4]', 4, null, 4],
+      ['"Recipe".Step[2].Temp', 'REAL', 'DB3.DBD4:REAL', 4, null, 4],
+      ['"Recipe".Step[3]', 'STRUCT', 'DB3.DBB8:BYTE[4]', 8, null, 4],
+      ['"Recipe".Step[3].Temp', 'REAL', 'DB3.DBD8:REAL', 8, null, 4],
     ]);
     expect(table.entries[2]!.children).to.deep.equal(['"Recipe".Step[1]', '"Recipe".Step[2]', '"Recipe".Step[3]']);
     expect(table.blocks).to.deep.equal([
@@ -485,6 +485,62 @@ describe('symbols compile: names, numbers, addresses, start values', () => {
     );
     expect(compileRefusal([db('A', [])], { db: { A: 0 } }).message).to.contain('a DB number is 1..65535');
     expect(compileRefusal([db('DB10', [], { number: 10 })], { db: { DB10: 11 } }).message).to.contain('is DB 10 in its source');
+  });
+
+  it('gives types by their IEC names in capitals, and user types by their own names in quotes (STEP 7: UDT n)', () => {
+    const motor = udt('Motor', [m('Run', el('BOOL'))]);
+    const valve = udt('UDT5', [m('Open', el('BOOL'))], { number: 5 });
+    const decl = db('Types', [
+      m('Level', el('REAL')),
+      m('Name', str(20)),
+      m('Label', wstr(10)),
+      m('Stamp', el('DATE_AND_TIME')),
+      m('Day', el('TIME_OF_DAY')),
+      m('Flags', arr([[1, 10]], el('BOOL'))),
+      m(
+        'Grid',
+        arr(
+          [
+            [1, 2],
+            [0, 3],
+          ],
+          el('INT'),
+        ),
+      ),
+      m('Texts', arr([[0, 1]], str(4))),
+      m('Part', struct([m('X', el('INT'))])),
+      m('Drive', named('Motor')),
+      m('Drives', arr([[1, 2]], named('Motor'))),
+      m('Valve', udtNumber(5)),
+    ]);
+    const table = compiled([motor, valve, decl], { db: { Types: 1 } }, [
+      row('Start button', 'I0.0', 'Bool'),
+      row('Text', 'MB4:STRING[8]', 'String[8]'),
+    ]);
+    const type = (name: string) => table.lookup(name)!.type;
+    expect(
+      ['Level', 'Name', 'Label', 'Stamp', 'Day', 'Flags', 'Grid', 'Texts', 'Part', 'Drive', 'Drives', 'Drives[1]', 'Valve'].map((n) =>
+        type(`"Types".${n}`),
+      ),
+    ).to.deep.equal([
+      'REAL',
+      'STRING[20]',
+      'WSTRING[10]',
+      'DATE_AND_TIME',
+      'TIME_OF_DAY',
+      'ARRAY[1..10] OF BOOL',
+      'ARRAY[1..2, 0..3] OF INT',
+      'ARRAY[0..1] OF STRING[4]',
+      'STRUCT',
+      '"Motor"',
+      'ARRAY[1..2] OF "Motor"',
+      '"Motor"',
+      'UDT 5',
+    ]);
+    // A symbol table's rows as TIA's tag table spells them (`Bool`) get the IEC name too.
+    expect([type('"Start button"'), type('"Text"')]).to.deep.equal(['BOOL', 'STRING[8]']);
+    // The block's instanceOf keeps the UDT's own name.
+    expect(compiled([motor, db('Motor 1', named('Motor'))], { db: { '"Motor 1"': 2 } }).blocks[0]!.instanceOf).to.equal('"Motor"');
   });
 
   it('makes I/Q/M rows of a symbol table entries with db null, skipping other blocks', () => {

@@ -12,11 +12,9 @@ import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer } from '../lib/fetchwrite/server';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
-import { compileDeclarations } from '../lib/symbols/compile';
-import { literalValue } from '../lib/symbols/literals';
+import { compileSymbols } from '../lib/symbols/compile';
 import { dataBlockImages, memoryFromSymbols } from '../lib/symbols/memory';
 import type { SymbolEntry, SymbolTable } from '../lib/symbols/model';
-import { parseBlockSource } from '../lib/symbols/source-parser';
 import type { DataTypeName, PlcValue } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';
 
@@ -75,24 +73,24 @@ function tankTable(): SymbolTable {
     });
   };
   const initial = (value: PlcValue) => ({ initial: value });
-  add('Level', 'Real', 'REAL', 0, 4, initial(12.5));
-  add('Running', 'Bool', 'BOOL', 4, 1, { bit: 0, initial: true });
-  add('Alarm', 'Bool', 'BOOL', 4, 1, { bit: 1 });
-  add('Valve', 'Bool', 'BOOL', 4, 1, { bit: 2, initial: true });
-  add('Count', 'Int', 'INT', 6, 2, initial(-2));
-  add('Name', 'String[6]', 'STRING', 8, 8, { stringLength: 6, initial: 'AB' });
-  add('Note', 'String[3]', 'STRING', 16, 5, { stringLength: 3 });
-  add('Label', 'WString[3]', 'WSTRING', 22, 10, { stringLength: 3, initial: 'Hé' });
+  add('Level', 'REAL', 'REAL', 0, 4, initial(12.5));
+  add('Running', 'BOOL', 'BOOL', 4, 1, { bit: 0, initial: true });
+  add('Alarm', 'BOOL', 'BOOL', 4, 1, { bit: 1 });
+  add('Valve', 'BOOL', 'BOOL', 4, 1, { bit: 2, initial: true });
+  add('Count', 'INT', 'INT', 6, 2, initial(-2));
+  add('Name', 'STRING[6]', 'STRING', 8, 8, { stringLength: 6, initial: 'AB' });
+  add('Note', 'STRING[3]', 'STRING', 16, 5, { stringLength: 3 });
+  add('Label', 'WSTRING[3]', 'WSTRING', 22, 10, { stringLength: 3, initial: 'Hé' });
   add('Stamp', 'DTL', 'DTL', 32, 12, initial(new Date(Date.UTC(2024, 4, 1, 12, 30, 15))));
   add('Since', 'DTL', 'DTL', 44, 12);
-  add('Set', 'Array[1..3] of Int', 'INT', 56, 6, { kind: 'array', children: ['"Tank".Set[1]', '"Tank".Set[2]', '"Tank".Set[3]'] });
-  [3, 4, 5].forEach((v, i) => add(`Set[${i + 1}]`, 'Int', 'INT', 56 + 2 * i, 2, initial(v)));
-  add('Flags', 'Array[0..9] of Bool', 'BOOL', 62, 2, { kind: 'array', bit: 0 });
+  add('Set', 'ARRAY[1..3] OF INT', 'INT', 56, 6, { kind: 'array', children: ['"Tank".Set[1]', '"Tank".Set[2]', '"Tank".Set[3]'] });
+  [3, 4, 5].forEach((v, i) => add(`Set[${i + 1}]`, 'INT', 'INT', 56 + 2 * i, 2, initial(v)));
+  add('Flags', 'ARRAY[0..9] OF BOOL', 'BOOL', 62, 2, { kind: 'array', bit: 0 });
   for (let i = 0; i < 10; i++)
-    add(`Flags[${i}]`, 'Bool', 'BOOL', 62 + (i >> 3), 1, { bit: i & 7, ...(i === 0 || i === 2 || i === 9 ? initial(true) : {}) });
-  add('Motor', 'Struct', undefined, 64, 6, { kind: 'struct', children: ['"Tank".Motor.Speed', '"Tank".Motor.On'] });
-  add('Motor.Speed', 'Real', 'REAL', 64, 4, initial(1.5));
-  add('Motor.On', 'Bool', 'BOOL', 68, 1, { bit: 0, initial: true });
+    add(`Flags[${i}]`, 'BOOL', 'BOOL', 62 + (i >> 3), 1, { bit: i & 7, ...(i === 0 || i === 2 || i === 9 ? initial(true) : {}) });
+  add('Motor', 'STRUCT', undefined, 64, 6, { kind: 'struct', children: ['"Tank".Motor.Speed', '"Tank".Motor.On'] });
+  add('Motor.Speed', 'REAL', 'REAL', 64, 4, initial(1.5));
+  add('Motor.On', 'BOOL', 'BOOL', 68, 1, { bit: 0, initial: true });
   const byName = new Map(entries.map((e) => [e.name, e]));
   return {
     entries,
@@ -117,8 +115,7 @@ describe('simulators built from DB sources', function () {
   });
 
   it('the data block compiled from Tank.db holds the same bytes', () => {
-    const blocks = parseBlockSource({ name: 'Tank.db', content: fs.readFileSync(path.join(FIXTURES, 'Tank.db')) });
-    const table = compileDeclarations(blocks, [], { db: { Tank: 1 } }, literalValue);
+    const table = compileSymbols([{ name: 'Tank.db', content: fs.readFileSync(path.join(FIXTURES, 'Tank.db')) }], { db: { Tank: 1 } });
     expect(table.blocks.map((b) => [b.db, b.length])).to.deep.equal([[1, 70]]);
     expect(dataBlockImages(table).get(1)!.toString('hex')).to.equal(TANK_HEX);
   });

@@ -3,21 +3,23 @@
  * the simulators. Every failure is one readable line on stderr and an exit
  * code a script can switch on (see EXIT and the README's CLI reference).
  */
-import { createClient } from '../connect';
-import { PlcError, TagErrors, type TagResult } from '../errors';
+import { createClient, type AnyClient } from '../connect';
+import { PlcError, TagErrors } from '../errors';
+import type { SymbolTable } from '../symbols/model';
+import type { PlcData } from '../types';
 import { validateValue, type TagShape } from '../values';
 import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
 import { parseArgs, UsageError, intFlag, withTimeout, type ParsedArgs } from './args';
 import { EXIT, confirm, exitCode, fail, withClient, type CliIo } from './io';
 import { serve, SERVE_FLAGS } from './serve';
-import { addressesOf, checkTargets, resultOf, symbolValueFromText, symbols, symbolsFlag, writesOf, SYMBOL_FLAGS } from './symbols';
+import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { textOf, toJson, valueFromText, type TypedTag } from './values';
 
 const USAGE = `usage:
-  plcwire read  <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--json] [--timeout ms]
-  plcwire write <url> <address|symbol>=<value>... [--symbols file]... [--db NAME=N]... [--yes] [--json] [--timeout ms]
-  plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--interval ms] [--json]
+  plcwire read  <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
+  plcwire write <url> <address|symbol>=<value>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--yes] [--json] [--timeout ms]
+  plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--json]
   plcwire symbols <file>... [--db NAME=N]... [--json | --csv]   (DB/UDT sources, symbol tables)
   plcwire info  <url> [--json]
   plcwire szl   <url> <id> [index] [--json]              (hex, e.g. 0x0011 0)
@@ -33,13 +35,14 @@ const USAGE = `usage:
   plcwire demo
 options: --debug prints stack traces; --help prints this text.
 symbols: names as TIA writes them ('"Tank".Motor.Speed', Tank.Motor.Speed); a STRUCT reads as an object
-      and is written as JSON ('"Tank".Motor={"Speed":1.5}'); --db numbers the blocks of TIA sources.
+      and is written as JSON ('"Tank".Motor={"Speed":1.5}'); --db numbers the blocks of TIA sources;
+      a DB whose length in the PLC differs from the sources' is a warning, --strict-symbols refuses its names.
 urls: s7://host?rack=0&slot=1  fetchwrite://host?fetchPort=2000&writePort=2001
       freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
 exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
 const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
-const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help'];
+const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'strict-symbols'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
   let args: ParsedArgs;
@@ -99,15 +102,49 @@ function endpointArg(rest: string[], what: string): { endpoint: Endpoint; addres
   return { endpoint: parseUrl(url), addresses };
 }
 
+/**
+ * The client for read, write and watch: with --symbols it holds the table,
+ * resolves the names and checks the layout (reported on stderr). Every
+ * address and name is then checked before connecting (an unstarted client
+ * holds nothing): a typo never costs a PLC connection; an unknown name is the
+ * client's INVALID_ADDRESS with the closest names.
+ */
+function targetClient(
+  endpoint: Endpoint,
+  targets: readonly string[],
+  args: ParsedArgs,
+  io: CliIo,
+): { client: AnyClient; table: SymbolTable | undefined } {
+  const { table, options } = symbolOptions(args);
+  let client: AnyClient;
+  try {
+    client = createClient(withTimeout(endpoint, args), options);
+  } catch (err) {
+    // Freeport refuses a symbol table: a bad command line, nothing was sent.
+    if (err instanceof PlcError && err.code === 'NOT_SUPPORTED') throw new UsageError(err.message);
+    throw err;
+  }
+  for (const target of targets) client.tag(target);
+  if (table) reportLayout(client, io, options.strictSymbols === true);
+  return { client, table };
+}
+
+/**
+ * With a table, the layout check of the connection, waited for so that its
+ * warning is printed before the command ends (the client also runs one on
+ * connect; it reports a finding once). Its failures are the request's to tell.
+ */
+function layoutChecked(client: AnyClient, table: SymbolTable | undefined, io: CliIo): Promise<unknown> {
+  return table ? client.checkLayout({ signal: io.signal }).catch(() => undefined) : Promise.resolve();
+}
+
 async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const { endpoint, addresses } = endpointArg(rest, 'read');
   const json = args.flags.has('json');
-  // Every address and name is checked before connecting (an unstarted client holds nothing): a typo never costs a PLC connection.
-  const table = symbolsFlag(args, 'symbols');
-  const client = createClient(withTimeout(endpoint, args));
-  const named = checkTargets(table, addresses, (a) => client.tag(a));
-  const byAddress = await withClient(client, io, (c) => c.readDetailed(addressesOf(table, addresses, named), { signal: io.signal }));
-  const results = Object.fromEntries(addresses.map((a) => [a, resultOf(table, a, named, byAddress)]));
+  const { client, table } = targetClient(endpoint, addresses, args, io);
+  const [results] = await withClient(client, io, (c) =>
+    Promise.all([c.readDetailed<PlcData>(addresses, { signal: io.signal }), layoutChecked(c, table, io)]),
+  );
   const values: Record<string, unknown> = {};
   const errors: PlcError[] = [];
   for (const address of addresses) {
@@ -132,34 +169,22 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     return { address: a.slice(0, eq), text: a.slice(eq + 1) };
   });
   // Parse addresses, names and values before connecting: bad input never reaches the PLC.
-  const table = symbolsFlag(args, 'symbols');
-  const client = createClient(withTimeout(endpoint, args));
-  const named = checkTargets(
-    table,
+  const { client, table } = targetClient(
+    endpoint,
     pairs.map((p) => p.address),
-    (a) => client.tag(a),
+    args,
+    io,
   );
   const values: Record<string, unknown> = {};
-  // What is sent: each address once, a name at its entry's address (a STRUCT: each given member at its own).
-  const sent: Record<string, unknown> = {};
-  const sentFor = new Map<string, string[]>();
   for (const { address, text } of pairs) {
-    const entry = named.get(address);
-    if (entry) {
-      values[address] = symbolValueFromText(table!, entry, address, text);
-      const writes = writesOf(table!, entry, values[address]);
-      for (const [a, v] of writes) sent[a] = v;
-      sentFor.set(
-        address,
-        writes.map(([a]) => a),
-      );
+    const struct = structValueFromText(client, table, address, text);
+    if (struct) {
+      values[address] = struct.value;
       continue;
     }
-    sentFor.set(address, [address]);
     const tag = client.tag(address) as unknown as TypedTag & TagShape;
     values[address] = valueFromText(tag, text);
     validateValue(tag, values[address]);
-    sent[address] = values[address];
   }
   if (!isLoopback(endpoint) && !args.flags.has('yes')) {
     if (!io.stdin.isTTY) {
@@ -171,15 +196,11 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     const ok = await confirm(io, `write ${pairs.length} value(s) to ${endpointName(endpoint)}? [y/N] `);
     if (!ok) throw new PlcError('WRITE_NOT_ALLOWED', 'write cancelled');
   }
-  const byAddress = await withClient(client, io, (c) => c.writeDetailed(sent, { signal: io.signal }));
-  const results: Record<string, TagResult<void>> = {};
-  for (const { address } of pairs) {
-    const failed = sentFor
-      .get(address)!
-      .map((a) => byAddress[a]!)
-      .find((r) => !r.ok);
-    results[address] = failed ?? { ok: true, value: undefined };
-  }
+  // The layout check first: its warning comes before the values are sent.
+  const results = await withClient(client, io, async (c) => {
+    await layoutChecked(c, table, io);
+    return c.writeDetailed(values, { signal: io.signal });
+  });
   const errors = Object.values(results).filter((r) => !r.ok);
   if (args.flags.has('json')) {
     const out: Record<string, string> = {};
@@ -200,10 +221,7 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   const { endpoint, addresses } = endpointArg(rest, 'watch');
   const interval = intFlag(args, 'interval', 1000, 10, 3_600_000);
   const json = args.flags.has('json');
-  const table = symbolsFlag(args, 'symbols');
-  const client = createClient(withTimeout(endpoint, args));
-  const named = checkTargets(table, addresses, (a) => client.tag(a)); // bad addresses and unknown names fail here, before connecting
-  const reads = addressesOf(table, addresses, named);
+  const { client } = targetClient(endpoint, addresses, args, io); // bad addresses and unknown names fail here, before connecting
   const last = new Map<string, string>();
   const report = (line: string) => io.stderr.write(`plcwire: ${line}\n`);
   client.on('connected', () => report(`connected to ${endpointName(endpoint)}`));
@@ -218,15 +236,16 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
       const started = Date.now();
       if (client.state === 'connected') {
         try {
-          const byAddress = await client.readDetailed(reads, { signal: io.signal });
+          const results = await client.readDetailed<PlcData>(addresses, { signal: io.signal });
           const changed: Record<string, unknown> = {};
           for (const a of addresses) {
-            const r = resultOf(table, a, named, byAddress);
+            const r = results[a]!;
             const text = r.ok ? textOf(r.value) : `error: ${r.error.message}`;
             if (last.get(a) === text) continue;
             last.set(a, text);
             if (r.ok) changed[a] = r.value;
-            else report(`${a}: ${r.error.message}`);
+            // A tag's error names it already (tagError); an error that does not is prefixed with the target.
+            else report(r.error.tag === a ? r.error.message : `${a}: ${r.error.message}`);
           }
           if (Object.keys(changed).length > 0) {
             if (json) io.stdout.write(`${toJson({ time: new Date().toISOString(), values: changed })}\n`);

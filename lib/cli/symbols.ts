@@ -7,14 +7,12 @@
  */
 import { readFileSync } from 'node:fs';
 import { parseAddress } from '../address';
-import { PlcError, ValueError, type TagResult } from '../errors';
-import { compileDeclarations } from '../symbols/compile';
-import { literalValue } from '../symbols/literals';
-import { parseBlockSource } from '../symbols/source-parser';
-import { readSymbolTable } from '../symbols/symbol-files';
+import type { AnyClient, ConnectOptions } from '../connect';
+import { ValueError } from '../errors';
+import { compileSymbols } from '../symbols/compile';
 import type { SymbolEntry, SymbolSource, SymbolTable } from '../symbols/model';
-import type { PlcValue, Tag } from '../types';
-import { validateValue } from '../values';
+import { expandWrite, resolveSymbol, type SymbolShape } from '../symbols/resolve';
+import type { LayoutMismatchEvent, LayoutUnknownEvent } from '../types';
 import { UsageError, listFlag, type ParsedArgs } from './args';
 import { EXIT, type CliIo } from './io';
 import { toJson, valueFromText } from './values';
@@ -53,9 +51,6 @@ function dbNumbers(args: ParsedArgs): Record<string, number> {
   return out;
 }
 
-/** Symbol table exports (lib/symbols/symbol-files.ts); any other file is a DB/UDT source. */
-const SYMBOL_TABLE = /\.(sdf|asc|seq|xlsx|csv)$/i;
-
 function readSource(file: string): SymbolSource {
   try {
     // Bytes: the readers tell UTF-8 from UTF-16 by the byte order mark, and .xlsx is binary.
@@ -65,13 +60,14 @@ function readSource(file: string): SymbolSource {
   }
 }
 
-/** Compiles the files (DB/UDT sources, symbol tables) with the --db numbers; a SourceError names file:line:column. */
+/**
+ * Compiles the files (DB/UDT sources, symbol tables, told apart by their
+ * extension as compileSymbols() does) with the --db numbers; a SourceError
+ * names file:line:column.
+ */
 function loadSymbols(files: readonly string[], args: ParsedArgs): SymbolTable {
   const db = dbNumbers(args);
-  const sources = files.map(readSource);
-  const tables = sources.filter((s) => SYMBOL_TABLE.test(s.name));
-  const blocks = sources.filter((s) => !SYMBOL_TABLE.test(s.name)).flatMap((s) => parseBlockSource(s));
-  return compileDeclarations(blocks, tables.flatMap(readSymbolTable), { db }, literalValue);
+  return compileSymbols(files.map(readSource), { db });
 }
 
 /** The table of the files given with `--<flag>` (repeatable), or undefined when none was given. */
@@ -134,154 +130,109 @@ export function symbols(rest: string[], args: ParsedArgs, io: CliIo): number {
 }
 
 /**
- * Checks every target before connecting: an address that parses, or a name
- * of the table. Anything else is an INVALID_ADDRESS naming it, with the
- * table's closest names; nothing is sent. Returns the entries of the names.
+ * The client options of `--symbols` and `--strict-symbols`: the compiled
+ * table handed to the client, which then resolves names, reads a STRUCT as an
+ * object and writes the members an object names (lib/symbols/resolve.ts):
+ * the command line and the library take one code path. Undefined table: no
+ * --symbols.
  */
-export function checkTargets(
-  table: SymbolTable | undefined,
-  targets: readonly string[],
-  parse: (address: string) => unknown,
-): Map<string, SymbolEntry> {
-  const named = new Map<string, SymbolEntry>();
-  for (const target of targets) {
-    let problem: unknown;
-    try {
-      parse(target);
-      continue;
-    } catch (err) {
-      if (!table) throw err;
-      problem = err;
-    }
-    const entry = table.lookup(target);
-    if (entry) {
-      named.set(target, entry);
-      continue;
-    }
-    const close = table.suggest(target);
-    const hint = close.length > 0 ? ` (did you mean ${close.join(', ')}?)` : '';
-    throw new PlcError('INVALID_ADDRESS', `"${target}" is no symbol of the --symbols files and no address${hint}`, {
-      tag: target,
-      cause: problem,
-    });
-  }
-  return named;
-}
-
-/** A member's name within its parent: `Speed` of `"Tank".Motor.Speed`, unquoted. */
-function memberKey(parent: SymbolEntry, child: string): string {
-  const rest = child.slice(parent.name.length + 1);
-  return rest.length >= 2 && rest.startsWith('"') && rest.endsWith('"') ? rest.slice(1, -1) : rest;
-}
-
-/** An elementary member (or an array of them) as a tag of its address, named as the user wrote it. */
-function leafTag(entry: SymbolEntry, label: string): Tag {
-  return { ...parseAddress(entry.address), address: label };
-}
-
-/** Text as a value of an elementary member or an array of them, checked against its type (a ValueError naming `label`). */
-function leafValue(entry: SymbolEntry, label: string, text: string): unknown {
-  const tag = leafTag(entry, label);
-  const value = valueFromText(tag, text);
-  validateValue(tag, value);
-  return value;
+export function symbolOptions(args: ParsedArgs): { table: SymbolTable | undefined; options: ConnectOptions } {
+  const table = symbolsFlag(args, 'symbols');
+  const strict = args.flags.has('strict-symbols');
+  if (strict && !table) throw new UsageError('--strict-symbols checks the names of --symbols files: give --symbols too');
+  return { table, options: table ? { symbols: table, ...(strict ? { strictSymbols: true } : {}) } : {} };
 }
 
 /**
- * Command-line text as a value of a symbol's type, checked against it before
- * anything is sent: an elementary member or an array of them as for an
- * address (lib/cli/values.ts); a STRUCT (or an array of them) as JSON, an
- * object keyed by member name (`{"Speed": 2.5, "On": true}`) whose members
- * are each parsed per their own type. Errors name the symbol as the user
- * wrote it (`label`), and a member the struct lacks lists its members.
+ * Command-line text as the value of a whole STRUCT (or an array of them)
+ * named `target`: JSON, an object keyed by member name
+ * (`{"Speed": 2.5, "On": true}`) whose members are each parsed per their own
+ * type as on the command line (lib/cli/values.ts), then checked as the
+ * client checks the write (members the type lacks, values that do not fit),
+ * before anything is sent. Undefined when `target` is no such symbol: an
+ * address, or an elementary member, is parsed as its tag says.
  */
-export function symbolValueFromText(table: SymbolTable, entry: SymbolEntry, label: string, text: string): unknown {
-  if (entry.dataType !== undefined) return leafValue(entry, label, text);
+export function structValueFromText(
+  client: AnyClient,
+  table: SymbolTable | undefined,
+  target: string,
+  text: string,
+): { value: unknown } | undefined {
+  // Text that parses as an address is that address, as the client reads it (lib/link/client-base.ts).
+  if (!table || parses(target)) return undefined;
+  const resolved = resolveSymbol(table, target, (address) => client.tag(address));
+  if (!resolved?.shape) return undefined;
   let json: unknown;
   try {
     json = JSON.parse(text);
   } catch {
     throw new ValueError(
-      label,
-      `"${text}" is not JSON (a ${entry.type} is written as an object keyed by member name, e.g. {"Speed": 1.5})`,
+      target,
+      `"${text}" is not JSON (a ${resolved.entry.type} is written as an object keyed by member name, e.g. {"Speed": 1.5})`,
     );
   }
-  return fromJson(table, entry, label, json);
+  const value = typedJson(resolved.shape, json);
+  expandWrite(resolved.shape, value);
+  return { value };
 }
 
-function fromJson(table: SymbolTable, entry: SymbolEntry, label: string, json: unknown): unknown {
-  if (entry.dataType !== undefined) return leafValue(entry, label, typeof json === 'string' ? json : toJson(json));
-  const children = (entry.children ?? []).map((name) => table.lookup(name)!);
-  if (entry.kind === 'array') {
-    if (!Array.isArray(json) || json.length !== children.length) {
-      throw new ValueError(label, `expected a JSON array of ${children.length} elements for ${entry.type}`);
-    }
-    return json.map((v: unknown, i) => fromJson(table, children[i]!, `${label}[${i}]`, v));
-  }
-  if (typeof json !== 'object' || json === null || Array.isArray(json)) {
-    throw new ValueError(label, `expected an object keyed by member name for ${entry.type}`);
-  }
-  const members = new Map(children.map((c) => [memberKey(entry, c.name), c]));
-  const out: Record<string, unknown> = {};
-  for (const [key, value] of Object.entries(json as Record<string, unknown>)) {
-    const member = members.get(key);
-    if (!member) throw new ValueError(label, `it has no member "${key}" (members: ${[...members.keys()].join(', ')})`);
-    out[key] = fromJson(table, member, `${label}.${key}`, value);
-  }
-  return out;
-}
-
-/** The entries a target is read and written through: itself when it has a data type, else its members' (recursively). */
-function leaves(table: SymbolTable, entry: SymbolEntry): SymbolEntry[] {
-  if (entry.dataType !== undefined) return [entry];
-  return (entry.children ?? []).flatMap((name) => leaves(table, table.lookup(name)!));
-}
-
-/** The addresses to read for the targets: an address as given, a name through its entry (a STRUCT: every member's). */
-export function addressesOf(table: SymbolTable | undefined, targets: readonly string[], named: ReadonlyMap<string, SymbolEntry>): string[] {
-  const out = new Set<string>();
-  for (const t of targets) {
-    const entry = named.get(t);
-    if (!entry) out.add(t);
-    else for (const leaf of leaves(table!, entry)) out.add(leaf.address);
-  }
-  return [...out];
-}
-
-/** A target's value from the results by address: a STRUCT as an object keyed by member name, an array of them as an array; the first failed member's error. */
-export function resultOf(
-  table: SymbolTable | undefined,
-  target: string,
-  named: ReadonlyMap<string, SymbolEntry>,
-  results: Readonly<Record<string, TagResult<PlcValue>>>,
-): TagResult<unknown> {
-  const entry = named.get(target);
-  if (!entry) return results[target]!;
-  const build = (e: SymbolEntry): unknown => {
-    if (e.dataType !== undefined) {
-      const r = results[e.address]!;
-      if (!r.ok) throw r.error;
-      return r.value;
-    }
-    const children = (e.children ?? []).map((name) => table!.lookup(name)!);
-    if (e.kind === 'array') return children.map(build);
-    return Object.fromEntries(children.map((c) => [memberKey(e, c.name), build(c)]));
-  };
+function parses(address: string): boolean {
   try {
-    return { ok: true, value: build(entry) };
-  } catch (err) {
-    return { ok: false, error: err as PlcError };
+    parseAddress(address);
+    return true;
+  } catch {
+    return false;
   }
 }
 
-/** The address → value pairs a write of `value` (as symbolValueFromText gives it) to a target sends: a STRUCT's given members each at their address. */
-export function writesOf(table: SymbolTable, entry: SymbolEntry, value: unknown): [string, unknown][] {
-  if (entry.dataType !== undefined) return [[entry.address, value]];
-  const children = (entry.children ?? []).map((name) => table.lookup(name)!);
-  if (entry.kind === 'array') return children.flatMap((c, i) => writesOf(table, c, (value as unknown[])[i]));
-  const given = value as Record<string, unknown>;
-  return children.flatMap((c) => {
-    const key = memberKey(entry, c.name);
-    return Object.prototype.hasOwnProperty.call(given, key) ? writesOf(table, c, given[key]) : [];
+/**
+ * JSON with each elementary member's value parsed per its type (a date of a
+ * DTL, a bigint of a LINT); anything that does not fit the shape is left as
+ * it is, for expandWrite to name.
+ */
+function typedJson<T>(shape: SymbolShape<T>, json: unknown): unknown {
+  if (json === undefined || json === null) return json;
+  if (shape.kind === 'leaf') {
+    return valueFromText(shape.s7, typeof json === 'string' ? json : toJson(json));
+  }
+  if (shape.kind === 'array') {
+    if (!Array.isArray(json) || json.length !== shape.elements.length) return json;
+    return json.map((element: unknown, i) => typedJson(shape.elements[i]!, element));
+  }
+  if (typeof json !== 'object' || Array.isArray(json)) return json;
+  return Object.fromEntries(
+    Object.entries(json as Record<string, unknown>).map(([key, value]) => {
+      const member = shape.members.get(key);
+      return [key, member ? typedJson(member, value) : value];
+    }),
+  );
+}
+
+/** `DB1 "Tank"`; a STEP 7 block without symbol just `DB10`. */
+function blockName(block: string, db: number): string {
+  return block === `DB${db}` ? block : `DB${db} "${block}"`;
+}
+
+/**
+ * Tells on stderr what the client's layout check finds (lib/symbols/layout-check.ts):
+ * a data block whose length in the PLC is not what the sources declare, as a
+ * warning (the client says it once per connect), and a PLC that cannot tell,
+ * as a one-line note.
+ */
+export function reportLayout(client: AnyClient, io: CliIo, strict: boolean): void {
+  const consequence = strict
+    ? 'reads and writes by name in it are refused (--strict-symbols)'
+    : "names in it are read at the offsets of the sources and may show other members' bytes";
+  client.on('layoutMismatch', (e: LayoutMismatchEvent) => {
+    const which = blockName(e.block, e.db);
+    const finding =
+      e.actual === null
+        ? `${which} is not in the PLC, the sources declare it with ${e.declared} bytes`
+        : `${which} is ${e.actual} bytes in the PLC, the sources declare ${e.declared}`;
+    io.stderr.write(`warning: ${finding}: ${consequence}; recompile the sources or download the block\n`);
+  });
+  client.on('layoutUnknown', (e: LayoutUnknownEvent) => {
+    const blocks = e.checks.map((c) => blockName(c.block, c.db)).join(', ');
+    io.stderr.write(`note: the length of ${blocks} could not be checked against the sources: ${e.error.message}\n`);
   });
 }

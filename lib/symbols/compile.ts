@@ -98,6 +98,29 @@ export function pathKey(path: string): string | undefined {
   return out === '' ? undefined : key(out);
 }
 
+/** An elementary type as its IEC name in capitals: `REAL`, `STRING[20]`, `WSTRING[10]`, `DATE_AND_TIME`. */
+function iecElementary(type: DataTypeName, stringLength: number): string {
+  return stringLength > 0 ? `${type}[${stringLength}]` : type;
+}
+
+/**
+ * A member's type as entries give it: the IEC name in capitals for
+ * elementary types and keywords (`REAL`, `STRING[20]`, `ARRAY[1..10] OF BOOL`,
+ * `ARRAY[1..2, 0..3] OF INT`, `STRUCT`), a user type by its own name as the
+ * sources write it (`"Motor"`, STEP 7 `UDT 5`).
+ */
+function iecType(node: LayoutNode): string {
+  switch (node.kind) {
+    case 'elementary':
+      return iecElementary(node.dataType, node.stringLength);
+    case 'array':
+      return `ARRAY[${node.dims.map((d) => `${d.low}..${d.high}`).join(', ')}] OF ${iecType(node.elements[0]!)}`;
+    case 'struct':
+      // A UDT instance's typeText is the UDT as the sources name it.
+      return node.typeName === undefined ? 'STRUCT' : node.typeText;
+  }
+}
+
 class TableBuilder {
   readonly entries: SymbolEntry[] = [];
   /** Start values per entry index (BEGIN overwrites the declarations'). */
@@ -132,7 +155,7 @@ class TableBuilder {
   private node(node: LayoutNode, blockName: string, rel: string, db: number, siblings: string[]): void {
     const name = blockName + rel;
     const index = this.entries.length;
-    const base = { name, type: node.typeText, area: 'DB' as const, db, byte: node.byte, bit: node.bit, size: node.size };
+    const base = { name, type: iecType(node), area: 'DB' as const, db, byte: node.byte, bit: node.bit, size: node.size };
     const comment = node.decl?.comment ?? '';
     const at = node.decl?.at ?? node.at;
     if (node.kind === 'elementary') {
@@ -265,7 +288,9 @@ function areaEntry(row: SymbolTableRow): SymbolEntry {
     throw new SourceError(row.at, `symbol "${row.name}": ${row.address} is in a DB; DB members come from the DB's source`);
   return Object.freeze({
     name: `"${row.name}"`,
-    type: row.dataType === '' ? tag.type : row.dataType,
+    type: tag.isArray
+      ? `ARRAY[0..${tag.count - 1}] OF ${iecElementary(tag.type, tag.stringLength)}`
+      : iecElementary(tag.type, tag.stringLength),
     kind: tag.isArray ? 'array' : 'elementary',
     dataType: tag.type,
     stringLength: tag.stringLength,

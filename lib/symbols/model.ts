@@ -127,7 +127,7 @@ export interface SymbolTableRow {
 export interface SymbolEntry {
   /** The name as TIA writes it: `"Tank".Motor.Speed`, `"Recipe".Step[3].Temp`, `"Motor 1".Run`, `"Start button"`. */
   readonly name: string;
-  /** IEC type as TIA shows it: `REAL`, `STRING[20]`, `Array[1..10] of Bool`, `"Motor"`, `Struct`. */
+  /** The IEC type in capitals: `REAL`, `STRING[20]`, `ARRAY[1..10] OF BOOL`, `STRUCT`; a user type by its own name, `"Motor"`, `UDT 5`. */
   readonly type: string;
   readonly kind: 'elementary' | 'array' | 'struct';
   /** Elementary entries: the data type (arrays of elementary types: the element's); undefined for structs and arrays of structs. */

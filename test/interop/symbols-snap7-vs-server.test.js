@@ -33,9 +33,7 @@ describe('interop: snap7 client against our S7Server built from DB sources', fun
   let peer;
 
   before(async () => {
-    const dist = (file) => require(path.resolve(__dirname, '../../dist/lib/symbols', file));
-    const blocks = dist('source-parser.js').parseBlockSource({ name: 'Tank.db', content: fs.readFileSync(FIXTURE) });
-    const symbols = dist('compile.js').compileDeclarations(blocks, [], { db: { Tank: 1 } }, dist('literals.js').literalValue);
+    const symbols = support.plcwire.compileSymbols([{ name: 'Tank.db', content: fs.readFileSync(FIXTURE) }], { db: { Tank: 1 } });
     server = new support.plcwire.S7Server({ port: 0, profile: 's7-300', symbols });
     peer = await snap7Client(await server.listen(), { rack: 0, slot: 2 });
   });
