@@ -13,6 +13,15 @@ for (const name of ['SIGINT', 'SIGTERM']) {
   });
 }
 
+// A reader that went away (`plcwire symbols … | head`, a closed `watch` pipe) is an end, not a crash:
+// stop as on Ctrl-C, closing PLC connections, and say nothing more on a stream nobody reads.
+process.stdout.on('error', (err) => {
+  if (err.code !== 'EPIPE') throw err;
+  process.exitCode = 0;
+  controller.abort();
+  setTimeout(() => process.exit(0), 2000).unref();
+});
+
 main(process.argv.slice(2), {
   stdout: process.stdout,
   stderr: process.stderr,

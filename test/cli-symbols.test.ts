@@ -388,6 +388,45 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
     expect(await w.exit).to.equal(0);
   });
 
+  describe('a reader that goes away (| head)', () => {
+    it('symbols stops quietly with exit 0 when its stdout closes', async () => {
+      const r = run(['symbols', 'Tank.db', '--db', 'Tank=1']);
+      await until(() => r.output().out.length > 0, 10000, 'the first line');
+      r.child.stdout!.destroy();
+      const code = await r.exit;
+      expect(r.output().err).to.not.match(/EPIPE|Unhandled/);
+      expect(code).to.equal(0);
+    });
+
+    it('watch stops as on Ctrl-C (no crash) at its next write after its stdout closes', async () => {
+      const port = await freePort();
+      const srv = run(['serve', 's7', '--port', String(port), '--profile', 's7-300', '--source', 'Tank.db', '--db', 'Tank=1']);
+      try {
+        await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+        const w = run(['watch', `s7://127.0.0.1:${port}?rack=0&slot=2`, 'Tank.Level', '--symbols', 'Tank.db', '--db', 'Tank=1']);
+        await until(() => w.output().out.length > 0, 10000, 'the first value');
+        w.child.stdout!.destroy();
+        // A pipe tells its writer that the reader left at the next write: change the value.
+        const write = await done([
+          'write',
+          `s7://127.0.0.1:${port}?rack=0&slot=2`,
+          'Tank.Level=99.5',
+          '--symbols',
+          'Tank.db',
+          '--db',
+          'Tank=1',
+        ]);
+        expect(write.code, write.err).to.equal(0);
+        const code = await w.exit;
+        expect(w.output().err).to.not.match(/EPIPE|Unhandled/);
+        expect(code).to.be.oneOf([0, 130]);
+      } finally {
+        srv.child.kill('SIGINT');
+        await srv.exit;
+      }
+    });
+  });
+
   describe("a PLC that cannot tell its blocks' lengths (FETCH/WRITE)", () => {
     it('a read by name prints a one-line note and the values', async () => {
       const port = await freePort();
