@@ -12,6 +12,16 @@ export * from './url';
 
 export { parseAddress, parseTypeSpec, formatAddress, type TypeSpec, type TagLocation } from './address';
 export {
+  compileSymbols,
+  type BlockSummary,
+  type CompileOptions,
+  type SymbolEntry,
+  type SymbolSource,
+  type SymbolTable,
+  type SymbolTableRow,
+  type SourcePosition,
+} from './symbols';
+export {
   tagsFromCsv,
   tagsToCsv,
   addressWithType,

@@ -207,6 +207,10 @@ describe('symbols: TIA Portal sources (parseBlockSource)', () => {
       `TYPE UDT 1 STRUCT x : INT; END_STRUCT; END_TYPE DATA_BLOCK "Sym" STRUCT x : INT; END_STRUCT; BEGIN END_DATA_BLOCK`,
     );
     expect((mixed[1] as DataBlockDecl).optimized, 'a STEP 7 file (numbers in its headers)').to.equal(false);
+    const symbolic = `DATA_BLOCK "Sym" STRUCT x : INT; END_STRUCT; BEGIN END_DATA_BLOCK`;
+    const awl = parseBlockSource({ name: 'Sym.AWL', content: symbolic })[0] as DataBlockDecl;
+    expect(awl.optimized, 'a STEP 7 file (named .awl)').to.equal(false);
+    expect((parseBlockSource({ name: 'Sym.db', content: symbolic })[0] as DataBlockDecl).optimized).to.equal(true);
   });
 
   it('reads UTF-16LE with BOM, tabs and a source given as a string with a BOM alike', () => {
@@ -307,7 +311,8 @@ describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
   it('reads instance DBs of UDT n and FB n, and a symbolic DB with a symbolic UDT', () => {
     expect(shape(db(blocks, 'DB11').body)).to.equal('UDT1#1');
     expect(db(blocks, 'DB11').startValues.map((s) => s.path)).to.deep.equal(['Speed', 'Run', 'Name']);
-    expect(shape(db(blocks, 'DB12').body)).to.equal('FB5#5');
+    // No number: a numbered named type is a UDT, and DB 12 is no instance of UDT 5.
+    expect(db(blocks, 'DB12').body).to.deep.equal({ kind: 'named', name: 'FB5', at: { file: 'step7-tank.awl', line: 68, column: 2 } });
     expect(shape(db(blocks, 'Recipe').body)).to.deep.equal({ Steps: { array: '1..3', of: '"Step"' }, Name: 'STRING[16]' });
   });
 
@@ -323,6 +328,45 @@ describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
     expect(shape((b as DataBlockDecl).body)).to.deep.equal({ t: '"IEC_TIMER"', a: '"DB_ANY"', c: 'COUNTER', d: 'TIMER' });
     const [inst] = parse('DATA_BLOCK "T1" TON_TIME BEGIN END_DATA_BLOCK');
     expect(shape((inst as DataBlockDecl).body)).to.equal('"TON_TIME"');
+  });
+});
+
+describe('symbols: declarations in detail', () => {
+  it('takes RETAIN / NON_RETAIN before a member, and a member named Retain', () => {
+    const [t] = parse('TYPE "T" STRUCT RETAIN a : Int; NON_RETAIN "b c" : Bool; Retain : Bool; END_STRUCT; END_TYPE') as TypeDecl[];
+    expect(shape(t!.body)).to.deep.equal({ a: 'INT', 'b c': 'BOOL', Retain: 'BOOL' });
+  });
+
+  it('reads lists, nested lists and repeats of lists in BEGIN and in declarations', () => {
+    const source = `DATA_BLOCK "D"
+STRUCT
+  A : Array[1..6] of Int := [2(1, 2), 2(0)];
+  B : Array[1..2, 1..2] of Int := [[1, 2], [3, 4]];
+END_STRUCT;
+BEGIN
+  A := [6(7)];
+  B[1, 2] := -16#10;
+END_DATA_BLOCK`;
+    const [d] = parse(source) as DataBlockDecl[];
+    expect(value(member(d!.body, 'A').initial)).to.equal('[2([1, 2]), 2(0)]');
+    expect(value(member(d!.body, 'B').initial)).to.equal('[[1, 2], [3, 4]]');
+    expect(d!.startValues.map((s) => `${s.path} := ${value(s.value)}`)).to.deep.equal(['A := [6(7)]', 'B[1,2] := -16#10']);
+  });
+
+  it('refuses nesting deeper than 64 levels with a SourceError, not a stack overflow', () => {
+    const deep = `TYPE "T" STRUCT ${'a : Struct '.repeat(100_000)}`;
+    expect(failure(deep).message).to.match(/a is nested deeper than 64 levels/);
+    expect(failure(`TYPE "T" STRUCT a : Array[1..2] of Int := ${'['.repeat(100_000)}`).message).to.match(/nested deeper than 64 levels/);
+    expect(failure(`TYPE "T" STRUCT a : Array[1..2] of Int := ${'2('.repeat(100_000)}`).message).to.match(/nested deeper than 64 levels/);
+    const fine = `TYPE "T" STRUCT ${'a : Struct '.repeat(60)}x : Int; ${'END_STRUCT; '.repeat(60)}END_STRUCT; END_TYPE`;
+    expect(parse(fine)).to.have.length(1);
+  });
+
+  it('reads a 10,000-member DB without trouble', () => {
+    const lines = Array.from({ length: 10_000 }, (_, i) => `   m${i} : Real := ${i}.5;   // member ${i}`);
+    const [d] = parse(`DATA_BLOCK "Big"\nSTRUCT\n${lines.join('\n')}\nEND_STRUCT;\nBEGIN\nEND_DATA_BLOCK`) as DataBlockDecl[];
+    expect(members(d!.body)).to.have.length(10_000);
+    expect(member(d!.body, 'm9999').comment).to.equal('member 9999');
   });
 });
 

@@ -3,7 +3,10 @@ import type { Endpoint } from '../url';
 
 export interface ParsedArgs {
   positionals: string[];
+  /** Each flag given; a value flag given twice holds its last value. */
   flags: Map<string, string | true>;
+  /** Every value of each value flag, in order (for the repeatable ones: --db, --symbols, --source). */
+  lists: Map<string, string[]>;
 }
 
 export class UsageError extends Error {}
@@ -11,6 +14,7 @@ export class UsageError extends Error {}
 export function parseArgs(argv: readonly string[], valueFlags: readonly string[], boolFlags: readonly string[]): ParsedArgs {
   const positionals: string[] = [];
   const flags = new Map<string, string | true>();
+  const lists = new Map<string, string[]>();
   for (let i = 0; i < argv.length; i++) {
     const arg = argv[i]!;
     if (arg === '--') {
@@ -30,11 +34,12 @@ export function parseArgs(argv: readonly string[], valueFlags: readonly string[]
       const value = eq >= 0 ? arg.slice(eq + 1) : argv[++i];
       if (value === undefined) throw new UsageError(`--${name} needs a value`);
       flags.set(name, value);
+      lists.set(name, [...(lists.get(name) ?? []), value]);
     } else {
       throw new UsageError(`unknown option --${name}`);
     }
   }
-  return { positionals, flags };
+  return { positionals, flags, lists };
 }
 
 export function intFlag(args: ParsedArgs, name: string, fallback: number, min = 0, max = Number.MAX_SAFE_INTEGER): number {
@@ -49,6 +54,11 @@ export function intFlag(args: ParsedArgs, name: string, fallback: number, min = 
 export function stringFlag(args: ParsedArgs, name: string): string | undefined {
   const raw = args.flags.get(name);
   return raw === true ? undefined : raw;
+}
+
+/** Every value of a repeatable flag, in the order given; [] when absent. */
+export function listFlag(args: ParsedArgs, name: string): string[] {
+  return args.lists.get(name) ?? [];
 }
 
 /** The endpoint with --timeout applied, when given. */

@@ -5,14 +5,14 @@
  */
 import { createInterface } from 'node:readline';
 import type { AnyClient } from '../connect';
-import { isLinkError, PlcError, TagErrors } from '../errors';
+import { isLinkError, PlcError, SourceError, TagErrors } from '../errors';
 import { UsageError } from './args';
 
 export const EXIT = Object.freeze({
   OK: 0,
   /** The PLC refused or could not serve one or more tags. */
   TAG_ERROR: 1,
-  /** Bad command line, URL, address or value: nothing was sent. */
+  /** Bad command line, URL, address, value or source file: nothing was sent. */
   USAGE: 2,
   /** Could not connect, or the connection was lost. */
   CONNECTION: 3,
@@ -30,11 +30,16 @@ export interface CliIo {
   signal: AbortSignal;
 }
 
-/** One line on stderr, and the exit code for the kind of failure. */
+/**
+ * One line on stderr, and the exit code for the kind of failure. A source
+ * that does not compile is reported as compilers do, `file:line:column: problem`
+ * at the start of the line, which editors and CI annotations jump to.
+ */
 export function fail(io: CliIo, err: unknown, debug: boolean): number {
   const code = exitCode(err);
   const message = err instanceof Error ? err.message : String(err);
-  io.stderr.write(`plcwire: ${message}${code === EXIT.USAGE && err instanceof UsageError ? ' (plcwire --help)' : ''}\n`);
+  const prefix = err instanceof SourceError ? '' : 'plcwire: ';
+  io.stderr.write(`${prefix}${message}${code === EXIT.USAGE && err instanceof UsageError ? ' (plcwire --help)' : ''}\n`);
   if (debug && err instanceof Error && err.stack) io.stderr.write(`${err.stack}\n`);
   return code;
 }
@@ -52,6 +57,7 @@ export function exitCode(err: unknown): number {
     case 'INVALID_ADDRESS':
     case 'INVALID_VALUE':
     case 'INVALID_URL':
+    case 'INVALID_SOURCE':
       return EXIT.USAGE;
     case 'WRITE_NOT_ALLOWED':
       return EXIT.REFUSED;

@@ -4,20 +4,21 @@
  * code a script can switch on (see EXIT and the README's CLI reference).
  */
 import { createClient } from '../connect';
-import { PlcError, TagErrors } from '../errors';
-import type { PlcValue } from '../types';
+import { PlcError, TagErrors, type TagResult } from '../errors';
 import { validateValue, type TagShape } from '../values';
 import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
 import { parseArgs, UsageError, intFlag, withTimeout, type ParsedArgs } from './args';
 import { EXIT, confirm, exitCode, fail, withClient, type CliIo } from './io';
 import { serve, SERVE_FLAGS } from './serve';
+import { addressesOf, checkTargets, resultOf, symbolValueFromText, symbols, symbolsFlag, writesOf, SYMBOL_FLAGS } from './symbols';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
-import { toJson, valueFromText, valueToText, type TypedTag } from './values';
+import { textOf, toJson, valueFromText, type TypedTag } from './values';
 
 const USAGE = `usage:
-  plcwire read  <url> <address>... [--json] [--timeout ms]
-  plcwire write <url> <address>=<value>... [--yes] [--json] [--timeout ms]
-  plcwire watch <url> <address>... [--interval ms] [--json]
+  plcwire read  <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--json] [--timeout ms]
+  plcwire write <url> <address|symbol>=<value>... [--symbols file]... [--db NAME=N]... [--yes] [--json] [--timeout ms]
+  plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--interval ms] [--json]
+  plcwire symbols <file>... [--db NAME=N]... [--json | --csv]   (DB/UDT sources, symbol tables)
   plcwire info  <url> [--json]
   plcwire szl   <url> <id> [index] [--json]              (hex, e.g. 0x0011 0)
   plcwire diag  <url> [--max N] [--json]
@@ -26,16 +27,19 @@ const USAGE = `usage:
   plcwire cpu   <url> stop|start|cold-start [--yes] [--json]   (the URL needs control=true)
   plcwire doctor <url> [address...] [--json] [--timeout ms]
   plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json] [--max-items N]
-  plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1]
+                   [--source Tank.db... --db Tank=1...]
+  plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
   plcwire demo
 options: --debug prints stack traces; --help prints this text.
+symbols: names as TIA writes them ('"Tank".Motor.Speed', Tank.Motor.Speed); a STRUCT reads as an object
+      and is written as JSON ('"Tank".Motor={"Speed":1.5}'); --db numbers the blocks of TIA sources.
 urls: s7://host?rack=0&slot=1  fetchwrite://host?fetchPort=2000&writePort=2001
       freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
 exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
-const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', ...SERVE_FLAGS];
-const BOOL_FLAGS = ['json', 'yes', 'debug', 'help'];
+const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
+const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
   let args: ParsedArgs;
@@ -72,12 +76,16 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
         return await cpu(rest, args, io);
       case 'doctor':
         return await doctor(rest, args, io);
+      case 'symbols':
+        return symbols(rest, args, io);
       case 'serve':
         return await serve(rest, args, io);
       case 'demo':
         return await (await import('./demo')).runDemo(io);
       default:
-        throw new UsageError(`unknown command "${command}" (read, write, watch, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`);
+        throw new UsageError(
+          `unknown command "${command}" (read, write, watch, symbols, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`,
+        );
     }
   } catch (err) {
     return fail(io, err, debug);
@@ -94,11 +102,13 @@ function endpointArg(rest: string[], what: string): { endpoint: Endpoint; addres
 async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const { endpoint, addresses } = endpointArg(rest, 'read');
   const json = args.flags.has('json');
-  // Every address is parsed before connecting (an unstarted client holds nothing): a typo never costs a PLC connection.
+  // Every address and name is checked before connecting (an unstarted client holds nothing): a typo never costs a PLC connection.
+  const table = symbolsFlag(args, 'symbols');
   const client = createClient(withTimeout(endpoint, args));
-  for (const a of addresses) client.tag(a);
-  const results = await withClient(client, io, (c) => c.readDetailed(addresses, { signal: io.signal }));
-  const values: Record<string, PlcValue | null> = {};
+  const named = checkTargets(table, addresses, (a) => client.tag(a));
+  const byAddress = await withClient(client, io, (c) => c.readDetailed(addressesOf(table, addresses, named), { signal: io.signal }));
+  const results = Object.fromEntries(addresses.map((a) => [a, resultOf(table, a, named, byAddress)]));
+  const values: Record<string, unknown> = {};
   const errors: PlcError[] = [];
   for (const address of addresses) {
     const r = results[address]!;
@@ -109,7 +119,7 @@ async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number
     }
   }
   if (json) io.stdout.write(`${toJson(values)}\n`);
-  else for (const a of addresses) if (values[a] !== null) io.stdout.write(`${a} = ${valueToText(values[a])}\n`);
+  else for (const a of addresses) if (values[a] !== null) io.stdout.write(`${a} = ${textOf(values[a])}\n`);
   for (const e of errors) io.stderr.write(`plcwire: ${e.message}\n`);
   return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
 }
@@ -121,13 +131,35 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     if (eq <= 0) throw new UsageError(`"${a}" is not <address>=<value>`);
     return { address: a.slice(0, eq), text: a.slice(eq + 1) };
   });
-  // Parse addresses and values before connecting: bad input never reaches the PLC.
+  // Parse addresses, names and values before connecting: bad input never reaches the PLC.
+  const table = symbolsFlag(args, 'symbols');
   const client = createClient(withTimeout(endpoint, args));
+  const named = checkTargets(
+    table,
+    pairs.map((p) => p.address),
+    (a) => client.tag(a),
+  );
   const values: Record<string, unknown> = {};
+  // What is sent: each address once, a name at its entry's address (a STRUCT: each given member at its own).
+  const sent: Record<string, unknown> = {};
+  const sentFor = new Map<string, string[]>();
   for (const { address, text } of pairs) {
+    const entry = named.get(address);
+    if (entry) {
+      values[address] = symbolValueFromText(table!, entry, address, text);
+      const writes = writesOf(table!, entry, values[address]);
+      for (const [a, v] of writes) sent[a] = v;
+      sentFor.set(
+        address,
+        writes.map(([a]) => a),
+      );
+      continue;
+    }
+    sentFor.set(address, [address]);
     const tag = client.tag(address) as unknown as TypedTag & TagShape;
     values[address] = valueFromText(tag, text);
     validateValue(tag, values[address]);
+    sent[address] = values[address];
   }
   if (!isLoopback(endpoint) && !args.flags.has('yes')) {
     if (!io.stdin.isTTY) {
@@ -139,14 +171,22 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     const ok = await confirm(io, `write ${pairs.length} value(s) to ${endpointName(endpoint)}? [y/N] `);
     if (!ok) throw new PlcError('WRITE_NOT_ALLOWED', 'write cancelled');
   }
-  const results = await withClient(client, io, (c) => c.writeDetailed(values, { signal: io.signal }));
+  const byAddress = await withClient(client, io, (c) => c.writeDetailed(sent, { signal: io.signal }));
+  const results: Record<string, TagResult<void>> = {};
+  for (const { address } of pairs) {
+    const failed = sentFor
+      .get(address)!
+      .map((a) => byAddress[a]!)
+      .find((r) => !r.ok);
+    results[address] = failed ?? { ok: true, value: undefined };
+  }
   const errors = Object.values(results).filter((r) => !r.ok);
   if (args.flags.has('json')) {
     const out: Record<string, string> = {};
     for (const [a, r] of Object.entries(results)) out[a] = r.ok ? 'ok' : r.error.message;
     io.stdout.write(`${toJson(out)}\n`);
   } else {
-    for (const [a, r] of Object.entries(results)) if (r.ok) io.stdout.write(`${a} = ${valueToText(values[a])} ok\n`);
+    for (const [a, r] of Object.entries(results)) if (r.ok) io.stdout.write(`${a} = ${textOf(values[a])} ok\n`);
   }
   for (const r of Object.values(results)) if (!r.ok) io.stderr.write(`plcwire: ${r.error.message}\n`);
   return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
@@ -160,8 +200,10 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   const { endpoint, addresses } = endpointArg(rest, 'watch');
   const interval = intFlag(args, 'interval', 1000, 10, 3_600_000);
   const json = args.flags.has('json');
+  const table = symbolsFlag(args, 'symbols');
   const client = createClient(withTimeout(endpoint, args));
-  for (const a of addresses) client.tag(a); // bad addresses fail here, before connecting
+  const named = checkTargets(table, addresses, (a) => client.tag(a)); // bad addresses and unknown names fail here, before connecting
+  const reads = addressesOf(table, addresses, named);
   const last = new Map<string, string>();
   const report = (line: string) => io.stderr.write(`plcwire: ${line}\n`);
   client.on('connected', () => report(`connected to ${endpointName(endpoint)}`));
@@ -176,11 +218,11 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
       const started = Date.now();
       if (client.state === 'connected') {
         try {
-          const results = await client.readDetailed(addresses, { signal: io.signal });
-          const changed: Record<string, PlcValue> = {};
+          const byAddress = await client.readDetailed(reads, { signal: io.signal });
+          const changed: Record<string, unknown> = {};
           for (const a of addresses) {
-            const r = results[a]!;
-            const text = r.ok ? valueToText(r.value) : `error: ${r.error.message}`;
+            const r = resultOf(table, a, named, byAddress);
+            const text = r.ok ? textOf(r.value) : `error: ${r.error.message}`;
             if (last.get(a) === text) continue;
             last.set(a, text);
             if (r.ok) changed[a] = r.value;
@@ -188,7 +230,7 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
           }
           if (Object.keys(changed).length > 0) {
             if (json) io.stdout.write(`${toJson({ time: new Date().toISOString(), values: changed })}\n`);
-            else for (const [a, v] of Object.entries(changed)) io.stdout.write(`${new Date().toISOString()} ${a} = ${valueToText(v)}\n`);
+            else for (const [a, v] of Object.entries(changed)) io.stdout.write(`${new Date().toISOString()} ${a} = ${textOf(v)}\n`);
           }
         } catch (err) {
           if (!io.signal.aborted) report((err as Error).message);

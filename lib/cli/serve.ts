@@ -4,9 +4,11 @@ import { FetchWriteServer } from '../fetchwrite/server';
 import { FreeportBus } from '../freeport/bus';
 import { S7Server, type S7Profile } from '../s7/server';
 import type { MemoryLayout } from '../sim/memory';
+import type { SymbolTable } from '../symbols/model';
 import { FREEPORT_BAUD_RATES } from '../url';
-import { UsageError, intFlag, stringFlag, type ParsedArgs } from './args';
+import { UsageError, intFlag, listFlag, stringFlag, type ParsedArgs } from './args';
 import { EXIT, untilInterrupted, type CliIo } from './io';
+import { symbolsFlag } from './symbols';
 
 export const SERVE_FLAGS = [
   'port',
@@ -46,6 +48,8 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
       if (!PROFILES.includes(profile)) throw new UsageError(`--profile must be one of ${PROFILES.join(', ')}`);
       // Without --layout the profile's own memory (DB1 only for s7-200 and logo).
       const layout = loadLayout(stringFlag(args, 'layout'));
+      // --source: the data blocks of DB sources, at their declared lengths with their start values.
+      const symbols = symbolsFlag(args, 'source');
       // --max-items: serve at most N items per job, as snap7's server (20) and the devices built on it.
       const maxItems = args.flags.has('max-items') ? intFlag(args, 'max-items', 20, 1, 255) : undefined;
       const server = new S7Server({
@@ -53,30 +57,38 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
         port: intFlag(args, 'port', 102, 0, 65535),
         profile,
         ...(layout ? { layout } : {}),
+        ...(symbols ? { symbols } : {}),
         ...(maxItems !== undefined ? { maxItems } : {}),
       });
       const port = await listen(() => server.listen(), 'port');
       say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
-      say(`try: plcwire read "s7://${urlHost(host)}:${port}?${REACH[profile].query}" ${REACH[profile].addresses}`);
+      const url = `s7://${urlHost(host)}:${port}?${REACH[profile].query}`;
+      if (symbols) for (const line of servedBlocks(symbols)) say(line);
+      say(`try: plcwire read "${url}" ${symbols ? tryByName(symbols, args) : REACH[profile].addresses}`);
       close = () => server.close();
       break;
     }
     case 'fetchwrite': {
       const single = args.flags.has('port') ? intFlag(args, 'port', 0, 0, 65535) : undefined;
-      const server = new FetchWriteServer(
-        single !== undefined
-          ? { host, port: single }
-          : { host, fetchPort: intFlag(args, 'fetch-port', 2000, 0, 65535), writePort: intFlag(args, 'write-port', 2001, 0, 65535) },
-      );
+      const symbols = symbolsFlag(args, 'source');
+      const server = new FetchWriteServer({
+        host,
+        ...(single !== undefined
+          ? { port: single }
+          : { fetchPort: intFlag(args, 'fetch-port', 2000, 0, 65535), writePort: intFlag(args, 'write-port', 2001, 0, 65535) }),
+        ...(symbols ? { symbols } : {}),
+      });
       const ports = await listen(() => server.listen(), 'port');
       const query =
         ports.fetchPort === ports.writePort ? `port=${ports.fetchPort}` : `fetchPort=${ports.fetchPort}&writePort=${ports.writePort}`;
       say(`FETCH/WRITE simulator listening on ${host}: fetch ${ports.fetchPort}, write ${ports.writePort}`);
-      say(`try: plcwire read "fetchwrite://${urlHost(host)}?${query}" DB1,INT0 MB0`);
+      if (symbols) for (const line of servedBlocks(symbols)) say(line);
+      say(`try: plcwire read "fetchwrite://${urlHost(host)}?${query}" ${symbols ? tryByName(symbols, args) : 'DB1,INT0 MB0'}`);
       close = () => server.close();
       break;
     }
     case 'freeport': {
+      if (args.lists.has('source')) throw new UsageError('--source builds data blocks: serve s7 or serve fetchwrite');
       const stations = parseStations(stringFlag(args, 'stations') ?? '5');
       const bus = new FreeportBus({ stations });
       const path = stringFlag(args, 'path');
@@ -103,6 +115,24 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
   await untilInterrupted(io);
   await close();
   return EXIT.OK;
+}
+
+/** The data blocks built from --source, one line each: what a client's block info will report. */
+function servedBlocks(table: SymbolTable): string[] {
+  return table.blocks.map((b) => `serving DB${b.db} "${b.name}" of ${b.length} bytes (${b.file})`);
+}
+
+/** The read command for the first elementary member of the sources, by name: `--symbols Tank.db --db Tank=1 '"Tank".Level'`. */
+function tryByName(table: SymbolTable, args: ParsedArgs): string {
+  const first = table.entries.find((e) => e.kind === 'elementary' && e.db !== null);
+  const files = listFlag(args, 'source').map((f) => `--symbols ${shellWord(f)}`);
+  const dbs = listFlag(args, 'db').map((d) => `--db ${shellWord(d)}`);
+  return [...files, ...dbs, ...(first ? [shellWord(first.name)] : [])].join(' ');
+}
+
+/** A word a POSIX shell passes through unchanged: bare when it is plain, else in single quotes. */
+function shellWord(text: string): string {
+  return /^[\w.,:/=@+-]+$/.test(text) ? text : `'${text.replace(/'/g, `'\\''`)}'`;
 }
 
 /** A bind error in words: port 102 needs privileges on Linux. */

@@ -11,6 +11,8 @@ import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
 import { FrameReader } from '../link/framer';
 import { PlcMemory, type MemoryLayout } from '../sim/memory';
+import { memoryFromSymbols } from '../symbols/memory';
+import type { SymbolTable } from '../symbols/model';
 import type { AreaName } from '../types';
 import { HEADER, MAX_DATA, OpCode, Org, byteLength, checkRequest, decodeRequest, encodeResponse, type FwRequest } from './codec';
 
@@ -25,6 +27,8 @@ export interface FetchWriteServerOptions {
   port?: number;
   memory?: PlcMemory;
   layout?: MemoryLayout;
+  /** Compiled DB sources: the data blocks are theirs, at their declared lengths with their start values (lib/symbols/memory.ts). */
+  symbols?: SymbolTable;
   /** How DB start addresses and lengths are counted (Siemens CPs: words). */
   dbUnit?: 'word' | 'byte';
   /** Initial fault injection; change it later through `server.faults`. */
@@ -90,7 +94,7 @@ export class FetchWriteServer extends EventEmitter {
         ? { fetch: options.port, write: options.port, single: true }
         : { fetch: options.fetchPort ?? 2000, write: options.writePort ?? 2001, single: false };
     this.dbUnit = options.dbUnit ?? 'word';
-    this.memory = options.memory ?? new PlcMemory(options.layout);
+    this.memory = options.memory ?? (options.symbols ? memoryFromSymbols(options.symbols, options.layout) : new PlcMemory(options.layout));
     this.faults = {
       errorCode: 0,
       latencyMs: 0,

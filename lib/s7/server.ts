@@ -8,6 +8,8 @@ import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
 import { FrameReader } from '../link/framer';
 import { PlcMemory } from '../sim/memory';
+import { memoryFromSymbols } from '../symbols/memory';
+import type { SymbolTable } from '../symbols/model';
 import { Rosctr, S7Function, tpduBytes } from './constants';
 import { isControlJob } from './codec/control';
 import type { DiagnosticEntry } from './diagnostics';
@@ -39,6 +41,12 @@ export interface S7ServerOptions {
   memory?: PlcMemory;
   /** Memory layout when no `memory` is given (MemoryLayout or the JSON form `{ dbs, areas }`). */
   layout?: S7Layout;
+  /**
+   * Compiled DB sources (compileSymbols): the data blocks served are theirs,
+   * at their declared lengths and holding their start values (lib/symbols/memory.ts),
+   * instead of the layout's; the other areas stay the layout's (or the profile's).
+   */
+  symbols?: SymbolTable;
   /**
    * Serve at most this many items per job, as snap7's server (20) and the
    * devices built on it: a longer job is served for its first N items and
@@ -143,7 +151,8 @@ export class S7Server extends EventEmitter {
     // eslint-disable-next-line @typescript-eslint/no-base-to-string
     if (!resolved) throw new TypeError(`unknown S7 profile "${String(profile)}" (${Object.keys(PROFILES).join(', ')})`);
     this.profile = resolved;
-    this.memory = options.memory ?? new PlcMemory(options.layout ? toMemoryLayout(options.layout) : resolved.layout);
+    const layout = options.layout ? toMemoryLayout(options.layout) : resolved.layout;
+    this.memory = options.memory ?? (options.symbols ? memoryFromSymbols(options.symbols, layout) : new PlcMemory(layout));
     if (options.maxItems !== undefined && !(Number.isInteger(options.maxItems) && options.maxItems >= 1 && options.maxItems <= 255)) {
       throw new TypeError(`maxItems must be a whole number 1..255, got ${String(options.maxItems)}`);
     }

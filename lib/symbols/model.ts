@@ -34,7 +34,8 @@ export interface Literal {
 }
 
 /** A start value: one literal, or for arrays a list with repeat factors (`3(0), 1`) as written. */
-export type StartValue = { readonly kind: 'literal'; readonly literal: Literal } | { readonly kind: 'list'; readonly items: readonly StartValueItem[] };
+export type StartValue =
+  { readonly kind: 'literal'; readonly literal: Literal } | { readonly kind: 'list'; readonly items: readonly StartValueItem[] };
 export interface StartValueItem {
   /** `n(...)` repeats its value n times; 1 when written bare. */
   readonly repeat: number;

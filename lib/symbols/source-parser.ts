@@ -114,6 +114,12 @@ const SYSTEM_TYPES = new Set(
   ].map((s) => s.toUpperCase()),
 );
 
+/**
+ * Nesting of STRUCTs, ARRAYs and start-value lists the parser follows: far
+ * beyond what the engineering tools let a block nest, far within the stack.
+ */
+const MAX_DEPTH = 64;
+
 /** Keywords that end a block or start the next one: a STRUCT or BEGIN section that meets one is unterminated. */
 const BLOCK_ENDS = new Set([
   'END_TYPE',
@@ -148,13 +154,14 @@ const HEADER_FLAGS = new Set(['KNOW_HOW_PROTECT', 'READ_ONLY', 'UNLINKED', 'DB_S
  * quoted name counts as optimized, TIA's default for a new block (and what
  * importing such a source creates on an S7-1500); a `DB n` block counts as
  * standard, since STEP 7 knows no other access. A file whose headers use a
- * number anywhere (`DB 10`, `UDT 1`) is a STEP 7 source: its symbolic
+ * number anywhere (`DB 10`, `UDT 1`), or named `*.awl` (STEP 7's
+ * extension for sources), is a STEP 7 source: its symbolic
  * `DATA_BLOCK "Tank"` blocks count as standard too.
  */
 export function parseBlockSource(source: SymbolSource): BlockDecl[] {
   const parser = new Parser(tokenize(sourceText(source.content), source.name), source.name);
   const blocks = parser.blocks();
-  const step7 = blocks.some((b) => b.number !== undefined);
+  const step7 = /\.awl$/i.test(source.name) || blocks.some((b) => b.number !== undefined);
   return blocks.map((b) => {
     if (b.kind !== 'db') return b;
     if (optimizedAttribute(b.attributes) !== undefined) return b;
@@ -215,6 +222,8 @@ class Parser {
   /** The comment that follows a token on its own line (a declaration's `// …`). */
   private readonly trailing = new Map<Token, string>();
   private i = 0;
+  /** STRUCT, ARRAY and start-value brackets open now; bounded so a hostile file cannot exhaust the stack. */
+  private depth = 0;
 
   constructor(
     tokens: readonly Token[],
@@ -399,7 +408,13 @@ class Parser {
     throw this.error(t, `expected STRUCT, or the UDT or FB that DATA_BLOCK ${name} is an instance of, found ${describe(t)}`);
   }
 
-  /** `UDT 5`, `FB 3`, `SFB 4` (or glued, `UDT5`) as a named type `UDT5` with its number; undefined when the next token is none. */
+  /**
+   * `UDT 5` (or glued, `UDT5`) as the named type `UDT5` with its number;
+   * `FB 3` / `SFB 4` as the named type `FB3` / `SFB4` WITHOUT a number,
+   * since a number on a named type means a UDT (model.ts) and an instance
+   * DB of FB 5 must not be laid out as UDT 5. Undefined when the next token
+   * is none of these.
+   */
   private numberedType(): TypeRef | undefined {
     const t = this.peek();
     const glued = /^(UDT|FB|SFB)(\d+)$/i.exec(t.text);
@@ -409,7 +424,7 @@ class Parser {
     const prefix = (glued ? glued[1]! : t.text).toUpperCase();
     const digits = glued ? glued[2]! : this.next().text;
     const { name, number } = this.numbered(prefix, digits, t);
-    return { kind: 'named', name, number, at: this.pos(t) };
+    return prefix === 'UDT' ? { kind: 'named', name, number, at: this.pos(t) } : { kind: 'named', name, at: this.pos(t) };
   }
 
   private skipBlock(end: string): void {
@@ -483,6 +498,21 @@ class Parser {
   }
 
   private typeRef(member: string): TypeRef {
+    return this.nested(member, () => this.typeRefAt(member));
+  }
+
+  /** Runs a nested part of a declaration, refusing nesting deeper than MAX_DEPTH. */
+  private nested<T>(what: string, read: () => T): T {
+    if (this.depth >= MAX_DEPTH) throw this.error(this.peek(), `${what} is nested deeper than ${MAX_DEPTH} levels`);
+    this.depth++;
+    try {
+      return read();
+    } finally {
+      this.depth--;
+    }
+  }
+
+  private typeRefAt(member: string): TypeRef {
     const t = this.peek();
     const kw = upper(t);
     if (t.kind === 'quoted') {
@@ -562,6 +592,10 @@ class Parser {
 
   /** `12.5`, `[1, 2, 3(0)]`, `1, 2, 3` (STEP 7 writes array values without brackets), `10(0)`. */
   private startValue(what: string): StartValue {
+    return this.nested(what, () => this.startValueAt(what));
+  }
+
+  private startValueAt(what: string): StartValue {
     if (this.isPunct('[')) {
       const open = this.next();
       const items = this.items(what);
@@ -590,7 +624,7 @@ class Parser {
         throw this.error(t, `the repeat factor ${t.text} (${what}) must be a whole number of at least 1`);
       this.next();
       const open = this.next();
-      const inner = this.items(what);
+      const inner = this.nested(what, () => this.items(what));
       this.expectPunct(')', `expected ')' to close the repeat opened at ${open.line}:${open.column} (${what})`);
       const value: StartValue =
         inner.length === 1 && inner[0]!.repeat === 1

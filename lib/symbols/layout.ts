@@ -1,0 +1,487 @@
+/**
+ * The layout engine: from the declarations of DBs and UDTs to the byte and
+ * bit of every member, as a CPU lays out a block with standard
+ * (non-optimized) access. Pure: declarations in, a tree of placed members
+ * out; SourceError at the declaration that cannot be laid out.
+ *
+ * The rules, and the Siemens documentation and observations they rest on,
+ * are in docs/symbols.md ("Layout rules"). In short, with a cursor that
+ * counts bits from the start of the block:
+ *  - BOOL takes the next bit;
+ *  - BYTE, CHAR, SINT, USINT the next whole byte;
+ *  - every type of 16 bits or more (WORD … LREAL, DATE_AND_TIME, DTL) starts
+ *    on the next even byte;
+ *  - STRING[n] (n+2 bytes) and WSTRING[n] (4+2n bytes) start on an even byte,
+ *    and what follows them starts on an even byte too;
+ *  - a STRUCT, a UDT and an ARRAY start on an even byte and occupy memory
+ *    up to the next word limit (what follows starts on an even byte);
+ *  - array elements follow each other by these same rules (BOOL elements
+ *    bit by bit, BYTE-sized ones byte by byte, a STRING or STRUCT element
+ *    padded to an even length); a multi-dimensional ARRAY OF BOOL starts
+ *    each run of its last index on a new byte; the last index runs fastest;
+ *  - the block is a STRUCT: its length is even.
+ */
+import { SourceError } from '../errors';
+import type { DataTypeName } from '../types';
+import { elementByteLength } from '../values/types-table';
+import type { BlockDecl, DataBlockDecl, MemberDecl, SourcePosition, TypeDecl, TypeRef } from './model';
+
+/** Bytes a data block with standard access can hold: 64 KB (S7-300/400 and S7-1200/1500 with standard access); the last byte, 65535, is the last our addresses reach. */
+const MAX_BLOCK_BYTES = 65536;
+/** Elements of one array: the element count of an address (`:BOOL[65535]`) and of an S7-300 array indexed by INT. */
+const MAX_ARRAY_ELEMENTS = 65535;
+
+const BLOCK_BITS = MAX_BLOCK_BYTES * 8;
+
+/** Checked as members are placed, so that a huge declaration is refused before it is built. */
+function tooLong(at: SourcePosition, where: Where): SourceError {
+  return new SourceError(
+    at,
+    `${whereText(where)} ends beyond byte ${MAX_BLOCK_BYTES - 1}: a block with standard access holds at most ${MAX_BLOCK_BYTES} bytes (64 KB)`,
+  );
+}
+
+/** How TIA Portal spells each type in its editors and sources (`Bool`, `DInt`, `Time_Of_Day`). */
+const TIA_SPELLING: Readonly<Record<DataTypeName, string>> = Object.freeze({
+  BOOL: 'Bool',
+  BYTE: 'Byte',
+  WORD: 'Word',
+  DWORD: 'DWord',
+  LWORD: 'LWord',
+  SINT: 'SInt',
+  USINT: 'USInt',
+  INT: 'Int',
+  UINT: 'UInt',
+  DINT: 'DInt',
+  UDINT: 'UDInt',
+  LINT: 'LInt',
+  ULINT: 'ULInt',
+  REAL: 'Real',
+  LREAL: 'LReal',
+  CHAR: 'Char',
+  WCHAR: 'WChar',
+  STRING: 'String',
+  WSTRING: 'WString',
+  S5TIME: 'S5Time',
+  TIME: 'Time',
+  LTIME: 'LTime',
+  DATE: 'Date',
+  TIME_OF_DAY: 'Time_Of_Day',
+  DATE_AND_TIME: 'Date_And_Time',
+  DTL: 'DTL',
+  COUNTER: 'Counter',
+  TIMER: 'Timer',
+});
+
+/** Types that take one byte and may start on any byte. */
+const BYTE_TYPES: ReadonlySet<DataTypeName> = new Set<DataTypeName>(['BYTE', 'CHAR', 'SINT', 'USINT']);
+/** Parameter types of STEP 7 blocks: a timer or counter number, not data a DB holds. */
+const NOT_IN_A_DB: ReadonlySet<DataTypeName> = new Set<DataTypeName>(['TIMER', 'COUNTER']);
+
+interface Placed {
+  /** Byte offset from the start of the block. */
+  readonly byte: number;
+  /** 0–7 for BOOL and a BOOL array (its first bit); null otherwise. */
+  readonly bit: number | null;
+  /** Bytes covered from `byte` (a BOOL: 1; a BOOL array: the bytes its bits touch; a struct: its even length). */
+  readonly size: number;
+  /** The type as TIA shows it: `Int`, `String[20]`, `Array[1..10] of Bool`, `"Motor"`, `Struct`. */
+  readonly typeText: string;
+  /** The member's declaration; undefined for array elements and the block itself. */
+  readonly decl?: MemberDecl;
+  readonly at: SourcePosition;
+}
+
+interface ElementaryNode extends Placed {
+  readonly kind: 'elementary';
+  readonly dataType: DataTypeName;
+  readonly stringLength: number;
+}
+
+export interface ArrayNode extends Placed {
+  readonly kind: 'array';
+  readonly dims: readonly { readonly low: number; readonly high: number }[];
+  /** The elements, last index fastest. */
+  readonly elements: readonly LayoutNode[];
+  /** Elements of an elementary type: the type and its string length. */
+  readonly elementType?: { readonly dataType: DataTypeName; readonly stringLength: number };
+  /** True when the elements lie as one `TYPE[count]` address reads them: elementary, one after the other with no gap. */
+  readonly contiguous: boolean;
+}
+
+interface StructNode extends Placed {
+  readonly kind: 'struct';
+  readonly members: readonly { readonly name: string; readonly node: LayoutNode }[];
+  /** The UDT it is an instance of (its declared name), when it is one. */
+  readonly typeName?: string;
+  /** The UDT's declaration, when it is an instance of one (its members' start values apply to every instance). */
+  readonly typeDecl?: TypeDecl;
+}
+
+export type LayoutNode = ElementaryNode | ArrayNode | StructNode;
+
+/** A data block laid out. */
+export interface BlockLayout {
+  readonly decl: DataBlockDecl;
+  /** The block's body, at byte 0. */
+  readonly root: StructNode;
+  /** Bytes of the block (even). */
+  readonly length: number;
+  /** The UDT the block is an instance of, as TIA writes it (`"Motor"`, `UDT 5`). */
+  readonly instanceOf?: string;
+}
+
+export interface LayoutOptions {
+  /** UDT numbers by symbol (lower case), from a symbol table: a `"Motor"` reference finds `TYPE UDT 5` through the row `Motor  UDT5`. */
+  readonly typeNumbers?: ReadonlyMap<string, number>;
+}
+
+// ---------------------------------------------------------------- names as TIA writes them
+
+/** A name needs no quotes when it is a plain identifier (letters, umlauts included, digits, `_`), as names.ts reads them. */
+const PLAIN_NAME = /^[\p{L}_][\p{L}\p{M}\p{N}_]*$/u;
+
+/** A block as TIA writes it: `"Tank"`; a STEP 7 DB without symbol as STEP 7 does: `DB10`. */
+export function blockRef(decl: { readonly name: string; readonly number?: number }): string {
+  return decl.number !== undefined && decl.name.toUpperCase() === `DB${decl.number}` ? `DB${decl.number}` : `"${decl.name}"`;
+}
+
+/** A member as TIA writes it after the dot: `Speed`, or quoted when not a plain identifier: `"Speed.Set"`. */
+export function memberRef(name: string): string {
+  return PLAIN_NAME.test(name) ? name : `"${name}"`;
+}
+
+/** A UDT as TIA writes it: `"Motor"`; a STEP 7 UDT without symbol: `UDT 5`. */
+function typeRef(decl: TypeDecl): string {
+  return decl.number !== undefined && decl.name.toUpperCase() === `UDT${decl.number}` ? `UDT ${decl.number}` : `"${decl.name}"`;
+}
+
+/** Where a member is, for messages: built only when a message needs it. */
+interface Where {
+  readonly parent?: Where;
+  /** `"Tank"`, `.Speed`, `[3]`. */
+  readonly segment: string;
+}
+
+function whereText(where: Where): string {
+  let text = '';
+  for (let w: Where | undefined = where; w; w = w.parent) text = w.segment + text;
+  return text;
+}
+
+function child(where: Where, name: string): Where {
+  return { parent: where, segment: `.${memberRef(name)}` };
+}
+
+// ---------------------------------------------------------------- the engine
+
+/** Rounds a bit position up to the next byte. */
+function nextByte(bits: number): number {
+  return Math.ceil(bits / 8) * 8;
+}
+
+/** Rounds a bit position up to the next even byte (word limit). */
+function nextWord(bits: number): number {
+  return Math.ceil(bits / 16) * 16;
+}
+
+/** The indices of element `k` of an array (last index fastest), as TIA writes them: `3`, `1,2`. */
+export function elementIndex(dims: ArrayNode['dims'], k: number): string {
+  const indices: number[] = new Array<number>(dims.length);
+  let rest = k;
+  for (let d = dims.length - 1; d >= 0; d--) {
+    const span = dims[d]!.high - dims[d]!.low + 1;
+    indices[d] = dims[d]!.low + (rest % span);
+    rest = Math.floor(rest / span);
+  }
+  return indices.join(',');
+}
+
+class Engine {
+  private readonly byName = new Map<string, TypeDecl>();
+  private readonly byNumber = new Map<number, TypeDecl>();
+  /** UDTs being laid out, innermost last: a UDT met again contains itself. */
+  private readonly open: TypeDecl[] = [];
+
+  constructor(
+    types: readonly TypeDecl[],
+    private readonly typeNumbers: ReadonlyMap<string, number>,
+  ) {
+    for (const t of types) {
+      const key = t.name.toLowerCase();
+      const known = this.byName.get(key) ?? (t.number === undefined ? undefined : this.byNumber.get(t.number));
+      if (known)
+        throw new SourceError(t.at, `UDT ${typeRef(t)} is declared twice (first at ${known.at.file}:${known.at.line}:${known.at.column})`);
+      this.byName.set(key, t);
+      if (t.number !== undefined) this.byNumber.set(t.number, t);
+    }
+  }
+
+  /** The UDT a named reference stands for, or undefined. */
+  find(ref: Extract<TypeRef, { kind: 'named' }>): TypeDecl | undefined {
+    if (ref.number !== undefined) return this.byNumber.get(ref.number);
+    const key = ref.name.toLowerCase();
+    const byName = this.byName.get(key);
+    if (byName) return byName;
+    const number = this.typeNumbers.get(key);
+    return number === undefined ? undefined : this.byNumber.get(number);
+  }
+
+  /** Lays out a type at bit `pos`; returns the node and the bit where the next member may start. */
+  place(type: TypeRef, pos: number, where: Where, decl: MemberDecl | undefined): { node: LayoutNode; next: number } {
+    switch (type.kind) {
+      case 'elementary':
+        return this.elementary(type, pos, where, decl);
+      case 'array':
+        return this.array(type, pos, where, decl);
+      case 'struct':
+        return this.struct(type.members, 'Struct', pos, where, decl, decl?.at ?? type.at, undefined);
+      case 'named': {
+        const udt = this.find(type);
+        const written = type.number === undefined ? `"${type.name}"` : `UDT ${type.number}`;
+        if (!udt)
+          throw new SourceError(type.at, `unknown type ${written} (used by ${whereText(where)}): no UDT of that name is among the sources`);
+        return this.udt(udt, pos, where, decl);
+      }
+    }
+  }
+
+  udt(udt: TypeDecl, pos: number, where: Where, decl: MemberDecl | undefined): { node: LayoutNode; next: number } {
+    const from = this.open.indexOf(udt);
+    if (from >= 0) {
+      const chain = [...this.open.slice(from), udt].map(typeRef).join(' → ');
+      throw new SourceError(udt.at, `UDT ${typeRef(udt)} contains itself (${chain}): a type cannot be laid out inside itself`);
+    }
+    this.open.push(udt);
+    try {
+      return this.struct(udt.body.members, typeRef(udt), pos, where, decl, decl?.at ?? udt.at, udt);
+    } finally {
+      this.open.pop();
+    }
+  }
+
+  private elementary(
+    type: Extract<TypeRef, { kind: 'elementary' }>,
+    pos: number,
+    where: Where,
+    decl: MemberDecl | undefined,
+  ): { node: ElementaryNode; next: number } {
+    const dataType = type.type;
+    if (NOT_IN_A_DB.has(dataType))
+      throw new SourceError(type.at, `${whereText(where)}: ${TIA_SPELLING[dataType]} is a block parameter type, not data a DB can hold`);
+    const stringLength = dataType === 'STRING' || dataType === 'WSTRING' ? type.stringLength : 0;
+    const typeText = stringLength > 0 ? `${TIA_SPELLING[dataType]}[${stringLength}]` : TIA_SPELLING[dataType];
+    const at = decl?.at ?? type.at;
+    const base = decl ? { decl } : {};
+    if (dataType === 'BOOL') {
+      const node: ElementaryNode = {
+        kind: 'elementary',
+        dataType,
+        stringLength,
+        byte: pos >> 3,
+        bit: pos & 7,
+        size: 1,
+        typeText,
+        at,
+        ...base,
+      };
+      return { node, next: pos + 1 };
+    }
+    const bytes = elementByteLength(dataType, stringLength);
+    const start = BYTE_TYPES.has(dataType) ? nextByte(pos) : nextWord(pos);
+    const node: ElementaryNode = {
+      kind: 'elementary',
+      dataType,
+      stringLength,
+      byte: start >> 3,
+      bit: null,
+      size: bytes,
+      typeText,
+      at,
+      ...base,
+    };
+    const end = start + bytes * 8;
+    // A STRING ends at a word limit: what follows an odd STRING[n] starts on the next even byte.
+    return { node, next: stringLength > 0 ? nextWord(end) : end };
+  }
+
+  private struct(
+    members: readonly MemberDecl[],
+    typeText: string,
+    pos: number,
+    where: Where,
+    decl: MemberDecl | undefined,
+    at: SourcePosition,
+    udt: TypeDecl | undefined,
+  ): { node: StructNode; next: number } {
+    const start = nextWord(pos);
+    let cursor = start;
+    const placed: { name: string; node: LayoutNode }[] = [];
+    const seen = new Map<string, MemberDecl>();
+    for (const m of members) {
+      const key = m.name.toLowerCase();
+      const before = seen.get(key);
+      if (before)
+        throw new SourceError(
+          m.at,
+          `${whereText(child(where, m.name))} is declared twice (first at line ${before.at.line}, column ${before.at.column})`,
+        );
+      seen.set(key, m);
+      const { node, next } = this.place(m.type, cursor, child(where, m.name), m);
+      placed.push({ name: m.name, node });
+      cursor = next;
+      if (cursor > BLOCK_BITS) throw tooLong(m.at, child(where, m.name));
+    }
+    // A STRUCT occupies memory up to the next word limit.
+    const end = nextWord(cursor);
+    const node: StructNode = {
+      kind: 'struct',
+      members: placed,
+      byte: start >> 3,
+      bit: null,
+      size: (end - start) >> 3,
+      typeText,
+      at,
+      ...(decl ? { decl } : {}),
+      ...(udt ? { typeName: udt.name, typeDecl: udt } : {}),
+    };
+    return { node, next: end };
+  }
+
+  private array(
+    type: Extract<TypeRef, { kind: 'array' }>,
+    pos: number,
+    where: Where,
+    decl: MemberDecl | undefined,
+  ): { node: ArrayNode; next: number } {
+    if (type.dims.length === 0) throw new SourceError(type.at, `${whereText(where)}: an array needs at least one dimension`);
+    let count = 1;
+    for (const { low, high } of type.dims) {
+      if (!Number.isSafeInteger(low) || !Number.isSafeInteger(high))
+        throw new SourceError(type.at, `${whereText(where)}: array bounds ${low}..${high} must be whole numbers`);
+      if (low > high)
+        throw new SourceError(type.at, `${whereText(where)}: array bounds ${low}..${high}: the low bound is above the high bound`);
+      count *= high - low + 1;
+      if (count > MAX_ARRAY_ELEMENTS)
+        throw new SourceError(
+          type.at,
+          `${whereText(where)}: the array has more than ${MAX_ARRAY_ELEMENTS} elements (at most ${MAX_ARRAY_ELEMENTS})`,
+        );
+    }
+    const element = type.element;
+    if (element.kind === 'array')
+      throw new SourceError(
+        element.at,
+        `${whereText(where)}: an array of arrays is not an S7 type; declare one array of several dimensions (Array[1..3, 1..2] of …)`,
+      );
+    const start = nextWord(pos);
+    const isBool = element.kind === 'elementary' && element.type === 'BOOL';
+    const rowLength = type.dims[type.dims.length - 1]!.high - type.dims[type.dims.length - 1]!.low + 1;
+    const elements: LayoutNode[] = new Array<LayoutNode>(count);
+    let cursor = start;
+    let dataEnd = start;
+    for (let k = 0; k < count; k++) {
+      // In a multi-dimensional bit array each run of the last index starts on a new byte.
+      if (isBool && type.dims.length > 1 && k % rowLength === 0) cursor = nextByte(cursor);
+      const { node, next } = this.place(element, cursor, { parent: where, segment: `[${elementIndex(type.dims, k)}]` }, undefined);
+      elements[k] = node;
+      if (next > BLOCK_BITS) throw tooLong(type.at, where);
+      dataEnd = node.kind === 'elementary' && node.bit !== null ? node.byte * 8 + node.bit + 1 : (node.byte + node.size) * 8;
+      cursor = next;
+    }
+    const elementText = this.typeText(element);
+    const dimsText = type.dims.map((d) => `${d.low}..${d.high}`).join(', ');
+    let elementType: ArrayNode['elementType'];
+    let contiguous = false;
+    if (element.kind === 'elementary') {
+      const stringLength = element.type === 'STRING' || element.type === 'WSTRING' ? element.stringLength : 0;
+      elementType = { dataType: element.type, stringLength };
+      contiguous = isBool
+        ? type.dims.length === 1 || rowLength % 8 === 0
+        : elementByteLength(element.type, stringLength) % 2 === 0 || BYTE_TYPES.has(element.type);
+    }
+    const node: ArrayNode = {
+      kind: 'array',
+      dims: type.dims,
+      elements,
+      contiguous,
+      byte: start >> 3,
+      bit: isBool ? 0 : null,
+      size: (nextByte(dataEnd) - start) >> 3,
+      typeText: `Array[${dimsText}] of ${elementText}`,
+      at: decl?.at ?? type.at,
+      ...(decl ? { decl } : {}),
+      ...(elementType ? { elementType } : {}),
+    };
+    // An array occupies memory up to the next word limit.
+    return { node, next: nextWord(cursor) };
+  }
+
+  /** A type as TIA shows it, without laying it out. */
+  typeText(type: TypeRef): string {
+    switch (type.kind) {
+      case 'elementary': {
+        const n = type.type === 'STRING' || type.type === 'WSTRING' ? type.stringLength : 0;
+        return n > 0 ? `${TIA_SPELLING[type.type]}[${n}]` : TIA_SPELLING[type.type];
+      }
+      case 'array':
+        return `Array[${type.dims.map((d) => `${d.low}..${d.high}`).join(', ')}] of ${this.typeText(type.element)}`;
+      case 'struct':
+        return 'Struct';
+      case 'named': {
+        const udt = this.find(type);
+        if (udt) return typeRef(udt);
+        return type.number === undefined ? `"${type.name}"` : `UDT ${type.number}`;
+      }
+    }
+  }
+}
+
+/**
+ * Lays out every data block of the declarations (UDTs are laid out where
+ * they are used, and each once on its own so that a UDT nobody uses is
+ * checked too). Throws SourceError at the first declaration that cannot be
+ * laid out: an optimized block, an unknown type, a UDT that contains
+ * itself, an instance of an FB, bad array bounds, a block over 64 KB (refused at the
+ * member that crosses the limit, before the rest is built).
+ */
+export function layoutBlocks(blocks: readonly BlockDecl[], options: LayoutOptions = {}): BlockLayout[] {
+  const types = blocks.filter((b): b is TypeDecl => b.kind === 'type');
+  const engine = new Engine(types, options.typeNumbers ?? new Map());
+  for (const t of types) engine.udt(t, 0, { segment: typeRef(t) }, undefined);
+  const out: BlockLayout[] = [];
+  for (const block of blocks) if (block.kind === 'db') out.push(layoutBlock(engine, block));
+  return out;
+}
+
+function layoutBlock(engine: Engine, db: DataBlockDecl): BlockLayout {
+  const name = blockRef(db);
+  if (db.optimized)
+    throw new SourceError(
+      db.at,
+      `DB ${name} has optimized block access: its members have no fixed offsets to read by address. ` +
+        `In TIA Portal uncheck 'Optimized block access' in the block's properties (Attributes), compile and download it, then export its source again`,
+    );
+  const where: Where = { segment: name };
+  let root: StructNode;
+  let instanceOf: string | undefined;
+  const body = db.body;
+  if (body.kind === 'struct') {
+    root = engine.place(body, 0, where, undefined).node as StructNode;
+  } else if (body.kind === 'named') {
+    const udt = engine.find(body);
+    if (!udt) {
+      const written = body.number === undefined ? `"${body.name}"` : `UDT ${body.number}`;
+      throw new SourceError(
+        db.at,
+        `DB ${name} is an instance of ${written}, which is not a UDT of the sources: an instance DB of a function block cannot be laid out ` +
+          `from DB and UDT sources (give the UDT's source, or read the block by absolute address)`,
+      );
+    }
+    root = engine.udt(udt, 0, where, undefined).node as StructNode;
+    instanceOf = root.typeText;
+  } else {
+    throw new SourceError(db.at, `DB ${name}: a block's body is a STRUCT or a UDT, not ${engine.typeText(body)}`);
+  }
+  return { decl: db, root, length: root.size, ...(instanceOf === undefined ? {} : { instanceOf }) };
+}

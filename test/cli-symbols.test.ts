@@ -1,0 +1,254 @@
+/**
+ * Tags by name on the command line, through the installed binary
+ * (bin/plcwire.js) in child processes: `plcwire symbols` (table, --json,
+ * --csv, errors as file:line:column), --db forms, and `serve s7 --source`
+ * with read, write, watch and blocks by symbol against it over a real socket.
+ * Fixtures: test/fixtures/symbols/cli/ (Tank.db's bytes are worked out in
+ * test/symbols-simulator.test.ts).
+ */
+import { expect } from 'chai';
+import { spawn, type ChildProcess } from 'node:child_process';
+import { once } from 'node:events';
+import * as path from 'node:path';
+import { EXIT } from '../lib/cli/io';
+import { freePort } from './support/net';
+import { until } from './support/wait';
+
+const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
+const FIXTURES = path.resolve(__dirname, '../../test/fixtures/symbols/cli');
+
+/** The real bin in a child process run in the fixtures' folder (so sources are named as a user types them); output until it exits. */
+function run(args: string[]): { child: ChildProcess; output: () => { out: string; err: string }; exit: Promise<number> } {
+  const child = spawn(process.execPath, [BIN, ...args], { cwd: FIXTURES, stdio: ['pipe', 'pipe', 'pipe'] });
+  let out = '';
+  let err = '';
+  child.stdout!.on('data', (d: Buffer) => (out += d.toString()));
+  child.stderr!.on('data', (d: Buffer) => (err += d.toString()));
+  const exit = once(child, 'exit').then(([code]) => code as number);
+  return { child, output: () => ({ out, err }), exit };
+}
+
+/** Runs to the end: exit code and output. */
+async function done(args: string[]): Promise<{ code: number; out: string; err: string }> {
+  const r = run(args);
+  const code = await r.exit;
+  return { code, ...r.output() };
+}
+
+interface Row {
+  name: string;
+  type: string;
+  db: number | null;
+  byte: number;
+  bit: number | null;
+  address: string;
+}
+
+describe('plcwire symbols and tags by name (the installed binary)', function () {
+  this.timeout(30000);
+
+  describe('symbols', () => {
+    it('--json gives every member with name, type, db, byte, bit (0-7 for BOOL, else null) and address', async () => {
+      const r = await done(['symbols', 'Tank.db', '--db', 'Tank=1', '--json']);
+      expect(r.code, r.err).to.equal(0);
+      const rows = JSON.parse(r.out) as Row[];
+      const by = new Map(rows.map((row) => [row.name, row]));
+      expect(by.get('"Tank".Level')).to.deep.equal({
+        name: '"Tank".Level',
+        type: by.get('"Tank".Level')!.type,
+        db: 1,
+        byte: 0,
+        bit: null,
+        address: 'DB1.DBD0:REAL',
+      });
+      expect(by.get('"Tank".Level')!.type).to.match(/^real$/i);
+      expect(by.get('"Tank".Valve')).to.include({ db: 1, byte: 4, bit: 2, address: 'DB1.DBX4.2' });
+      expect(by.get('"Tank".Name')).to.include({ byte: 8, bit: null, address: 'DB1.DBB8:STRING[6]' });
+      expect(by.get('"Tank".Name')!.type).to.match(/^string\[6\]$/i);
+      expect(by.get('"Tank".Label')).to.include({ byte: 22, address: 'DB1.DBB22:WSTRING[3]' });
+      expect(by.get('"Tank".Flags[9]')).to.include({ byte: 63, bit: 1 });
+      expect(by.get('"Tank".Motor')).to.include({ byte: 64, bit: null });
+      expect(by.get('"Tank".Motor.On')).to.include({ byte: 68, bit: 0, address: 'DB1.DBX68.0' });
+      // Declaration order: a struct before its members.
+      const names = rows.map((row) => row.name);
+      expect(names.indexOf('"Tank".Motor')).to.be.below(names.indexOf('"Tank".Motor.Speed'));
+      expect(names[0]).to.equal('"Tank".Level');
+    });
+
+    it('the table has a header and aligned columns: name, address, type, byte, bit', async () => {
+      const r = await done(['symbols', 'Tank.db', '--db', 'Tank=1']);
+      expect(r.code, r.err).to.equal(0);
+      const lines = r.out.trimEnd().split('\n');
+      expect(lines[0]).to.match(/^name\s+address\s+type\s+byte\s+bit$/);
+      const level = lines.find((l) => l.startsWith('"Tank".Level '))!;
+      expect(level).to.match(/^"Tank"\.Level\s+DB1\.DBD0:REAL\s+\S+\s+0$/);
+      expect(lines.find((l) => l.startsWith('"Tank".Valve '))).to.match(/DB1\.DBX4\.2\s+\S+\s+4\s+2$/);
+      const column = (l: string, word: string) => l.indexOf(word);
+      expect(column(level, 'DB1.')).to.equal(column(lines[0]!, 'address'));
+      const on = lines.find((l) => l.startsWith('"Tank".Motor.On '))!;
+      expect(column(on, 'DB1.')).to.equal(column(lines[0]!, 'address'));
+    });
+
+    it('--csv has a header row and quotes fields as RFC 4180 (quotes doubled), lines ending CRLF', async () => {
+      const r = await done(['symbols', 'Tank.db', 'Mix.db', '--db', 'Tank=1', '--db', 'Mix=2', '--csv']);
+      expect(r.code, r.err).to.equal(0);
+      const lines = r.out.split('\r\n');
+      expect(lines[0]).to.equal('name,address,type,db,byte,bit');
+      expect(lines.at(-1)).to.equal('');
+      expect(lines.find((l) => l.startsWith('"""Tank"".Level"'))).to.match(/^"""Tank""\.Level",DB1\.DBD0:REAL,\w+,1,0,$/);
+      expect(lines.find((l) => l.startsWith('"""Tank"".Running"'))).to.match(/,1,4,0$/);
+      expect(lines.find((l) => l.startsWith('"""Mix"".Ratio"'))).to.match(/^"""Mix""\.Ratio",DB2\.DBD0:REAL,\w+,2,0,$/);
+      expect(r.out).not.to.match(/[^\r]\n/);
+    });
+
+    it('a source that does not compile prints file:line:column: problem, nothing on stdout, and exits 2', async () => {
+      const r = await done(['symbols', 'Tank.db', 'Broken.db', '--db', 'Tank=1', '--db', 'Broken=3']);
+      expect(r.code).to.equal(EXIT.USAGE);
+      expect(r.out).to.equal('');
+      expect(r.err).to.match(/^Broken\.db:5:\d+: .*Reel/);
+      expect(r.err.trim().split('\n')).to.have.length(1);
+    });
+
+    it('a file that cannot be read, or no file, is a usage error', async () => {
+      const missing = await done(['symbols', 'Nope.db']);
+      expect(missing.code).to.equal(EXIT.USAGE);
+      expect(missing.err).to.match(/cannot read Nope\.db: ENOENT/);
+      const none = await done(['symbols']);
+      expect(none.code).to.equal(EXIT.USAGE);
+      expect(none.out).to.equal('');
+    });
+
+    it('--db takes NAME=N with the name bare or quoted as TIA writes it; a bad form is named', async () => {
+      const forms = [['--db', 'Mix=2'], ['--db', '"Mix"=2'], ['--db=Mix=2'], ['--db', ' "Mix" = 2 ']];
+      const outs = await Promise.all(forms.map((f) => done(['symbols', 'Mix.db', ...f, '--json'])));
+      for (const o of outs) expect(o.code, o.err).to.equal(0);
+      expect(new Set(outs.map((o) => o.out)).size).to.equal(1);
+      expect((JSON.parse(outs[0]!.out) as Row[])[0]).to.include({ name: '"Mix".Ratio', db: 2, address: 'DB2.DBD0:REAL' });
+      for (const [bad, message] of [
+        ['Mix', /--db "Mix": give NAME=NUMBER/],
+        ['=2', /--db "=2": give NAME=NUMBER/],
+        ['Mix=0', /--db "Mix=0": "0" is not a DB number 1\.\.65535/],
+        ['Mix=x', /--db "Mix=x": "x" is not a DB number/],
+        ['Mix=70000', /"70000" is not a DB number/],
+      ] as const) {
+        const r = await done(['symbols', 'Mix.db', '--db', bad]);
+        expect(r.code, bad).to.equal(EXIT.USAGE);
+        expect(r.err, bad).to.match(message);
+        expect(r.out).to.equal('');
+      }
+      const twice = await done(['symbols', 'Mix.db', '--db', 'Mix=2', '--db', 'Mix=3']);
+      expect(twice.err).to.match(/--db gives "Mix" two numbers: 2 and 3/);
+      const shared = await done(['symbols', 'Mix.db', 'Tank.db', '--db', 'Mix=2', '--db', 'Tank=2']);
+      expect(shared.err).to.match(/--db gives DB2 to two blocks: "Mix" and "Tank"/);
+    });
+  });
+
+  describe('serve s7 --source, and read, write, watch by symbol', () => {
+    let srv: ReturnType<typeof run>;
+    let url: string;
+    const symbols = ['--symbols', 'Tank.db', '--db', 'Tank=1'];
+
+    before(async () => {
+      const port = await freePort();
+      srv = run(['serve', 's7', '--port', String(port), '--profile', 's7-300', '--source', 'Tank.db', '--db', 'Tank=1']);
+      await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+      url = `s7://127.0.0.1:${port}?rack=0&slot=2`;
+    });
+
+    after(async () => {
+      srv.child.kill('SIGINT');
+      expect(await srv.exit).to.equal(0);
+    });
+
+    it('prints the blocks it serves with their lengths, and a read by name to try', () => {
+      const out = srv.output().out;
+      expect(out).to.match(/^serving DB1 "Tank" of 70 bytes \(Tank\.db\)$/m);
+      expect(out).to.match(/^try: plcwire read "s7:\/\/127\.0\.0\.1:\d+\?rack=0&slot=2" --symbols Tank\.db --db Tank=1 '"Tank"\.Level'$/m);
+    });
+
+    it('block info reports the declared length', async () => {
+      const r = await done(['blocks', url, 'DB', '1', '--json']);
+      expect(r.code, r.err).to.equal(0);
+      expect(JSON.parse(r.out)).to.include({ number: 1, mc7Size: 70 });
+    });
+
+    it('read mixes names (quoted or not) and addresses, keyed as given', async () => {
+      const r = await done(['read', url, '"Tank".Level', 'Tank.Count', 'Tank.Name', 'DB1.DBD64:REAL', ...symbols, '--json']);
+      expect(r.code, r.err).to.equal(0);
+      expect(JSON.parse(r.out)).to.deep.equal({ '"Tank".Level': 12.5, 'Tank.Count': -2, 'Tank.Name': 'AB', 'DB1.DBD64:REAL': 1.5 });
+      const plain = await done(['read', url, '"Tank".Level', 'Tank.Valve', ...symbols]);
+      expect(plain.out).to.equal('"Tank".Level = 12.5\nTank.Valve = true\n');
+    });
+
+    it('a whole STRUCT reads as an object keyed by member name, in --json and in plain text', async () => {
+      const json = await done(['read', url, '"Tank".Motor', ...symbols, '--json']);
+      expect(json.code, json.err).to.equal(0);
+      expect(JSON.parse(json.out)).to.deep.equal({ '"Tank".Motor': { Speed: 1.5, On: true } });
+      const plain = await done(['read', url, '"Tank".Motor', ...symbols]);
+      expect(plain.out).to.equal('"Tank".Motor = { Speed: 1.5, On: true }\n');
+    });
+
+    it('write parses each value per its symbol type, a STRUCT as JSON; a read gives them back', async () => {
+      const w = await done([
+        'write',
+        url,
+        'Tank.Count=-300',
+        'Tank.Name=hello',
+        'Tank.Alarm=1',
+        '"Tank".Motor={"Speed":2.5,"On":false}',
+        ...symbols,
+      ]);
+      expect(w.code, w.err).to.equal(0);
+      expect(w.out).to.include('Tank.Count = -300 ok\n');
+      expect(w.out).to.include('"Tank".Motor = { Speed: 2.5, On: false } ok\n');
+      const r = await done(['read', url, 'Tank.Count', 'Tank.Name', 'Tank.Alarm', 'Tank.Motor', 'DB1.DBB8', ...symbols, '--json']);
+      expect(JSON.parse(r.out)).to.deep.equal({
+        'Tank.Count': -300,
+        'Tank.Name': 'hello',
+        'Tank.Alarm': true,
+        'Tank.Motor': { Speed: 2.5, On: false },
+        'DB1.DBB8': 6, // the STRING[6] max-length byte the download put there
+      });
+    });
+
+    it('a value that does not fit the symbol type exits 2 and writes nothing', async () => {
+      const w = await done(['write', url, 'Tank.Count=70000', 'Tank.Level=1', ...symbols]);
+      expect(w.code).to.equal(EXIT.USAGE);
+      expect(w.err).to.match(/Tank\.Count/);
+      const bad = await done(['write', url, '"Tank".Motor={"Speed":1,"Of":true}', ...symbols]);
+      expect(bad.code).to.equal(EXIT.USAGE);
+      expect(bad.err).to.match(/no member "Of" \(members: Speed, On\)/);
+    });
+
+    it('an unknown name exits 2 before connecting and suggests the closest names', async () => {
+      const r = await done(['read', url, 'Tank.Levle', ...symbols]);
+      expect(r.code).to.equal(EXIT.USAGE);
+      expect(r.out).to.equal('');
+      expect(r.err).to.match(/"Tank\.Levle" is no symbol of the --symbols files and no address \(did you mean .*"Tank"\.Level/);
+      const without = await done(['read', url, '"Tank".Level']);
+      expect(without.code).to.equal(EXIT.USAGE);
+      const dbAlone = await done(['read', url, 'MW0', '--db', 'Tank=1']);
+      expect(dbAlone.err).to.match(/--db numbers the blocks of --symbols files: give --symbols too/);
+    });
+
+    it('watch prints a symbol and a struct, and their changes', async () => {
+      const w = run(['watch', url, 'Tank.Level', '"Tank".Motor', ...symbols, '--interval', '50', '--json']);
+      try {
+        await until(() => w.output().out.includes('\n'), 10000, 'first line');
+        const set = await done(['write', url, 'Tank.Level=77.5', ...symbols]);
+        expect(set.code, set.err).to.equal(0);
+        await until(() => w.output().out.includes('"Tank.Level":77.5'), 10000, 'the change');
+      } finally {
+        w.child.kill('SIGINT');
+      }
+      expect(await w.exit).to.equal(0);
+      const lines = w
+        .output()
+        .out.trim()
+        .split('\n')
+        .map((l) => JSON.parse(l) as { values: Record<string, unknown> });
+      expect(lines[0]!.values['"Tank".Motor']).to.have.keys('Speed', 'On');
+      expect(lines.at(-1)!.values).to.deep.equal({ 'Tank.Level': 77.5 });
+    });
+  });
+});
