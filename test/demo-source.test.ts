@@ -7,10 +7,18 @@
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
-import { DEMO_SYMBOLS, DEMO_TAGS } from '../lib/plant/process';
+import { formatAddress, parseAddress } from '../lib/address';
+import { startPlant } from '../lib/plant/plant';
+import { DEMO_SYMBOLS, DEMO_TAGS, DemoProcess, THERMAL } from '../lib/plant/process';
 import { PLANT_DB_NUMBERS, PLANT_SOURCE } from '../lib/plant/source';
+import { PlcMemory } from '../lib/sim/memory';
+import { compileSymbols } from '../lib/symbols';
+import { dataBlockImages } from '../lib/symbols/memory';
 import type { DataBlockDecl, TypeRef } from '../lib/symbols/model';
 import { parseBlockSource } from '../lib/symbols/source-parser';
+
+/** An address in one spelling, so that `DB1.DBD0:REAL` and `DB1,REAL0` compare equal. */
+const canonical = (address: string) => formatAddress(parseAddress(address));
 
 const ROOT = path.resolve(__dirname, '../..');
 const FILE = path.join(ROOT, 'demo/Plant.db');
@@ -40,5 +48,46 @@ describe('demo plant: DB1 as a TIA source', () => {
     expect(Object.keys(DEMO_SYMBOLS)).to.deep.equal(Object.keys(DEMO_TAGS));
     // A real programmer's DB: every member says what it is.
     for (const m of body.members) expect(m.comment, m.name).to.match(/\w{3,}/);
+  });
+
+  it('compiles to exactly the offsets the process uses: every name of DEMO_SYMBOLS is the address of DEMO_TAGS, in a block of 20 bytes', () => {
+    const table = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
+    expect(table.blocks.map((b) => ({ name: b.name, db: b.db, length: b.length }))).to.deep.equal([{ name: 'Plant', db: 1, length: 20 }]);
+    for (const [key, name] of Object.entries(DEMO_SYMBOLS)) {
+      const entry = table.lookup(name);
+      expect(entry, name).to.not.equal(undefined);
+      expect(entry!.name).to.equal(name);
+      expect(canonical(entry!.address), name).to.equal(canonical(DEMO_TAGS[key as keyof typeof DEMO_TAGS]));
+    }
+    // No member the process does not know: the table is the plant's memory map, nothing beside it.
+    expect(table.entries.map((e) => e.name)).to.have.members(Object.values(DEMO_SYMBOLS));
+  });
+
+  it('its start values are those the process starts from on blank memory: level 20 %, temperature at ambient, the rest 0', () => {
+    const table = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
+    const initial = Object.fromEntries(table.entries.map((e) => [e.name, e.initial]));
+    expect(initial).to.deep.equal({
+      ...Object.fromEntries(Object.values(DEMO_SYMBOLS).map((n) => [n, undefined])),
+      [DEMO_SYMBOLS.level]: 20,
+      [DEMO_SYMBOLS.temperature]: THERMAL.ambient,
+    });
+    const blank = new PlcMemory();
+    new DemoProcess(blank).start().stop();
+    // The first 20 bytes of a process started on blank memory are the bytes the source's start values give.
+    expect(blank.area('DB', 1)!.subarray(0, 20).toString('hex')).to.equal(dataBlockImages(table).get(1)!.toString('hex'));
+  });
+
+  it('the demo plant serves DB1 as the source declares it, 20 bytes, and no other data block, to S7 and FETCH/WRITE alike', async () => {
+    const plant = await startPlant({ ports: { s7: 0, fetch: 0, write: 0, freeport: 0 } });
+    try {
+      plant.process.stop();
+      expect(plant.memory.dataBlockNumbers()).to.deep.equal([1]);
+      expect(plant.memory.area('DB', 1)!.length).to.equal(20);
+      expect(plant.symbols.blocks).to.deep.equal(compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS }).blocks);
+      // The CP serves the CPU's memory.
+      expect(plant.fetchwrite.memory).to.equal(plant.memory);
+    } finally {
+      await plant.close();
+    }
   });
 });
