@@ -102,6 +102,7 @@ export class DemoProcess {
   start(): this {
     if (!this.timer) {
       const db = this.db();
+      // The source's start values (PLANT_SOURCE) where the memory was not built from it: a blank DB1.
       if (db.readFloatBE(0) === 0) db.writeFloatBE(20, 0);
       if (db.readFloatBE(16) === 0) db.writeFloatBE(THERMAL.ambient, 16);
       this.timer = setInterval(() => this.step(), this.periodMs);
