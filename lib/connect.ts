@@ -3,14 +3,23 @@
  * (see lib/url.ts); the same URLs serve the CLI and the Node-RED nodes.
  */
 import type { BindingInterface } from '@serialport/bindings-interface';
+import { PlcError } from './errors';
 import { FetchWriteClient } from './fetchwrite/client';
 import { FreeportClient } from './freeport/client';
 import type { FreeportProfile } from './freeport/profile';
 import type { ClientOptions } from './link/client-base';
 import { S7Client } from './s7/client';
 import type { PlcClient } from './types';
-import { parseUrl, type Endpoint } from './url';
+import { endpointName, parseUrl, type Endpoint } from './url';
 
+/**
+ * `symbols` (a compiled SymbolTable) lets reads and writes name tags as the
+ * PLC's sources do, beside absolute addresses; `strictSymbols` (also the
+ * URL's `strictSymbols=true`) refuses names in a data block whose length in
+ * the PLC differs from the sources' (docs/symbols.md, "Reading and writing
+ * by name"). Freeport refuses `symbols`: it reaches a few bytes per station
+ * that the station's program fills, not V memory by offset.
+ */
 export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
   /** Serial binding for freeport (tests inject `@serialport/binding-mock`). */
   binding?: BindingInterface;
@@ -30,6 +39,12 @@ export function createClient(url: string | Endpoint, options: ConnectOptions = {
     case 'fetchwrite':
       return new FetchWriteClient(endpoint, common);
     case 'freeport':
+      if (common.symbols) {
+        throw new PlcError(
+          'NOT_SUPPORTED',
+          `${endpointName(endpoint)}: freeport cannot read or write by symbol: it reaches only each station's data area (ST<station>,…), a few bytes its PLC program fills, not V memory (DB1) by offset; reach the S7-200 over s7:// (a CP 243-1) to use its V memory symbols`,
+        );
+      }
       return new FreeportClient(endpoint, { ...common, ...(binding ? { binding } : {}), ...(profile ? { profile } : {}) });
   }
 }

@@ -74,6 +74,18 @@ export interface Tag {
 export type PlcScalar = boolean | number | bigint | string | Date;
 export type PlcValue = PlcScalar | PlcScalar[];
 
+/**
+ * A whole STRUCT / UDT instance read by name (a client with `symbols`, see
+ * docs/symbols.md): its members by name, nested structs as objects, arrays
+ * of structs as arrays of objects.
+ */
+export interface PlcStruct {
+  [member: string]: PlcData;
+}
+
+/** Any value a read can give: what an address gives (PlcValue), or a struct read by name. */
+export type PlcData = PlcValue | PlcStruct | PlcStruct[];
+
 export type LinkState = 'idle' | 'connecting' | 'connected' | 'reconnecting' | 'closed';
 
 export type Protocol = 's7' | 'fetchwrite' | 'freeport';
@@ -81,6 +93,39 @@ export type Protocol = 's7' | 'fetchwrite' | 'freeport';
 export interface RequestOptions {
   /** Abort the request (it rejects with code ABORTED). */
   signal?: AbortSignal;
+}
+
+/** The layout check of one data block of a symbol table's sources (client.checkLayout(), docs/symbols.md). */
+export interface LayoutCheck {
+  /** The block's name in the sources (`Tank`; `DB10` for a STEP 7 block without symbol). */
+  block: string;
+  db: number;
+  /** Bytes the sources declare (standard access). */
+  declared: number;
+  /** Bytes the PLC reports; null when the PLC has no such DB; undefined when it could not tell (status 'unknown'). */
+  actual: number | null | undefined;
+  status: 'ok' | 'mismatch' | 'unknown';
+  /** Why the PLC could not tell (status 'unknown'). */
+  error?: PlcError;
+}
+
+/** The `layoutMismatch` event: a block of the PLC is not as long as the sources declare (`actual` null: the PLC has no such DB). */
+export interface LayoutMismatchEvent {
+  block: string;
+  db: number;
+  declared: number;
+  actual: number | null;
+}
+
+/** The `layoutUnknown` event: the PLC could not tell the length of these blocks; `error` says why (the first block's). */
+export interface LayoutUnknownEvent {
+  checks: LayoutCheck[];
+  error: PlcError;
+}
+
+/** The `layoutOk` event: every block of the sources has the length they declare. */
+export interface LayoutOkEvent {
+  checks: LayoutCheck[];
 }
 
 /**
@@ -91,6 +136,18 @@ export interface RequestOptions {
  * S7Client also emits `itemLimit` (ItemLimitEvent `{ limit, was }`) once when
  * the PLC answers fewer items than a job asked for: from then on it plans jobs
  * of at most `limit` items (see S7Endpoint.maxItems).
+ *
+ * A client with a symbol table (`symbols`) checks after each connect (and
+ * on checkLayout()) that the PLC's data blocks are as long as the sources
+ * declare, and emits, at most once per connection and block for the same
+ * finding:
+ * - `layoutMismatch` (LayoutMismatchEvent `{ block, db, declared, actual }`):
+ *   a block differs (`actual` null: the PLC has no such DB); reads by name in
+ *   it return shifted values, or fail with LAYOUT_MISMATCH with `strictSymbols`;
+ * - `layoutUnknown` (LayoutUnknownEvent `{ checks, error }`): the PLC could not
+ *   tell (no block functions, e.g. S7-1200/1500 over PUT/GET; FETCH/WRITE has
+ *   no such service); nothing is refused;
+ * - `layoutOk` (LayoutOkEvent `{ checks }`): every block matches (again).
  */
 export interface PlcClient extends EventEmitter {
   readonly protocol: Protocol;
@@ -98,16 +155,20 @@ export interface PlcClient extends EventEmitter {
   /**
    * Reads tags; resolves `{ address: value }`, or rejects with TagErrors (whose `results` has the good ones).
    * Polling the same list: pass the same array object each time, or use prepare(); a new array is parsed and planned again.
+   * `V` is a type assertion, as PlcValue (the default) is: addresses and elementary symbols give PlcValues; a whole
+   * struct read by name gives a PlcStruct (`read<PlcData>([...])`).
    */
-  read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>>;
+  read<V extends PlcData = PlcValue>(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, V>>;
   /** Reads tags; always resolves with a result per tag (rejects only when nothing could be attempted). */
-  readDetailed(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, TagResult<PlcValue>>>;
+  readDetailed<V extends PlcData = PlcValue>(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, TagResult<V>>>;
   /** Parses `addresses` once and keeps what the driver computes for them: the fast way to poll the same tags (see PreparedRead). */
   prepare(addresses: readonly string[]): PreparedRead;
   /** Writes `{ address: value }`; resolves when the PLC acknowledged every tag, else rejects with TagErrors. */
   write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void>;
   /** Writes; always resolves with a result per tag. */
   writeDetailed(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<Record<string, TagResult<void>>>;
+  /** Checks the symbol table's data blocks against the PLC now (see the layout events above); [] without a symbol table. */
+  checkLayout(options?: RequestOptions): Promise<LayoutCheck[]>;
   /** Stops reconnecting, fails what is pending with CLOSED, closes the socket. Always resolves. */
   close(): Promise<void>;
 }
@@ -133,9 +194,9 @@ export interface PreparedRead {
   /** The addresses, in the order given to prepare() (a frozen copy). */
   readonly addresses: readonly string[];
   /** Same result as `client.read(addresses)`: `{ address: value }`, or rejects with TagErrors (its `results` keeps the good values). */
-  read(options?: RequestOptions): Promise<Record<string, PlcValue>>;
+  read<V extends PlcData = PlcValue>(options?: RequestOptions): Promise<Record<string, V>>;
   /** Same result as `client.readDetailed(addresses)`: a result per tag. */
-  readDetailed(options?: RequestOptions): Promise<Record<string, TagResult<PlcValue>>>;
+  readDetailed<V extends PlcData = PlcValue>(options?: RequestOptions): Promise<Record<string, TagResult<V>>>;
   /** Drops the plan and frames it holds; reads then reject with CLOSED. Nothing else needs releasing. */
   close(): void;
 }

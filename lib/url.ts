@@ -12,7 +12,9 @@
  *   freeport+tcp://host:4001?timeout=1000                (serial device server)
  *
  * Every protocol also takes `readOnly=true` and `allow=<address or area>,…`
- * (a write allow-list). Unknown parameters are refused, so a typo never
+ * (a write allow-list), and `strictSymbols=true` (reads and writes by name
+ * refused in a data block whose length differs from the sources',
+ * docs/symbols.md). Unknown parameters are refused, so a typo never
  * silently falls back to a default.
  */
 import { FETCHWRITE_URLS, type FetchWriteEndpoint } from './fetchwrite/url';
@@ -91,7 +93,7 @@ export const S7_CPU_PRESETS: Readonly<Record<S7CpuPreset, Readonly<S7CpuPresetPa
   's7-200': Object.freeze({ localTsap: 0x1000, remoteTsap: 0x1001 }),
 });
 
-const SAFETY_PARAMS = ['readOnly', 'allow'];
+const SAFETY_PARAMS = ['readOnly', 'allow', 'strictSymbols'];
 
 /** Parses a PLC URL; throws PlcError INVALID_URL naming the part that is wrong. */
 export function parseUrl(text: string): Endpoint {
@@ -125,6 +127,7 @@ function parseSafety(p: UrlParams): SafetyOptions {
   if (p.has('readOnly')) safety.readOnly = p.bool('readOnly');
   const allow = p.list('allow');
   if (allow) safety.allow = allow;
+  if (p.has('strictSymbols') && p.bool('strictSymbols')) safety.strictSymbols = true;
   return safety;
 }
 
@@ -134,6 +137,7 @@ export function formatUrl(e: Endpoint): string {
   const base = urlsOf(e).format(e, q);
   if (e.readOnly) q.set('readOnly', 'true');
   if (e.allow?.length) q.set('allow', e.allow.join(','));
+  if (e.strictSymbols) q.set('strictSymbols', 'true');
   const query = q.toString().replace(/%2C/g, ',');
   return query ? `${base}?${query}` : base;
 }

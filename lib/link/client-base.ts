@@ -1,7 +1,10 @@
 import { EventEmitter } from 'node:events';
 import type { Duplex } from 'node:stream';
-import { ConnectionError, PlcError, TagErrors, toPlcError, type TagResult } from '../errors';
-import type { LinkState, PlcClient, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
+import { ConnectionError, PlcError, TagErrors, tagError, toPlcError, type TagResult } from '../errors';
+import { LayoutMonitor } from '../symbols/layout-check';
+import type { SymbolTable } from '../symbols/model';
+import { decodeShape, expandWrite, resolveSymbol, unknownSymbol, type SymbolShape } from '../symbols/resolve';
+import type { LayoutCheck, LinkState, PlcClient, PlcData, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
 
 export type { PreparedRead } from '../types';
 import type { BackoffOptions } from './backoff';
@@ -24,6 +27,18 @@ export interface ClientOptions {
   readOnly?: boolean;
   /** Only writes inside these areas ("DB10", "M", "ST5") or addresses ("DB1.DBW2") are allowed. */
   allow?: readonly string[];
+  /**
+   * A compiled symbol table (compileSymbols): tags may then be named as the
+   * sources name them, `"Tank".Level`, beside absolute addresses
+   * (docs/symbols.md, "Reading and writing by name").
+   */
+  symbols?: SymbolTable;
+  /**
+   * Refuse reads and writes by name (LAYOUT_MISMATCH) in a data block whose
+   * length in the PLC differs from what the sources declare, instead of
+   * returning values from shifted offsets (the URL's `strictSymbols=true`).
+   */
+  strictSymbols?: boolean;
 }
 
 export const DEFAULT_TIMEOUT = 5000;
@@ -33,6 +48,7 @@ export interface EndpointOptions {
   timeout: number;
   readOnly?: boolean;
   allow?: readonly string[];
+  strictSymbols?: boolean;
 }
 
 /** A client's options from its endpoint (`name` for messages), overridden by the caller's. */
@@ -42,6 +58,7 @@ export function endpointOptions(name: string, endpoint: EndpointOptions, options
     timeout: endpoint.timeout,
     ...(endpoint.readOnly ? { readOnly: true } : {}),
     ...(endpoint.allow ? { allow: endpoint.allow } : {}),
+    ...(endpoint.strictSymbols ? { strictSymbols: true } : {}),
     ...options,
   };
 }
@@ -56,11 +73,32 @@ interface ReadList<T, M> {
   prepared: M | undefined;
   /** Reads of this list so far; from the second on, results are built by a compiled object literal. */
   uses: number;
+  /** Undefined when no tag of the list is a symbol; else their DBs (the layout check) and the structs among them. */
+  symbols?: ListSymbols<T>;
   values?: RecordBuilder | null;
   results?: RecordBuilder | null;
 }
 
 type RecordBuilder = (read: readonly unknown[]) => Record<string, unknown>;
+
+/** What the client keeps of a tag resolved from a symbol: its data block (null outside DBs) and, for a struct, its shape. */
+interface SymbolUse<T> {
+  db: number | null;
+  shape: SymbolShape<T> | undefined;
+}
+
+interface ListSymbols<T> {
+  dbs: Set<number>;
+  /** Tags (by index) whose bytes are decoded into an object. */
+  shaped: { index: number; shape: SymbolShape<T> }[];
+}
+
+/**
+ * Block infos the layout check asks at once: the S7 session queues beyond
+ * the PLC's parallel jobs, and a few in flight hide the round trips without
+ * crowding out the polls.
+ */
+const LAYOUT_PARALLEL = 4;
 
 const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) as ReadValues;
 
@@ -129,6 +167,11 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   private readonly readOnly: boolean;
   private readonly allow: readonly string[] | undefined;
   private allowed: { areas: Set<string>; tags: T[] } | undefined;
+  /** The symbol table (ClientOptions.symbols) and what its names resolved to (the tags of the parse cache). */
+  private readonly symbols: SymbolTable | undefined;
+  private readonly strictSymbols: boolean;
+  private readonly symbolUses = new WeakMap<T, SymbolUse<T>>();
+  private layoutMonitor: LayoutMonitor | undefined;
 
   constructor(options: ClientOptions) {
     super();
@@ -137,11 +180,22 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     this.maxQueued = options.maxQueued;
     this.readOnly = options.readOnly ?? false;
     this.allow = options.allow && options.allow.length > 0 ? options.allow : undefined;
+    this.symbols = options.symbols;
+    this.strictSymbols = options.strictSymbols ?? false;
+    // The supervisor's events are the client's; a new live session first starts its layout check.
+    const events = {
+      emit: (event: string, ...args: unknown[]) => {
+        if (event === 'connected') this.layout?.linkUp();
+        return this.emit(event, ...args);
+      },
+      listenerCount: (event: string) => this.listenerCount(event),
+    };
     this.supervisor = new LinkSupervisor<S>({
       name: options.name,
       connectTimeout: this.timeout,
       open: (signal) => this.driver.openSession(signal),
-      events: this,
+      // The supervisor uses emit and listenerCount only.
+      events: events as unknown as EventEmitter,
       ...(options.backoff ? { backoff: options.backoff } : {}),
       ...(options.random ? { random: options.random } : {}),
     });
@@ -198,7 +252,46 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   }
 
   close(): Promise<void> {
+    this.layoutMonitor?.stop();
     return this.supervisor.close();
+  }
+
+  /**
+   * Compares the length of every data block of the symbol table's sources
+   * with the PLC's block (S7: block info), as on each connect, and reports
+   * as on connect (`layoutMismatch`, `layoutUnknown`, `layoutOk`: PlcClient).
+   * Resolves [] without a symbol table; rejects NOT_CONNECTED while not
+   * connected, and with the link's error when it drops during the check.
+   */
+  checkLayout(options: RequestOptions = {}): Promise<LayoutCheck[]> {
+    const layout = this.layout;
+    if (!layout) return Promise.resolve([]);
+    try {
+      this.liveSession();
+    } catch (err) {
+      return Promise.reject(err);
+    }
+    return layout.check(options.signal);
+  }
+
+  /** The layout check of the symbol table's blocks (made at first use: the driver is a subclass field). */
+  private get layout(): LayoutMonitor | undefined {
+    if (!this.symbols) return undefined;
+    const { driver } = this;
+    return (this.layoutMonitor ??= new LayoutMonitor({
+      table: this.symbols,
+      strict: this.strictSymbols,
+      events: this,
+      blockLength: driver.blockLength
+        ? (db, signal) => {
+            const session = this.liveSession();
+            return driver.blockLength!(session, db, signal);
+          }
+        : undefined,
+      dbNumbers: driver.dbNumbers ? (signal) => driver.dbNumbers!(this.liveSession(), signal) : undefined,
+      unsupported: driver.noBlockLength ?? `${this.name}: the protocol has no service that tells the length of a data block`,
+      parallel: () => LAYOUT_PARALLEL,
+    }));
   }
 
   /** Parses an address with this driver's syntax (cached); throws AddressError. */
@@ -225,8 +318,10 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     const closed = () => new PlcError('CLOSED', `a prepared read of ${this.name} was used after its close()`);
     return {
       addresses: Object.freeze(list.addresses.slice()),
-      read: (options) => (list ? this.readOf(list, options) : Promise.reject(closed())),
-      readDetailed: (options) => (list ? this.readDetailedOf(list, options) : Promise.reject(closed())),
+      read: <V extends PlcData>(options?: RequestOptions) =>
+        (list ? this.readOf(list, options) : Promise.reject(closed())) as Promise<Record<string, V>>,
+      readDetailed: <V extends PlcData>(options?: RequestOptions) =>
+        (list ? this.readDetailedOf(list, options) : Promise.reject(closed())) as Promise<Record<string, TagResult<V>>>,
       close: () => void (list = undefined),
     };
   }
@@ -237,24 +332,28 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
    * prepare() saves as well; a new array each time is parsed and prepared
    * again (an S7 client finds the plan in its bounded plan cache).
    */
-  read(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, PlcValue>> {
+  read<V extends PlcData = PlcValue>(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, V>> {
     let list: ReadList<T, M>;
     try {
       list = this.listOf(addresses);
     } catch (err) {
       return Promise.reject(err);
     }
-    return this.readOf(list, options);
+    return this.readOf(list, options) as Promise<Record<string, V>>;
   }
 
-  private async readOf(prepared: ReadList<T, M>, options?: RequestOptions): Promise<Record<string, PlcValue>> {
+  private async readOf(list: ReadList<T, M>, options?: RequestOptions): Promise<Record<string, PlcValue>> {
+    const prepared = list.symbols && this.layout?.gating ? await this.layoutGated(list, options?.signal) : list;
     if (prepared.bad.length > 0) {
       const results = await this.readDetailedOf(prepared, options);
       throw new TagErrors(results);
     }
     const session = this.liveSession();
     const { tags } = prepared;
-    const { values, errors } = tags.length > 0 ? await this.valuesOf(session, tags, options?.signal, prepared.prepared) : NO_VALUES;
+    const read = tags.length > 0 ? await this.valuesOf(session, tags, options?.signal, prepared.prepared) : NO_VALUES;
+    const { values } = read;
+    let { errors } = read;
+    if (prepared.symbols && prepared.symbols.shaped.length > 0) errors = shapeValues(prepared.symbols, tags, values, errors);
     if (errors) return this.valuesOrThrow(this.byAddress(prepared, toResults(values, errors)));
     const build = recordBuilder(prepared, 'values');
     if (build) return build(values) as Record<string, PlcValue>;
@@ -289,20 +388,46 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   }
 
   /** A result per tag; like read(), fastest for a prepared list (prepare()) or the same array again. */
-  readDetailed(addresses: readonly string[], options: RequestOptions = {}): Promise<Record<string, TagResult<PlcValue>>> {
+  readDetailed<V extends PlcData = PlcValue>(
+    addresses: readonly string[],
+    options: RequestOptions = {},
+  ): Promise<Record<string, TagResult<V>>> {
     let list: ReadList<T, M>;
     try {
       list = this.listOf(addresses);
     } catch (err) {
       return Promise.reject(err);
     }
-    return this.readDetailedOf(list, options);
+    return this.readDetailedOf(list, options) as Promise<Record<string, TagResult<V>>>;
   }
 
-  private async readDetailedOf(prepared: ReadList<T, M>, options: RequestOptions = {}): Promise<Record<string, TagResult<PlcValue>>> {
+  private async readDetailedOf(list: ReadList<T, M>, options: RequestOptions = {}): Promise<Record<string, TagResult<PlcValue>>> {
+    const prepared = list.symbols && this.layout?.gating ? await this.layoutGated(list, options.signal) : list;
     const session = this.liveSession();
     const read = prepared.tags.length > 0 ? await this.driver.readTags(session, prepared.tags, options.signal, prepared.prepared) : [];
+    if (prepared.symbols && prepared.symbols.shaped.length > 0) shapeResults(prepared.symbols, prepared.tags, read);
     return this.byAddress(prepared, read);
+  }
+
+  /**
+   * strictSymbols: waits for a layout check under way, then the list
+   * without the symbols of blocks that do not match (their LAYOUT_MISMATCH
+   * among the unparsable ones); the list itself when none is refused.
+   */
+  private async layoutGated(list: ReadList<T, M>, signal: AbortSignal | undefined): Promise<ReadList<T, M>> {
+    const layout = this.layout!;
+    await layout.settled(signal);
+    let kept: T[] | undefined;
+    const refused: { address: string; error: PlcError }[] = [];
+    list.tags.forEach((tag, i) => {
+      const refusal = layout.refusal(this.symbolUses.get(tag)?.db ?? null);
+      if (refusal) {
+        kept ??= list.tags.slice(0, i);
+        refused.push({ address: tag.address, error: tagError(tag.address, refusal) });
+      } else kept?.push(tag);
+    });
+    if (!kept) return list;
+    return this.listOfTags(list.addresses, kept, [...list.bad, ...refused]);
   }
 
   /** Results keyed by address: unparsable addresses first, then the tags read (a tag given twice: its last result). */
@@ -338,8 +463,22 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
       if (tag instanceof PlcError) bad.push({ address, error: tag });
       else tags.push(tag);
     }
+    return this.listOfTags(addresses.slice(), tags, bad);
+  }
+
+  private listOfTags(addresses: readonly string[], tags: T[], bad: { address: string; error: PlcError }[]): ReadList<T, M> {
     const prepared = tags.length > 0 ? this.driver.prepareRead?.(tags) : undefined;
-    return { addresses: addresses.slice(), tags, bad, prepared, uses: 0 };
+    const list: ReadList<T, M> = { addresses, tags, bad, prepared, uses: 0 };
+    if (this.symbols) {
+      tags.forEach((tag, index) => {
+        const use = this.symbolUses.get(tag);
+        if (!use) return;
+        const symbols = (list.symbols ??= { dbs: new Set(), shaped: [] });
+        if (use.db !== null) symbols.dbs.add(use.db);
+        if (use.shape) symbols.shaped.push({ index, shape: use.shape });
+      });
+    }
+    return list;
   }
 
   async write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void> {
@@ -351,18 +490,46 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     if (values === null || typeof values !== 'object') {
       throw new PlcError('INVALID_VALUE', 'write() takes an object of { address: value }');
     }
-    const session = this.liveSession();
+    let session = this.liveSession();
+    const keys = Object.keys(values);
+    const tags = keys.map((address) => this.parseCached(address));
+    const layout = this.layout;
+    if (layout?.gating && tags.some((t) => !(t instanceof PlcError) && this.symbolUses.has(t))) {
+      await layout.settled(options.signal);
+      session = this.liveSession();
+    }
     const results: Record<string, TagResult<void>> = {};
     const items: { tag: T; value: unknown }[] = [];
-    for (const address of Object.keys(values)) {
-      const tag = this.parseCached(address);
-      const refusal = tag instanceof PlcError ? tag : this.writeRefusal(tag);
-      if (refusal) results[address] = { ok: false, error: refusal };
-      else items.push({ tag: tag as T, value: values[address] });
-    }
-    if (items.length > 0) {
-      const written = await this.driver.writeTags(session, items, options.signal);
-      for (let i = 0; i < items.length; i++) results[items[i]!.tag.address] = written[i]!;
+    /** Per key written: its first item and how many (a struct: one per member given). */
+    const written: { key: string; from: number; count: number }[] = [];
+    keys.forEach((address, k) => {
+      const tag = tags[k]!;
+      if (tag instanceof PlcError) return void (results[address] = { ok: false, error: tag });
+      const use = this.symbols ? this.symbolUses.get(tag) : undefined;
+      let own: { tag: T; value: unknown }[];
+      try {
+        const refusal = use && layout?.refusal(use.db);
+        if (refusal) throw tagError(address, refusal);
+        own = use?.shape ? expandWrite(use.shape, values[address]) : [{ tag, value: values[address] }];
+      } catch (err) {
+        return void (results[address] = { ok: false, error: tagError(address, toPlcError(err, 'INVALID_VALUE')) });
+      }
+      for (const item of own) {
+        const refusal = this.writeRefusal(item.tag);
+        if (refusal) return void (results[address] = { ok: false, error: tagError(address, refusal) });
+      }
+      written.push({ key: address, from: items.length, count: own.length });
+      items.push(...own);
+    });
+    const outcome = items.length > 0 ? await this.driver.writeTags(session, items, options.signal) : [];
+    for (const { key, from, count } of written) {
+      if (count === 1) {
+        results[key] = outcome[from]!;
+        continue;
+      }
+      // A struct: ok when every member written is; else its first member's error, naming the struct and the member.
+      const failed = outcome.slice(from, from + count).find((r) => !r.ok);
+      results[key] = failed && !failed.ok ? { ok: false, error: tagError(key, failed.error) } : { ok: true, value: undefined };
     }
     return results;
   }
@@ -406,6 +573,13 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (${why})`);
   }
 
+  /**
+   * The tag of an address or, with a symbol table, of a name (cached: a
+   * symbol is resolved once). Absolute addresses come first: text that
+   * parses as an address is that address (`M1`, `DB1.DBW2`, with or without
+   * %), so a symbol table never changes what an address means; a symbol whose
+   * name reads as an address is written quoted, as TIA writes it (`"M1"`).
+   */
   private parseCached(address: string): T | PlcError {
     let tag = this.tags.get(address);
     if (tag === undefined) {
@@ -413,10 +587,56 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
         tag = this.driver.syntax.parse(address);
       } catch (err) {
         tag = toPlcError(err, 'INVALID_ADDRESS');
+        if (this.symbols && typeof address === 'string') tag = this.symbolTag(this.symbols, address, tag);
       }
       if (this.tags.size >= MAX_CACHED_TAGS) this.tags.clear();
       this.tags.set(address, tag);
     }
     return tag;
+  }
+
+  private symbolTag(table: SymbolTable, name: string, asAddress: PlcError): T | PlcError {
+    try {
+      const resolved = resolveSymbol(table, name, (address) => this.driver.syntax.parse(address));
+      if (!resolved) return unknownSymbol(table, name, asAddress);
+      const { entry, tag, shape } = resolved;
+      this.symbolUses.set(tag, { db: entry.area === 'DB' ? entry.db : null, shape });
+      return tag;
+    } catch (err) {
+      return toPlcError(err, 'INVALID_ADDRESS');
+    }
+  }
+}
+
+/** Struct values from their bytes, in place (tags that failed keep their error); the errors, with any of decoding. */
+function shapeValues<T>(
+  symbols: ListSymbols<T>,
+  tags: readonly DriverTag[],
+  values: unknown[],
+  errors: (PlcError | undefined)[] | undefined,
+): (PlcError | undefined)[] | undefined {
+  for (const { index, shape } of symbols.shaped) {
+    if (errors?.[index]) continue;
+    try {
+      values[index] = decodeShape(shape, values[index] as PlcValue);
+    } catch (err) {
+      (errors ??= new Array<PlcError | undefined>(values.length))[index] = tagError(
+        tags[index]!.address,
+        toPlcError(err, 'PROTOCOL_ERROR'),
+      );
+    }
+  }
+  return errors;
+}
+
+function shapeResults<T>(symbols: ListSymbols<T>, tags: readonly DriverTag[], results: TagResult<PlcValue>[]): void {
+  for (const { index, shape } of symbols.shaped) {
+    const r = results[index]!;
+    if (!r.ok) continue;
+    try {
+      results[index] = { ok: true, value: decodeShape(shape, r.value) as PlcValue };
+    } catch (err) {
+      results[index] = { ok: false, error: tagError(tags[index]!.address, toPlcError(err, 'PROTOCOL_ERROR')) };
+    }
   }
 }

@@ -112,6 +112,18 @@ export interface Driver<S extends DriverSession, T extends DriverTag, M = undefi
   writeTags(session: S, items: readonly { tag: T; value: unknown }[], signal?: AbortSignal): Promise<TagResult<void>[]>;
 
   /**
+   * Optional: the length of data block `db` as the PLC reports it (null
+   * when it has no such block), for the layout check of symbols
+   * (lib/symbols/layout-check.ts). Rejects when the PLC cannot tell. Absent:
+   * the protocol has no way to ask (`noBlockLength` says why, for the
+   * `layoutUnknown` event).
+   */
+  blockLength?(session: S, db: number, signal?: AbortSignal): Promise<number | null>;
+  /** Optional, with blockLength: the numbers of the data blocks the PLC has (the check asks only for those). */
+  dbNumbers?(session: S, signal?: AbortSignal): Promise<number[]>;
+  readonly noBlockLength?: string;
+
+  /**
    * True when `err` ends the whole request rather than one tag's part of it:
    * the link is gone, or, on a protocol without request ids, a job timed out
    * and the link was dropped for it. The shared `isLinkError` (lib/errors.ts)
@@ -123,7 +135,7 @@ export interface Driver<S extends DriverSession, T extends DriverTag, M = undefi
 /**
  * A driver's URLs: its scheme(s) and parameters, parsed to its endpoint and
  * formatted back. lib/url.ts looks schemes up in a registry of these; the
- * parameters every scheme takes (readOnly, allow) are parsed there.
+ * parameters every scheme takes (readOnly, allow, strictSymbols) are parsed there.
  */
 export interface UrlScheme<E extends { readonly protocol: Protocol }> {
   readonly protocol: E['protocol'];

@@ -94,10 +94,12 @@ export function urlError(url: string, problem: string): PlcError {
   return new PlcError('INVALID_URL', `invalid PLC URL "${url}": ${problem}`);
 }
 
-/** What every endpoint carries, whatever its protocol (`readOnly`, `allow`). */
+/** What every endpoint carries, whatever its protocol (`readOnly`, `allow`, `strictSymbols`). */
 export interface SafetyOptions {
   /** Refuse every write before anything is sent. */
   readOnly?: boolean;
   /** When set, only writes to these addresses or areas (e.g. "DB10", "M", "DB1.DBW2") are allowed. */
   allow?: string[];
+  /** Reads and writes by name refused (LAYOUT_MISMATCH) in a data block whose length in the PLC differs from the sources'. */
+  strictSymbols?: boolean;
 }

@@ -105,6 +105,8 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
     readTags: (session, tags, signal, prepared) => this.readTags(session, tags, signal, prepared),
     readValues: (session, tags, signal, prepared) => this.readValues(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
+    blockLength: (_session, db, signal) => this.dbLength(db, signal),
+    dbNumbers: (_session, signal) => this.services.listBlocksOfType('DB', signal ? { signal } : {}),
     isLinkError,
   };
 
@@ -347,6 +349,21 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   /** Withdraws the password given on this connection. */
   clearPassword(options?: RequestOptions): Promise<void> {
     return this.services.clearPassword(options);
+  }
+
+  /**
+   * A DB's data length from its block info, for the layout check of symbols
+   * (null: the PLC has no such DB). A CPU without block functions (S7-1200
+   * and S7-1500 answer "not implemented") rejects: the layout is unknown.
+   */
+  private async dbLength(db: number, signal?: AbortSignal): Promise<number | null> {
+    try {
+      const info = await this.services.blockInfo('DB', db, signal ? { signal } : {});
+      return info.dataLength ?? info.mc7Size;
+    } catch (err) {
+      if (err instanceof PlcError && err.code === 'OBJECT_DOES_NOT_EXIST') return null;
+      throw err;
+    }
   }
 
   // ---------------------------------------------------------------- reads

@@ -1,0 +1,211 @@
+/**
+ * Tags by name in the client: a name as the user writes it (`"Tank".Level`,
+ * `"Tank".Motor`, `"Recipe".Step[3]`) resolved through a compiled
+ * SymbolTable (its lookup() applies the names rules) to the driver's tag for
+ * the entry's bytes, keyed by the name as given, so results and errors name
+ * what the user wrote. The client resolves each name once, in its parse
+ * cache: a poll of symbols is a poll of addresses.
+ *
+ * A whole STRUCT / UDT instance, or an array of them, is one tag over its
+ * bytes (one item of one request) and a shape that decodes the members from
+ * those bytes into an object (an array of objects). A write of such an
+ * object becomes one write per member it names (docs/symbols.md, "Reading
+ * and writing by name").
+ */
+import { parseAddress } from '../address';
+import { PlcError, ValueError } from '../errors';
+import type { DriverTag } from '../link/driver';
+import type { PlcData, PlcStruct, PlcValue, Tag } from '../types';
+import { tagDecoder, validateValue, type TagDecoder } from '../values';
+import type { SymbolEntry, SymbolTable } from './model';
+
+/**
+ * How the bytes of a struct (or of an array of structs) become a value, and
+ * a value its member writes: a tree of the entry's members down to the
+ * elementary ones, each with its offset from the struct's first byte.
+ */
+export type SymbolShape<T> =
+  | {
+      readonly kind: 'leaf';
+      readonly name: string;
+      /** The driver's tag of the member, named by its full symbol (the key of its errors). */
+      readonly tag: T;
+      /** Its shape for the value codecs (S7 syntax, as every entry address is written). */
+      readonly s7: Tag;
+      /** Bytes from the outer struct's first byte. */
+      readonly offset: number;
+      readonly decode: TagDecoder;
+    }
+  | { readonly kind: 'struct'; readonly name: string; readonly members: ReadonlyMap<string, SymbolShape<T>> }
+  | { readonly kind: 'array'; readonly name: string; readonly elements: readonly SymbolShape<T>[] };
+
+/** A resolved name: the entry, the driver's tag for its bytes, and for structs their shape. */
+export interface ResolvedSymbol<T> {
+  readonly entry: SymbolEntry;
+  readonly tag: T;
+  readonly shape?: SymbolShape<T>;
+}
+
+/** A name the table does not know: INVALID_ADDRESS naming it and the closest names the table has. */
+export function unknownSymbol(table: SymbolTable, name: string, asAddress: PlcError): PlcError {
+  const quoted = name.includes('"');
+  let suggestions: string[] = [];
+  try {
+    suggestions = table.suggest(name);
+  } catch {
+    // A table without suggestions still names the symbol.
+  }
+  if (!quoted && suggestions.length === 0) return asAddress;
+  const hint = suggestions.length > 0 ? `; did you mean ${orList(suggestions)}?` : '; the sources declare no such name';
+  // An unquoted name may have been meant as an address: say what is wrong with it as one too.
+  const address = quoted ? '' : ` (nor an address: ${asAddress.message.replace(/^invalid address "[^"]*": /, '')})`;
+  return new PlcError('INVALID_ADDRESS', `unknown symbol ${name}${hint}${address}`, { tag: name, cause: asAddress });
+}
+
+function orList(names: readonly string[]): string {
+  return names.length > 1 ? `${names.slice(0, -1).join(', ')} or ${names.at(-1)!}` : names[0]!;
+}
+
+/**
+ * Resolves `name` through the table to a driver tag (`parse` is the driver's
+ * address parser: its reach checks apply to the entry's address), or
+ * undefined when the table has no such name. A name whose entry the driver
+ * cannot reach throws that error, naming the symbol.
+ */
+export function resolveSymbol<T extends DriverTag>(
+  table: SymbolTable,
+  name: string,
+  parse: (address: string) => T,
+): ResolvedSymbol<T> | undefined {
+  const entry = table.lookup(name);
+  if (!entry) return undefined;
+  const named = (address: string, as: string): T => {
+    let tag: T;
+    try {
+      tag = parse(address);
+    } catch (err) {
+      const problem = err instanceof Error ? err.message : String(err);
+      throw new PlcError('INVALID_ADDRESS', `symbol ${as} (${address}): ${problem}`, { tag: as, cause: err });
+    }
+    return { ...tag, address: as };
+  };
+  if (isElementary(entry)) return { entry, tag: named(entry.address, name) };
+  const shape = shapeOf(table, entry, entry, named);
+  return { entry, tag: named(spanAddress(entry), name), shape };
+}
+
+/** Elementary entries and arrays of elementary types are one tag of the driver (its value: a scalar or an array). */
+function isElementary(entry: SymbolEntry): boolean {
+  return entry.kind === 'elementary' || (entry.kind === 'array' && entry.dataType !== undefined);
+}
+
+/** A struct's bytes as one BYTE array: `DB1.DBB10:BYTE[12]`, `MB4:BYTE[2]`. */
+function spanAddress(entry: SymbolEntry): string {
+  const count = Math.max(1, entry.size);
+  const at = entry.area === 'DB' ? `DB${entry.db ?? 0}.DBB${entry.byte}` : `${entry.area}B${entry.byte}`;
+  return `${at}:BYTE[${count}]`;
+}
+
+function shapeOf<T>(table: SymbolTable, root: SymbolEntry, entry: SymbolEntry, named: (address: string, as: string) => T): SymbolShape<T> {
+  if (isElementary(entry)) {
+    const s7 = { ...parseAddress(entry.address), address: entry.name };
+    return {
+      kind: 'leaf',
+      name: entry.name,
+      tag: named(entry.address, entry.name),
+      s7,
+      offset: entry.byte - root.byte,
+      decode: tagDecoder(s7),
+    };
+  }
+  const children = (entry.children ?? []).map((child) => {
+    const found = table.lookup(child);
+    if (!found)
+      throw new PlcError('INVALID_ADDRESS', `symbol ${entry.name}: its member ${child} is not in the symbol table`, { tag: entry.name });
+    return found;
+  });
+  if (entry.kind === 'array') return { kind: 'array', name: entry.name, elements: children.map((c) => shapeOf(table, root, c, named)) };
+  const members = new Map<string, SymbolShape<T>>();
+  for (const child of children) members.set(memberKey(entry.name, child.name), shapeOf(table, root, child, named));
+  return { kind: 'struct', name: entry.name, members };
+}
+
+/** A member's key in the object: its name after the parent's (`"Tank".Motor.Speed` → `Speed`, `."Speed.Set"` → `Speed.Set`). */
+function memberKey(parent: string, child: string): string {
+  const rest = child.startsWith(parent) ? child.slice(parent.length).replace(/^\./, '') : (child.split('.').at(-1) ?? child);
+  return rest.length >= 2 && rest.startsWith('"') && rest.endsWith('"') ? rest.slice(1, -1) : rest;
+}
+
+/** The object (array of objects) of a struct's bytes: a BYTE array as read, or the bytes. */
+export function decodeShape<T>(shape: SymbolShape<T>, bytes: PlcValue | Buffer): PlcData {
+  const data = Buffer.isBuffer(bytes) ? bytes : Array.isArray(bytes) ? Buffer.from(bytes as number[]) : Buffer.of(bytes as number);
+  return decodeAt(shape, data);
+}
+
+function decodeAt<T>(shape: SymbolShape<T>, data: Buffer): PlcData {
+  switch (shape.kind) {
+    case 'leaf':
+      return shape.decode(data, shape.offset);
+    case 'array':
+      return shape.elements.map((e) => decodeAt(e, data) as PlcStruct);
+    case 'struct': {
+      const out: Record<string, PlcData> = {};
+      for (const [key, member] of shape.members) out[key] = decodeAt(member, data);
+      return out;
+    }
+  }
+}
+
+/**
+ * The member writes of a value for a struct (an array of structs): one per
+ * elementary member the object names, nested objects and arrays followed;
+ * members not named are not written. Throws INVALID_VALUE, before anything
+ * is sent, for a value that is not an object (array), for members the type
+ * does not have (naming them) and for a member value that does not fit.
+ */
+export function expandWrite<T>(shape: SymbolShape<T>, value: unknown): { tag: T; value: unknown }[] {
+  const items: { tag: T; value: unknown }[] = [];
+  const walk = (s: SymbolShape<T>, v: unknown): void => {
+    if (s.kind === 'leaf') {
+      validateValue(s.s7, v);
+      items.push({ tag: s.tag, value: v });
+      return;
+    }
+    if (s.kind === 'array') {
+      if (!Array.isArray(v) || v.length !== s.elements.length) {
+        throw new ValueError(
+          s.name,
+          `expected an array of ${s.elements.length} objects (holes or undefined keep an element), got ${describe(v)}`,
+        );
+      }
+      s.elements.forEach((e, i) => {
+        const element: unknown = v[i];
+        if (element !== undefined) walk(e, element);
+      });
+      return;
+    }
+    if (v === null || typeof v !== 'object' || Array.isArray(v) || v instanceof Date || Buffer.isBuffer(v)) {
+      throw new ValueError(s.name, `expected an object of its members (${[...s.members.keys()].join(', ')}), got ${describe(v)}`);
+    }
+    const record = v as Record<string, unknown>;
+    const unknown = Object.keys(record).filter((k) => !s.members.has(k));
+    if (unknown.length > 0) {
+      throw new ValueError(
+        s.name,
+        `no member${unknown.length > 1 ? 's' : ''} ${unknown.map((k) => JSON.stringify(k)).join(', ')} (its members: ${[...s.members.keys()].join(', ')})`,
+      );
+    }
+    for (const [key, member] of s.members) if (record[key] !== undefined) walk(member, record[key]);
+  };
+  walk(shape, value);
+  return items;
+}
+
+function describe(v: unknown): string {
+  if (Array.isArray(v)) return `an array of ${v.length}`;
+  if (v === null) return 'null';
+  if (v instanceof Date) return 'a Date';
+  if (typeof v === 'object') return 'an object';
+  if (typeof v === 'bigint') return `bigint ${v}n`;
+  return `${typeof v} ${JSON.stringify(v) ?? 'undefined'}`;
+}
