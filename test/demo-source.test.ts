@@ -8,6 +8,7 @@ import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { formatAddress, parseAddress } from '../lib/address';
+import { connect } from '../lib/connect';
 import { startPlant } from '../lib/plant/plant';
 import { DEMO_SYMBOLS, DEMO_TAGS, DemoProcess, THERMAL } from '../lib/plant/process';
 import { PLANT_DB_NUMBERS, PLANT_SOURCE } from '../lib/plant/source';
@@ -87,6 +88,39 @@ describe('demo plant: DB1 as a TIA source', () => {
       // The CP serves the CPU's memory.
       expect(plant.fetchwrite.memory).to.equal(plant.memory);
     } finally {
+      await plant.close();
+    }
+  });
+
+  it('a client given the source reads the plant by name over S7 and FETCH/WRITE, the values the process holds, and a write by name starts the motor', async () => {
+    const plant = await startPlant({ ports: { s7: 0, fetch: 0, write: 0, freeport: 0 } });
+    const symbols = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
+    const clients = [await connect(plant.urls.s7, { symbols }), await connect(plant.urls.fetchwrite, { symbols })];
+    try {
+      plant.process.stop();
+      for (let i = 0; i < 25; i++) plant.process.step();
+      const held = plant.process.snapshot();
+      const names = [DEMO_SYMBOLS.level, DEMO_SYMBOLS.parts, DEMO_SYMBOLS.plcHeartbeat, DEMO_SYMBOLS.temperature, DEMO_SYMBOLS.heater];
+      for (const client of clients) {
+        expect(await client.read(names), client.protocol).to.deep.equal({
+          [DEMO_SYMBOLS.level]: held.level,
+          [DEMO_SYMBOLS.parts]: held.parts,
+          [DEMO_SYMBOLS.plcHeartbeat]: held.heartbeat,
+          [DEMO_SYMBOLS.temperature]: held.temperature,
+          [DEMO_SYMBOLS.heater]: held.heater,
+        });
+      }
+      expect(held.heartbeat).to.be.greaterThan(0);
+      await clients[1]!.write({ [DEMO_SYMBOLS.run]: true });
+      expect(plant.memory.area('DB', 1)![4]! & 0x01).to.equal(1);
+      for (let i = 0; i < 5; i++) plant.process.step();
+      expect(await clients[0]!.read([DEMO_SYMBOLS.running, DEMO_SYMBOLS.speed])).to.deep.equal({
+        [DEMO_SYMBOLS.running]: true,
+        [DEMO_SYMBOLS.speed]: plant.process.snapshot().speed,
+      });
+      expect(plant.process.snapshot().speed).to.be.greaterThan(0);
+    } finally {
+      for (const c of clients) await c.close();
       await plant.close();
     }
   });
