@@ -1,11 +1,16 @@
 'use strict';
 const { acquire, release, plc } = require('./shared/links');
 const { settleWithin } = require('./shared/user');
+const symbols = require('./shared/symbols');
 
 /**
- * plcwire-connection (config): property `url`. Opens the shared link on its
- * first user, gives it back after the last; forwards link errors to the users'
- * Catch nodes through `this.users` (the runtime's convention for config nodes).
+ * plcwire-connection (config): properties `url`, and for tags by name
+ * `symbolSources` [{ name, content, encoding? }], `dbNumbers` [{ block, db }]
+ * and `strictSymbols`. Compiles the sources when it starts (a failed compile
+ * is reported and leaves absolute addresses working), opens the shared link on
+ * its first user, gives it back after the last; forwards link errors to the
+ * users' Catch nodes through `this.users` (the runtime's convention for config
+ * nodes).
  */
 /** The URL without a user:password@ part. */
 function withoutCredentials(url) {
@@ -21,15 +26,66 @@ module.exports = function (RED) {
     node.users = {};
     node.linkStatus = { state: 'connecting' };
     node.problem = undefined;
+    const compiled = symbols.compile(config);
+    /** The compiled symbol table, or undefined (no sources, or they did not compile). */
+    node.symbols = compiled.table;
+    /** Why the sources did not compile: [{ code, message, file?, line?, column? }]. */
+    node.symbolProblems = compiled.problems || [];
+    const symbolsOf = { key: symbols.symbolsKey(config), table: node.symbols, strict: !!config.strictSymbols };
+    /** Data blocks whose length on the PLC differs from their source's, by DB number, since the link came up. */
+    const mismatches = new Map();
     let link;
     let lastError = '';
+    let linkState = node.linkStatus;
 
     Object.defineProperty(node, 'client', { get: () => link && link.client });
 
+    /** The link's status with what the users show instead of "connected": a layout mismatch, or sources that did not compile. */
+    function shown(status) {
+      if (status.state !== 'connected') return status;
+      const mismatch = mismatches.values().next().value;
+      if (mismatch) return { ...status, notice: { kind: 'layout', db: mismatch.db, declared: mismatch.declared, actual: mismatch.actual } };
+      if (node.symbolProblems.length > 0) return { ...status, notice: { kind: 'sources' } };
+      return status;
+    }
+
     function broadcast(status) {
-      node.linkStatus = status;
+      linkState = status;
+      node.linkStatus = shown(status);
       if (status.state === 'connected') lastError = '';
-      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
+      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(node.linkStatus);
+    }
+
+    function onMismatch(event) {
+      const known = mismatches.get(event.db);
+      if (known && known.declared === event.declared && known.actual === event.actual) return;
+      mismatches.set(event.db, event);
+      const key = event.actual === null ? 'plcwire-connection.errors.layoutMissing' : 'plcwire-connection.errors.layoutMismatch';
+      node.warn(RED._(key, { block: event.block, db: event.db, declared: event.declared, actual: event.actual }));
+      broadcast(linkState);
+    }
+
+    function onLayoutOk() {
+      if (mismatches.size === 0) return;
+      mismatches.clear();
+      broadcast(linkState);
+    }
+
+    if (node.symbolProblems.length > 0) {
+      // Once the flows have started, so the users' Catch nodes hear it too (the log has it either way).
+      const problems = node.symbolProblems;
+      const report = () => {
+        const more = problems.length > 1 ? RED._('plcwire-connection.errors.more', { n: problems.length - 1 }) : '';
+        const text =
+          RED._('plcwire-connection.errors.sources', { name: node.name || withoutCredentials(node.url), problem: problems[0].message }) +
+          more;
+        node.error(new plc.PlcError(problems[0].code || 'INVALID_SOURCE', text), {
+          topic: node.name || withoutCredentials(node.url),
+          payload: { problems },
+        });
+      };
+      RED.events.once('flows:started', report);
+      node.on('close', () => RED.events.removeListener('flows:started', report));
     }
 
     /** Reported once per distinct error between two connections, so a PLC that is off does not flood the log. */
@@ -42,11 +98,15 @@ module.exports = function (RED) {
       node.error(err, { topic: link ? link.name : url, payload: { url, state: node.linkStatus.state, code: err && err.code } });
     }
 
-    const onStatus = (status) => broadcast(status);
+    const onStatus = (status) => {
+      // A mismatch is the PLC's answer on one connection: the client checks again on the next.
+      if (status.state !== 'connected') mismatches.clear();
+      broadcast(status);
+    };
 
     function open() {
       try {
-        link = acquire(node.url, node);
+        link = acquire(node.url, node, symbolsOf);
       } catch (err) {
         // Each user reports this to its own Catch nodes once the flows have started (see problemReport).
         node.problem = err;
@@ -56,6 +116,8 @@ module.exports = function (RED) {
       node.problem = undefined;
       link.on('status', onStatus);
       link.on('link-error', reportError);
+      link.on('layout-mismatch', onMismatch);
+      link.on('layout-ok', onLayoutOk);
       broadcast(link.status);
     }
 
@@ -65,6 +127,8 @@ module.exports = function (RED) {
       if (!held) return Promise.resolve();
       held.off('status', onStatus);
       held.off('link-error', reportError);
+      held.off('layout-mismatch', onMismatch);
+      held.off('layout-ok', onLayoutOk);
       return release(held, node);
     }
 
@@ -102,6 +166,11 @@ module.exports = function (RED) {
 
   RED.nodes.registerType('plcwire-connection', PlcwireConnection);
 
+  /** The sources of a request body, the way a connection node's config carries them. */
+  function symbolConfig(body) {
+    return { symbolSources: body.symbolSources, dbNumbers: body.dbNumbers, strictSymbols: false };
+  }
+
   const canRead = RED.auth.needsPermission('plcwire.read');
 
   /**
@@ -123,8 +192,10 @@ module.exports = function (RED) {
 
   /**
    * Address validation for the editor with the library's own parser (the
-   * driver of the URL's protocol): POST { url?, addresses: [...] } →
-   * { results: { address: { ok, type, count } | { ok: false, code, message } } }.
+   * driver of the URL's protocol) and, when the connection has symbol
+   * sources, its compiled table: POST { url?, addresses: [...],
+   * symbolSources?, dbNumbers? } → { url, symbols: { ok } | { ok: false, errors },
+   * results: { address: { ok, type, count } | { ok, symbol, address, type, kind } | { ok: false, code, message } } }.
    */
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
     const body = req.body || {};
@@ -134,17 +205,35 @@ module.exports = function (RED) {
       res.json({ url: urlAnswer(parser.error), results: {} });
       return;
     }
-    const results = {};
-    for (const address of addresses) {
+    const compiledSources = symbols.compileCached(symbolConfig(body));
+    let symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
+    // The client's own resolution of names, when there is a table and a URL: a protocol may refuse symbols (freeport).
+    let named;
+    if (compiledSources.table && body.url) {
       try {
-        const tag = parser.parse(address);
-        results[address] = { ok: true, type: tag.type, count: tag.count };
+        named = plc.createClient(String(body.url), { symbols: compiledSources.table });
       } catch (err) {
-        results[address] = { ok: false, code: err.code || 'INVALID_ADDRESS', message: err.message };
+        symbolAnswer = { ok: false, errors: [{ code: err.code, message: err.message }] };
       }
     }
+    const results = {};
+    for (const address of addresses) {
+      results[address] = symbols.resolveAddress(address, parser.parse, compiledSources.table, named && ((a) => named.tag(a)));
+    }
     parser.done();
-    res.json({ url: { ok: true }, results });
+    if (named) named.close().catch(() => undefined);
+    res.json({ url: { ok: true }, symbols: symbolAnswer, results });
+  });
+
+  /**
+   * The connection dialog's compile of its sources, and the tag tables'
+   * completion: POST { symbolSources, dbNumbers } → { blocks: [{ name, db,
+   * length, file, instanceOf? }], entries: [{ name, address, type, kind,
+   * children? }], types, errors: [{ code, message, file?, line?, column? }] },
+   * compiled with the library's compileSymbols().
+   */
+  RED.httpAdmin.post('/plcwire/symbols', canRead, function (req, res) {
+    res.json(symbols.describe(symbols.compileCached(symbolConfig(req.body || {}))));
   });
 
   /**

@@ -23,13 +23,122 @@
     return c ? c.url || '' : '';
   };
 
-  /** Asks the runtime (the library's own parser) about addresses: callback(results) with { address: { ok, type, message } }. */
-  editor.validate = function (url, addresses, callback) {
+  // --- tags by name: the symbol sources of a connection node, compiled by the runtime ---
+
+  /** The sources of connection `connectionId` as the runtime's endpoints take them, or undefined when it has none. */
+  editor.symbolsOf = function (connectionId) {
+    var c = editor.connectionNode(connectionId);
+    if (!c || !Array.isArray(c.symbolSources) || c.symbolSources.length === 0) return undefined;
+    return { symbolSources: c.symbolSources, dbNumbers: c.dbNumbers || [] };
+  };
+
+  /** A short fingerprint of a set of sources (32-bit FNV-1a over their JSON), to cache the runtime's answers by; '' for none. */
+  function keyOf(symbols) {
+    if (!symbols) return '';
+    var text = JSON.stringify([symbols.symbolSources, symbols.dbNumbers]);
+    var h = 0x811c9dc5;
+    for (var i = 0; i < text.length; i++) {
+      h ^= text.charCodeAt(i);
+      h = Math.imul(h, 0x01000193) >>> 0;
+    }
+    return text.length + ':' + h.toString(16);
+  }
+
+  var compiled = {}; // keyOf(symbols) → the runtime's answer, with byName
+  var compiling = {}; // keyOf(symbols) → callbacks waiting for it
+
+  /**
+   * The runtime's compile of `symbols` ({ symbolSources, dbNumbers }):
+   * callback({ blocks, entries, types, errors, byName }), once per set of
+   * sources (answers are kept). Without sources: an empty table.
+   */
+  editor.compileSymbols = function (symbols, callback) {
+    var key = keyOf(symbols);
+    if (!key) return callback({ blocks: [], entries: [], types: [], errors: [], byName: {} });
+    if (compiled[key]) return callback(compiled[key]);
+    if (compiling[key]) return void compiling[key].push(callback);
+    compiling[key] = [callback];
+    $.ajax({
+      url: 'plcwire/symbols',
+      type: 'POST',
+      contentType: 'application/json',
+      data: JSON.stringify(symbols),
+      success: function (res) {
+        var answer = res || { blocks: [], entries: [], types: [], errors: [] };
+        answer.byName = {};
+        (answer.entries || []).forEach(function (e) {
+          answer.byName[e.name] = e;
+        });
+        compiled[key] = answer;
+        finish(answer);
+      },
+      error: function (xhr) {
+        // Not kept: the next question asks again.
+        finish({ blocks: [], entries: [], types: [], byName: {}, errors: [{ message: String((xhr && xhr.statusText) || 'error') }] });
+      },
+    });
+    function finish(answer) {
+      var waiting = compiling[key] || [];
+      delete compiling[key];
+      waiting.forEach(function (cb) {
+        cb(answer);
+      });
+    }
+  };
+
+  /** Names without their quotes, in lower case: what a typed prefix is compared with. */
+  function plainName(name) {
+    return String(name).replace(/"/g, '').toLowerCase();
+  }
+
+  /** Completions for `typed` among the entries of a compiled table: names starting with it first, then containing it; at most `max`. */
+  editor.completions = function (answer, typed, max) {
+    var want = plainName(typed).trim();
+    if (!want) return [];
+    var starts = [];
+    var contains = [];
+    (answer.entries || []).forEach(function (e) {
+      var plain = plainName(e.name);
+      var at = plain.indexOf(want);
+      if (at === 0) starts.push(e);
+      else if (at > 0) contains.push(e);
+    });
+    return starts.concat(contains).slice(0, max || 50);
+  };
+
+  /**
+   * The rows "all members" adds for a struct (or array) entry: one per
+   * elementary member and per array of elementary values, found through
+   * nested structs and arrays of structs; each named by its path from the
+   * struct's own name (`Motor.Speed` for `"Tank".Motor`, `Level` for `"Tank"`).
+   */
+  editor.memberRows = function (answer, name) {
+    var top = answer.byName[name];
+    if (!top) return [];
+    var lastDot = top.name.lastIndexOf('.');
+    var cut = lastDot > top.name.lastIndexOf('"') ? lastDot + 1 : top.name.length + 1;
+    var rows = [];
+    function walk(e) {
+      (e.children || []).forEach(function (childName) {
+        var child = answer.byName[childName];
+        if (!child) return;
+        var first = child.children && answer.byName[child.children[0]];
+        var whole = child.kind === 'elementary' || (child.kind === 'array' && (!first || first.kind === 'elementary'));
+        if (whole) rows.push({ name: child.name.slice(cut), address: child.name });
+        else walk(child);
+      });
+    }
+    walk(top);
+    return rows;
+  };
+
+  /** Asks the runtime about addresses (the library's own parser, and the connection's symbols if given): callback(results) with { address: { ok, type, message } }. */
+  editor.validate = function (url, addresses, callback, symbols) {
     $.ajax({
       url: 'plcwire/validate',
       type: 'POST',
       contentType: 'application/json',
-      data: JSON.stringify({ url: url || undefined, addresses: addresses }),
+      data: JSON.stringify($.extend({ url: url || undefined, addresses: addresses }, symbols || {})),
       success: function (res) {
         callback((res && res.results) || {}, res && res.url);
       },
@@ -44,15 +153,22 @@
   // what the runtime said before, ask about what it has not been asked yet, and every plcwire node is
   // validated again when the answers arrive (so the red triangle appears a moment after a flow loads).
 
-  var answers = {}; // url → { '': the URL's answer, address: the address's answer }
-  var wanted = {}; // url → { address: true }, for the next question
+  // Questions are asked per URL and set of symbol sources (a name means what the connection's sources say).
+  var answers = {}; // question key → { '': the URL's answer, '\u0001': the sources' answer, address: the address's answer }
+  var wanted = {}; // question key → { url, symbols, addresses: { address: true } }, for the next question
   var asking;
 
-  function answerOf(url, address) {
-    var known = answers[url] && answers[url][address];
+  /** The question a connection's addresses are asked in: its URL and symbol sources. */
+  function questionOf(url, symbols) {
+    return { key: url + '\u0000' + keyOf(symbols), url: url, symbols: symbols };
+  }
+
+  function answerOf(question, address) {
+    var known = answers[question.key] && answers[question.key][address];
     if (known) return known;
-    (wanted[url] = wanted[url] || {})[address] = true;
-    if (!asking) asking = setTimeout(ask, 0); // one question per URL for everything validated in this turn
+    var w = (wanted[question.key] = wanted[question.key] || { url: question.url, symbols: question.symbols, addresses: {} });
+    w.addresses[address] = true;
+    if (!asking) asking = setTimeout(ask, 0); // one question per URL and sources for everything validated in this turn
     return undefined;
   }
 
@@ -60,16 +176,21 @@
     asking = undefined;
     var batch = wanted;
     wanted = {};
-    Object.keys(batch).forEach(function (url) {
-      var addresses = Object.keys(batch[url]).filter(Boolean);
+    Object.keys(batch).forEach(function (key) {
+      var question = batch[key];
+      var url = question.url;
+      var addresses = Object.keys(question.addresses).filter(function (a) {
+        return a && a !== '\u0001';
+      });
       $.ajax({
         url: 'plcwire/validate',
         type: 'POST',
         contentType: 'application/json',
-        data: JSON.stringify({ url: url || undefined, addresses: addresses }),
+        data: JSON.stringify($.extend({ url: url || undefined, addresses: addresses }, question.symbols || {})),
         success: function (res) {
-          var known = (answers[url] = answers[url] || {});
+          var known = (answers[key] = answers[key] || {});
           known[''] = (res && res.url) || { ok: true };
+          known['\u0001'] = (res && res.symbols) || { ok: true };
           // With an invalid URL there are no address answers: the connection is what is wrong.
           addresses.forEach(function (a) {
             known[a] = (res && res.results && res.results[a]) || { ok: true };
@@ -105,17 +226,41 @@
 
   /** The parser's objection to a URL, or undefined (also while the answer is on its way). */
   editor.urlProblem = function (url) {
-    var answer = answerOf(String(url == null ? '' : url).trim(), '');
+    var answer = answerOf(questionOf(String(url == null ? '' : url).trim()), '');
     return answer && !answer.ok ? answer.message : undefined;
   };
 
-  /** The parser's objections to addresses with the URL of connection `connectionId`. */
+  /** A compile error as the dialogs show it: file, line and column when the library knows them. */
+  editor.sourceErrorText = function (e, t) {
+    return e.file
+      ? t('plcwire-connection.editor.errorAt', { file: e.file, line: e.line, column: e.column, message: e.message })
+      : e.message;
+  };
+
+  /** For a connection's `symbolSources` validate: the compile errors of its sources (the first few), or undefined. */
+  editor.sourcesProblem = function (node) {
+    var url = String(node.url == null ? '' : node.url).trim();
+    var symbols =
+      Array.isArray(node.symbolSources) && node.symbolSources.length
+        ? { symbolSources: node.symbolSources, dbNumbers: node.dbNumbers || [] }
+        : undefined;
+    if (!symbols) return undefined;
+    var question = questionOf(url, symbols);
+    var urlAnswer = answerOf(question, '');
+    var answer = answerOf(question, '\u0001');
+    if (!urlAnswer || !urlAnswer.ok || !answer || answer.ok) return undefined;
+    return (answer.errors || []).slice(0, 3).map(function (e) {
+      return e.message;
+    });
+  };
+
+  /** The parser's objections to addresses (names among them) with the URL and symbol sources of connection `connectionId`. */
   function addressProblems(connectionId, addresses) {
-    var url = editor.urlOf(connectionId);
-    var urlAnswer = answerOf(url, '');
+    var question = questionOf(editor.urlOf(connectionId), editor.symbolsOf(connectionId));
+    var urlAnswer = answerOf(question, '');
     var out = [];
     addresses.forEach(function (a) {
-      var answer = a ? answerOf(url, a) : undefined;
+      var answer = a ? answerOf(question, a) : undefined;
       if (urlAnswer && urlAnswer.ok && answer && !answer.ok) out.push(answer.message);
     });
     return out;
@@ -166,7 +311,7 @@
    * problem in `hint`. Returns { check, dispose }; dispose (on Done and Cancel)
    * stops a pending validation, which would otherwise outlive the dialog.
    */
-  editor.watchAddress = function (input, hint, urlOf) {
+  editor.watchAddress = function (input, hint, urlOf, symbolsOf) {
     var timer;
     var closed = false;
     function check() {
@@ -175,15 +320,21 @@
       input.removeClass('plcwire-invalid');
       hint.text('').removeClass('plcwire-bad');
       if (!address) return;
-      editor.validate(urlOf(), [address], function (results) {
-        var r = results[address];
-        if (closed || !r) return;
-        if (r.ok) hint.text(r.type + (r.count > 1 ? '[' + r.count + ']' : ''));
-        else {
-          input.addClass('plcwire-invalid');
-          hint.text(r.message).addClass('plcwire-bad');
-        }
-      });
+      editor.validate(
+        urlOf(),
+        [address],
+        function (results) {
+          var r = results[address];
+          if (closed || !r) return;
+          // A name: its type and the absolute address it stands for.
+          if (r.ok) hint.text(r.type + (r.count > 1 ? '[' + r.count + ']' : '') + (r.symbol ? ' = ' + r.address : ''));
+          else {
+            input.addClass('plcwire-invalid');
+            hint.text(r.message).addClass('plcwire-bad');
+          }
+        },
+        symbolsOf ? symbolsOf() : undefined,
+      );
     }
     input.on('input change', function () {
       clearTimeout(timer);
@@ -237,10 +388,19 @@
    * The tag table of the read and write dialogs: an editableList of name/address
    * rows with add/remove, validation against the chosen connection (addresses
    * by the runtime's parser, names used twice), CSV import (replace or append)
-   * and export. Returns { value(): [{ name, address }], revalidate(), dispose() };
+   * and export. With symbol sources on the connection (`symbolsOf()`: what
+   * editor.symbolsOf gives), an address cell completes names from the
+   * compiled table, each row shows the absolute address a name resolves to
+   * beside its type, and a struct's row offers "all members".
+   * Returns { value(): [{ name, address }], revalidate(), dispose() };
    * dispose on Done and Cancel, so no validation runs after the dialog closed.
    */
-  editor.tagTable = function (container, tags, urlOf, t) {
+  editor.tagTable = function (container, tags, urlOf, t, symbolsOf) {
+    symbolsOf =
+      symbolsOf ||
+      function () {
+        return undefined;
+      };
     var toolbar = $('<div class="plcwire-tags-toolbar">').insertBefore(container);
     var importButton = $('<button type="button" class="red-ui-button red-ui-button-small"><i class="fa fa-upload"></i> </button>').appendTo(
       toolbar,
@@ -287,21 +447,74 @@
         })
         .filter(Boolean);
       if (!addresses.length) return;
-      editor.validate(urlOf(), addresses, function (results) {
+      editor.validate(
+        urlOf(),
+        addresses,
+        function (results) {
+          if (closed) return;
+          items.forEach(function (r) {
+            var input = r.find('.plcwire-tag-address');
+            var type = r.find('.plcwire-tag-type');
+            var resolved = r.find('.plcwire-tag-resolved');
+            var members = r.find('.plcwire-tag-members');
+            var res = results[String(input.val() || '').trim()];
+            input.removeClass('plcwire-invalid');
+            type.removeClass('plcwire-invalid-text').text('').attr('title', '');
+            resolved.text('').attr('title', '');
+            members.hide().removeData('symbol');
+            if (!res) return;
+            if (res.ok) {
+              type.text(res.type + (res.count > 1 ? '[' + res.count + ']' : '')).attr('title', res.type);
+              // A name: the absolute address it stands for, as the library resolved it.
+              if (res.symbol) resolved.text(res.address).attr('title', res.symbol + ' = ' + res.address);
+              if (res.symbol && res.kind !== 'elementary') {
+                members
+                  .data('symbol', res.symbol)
+                  .attr('title', t('plcwire.editor.addMembersTitle', { name: res.symbol }))
+                  .show();
+              }
+            } else {
+              input.addClass('plcwire-invalid');
+              type.addClass('plcwire-invalid-text').text(t('plcwire.editor.invalid')).attr('title', res.message);
+            }
+          });
+        },
+        symbolsOf(),
+      );
+    }
+
+    /** Completion of names from the connection's compiled symbols (none without sources). */
+    function complete(value, done) {
+      var symbols = symbolsOf();
+      if (!symbols || closed) return done([]);
+      editor.compileSymbols(symbols, function (answer) {
+        if (closed) return done([]);
+        done(
+          editor.completions(answer, value, 50).map(function (e) {
+            // Names, types and addresses come from the sources: text nodes, never HTML.
+            var label = $('<div class="plcwire-completion">');
+            $('<span class="plcwire-completion-name">').text(e.name).appendTo(label);
+            $('<span class="plcwire-completion-type">').text(e.type).appendTo(label);
+            $('<span class="plcwire-completion-address">').text(e.address).appendTo(label);
+            return { value: e.name, label: label };
+          }),
+        );
+      });
+    }
+
+    /** "all members": a row for every member of the struct in row `item`, after the table's rows. */
+    function addMembers(item) {
+      var name = item.find('.plcwire-tag-members').data('symbol');
+      var symbols = symbolsOf();
+      if (!name || !symbols) return;
+      editor.compileSymbols(symbols, function (answer) {
         if (closed) return;
-        items.forEach(function (r) {
-          var input = r.find('.plcwire-tag-address');
-          var type = r.find('.plcwire-tag-type');
-          var res = results[String(input.val() || '').trim()];
-          input.removeClass('plcwire-invalid');
-          type.removeClass('plcwire-invalid-text').text('').attr('title', '');
-          if (!res) return;
-          if (res.ok) type.text(res.type + (res.count > 1 ? '[' + res.count + ']' : ''));
-          else {
-            input.addClass('plcwire-invalid');
-            type.addClass('plcwire-invalid-text').text(t('plcwire.editor.invalid')).attr('title', res.message);
-          }
+        var rows = editor.memberRows(answer, name);
+        rows.forEach(function (row) {
+          container.editableList('addItem', row);
         });
+        later();
+        RED.notify(t('plcwire.editor.membersAdded', { count: rows.length, name: name }), { type: 'success', timeout: 3000 });
       });
     }
     function later() {
@@ -322,12 +535,24 @@
           .val(data.name || '')
           .appendTo(line)
           .on('input change', later);
-        $('<input type="text" class="plcwire-tag-address">')
+        var address = $('<input type="text" class="plcwire-tag-address">')
           .attr('placeholder', t('plcwire.editor.tagAddress'))
           .val(data.address || '')
           .appendTo(line)
           .on('input change', later);
+        // Node-RED's completion widget (the one its msg and env fields use); it asks complete() as the user types.
+        if ($.fn.autoComplete) address.autoComplete({ search: complete, minLength: 1 });
+        $('<span class="plcwire-tag-resolved">').appendTo(line);
         $('<span class="plcwire-tag-type">').appendTo(line);
+        var members = $(
+          '<button type="button" class="red-ui-button red-ui-button-small plcwire-tag-members"><i class="fa fa-sitemap"></i> </button>',
+        )
+          .hide()
+          .appendTo(line)
+          .on('click', function () {
+            addMembers(row);
+          });
+        members.append(document.createTextNode(t('plcwire.editor.addMembers')));
         later();
       },
       removeItem: later,
@@ -434,6 +659,9 @@
       dispose: function () {
         closed = true;
         clearTimeout(timer);
+        container.find('.plcwire-tag-address').each(function () {
+          if ($(this).hasClass('red-ui-autoComplete')) $(this).autoComplete('destroy');
+        });
       },
     };
     return api;
@@ -450,7 +678,10 @@
     var urlOf = function () {
       return editor.urlOf($('#node-input-connection').val());
     };
-    var table = editor.tagTable($('#node-input-plcwire-tags'), node.tags, urlOf, t);
+    var symbolsOf = function () {
+      return editor.symbolsOf($('#node-input-connection').val());
+    };
+    var table = editor.tagTable($('#node-input-plcwire-tags'), node.tags, urlOf, t, symbolsOf);
     $('#node-input-connection').on('change', function () {
       table.revalidate();
     });

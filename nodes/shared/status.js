@@ -8,10 +8,17 @@
 
 /** @typedef {(key: string, params?: object) => string} Translate  RED._ of the node's module */
 
-/** The link state: connecting, connected, retry in N s, closed, bad connection, no connection. */
+/**
+ * The link state: connecting, connected, retry in N s, closed, bad connection,
+ * no connection. Connected with a notice of the connection (tags by name):
+ * a data block whose length differs from its source's (`DB1 20≠24`: the
+ * sources' length, then the PLC's), or sources that did not compile.
+ */
 function linkStatus(t, status) {
   switch (status.state) {
     case 'connected':
+      if (status.notice && status.notice.kind === 'layout') return layoutStatus(t, status.notice);
+      if (status.notice && status.notice.kind === 'sources') return { fill: 'yellow', shape: 'dot', text: t('plcwire.status.sourceError') };
       return { fill: 'green', shape: 'dot', text: t('plcwire.status.connected') };
     case 'connecting':
       return { fill: 'yellow', shape: 'ring', text: t('plcwire.status.connecting') };
@@ -25,6 +32,12 @@ function linkStatus(t, status) {
     default:
       return { fill: 'red', shape: 'ring', text: t('plcwire.status.noConnection') };
   }
+}
+
+/** A data block's length on the PLC (`actual`; null: the PLC has no such DB) is not what its source declares (`declared`). */
+function layoutStatus(t, { db, declared, actual }) {
+  if (actual === null) return { fill: 'red', shape: 'ring', text: t('plcwire.status.layoutMissing', { db }) };
+  return { fill: 'red', shape: 'ring', text: t('plcwire.status.layoutMismatch', { db, declared, actual }) };
 }
 
 /** Read node: the link is up but `n` tags of the last read failed. */
@@ -71,6 +84,7 @@ function failedStatus(t, action) {
 
 module.exports = {
   linkStatus,
+  layoutStatus,
   tagErrorsStatus,
   sentStatus,
   aliveStatus,

@@ -20,6 +20,7 @@ import {
 } from '../../lib/s7/codec';
 import { decodeTag } from '../../lib/values';
 import { fuzz, type FuzzTarget } from './engine';
+import { symbolTargets } from './symbol-targets';
 import { extraTargets } from './targets';
 
 const inputs = Number(process.argv[2] ?? 1_000_000);
@@ -122,6 +123,7 @@ const targets: FuzzTarget[] = [
     run: (b) => void parseAddress(b.toString('latin1')),
   },
   ...extraTargets(),
+  ...symbolTargets(),
 ];
 
 const results = targets.map((t) => fuzz(t, inputs));

@@ -107,7 +107,7 @@ describe('nodes: editor endpoints', function () {
   it('asks for the plcwire.read permission', () => {
     const source = fs.readFileSync(path.join(ROOT, 'nodes/connection.js'), 'utf8');
     const routes = source.match(/RED\.httpAdmin\.(get|post)\([^)]*\)/g) ?? [];
-    expect(routes.length).to.equal(6);
+    expect(routes.length).to.equal(7);
     for (const r of routes) expect(r).to.include('canRead');
     expect(source).to.include("RED.auth.needsPermission('plcwire.read')");
   });
