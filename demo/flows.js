@@ -14,7 +14,26 @@
  * RUN/STOP, its clock, the diagnostic buffer) and has Stop and Start buttons:
  * the demo's S7 connection has `control=true`. In STOP the CPU still answers
  * reads but its program (the demo process) stands still, so the values freeze.
+ *
+ * The S7 and FETCH/WRITE connections carry the plant's DB1 as its PLC
+ * programmer exports it (demo/Plant.db, TIA Portal's "Generate source from
+ * blocks"), so every node there names its tags as TIA does ("Plant".Level);
+ * the simulated PLCs are built from the same source (lib/plant/source.ts).
+ * Freeport stations have no data blocks: they keep their addresses.
  */
+const fs = require('node:fs');
+const path = require('node:path');
+
+/** The demo plant's DB1 source as a connection node keeps it (the file's text: its BOM and CRLFs are TIA's, not the source's). */
+const PLANT_SOURCE = Object.freeze({
+  name: 'Plant.db',
+  content: fs
+    .readFileSync(path.join(__dirname, 'Plant.db'), 'utf8')
+    .replace(/^\uFEFF/, '')
+    .replace(/\r\n/g, '\n'),
+});
+/** A TIA source does not carry its DB number: the connection node gives it. */
+const PLANT_DB_NUMBERS = Object.freeze([{ block: 'Plant', db: 1 }]);
 
 /**
  * Editor columns (node centres): sources (polls, status, heartbeat), routing
@@ -64,7 +83,7 @@ function demoFlow(urls) {
     id: 'demo.comment',
     type: 'comment',
     name: 'Simulators: started by npm start (S7 10102, FETCH/WRITE 12000/12001, freeport tcp 14001)',
-    info: 'Run `npx plcwire demo` to start the same simulated plant without Node-RED.',
+    info: 'Run `npx plcwire demo` to start the same simulated plant without Node-RED.\n\nThe S7 and CP connections hold the source of the plant\'s DB1 (`Plant.db`, as TIA Portal generates it): their nodes read and write by name, `"Plant".Level`. Open a connection node to see its blocks.',
     ...at(380, 40),
   });
   nodes.push({
@@ -278,26 +297,29 @@ function demoFlow(urls) {
 
   // Connections: one per PLC, shared by every node below.
   // control=true: the CPU panel's Stop and Start buttons may stop and restart the CPU.
+  // The S7 and CP connections hold DB1's source: their nodes name the tags as the PLC program does.
+  const symbols = () => ({ symbolSources: [{ ...PLANT_SOURCE }], dbNumbers: PLANT_DB_NUMBERS.map((d) => ({ ...d })) });
   nodes.push({
     id: 'conn.s7',
     type: 'plcwire-connection',
     name: 'S7-1200 sim',
     url: `${urls.s7}${urls.s7.includes('?') ? '&' : '?'}control=true`,
+    ...symbols(),
   });
-  nodes.push({ id: 'conn.fw', type: 'plcwire-connection', name: 'CP fetch/write sim', url: urls.fetchwrite });
+  nodes.push({ id: 'conn.fw', type: 'plcwire-connection', name: 'CP fetch/write sim', url: urls.fetchwrite, ...symbols() });
   nodes.push({ id: 'conn.fp', type: 'plcwire-connection', name: 'S7-200 freeport sim', url: urls.freeport });
 
   // S7: poll the process, one message per tag, routed by topic; widgets one under the other.
   let y = 140;
   const row = (i) => y + i * PITCH;
   const s7Tags = [
-    { name: 'level', address: 'DB1.DBD0:REAL' },
-    { name: 'temperature', address: 'DB1.DBD16:REAL' },
-    { name: 'run', address: 'DB1.DBX4.0' },
-    { name: 'running', address: 'DB1.DBX4.1' },
-    { name: 'speed', address: 'DB1.DBW6:INT' },
-    { name: 'parts', address: 'DB1.DBD8:DINT' },
-    { name: 'heater', address: 'DB1.DBX4.2' },
+    { name: 'level', address: '"Plant".Level' },
+    { name: 'temperature', address: '"Plant".Temperature' },
+    { name: 'run', address: '"Plant".MotorRun' },
+    { name: 'running', address: '"Plant".MotorRunning' },
+    { name: 'speed', address: '"Plant".MotorSpeed' },
+    { name: 'parts', address: '"Plant".Parts' },
+    { name: 'heater', address: '"Plant".Heater' },
   ];
   const s7Widgets = ['ui.level', 'ui.chart', 'ui.temp', 'ui.motor', 'ui.running', 'ui.speed', 'ui.parts', 'ui.heater'];
   nodes.push({
@@ -408,7 +430,7 @@ function demoFlow(urls) {
   });
   // The operator's switch: a click sends the run command to the PLC (passthru off, so the polled
   // bit coming in is not written back), and the switch shows the bit as polled (decouple: the
-  // indicator follows the input), so it moves when anything else sets or clears DB1.DBX4.0.
+  // indicator follows the input), so it moves when anything else sets or clears "Plant".MotorRun (DB1.DBX4.0).
   nodes.push({
     id: 'ui.motor',
     type: 'ui-switch',
@@ -420,7 +442,7 @@ function demoFlow(urls) {
     height: 1,
     passthru: false,
     decouple: true,
-    topic: 'DB1.DBX4.0',
+    topic: '"Plant".MotorRun',
     topicType: 'str',
     style: '',
     className: 'plcwire-motor',
@@ -454,16 +476,16 @@ function demoFlow(urls) {
   linkState('s7', 'S7 link', 's7.read', row(8.5), 'ui.link.s7');
   stateLamp('ui.link.s7', 'ui.g.s7', 'S7 link', 9, 3, row(8.5));
 
-  // S7: heartbeat — our counter to DB1.DBW14, the PLC's counter in DB1.DBW12 must keep changing.
+  // S7: heartbeat — our counter to "Plant".PcHeartbeat, the PLC's "Plant".PlcHeartbeat must keep changing.
   nodes.push({
     id: 's7.heartbeat',
     type: 'plcwire-heartbeat',
     name: 'S7 life sign',
     connection: 'conn.s7',
-    writeAddress: 'DB1.DBW14:INT',
+    writeAddress: '"Plant".PcHeartbeat',
     writeMode: 'counter',
     interval: 1000,
-    watchAddress: 'DB1.DBW12:INT',
+    watchAddress: '"Plant".PlcHeartbeat',
     timeout: 3000,
     ...at(X.source, row(9.5)),
     wires: [['s7.hbtext']],
@@ -655,7 +677,7 @@ return msg;`,
   control('cpu.start', 'start CPU', 'start', 7.5, ['cpu.lamp']);
   watchdog('cpu', 3, row(9), cpuWidgets);
 
-  // FETCH/WRITE: the same DB1 through the CP.
+  // FETCH/WRITE: the same DB1 through the CP, by the same names (the CP serves the CPU's data blocks).
   y = row(11);
   nodes.push({
     id: 'fw.read',
@@ -666,8 +688,8 @@ return msg;`,
     output: 'per-tag',
     deadband: 0,
     tags: [
-      { name: 'level', address: 'DB1,REAL0' },
-      { name: 'parts', address: 'DB1,DINT8' },
+      { name: 'level', address: '"Plant".Level' },
+      { name: 'parts', address: '"Plant".Parts' },
     ],
     ...at(X.source, row(0)),
     wires: [['fw.route', 'fw.watch']],
@@ -759,12 +781,10 @@ const DEMO_URLS = Object.freeze({
   freeport: 'freeport+tcp://127.0.0.1:14001',
 });
 
-module.exports = { demoFlow, DEMO_URLS, STALE, LIVE };
+module.exports = { demoFlow, DEMO_URLS, PLANT_SOURCE, PLANT_DB_NUMBERS, STALE, LIVE };
 
 // `node demo/flows.js` regenerates the Dashboard 2 example from this flow.
 if (require.main === module) {
-  const fs = require('node:fs');
-  const path = require('node:path');
   const dir = path.join(__dirname, '..', 'examples', 'Dashboard 2');
   fs.mkdirSync(dir, { recursive: true });
   fs.writeFileSync(path.join(dir, 'Plant dashboard for all three protocols.json'), `${JSON.stringify(demoFlow(DEMO_URLS), null, 2)}\n`);

@@ -135,5 +135,6 @@ export { DEFAULT_FREEPORT_PROFILE, defineProfile, type FreeportProfile } from '.
 export { parseFreeportAddress, type FreeportTag } from './freeport/address';
 
 export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess, type MemoryFault } from './sim/memory';
-export { DemoProcess, DEMO_TAGS, type ProcessSnapshot } from './plant/process';
+export { DemoProcess, DEMO_SYMBOLS, DEMO_TAGS, type ProcessSnapshot } from './plant/process';
+export { PLANT_DB_NUMBERS, PLANT_SOURCE } from './plant/source';
 export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './plant/plant';

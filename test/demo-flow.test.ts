@@ -10,6 +10,10 @@
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
+import { formatAddress, parseAddress } from '../lib/address';
+import { DEMO_SYMBOLS, DEMO_TAGS } from '../lib/plant/process';
+import { PLANT_DB_NUMBERS, PLANT_SOURCE } from '../lib/plant/source';
+import { compileSymbols } from '../lib/symbols';
 import { dashboardProblems, drawnBoxes, layoutProblems, placementOf, type FlowNode } from './support/flow-layout';
 
 const ROOT = path.resolve(__dirname, '../..');
@@ -95,14 +99,14 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
   const feeding = (id: string) =>
     flow.filter((n) => (n.wires as string[][] | undefined)?.some((port) => port.includes(id))).map((n) => n.id);
 
-  it('the motor switch is fed the polled run bit, shows it, and a click writes DB1.DBX4.0 without echoing the polled bit back', () => {
+  it('the motor switch is fed the polled run bit, shows it, and a click writes "Plant".MotorRun without echoing the polled bit back', () => {
     const motor = node('ui.motor');
-    expect(motor).to.include({ type: 'ui-switch', passthru: false, decouple: true, topic: 'DB1.DBX4.0', topicType: 'str' });
+    expect(motor).to.include({ type: 'ui-switch', passthru: false, decouple: true, topic: DEMO_SYMBOLS.run, topicType: 'str' });
     const route = node('s7.route');
     const run = (route.rules as { v: string }[]).findIndex((r) => r.v === 'run');
     expect((route.wires as string[][])[run]).to.deep.equal(['ui.motor']);
     const tags = node('s7.read').tags as { name: string; address: string }[];
-    expect(tags.find((t) => t.name === 'run')?.address).to.equal('DB1.DBX4.0');
+    expect(tags.find((t) => t.name === 'run')?.address).to.equal(DEMO_SYMBOLS.run);
     expect(motor.wires).to.deep.equal([['s7.write']]);
   });
 
@@ -111,9 +115,39 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
       expect(node(id).type, id).to.equal('ui-template');
       expect(String(node(id).format), id).to.match(/class="plcwire-lamp"/);
     }
+    const table = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
     const tags = node('s7.read').tags as { name: string; address: string }[];
-    const bools = tags.filter((t) => /X\d+\.\d$/.test(t.address)).map((t) => t.name);
+    const bools = tags.filter((t) => table.lookup(t.address)?.dataType === 'BOOL').map((t) => t.name);
     expect(bools).to.have.members(['run', 'running', 'heater']);
+  });
+
+  it("the S7 and CP nodes name their tags as the PLC program does, each name one of the plant's addresses; freeport keeps its stations", () => {
+    const table = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
+    const byAddress = new Map(Object.entries(DEMO_TAGS).map(([k, a]) => [formatAddress(parseAddress(a)), k]));
+    const named = (connection: string) =>
+      flow
+        .filter((n) => n.connection === connection)
+        .flatMap((n) => [...((n.tags as { address: string }[] | undefined) ?? []).map((t) => t.address), n.writeAddress, n.watchAddress])
+        .concat(connection === 'conn.s7' ? [node('ui.motor').topic] : [])
+        .filter((a): a is string => typeof a === 'string');
+    for (const connection of ['conn.s7', 'conn.fw']) {
+      // The connection carries the shipped source, as the editor keeps an uploaded file.
+      expect(node(connection).symbolSources).to.deep.equal([{ name: PLANT_SOURCE.name, content: PLANT_SOURCE.content }]);
+      expect(node(connection).dbNumbers).to.deep.equal(Object.entries(PLANT_DB_NUMBERS).map(([block, db]) => ({ block, db })));
+      const names = named(connection);
+      expect(names.length, connection).to.be.at.least(2);
+      for (const name of names) {
+        expect(name, connection).to.match(/^"Plant"\./);
+        const entry = table.lookup(name);
+        expect(entry, name).to.not.equal(undefined);
+        // The process reads and writes the same bytes (DEMO_TAGS), and the name is the one DEMO_SYMBOLS gives them.
+        const tag = byAddress.get(formatAddress(parseAddress(entry!.address)));
+        expect(tag, `${name} is ${entry!.address}, none of DEMO_TAGS`).to.not.equal(undefined);
+        expect(DEMO_SYMBOLS[tag as keyof typeof DEMO_SYMBOLS]).to.equal(name);
+      }
+    }
+    expect(node('conn.fp')).to.not.have.property('symbolSources');
+    for (const t of node('fp.read').tags as { address: string }[]) expect(t.address).to.match(/^ST\d+,/);
   });
 
   it("every widget fed by a link is marked stale by that link's watchdog, and only by it", () => {

@@ -2,12 +2,20 @@
  * The demo plant: all three simulators on fixed loopback ports, sharing one
  * simulated process. Used by `plcwire demo`, by `npm start` (which adds
  * Node-RED and a dashboard) and by tests (ports 0 = ephemeral).
+ *
+ * The S7-1200 holds the data blocks its program was downloaded with: DB1
+ * compiled from the plant's source (PLANT_SOURCE, lib/plant/source.ts), 20
+ * bytes holding its start values, and no other DB. The CP (FETCH/WRITE)
+ * serves the same memory, as a CP in the CPU's rack does.
  */
 import { FetchWriteServer } from '../fetchwrite/server';
 import { FreeportBus } from '../freeport/bus';
 import { S7Server } from '../s7/server';
-import { PlcMemory } from '../sim/memory';
+import type { PlcMemory } from '../sim/memory';
+import { compileSymbols } from '../symbols';
+import type { SymbolTable } from '../symbols/model';
 import { DemoProcess } from './process';
+import { PLANT_DB_NUMBERS, PLANT_SOURCE } from './source';
 
 export interface PlantPorts {
   s7: number;
@@ -23,6 +31,8 @@ export const DEMO_STATIONS = Object.freeze({ level: 5, parts: 6 });
 
 export interface Plant {
   memory: PlcMemory;
+  /** The plant's source compiled: what the demo flow's connections and `--symbols` read by name. */
+  symbols: SymbolTable;
   process: DemoProcess;
   s7: S7Server;
   fetchwrite: FetchWriteServer;
@@ -35,8 +45,9 @@ export interface Plant {
 export async function startPlant(options: { host?: string; ports?: Partial<PlantPorts>; periodMs?: number } = {}): Promise<Plant> {
   const host = options.host ?? '127.0.0.1';
   const want = { ...DEMO_PORTS, ...options.ports };
-  const memory = new PlcMemory();
-  const s7 = new S7Server({ host, port: want.s7, profile: 's7-1200', memory });
+  const symbols = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
+  const s7 = new S7Server({ host, port: want.s7, profile: 's7-1200', symbols });
+  const memory = s7.memory;
   // The process is the S7-1200's program: it stops with the CPU (the other links see the same memory held).
   const process = new DemoProcess(memory, options.periodMs ?? 100, s7.cpu);
   const fetchwrite = new FetchWriteServer({ host, fetchPort: want.fetch, writePort: want.write, memory });
@@ -62,6 +73,7 @@ export async function startPlant(options: { host?: string; ports?: Partial<Plant
     const h = host.includes(':') ? `[${host}]` : host;
     return {
       memory,
+      symbols,
       process,
       s7,
       fetchwrite,

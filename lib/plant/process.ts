@@ -23,6 +23,9 @@
  *   DB1.DBW12:INT   PLC heartbeat counter    (process, every 500 ms)
  *   DB1.DBW14:INT   PC heartbeat             (written by the heartbeat node)
  *   DB1.DBD16:REAL  temperature, °C          (process)
+ *
+ * DB1 is the data block "Plant" of lib/plant/source.ts (PLANT_SOURCE): the
+ * same members by name (DEMO_SYMBOLS), which compile to these addresses.
  */
 import type { PlcMemory } from '../sim/memory';
 
@@ -41,6 +44,19 @@ export const DEMO_TAGS = Object.freeze({
   plcHeartbeat: 'DB1.DBW12:INT',
   pcHeartbeat: 'DB1.DBW14:INT',
   temperature: 'DB1.DBD16:REAL',
+});
+
+/** The same tags by name: the members of "Plant" (PLANT_SOURCE, lib/plant/source.ts), compiled to DEMO_TAGS' addresses. */
+export const DEMO_SYMBOLS: Readonly<Record<keyof typeof DEMO_TAGS, string>> = Object.freeze({
+  level: '"Plant".Level',
+  run: '"Plant".MotorRun',
+  running: '"Plant".MotorRunning',
+  heater: '"Plant".Heater',
+  speed: '"Plant".MotorSpeed',
+  parts: '"Plant".Parts',
+  plcHeartbeat: '"Plant".PlcHeartbeat',
+  pcHeartbeat: '"Plant".PcHeartbeat',
+  temperature: '"Plant".Temperature',
 });
 
 export interface ProcessSnapshot {
@@ -86,6 +102,7 @@ export class DemoProcess {
   start(): this {
     if (!this.timer) {
       const db = this.db();
+      // The source's start values (PLANT_SOURCE) where the memory was not built from it: a blank DB1.
       if (db.readFloatBE(0) === 0) db.writeFloatBE(20, 0);
       if (db.readFloatBE(16) === 0) db.writeFloatBE(THERMAL.ambient, 16);
       this.timer = setInterval(() => this.step(), this.periodMs);

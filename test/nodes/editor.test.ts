@@ -130,7 +130,8 @@ describe('nodes: examples', function () {
     for (const f of files) {
       const flow = JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8'));
       expect(flow[0].type, f).to.equal('comment');
-      expect(flow[0].name, f).to.match(/npx plcwire serve (s7|fetchwrite|freeport)/);
+      // A flow by name reads the demo plant, whose simulator is built from the source its connection carries.
+      expect(flow[0].name, f).to.match(/npx plcwire (serve (s7|fetchwrite|freeport)|demo)/);
       for (const n of flow) if (n.type === 'plcwire-connection') urls.add(n.url.split(':')[0]);
     }
     expect([...urls].sort()).to.deep.equal(['fetchwrite', 'freeport+tcp', 's7']);
@@ -168,8 +169,14 @@ describe('nodes: examples', function () {
       const addresses = flow
         .flatMap((n: any) => [...(n.tags ?? []).map((t: any) => t.address), n.writeAddress, n.watchAddress])
         .filter(Boolean);
-      const res = await helper.request().post('/plcwire/validate').send({ url: conn.url, addresses }).expect(200);
+      const sources = { symbolSources: conn.symbolSources, dbNumbers: conn.dbNumbers };
+      const res = await helper
+        .request()
+        .post('/plcwire/validate')
+        .send({ url: conn.url, addresses, ...sources })
+        .expect(200);
       expect(res.body.url.ok, res.body.url.message).to.equal(true);
+      if (conn.symbolSources) expect(res.body.symbols, JSON.stringify(res.body.symbols)).to.deep.equal({ ok: true });
       for (const a of addresses) expect(res.body.results[a].ok, `${a}: ${res.body.results[a].message}`).to.equal(true);
     });
   }

@@ -1,0 +1,47 @@
+/**
+ * The demo plant's DB1 as its PLC programmer would hand it over: the source
+ * TIA Portal writes with "Generate source from blocks" for a global DB
+ * "Plant" with standard access (S7_Optimized_Access := 'FALSE'), DB number 1.
+ * Compiled (compileSymbols) it places every member exactly where the demo
+ * process reads and writes it (DEMO_TAGS, lib/plant/process.ts); a test
+ * holds the two together, and holds demo/Plant.db (the same text as the
+ * file TIA writes: UTF-8 with BOM, CRLF) to this one.
+ *
+ * It ships inside the library so that `plcwire demo` and `npm start` build
+ * their simulated S7-1200 from it, and the demo flow's connection node
+ * carries it to read the plant by name.
+ */
+import type { SymbolSource } from '../symbols/model';
+
+export const PLANT_SOURCE: SymbolSource = Object.freeze({
+  name: 'Plant.db',
+  content: `DATA_BLOCK "Plant"
+{ S7_Optimized_Access := 'FALSE' }
+AUTHOR : plcwire
+FAMILY : Demo
+NAME : Plant
+VERSION : 0.1
+RETAIN
+//Demo plant: heated tank with feed motor, parts counter and the life signs between PLC and PC. Standard access (PUT/GET reads it by offset).
+   STRUCT 
+      Level : Real := 20.0;   // Tank level in %; fills at 4 %/s up to 90 %, drains at 3 %/s down to 10 %
+      MotorRun : Bool;   // Run command from the operator (dashboard switch, HMI)
+      MotorRunning : Bool;   // Motor turns (speed > 0)
+      Heater : Bool;   // Tank heater, switched by the thermostat: on below 35 °C, off above 50 °C
+      MotorSpeed : Int;   // Actual speed in rpm; ramps up at 600 rpm/s to 1450, down at 900 rpm/s
+      Parts : DInt;   // Parts made: +1 every 500 ms while the motor turns
+      PlcHeartbeat : Int;   // PLC life sign: +1 every 500 ms in RUN, 0..32767
+      PcHeartbeat : Int;   // PC life sign: written by the PC (Node-RED heartbeat node), not used by the PLC
+      Temperature : Real := 20.0;   // Tank temperature in °C
+   END_STRUCT;
+
+
+BEGIN
+
+END_DATA_BLOCK
+
+`,
+});
+
+/** The DB number of each block of PLANT_SOURCE (a TIA source does not carry it): the `db` option of compileSymbols. */
+export const PLANT_DB_NUMBERS: Readonly<Record<string, number>> = Object.freeze({ Plant: 1 });
