@@ -438,7 +438,7 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
         expect(r.code, r.err).to.equal(0);
         expect(r.out).to.equal('Tank.Level = 12.5\n');
         expect(r.err).to.match(
-          /^note: the length of DB1 "Tank" could not be checked against the sources: .*no service that tells the length of a data block$/m,
+          /^note: the length of DB1 "Tank" could not be checked against the sources: .*FETCH\/WRITE has no service that tells the length of a data block, .*at the offsets of the sources, unchecked/m,
         );
         expect(r.err.trim().split('\n')).to.have.length(1);
       } finally {

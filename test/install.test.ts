@@ -86,6 +86,14 @@ describe('install: the tarball in a fresh Node-RED user directory', function () 
         }
       });
 
+      let shownLog = false;
+      afterEach(function () {
+        // A failure here is about a runtime in another process: its log says why (once).
+        if (this.currentTest?.state !== 'failed' || shownLog) return;
+        shownLog = true;
+        console.error(`${runtime.name} (exit code ${child?.exitCode ?? 'none: still running'}) logged:\n${log}`);
+      });
+
       after(async () => {
         if (child && child.exitCode === null) {
           const exited = new Promise((r) => child!.once('exit', r));
