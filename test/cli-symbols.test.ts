@@ -9,6 +9,7 @@
 import { expect } from 'chai';
 import { spawn, type ChildProcess } from 'node:child_process';
 import { once } from 'node:events';
+import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { EXIT } from '../lib/cli/io';
 import { freePort } from './support/net';
@@ -386,6 +387,27 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
       await srv.exit;
     }
     expect(await w.exit).to.equal(0);
+  });
+
+  it("the README's table of demo/Plant.db is what plcwire symbols prints", async () => {
+    const readme = fs.readFileSync(path.resolve(__dirname, '../../README.md'), 'utf8');
+    const block = /```sh\n\s*npx plcwire symbols Plant\.db --db Plant=1\n((?:\s*# .*\n)+)/.exec(readme);
+    expect(block, 'the README shows the command and its output').to.not.equal(null);
+    const shown = block![1]!
+      .split('\n')
+      .filter(Boolean)
+      .map((l) => l.replace(/^\s*# /, ''));
+    const child = spawn(process.execPath, [BIN, 'symbols', 'Plant.db', '--db', 'Plant=1'], { cwd: path.resolve(__dirname, '../../demo') });
+    let out = '';
+    child.stdout.on('data', (d: Buffer) => (out += d.toString()));
+    const [code] = await once(child, 'exit');
+    expect(code).to.equal(0);
+    expect(shown).to.deep.equal(
+      out
+        .trimEnd()
+        .split('\n')
+        .map((l) => l.trimEnd()),
+    );
   });
 
   describe('a reader that goes away (| head)', () => {
