@@ -298,6 +298,30 @@ describe('plcwire CLI', function () {
   });
 
   describe('the installed binary', () => {
+    it('demo prints try: lines that work as printed (by address and, from the shipped Plant.db, by name), until Ctrl-C', async () => {
+      const demo = run(['demo']);
+      try {
+        await until(() => /^Ctrl-C stops\.$/m.test(demo.output().out), 20000, 'the demo prints what to try');
+        const lines = [...demo.output().out.matchAll(/^ {2}npx plcwire (.+)$/gm)].map((m) => m[1]!);
+        expect(lines.some((l) => l.includes('"Plant".Level') && l.includes('--symbols'))).to.equal(true);
+        for (const line of lines) {
+          // As a user pastes it into a shell; `watch` runs until Ctrl-C, so the same arguments are read once.
+          const command = line.replace(/^watch /, 'read ');
+          const child = spawn('sh', ['-c', `"${process.execPath}" "${BIN}" ${command}`], { stdio: ['ignore', 'pipe', 'pipe'] });
+          let out = '';
+          let err = '';
+          child.stdout.on('data', (d: Buffer) => (out += d.toString()));
+          child.stderr.on('data', (d: Buffer) => (err += d.toString()));
+          const [code] = await once(child, 'exit');
+          expect(code, `${command}\n${err}`).to.equal(0);
+          expect(out, command).to.match(/ = /);
+        }
+      } finally {
+        demo.child.kill('SIGINT');
+      }
+      expect(await demo.exit).to.equal(0);
+    });
+
     it('serve s7 runs the simulator until Ctrl-C, and read/write talk to it', async () => {
       const port = await freePort();
       const srv = run(['serve', 's7', '--port', String(port), '--profile', 's7-1200']);

@@ -217,6 +217,8 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
 
   it('ships the compiled library, the CLI and the docs, and no tests or sources', () => {
     expect(files).to.include.members(['dist/lib/index.js', 'dist/lib/index.d.ts', 'bin/plcwire.js', 'README.md']);
+    // plcwire demo names it in its try: lines.
+    expect(files).to.include('demo/Plant.db');
     expect(
       files.filter((f) => f.startsWith('dist/test/') || f.startsWith('test/') || (f.endsWith('.ts') && !f.endsWith('.d.ts'))),
     ).to.deep.equal([]);

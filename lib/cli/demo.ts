@@ -1,7 +1,11 @@
 /** `plcwire demo`: the three simulated PLCs with a running process, until Ctrl-C. */
+import * as path from 'node:path';
 import { DEMO_STATIONS, startPlant } from '../plant/plant';
 import { DEMO_TAGS } from '../plant/process';
 import { EXIT, untilInterrupted, type CliIo } from './io';
+
+/** demo/Plant.db beside dist/ (in the repository and in the installed package alike). */
+const PLANT_SOURCE_FILE = path.resolve(__dirname, '..', '..', '..', 'demo', 'Plant.db');
 
 export async function runDemo(io: CliIo): Promise<number> {
   const plant = await startPlant();
@@ -13,6 +17,9 @@ export async function runDemo(io: CliIo): Promise<number> {
   say('try:');
   say(`  npx plcwire watch "${plant.urls.s7}" ${DEMO_TAGS.level} ${DEMO_TAGS.speed} ${DEMO_TAGS.parts}`);
   say(`  npx plcwire write "${plant.urls.s7}" ${DEMO_TAGS.run}=true`);
+  // By name, from the plant's own DB source (shipped with the package: package.json "files").
+  const source = JSON.stringify(PLANT_SOURCE_FILE);
+  say(`  npx plcwire watch "${plant.urls.s7}" '"Plant".Level' '"Plant".MotorSpeed' --symbols ${source} --db Plant=1`);
   say(`  npx plcwire read "${plant.urls.freeport}" ST${DEMO_STATIONS.level},REAL0`);
   say('Ctrl-C stops.');
   await untilInterrupted(io);
