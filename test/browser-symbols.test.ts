@@ -9,14 +9,12 @@
  * admin endpoint's permission.
  */
 import { expect } from 'chai';
-import { spawn, type ChildProcess } from 'node:child_process';
 import * as fs from 'node:fs';
 import * as http from 'node:http';
-import * as os from 'node:os';
 import * as path from 'node:path';
 import type { Browser, BrowserContext, Page } from 'playwright-core';
 import { launchChromium } from './support/browser';
-import { freePort } from './support/net';
+import { startNodeRedProcess, type NodeRedProcess } from './support/node-red-process';
 
 const ROOT = path.resolve(__dirname, '../..');
 const lib = require(path.join(ROOT, 'dist/lib/index.js'));
@@ -78,68 +76,15 @@ function testFlow(url: string): object[] {
   ];
 }
 
-interface NodeRed {
-  url: string;
-  stop(): Promise<void>;
-}
-
 /** Node-RED in a child process, with admin authentication (anonymous: every permission; VIEWER: flows.read only). */
-async function startNodeRed(flow: object[]): Promise<NodeRed> {
-  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-symbols-'));
-  const port = await freePort();
-  fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
-  fs.symlinkSync(ROOT, path.join(dir, 'node_modules', '@plcwire', 'node-red-siemens'), 'dir');
-  fs.writeFileSync(path.join(dir, 'package.json'), JSON.stringify({ name: 'symbols-test', private: true }));
-  fs.writeFileSync(path.join(dir, 'flows.json'), JSON.stringify(flow));
-  const { localSettings } = require(path.join(ROOT, 'demo/start.js')) as { localSettings(port: number): object };
+function startNodeRed(flow: object[]): Promise<NodeRedProcess> {
   const bcrypt = require(require.resolve('bcryptjs', { paths: [path.dirname(require.resolve('@node-red/editor-api/package.json'))] }));
   const adminAuth = {
     type: 'credentials',
     users: [{ username: VIEWER.username, password: bcrypt.hashSync(VIEWER.password, 8), permissions: VIEWER.permissions }],
     default: { permissions: '*' },
   };
-  fs.writeFileSync(path.join(dir, 'settings.js'), `module.exports = ${JSON.stringify({ ...localSettings(port), adminAuth })};\n`);
-  const red = require.resolve('node-red/red.js', { paths: [ROOT] });
-  const child: ChildProcess = spawn(process.execPath, [red, '--userDir', dir, '--settings', path.join(dir, 'settings.js')], {
-    cwd: dir,
-    stdio: ['ignore', 'pipe', 'pipe'],
-  });
-  let output = '';
-  child.stdout!.on('data', (d: Buffer) => (output += d.toString()));
-  child.stderr!.on('data', (d: Buffer) => (output += d.toString()));
-  const stop = async () => {
-    if (child.exitCode === null && child.signalCode === null) {
-      const exited = new Promise((r) => child.once('exit', r));
-      child.kill('SIGINT');
-      const force = setTimeout(() => child.kill('SIGKILL'), 5000);
-      await exited;
-      clearTimeout(force);
-    }
-    fs.rmSync(dir, { recursive: true, force: true });
-  };
-  const url = `http://127.0.0.1:${port}/`;
-  try {
-    await new Promise<void>((resolve, reject) => {
-      const deadline = Date.now() + 60_000;
-      const attempt = () => {
-        if (child.exitCode !== null) return reject(new Error(`Node-RED exited (${child.exitCode}):\n${output}`));
-        if (Date.now() > deadline) return reject(new Error(`Node-RED did not start within 60 s:\n${output}`));
-        if (!/Started flows/.test(output)) return void setTimeout(attempt, 100);
-        http
-          .get(`${url}flows`, (res) => {
-            res.resume();
-            if (res.statusCode === 200) resolve();
-            else setTimeout(attempt, 100);
-          })
-          .on('error', () => setTimeout(attempt, 100));
-      };
-      attempt();
-    });
-  } catch (err) {
-    await stop();
-    throw err;
-  }
-  return { url, stop };
+  return startNodeRedProcess(flow, { adminAuth });
 }
 
 /** A JSON request to the runtime: status code and parsed body. */
@@ -174,7 +119,7 @@ function connectionText(key: string, params: Record<string, unknown>): string {
 describe('editor: tags by name in headless Chromium', function () {
   this.timeout(120_000);
   let s7: any;
-  let red: NodeRed;
+  let red: NodeRedProcess;
   let browser: Browser;
 
   before(async () => {

@@ -5,14 +5,11 @@
  * headless Chromium driven by playwright-core (test/support/browser.ts).
  */
 import { expect } from 'chai';
-import { spawn, type ChildProcess } from 'node:child_process';
 import * as fs from 'node:fs';
-import * as http from 'node:http';
-import * as os from 'node:os';
 import * as path from 'node:path';
 import type { Browser, BrowserContext, Page } from 'playwright-core';
 import { launchChromium } from './support/browser';
-import { freePort } from './support/net';
+import { startNodeRedProcess, type NodeRedProcess } from './support/node-red-process';
 
 const ROOT = path.resolve(__dirname, '../..');
 const LOCALES = { 'en-US': 'en-US', de: 'de-DE', 'zh-CN': 'zh-CN' } as const;
@@ -137,66 +134,9 @@ function testFlow(s7Port: number, doctorPort: number): object[] {
   ];
 }
 
-interface NodeRed {
-  url: string;
-  stop(): Promise<void>;
-}
-
 /** Node-RED 4 in a child process on a free port, with `flow` deployed; resolves once the flows have started. */
-async function startNodeRed(flow: object[]): Promise<NodeRed> {
-  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-editor-'));
-  const port = await freePort();
-  fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
-  fs.symlinkSync(ROOT, path.join(dir, 'node_modules', '@plcwire', 'node-red-siemens'), 'dir');
-  fs.writeFileSync(
-    path.join(dir, 'package.json'),
-    JSON.stringify({ name: 'editor-test', private: true, dependencies: { '@plcwire/node-red-siemens': '*' } }),
-  );
-  fs.writeFileSync(path.join(dir, 'flows.json'), JSON.stringify(flow));
-  const { localSettings } = require(path.join(ROOT, 'demo/start.js')) as { localSettings(port: number): object };
-  const settings = localSettings(port);
-  fs.writeFileSync(path.join(dir, 'settings.js'), `module.exports = ${JSON.stringify(settings)};\n`);
-  const red = require.resolve('node-red/red.js', { paths: [ROOT] });
-  const child: ChildProcess = spawn(process.execPath, [red, '--userDir', dir, '--settings', path.join(dir, 'settings.js')], {
-    cwd: dir,
-    stdio: ['ignore', 'pipe', 'pipe'],
-  });
-  let output = '';
-  child.stdout!.on('data', (d: Buffer) => (output += d.toString()));
-  child.stderr!.on('data', (d: Buffer) => (output += d.toString()));
-  const stop = async () => {
-    if (child.exitCode === null && child.signalCode === null) {
-      const exited = new Promise((r) => child.once('exit', r));
-      child.kill('SIGINT');
-      const force = setTimeout(() => child.kill('SIGKILL'), 5000);
-      await exited;
-      clearTimeout(force);
-    }
-    fs.rmSync(dir, { recursive: true, force: true });
-  };
-  const url = `http://127.0.0.1:${port}/`;
-  try {
-    await new Promise<void>((resolve, reject) => {
-      const deadline = Date.now() + 60_000;
-      const attempt = () => {
-        if (child.exitCode !== null) return reject(new Error(`Node-RED exited (${child.exitCode}):\n${output}`));
-        if (Date.now() > deadline) return reject(new Error(`Node-RED did not start within 60 s:\n${output}`));
-        if (!/Started flows/.test(output)) return void setTimeout(attempt, 100);
-        http
-          .get(`${url}flows`, (res) => {
-            res.resume();
-            if (res.statusCode === 200) resolve();
-            else setTimeout(attempt, 100);
-          })
-          .on('error', () => setTimeout(attempt, 100));
-      };
-      attempt();
-    });
-  } catch (err) {
-    await stop();
-    throw err;
-  }
-  return { url, stop };
+function startNodeRed(flow: object[]): Promise<NodeRedProcess> {
+  return startNodeRedProcess(flow);
 }
 
 /** Polls a condition of this process (a simulator's connection count) until it holds, within 3 s. */
@@ -219,7 +159,7 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
   this.timeout(120_000);
   let s7: any;
   let doctorSim: any;
-  let red: NodeRed;
+  let red: NodeRedProcess;
   let browser: Browser;
 
   before(async () => {
