@@ -194,6 +194,20 @@ describe('layout check of the symbol table against the S7 simulator', function (
     expect(seen).to.deep.equal([]);
   });
 
+  it('checkLayout() right after connect shares the check the connect started: the PLC is asked once, not twice', async () => {
+    server.faults.latencyMs = 50;
+    const userdata: S7RequestEvent[] = [];
+    server.on('request', (r: S7RequestEvent) => r.kind === 'userdata' && userdata.push(r));
+    client = open();
+    await client.connect();
+    const shared = await client.checkLayout();
+    const once = userdata.length;
+    expect(once, 'the block list and a block info per DB').to.be.greaterThan(1);
+    // No check under way now: this one asks the PLC again, exactly as many requests as one check takes.
+    expect(await client.checkLayout()).to.deep.equal(shared);
+    expect(userdata.length).to.equal(2 * once);
+  });
+
   it('an aborted checkLayout() rejects ABORTED; a read by name that waits for a check can be aborted too', async () => {
     server.faults.latencyMs = 150;
     client = open('&strictSymbols=true');

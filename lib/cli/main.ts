@@ -131,8 +131,9 @@ function targetClient(
 
 /**
  * With a table, the layout check of the connection, waited for so that its
- * warning is printed before the command ends (the client also runs one on
- * connect; it reports a finding once). Its failures are the request's to tell.
+ * warning is printed before the command ends (it is the check the client
+ * starts on connect, shared, not a second one). Its failures are the
+ * request's to tell.
  */
 function layoutChecked(client: AnyClient, table: SymbolTable | undefined, io: CliIo): Promise<unknown> {
   return table ? client.checkLayout({ signal: io.signal }).catch(() => undefined) : Promise.resolve();

@@ -55,6 +55,8 @@ export class LayoutMonitor {
    * (test/fixtures/s7-userdata.ts, SNAP7).
    */
   private readonly unreadable = new Map<number, PlcError>();
+  /** The check under way that check() may share (one started without a signal of its own). */
+  private running: { generation: number; checks: Promise<LayoutCheck[]> } | undefined;
 
   constructor(private readonly o: LayoutMonitorOptions) {}
 
@@ -77,9 +79,25 @@ export class LayoutMonitor {
     this.unknownReported = false;
   }
 
-  /** Checks every block now (and reports as on connect). */
+  /**
+   * Checks every block now (and reports as on connect). A check of this
+   * connection already under way (the one each connect starts) is shared
+   * rather than asked again: its answers are as fresh, and the PLC is not
+   * asked every block's info twice.
+   */
   check(signal?: AbortSignal): Promise<LayoutCheck[]> {
-    return this.run(signal);
+    const running = this.running;
+    if (!running || running.generation !== this.generation) return this.run(signal);
+    if (!signal) return running.checks;
+    if (signal.aborted) return Promise.reject(abortError('the layout check', signal));
+    return new Promise((resolve, reject) => {
+      const onAbort = () => reject(abortError('the layout check', signal));
+      signal.addEventListener('abort', onAbort, { once: true });
+      running.checks.then(
+        (checks) => (signal.removeEventListener('abort', onAbort), resolve(checks)),
+        (err: unknown) => (signal.removeEventListener('abort', onAbort), reject(err)),
+      );
+    });
   }
 
   /** True when reads and writes by name must wait for a check, or may be refused (strictSymbols only). */
@@ -123,7 +141,12 @@ export class LayoutMonitor {
       return checks;
     });
     this.pending.add(run);
-    const done = () => void this.pending.delete(run);
+    // Only a check without a signal of its own is shared: an aborted one must not fail the others.
+    if (!signal) this.running = { generation, checks: run };
+    const done = () => {
+      this.pending.delete(run);
+      if (this.running?.checks === run) this.running = undefined;
+    };
     run.then(done, done);
     return run;
   }
