@@ -14,7 +14,7 @@ import * as http from 'node:http';
 import * as path from 'node:path';
 import type { Browser, BrowserContext, Page } from 'playwright-core';
 import { launchChromium } from './support/browser';
-import { startNodeRedProcess, type NodeRedProcess } from './support/node-red-process';
+import { openEditor as openEditorOf, startNodeRedProcess, type NodeRedProcess } from './support/node-red-process';
 
 const ROOT = path.resolve(__dirname, '../..');
 const lib = require(path.join(ROOT, 'dist/lib/index.js'));
@@ -135,18 +135,8 @@ describe('editor: tags by name in headless Chromium', function () {
     await s7?.close();
   });
 
-  async function openEditor(): Promise<{ context: BrowserContext; page: Page; errors: Error[] }> {
-    const context = await browser.newContext({ locale: 'en-US' });
-    const page = await context.newPage();
-    const errors: Error[] = [];
-    page.on('pageerror', (err) => errors.push(err));
-    await page.goto(red.url, { waitUntil: 'domcontentloaded' });
-    await page.waitForFunction(
-      () => (globalThis as any).RED?.nodes?.node('read-sym') && (globalThis as any).document.getElementById('read-sym'),
-      undefined,
-      { timeout: 30_000 },
-    );
-    return { context, page, errors };
+  function openEditor(): Promise<{ context: BrowserContext; page: Page; errors: Error[] }> {
+    return openEditorOf(browser, red, 'en-US', 'read-sym');
   }
 
   async function editConnection(page: Page, id: string): Promise<void> {

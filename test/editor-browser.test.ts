@@ -9,7 +9,7 @@ import * as fs from 'node:fs';
 import * as path from 'node:path';
 import type { Browser, BrowserContext, Page } from 'playwright-core';
 import { launchChromium } from './support/browser';
-import { startNodeRedProcess, type NodeRedProcess } from './support/node-red-process';
+import { openEditor as openEditorOf, startNodeRedProcess, type NodeRedProcess } from './support/node-red-process';
 
 const ROOT = path.resolve(__dirname, '../..');
 const LOCALES = { 'en-US': 'en-US', de: 'de-DE', 'zh-CN': 'zh-CN' } as const;
@@ -179,18 +179,8 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
   });
 
   /** The editor in `locale`, with every page error collected. */
-  async function openEditor(locale: Locale = 'en-US'): Promise<{ context: BrowserContext; page: Page; errors: Error[] }> {
-    const context = await browser.newContext({ locale: LOCALES[locale] });
-    const page = await context.newPage();
-    const errors: Error[] = [];
-    page.on('pageerror', (err) => errors.push(err));
-    await page.goto(red.url, { waitUntil: 'domcontentloaded' });
-    await page.waitForFunction(
-      () => (globalThis as any).RED?.nodes?.node('read-ok') && (globalThis as any).document.getElementById('read-ok'),
-      undefined,
-      { timeout: 30_000 },
-    );
-    return { context, page, errors };
+  function openEditor(locale: Locale = 'en-US'): Promise<{ context: BrowserContext; page: Page; errors: Error[] }> {
+    return openEditorOf(browser, red, LOCALES[locale], 'read-ok');
   }
 
   /** Opens the edit dialog of node `id` and waits for its tag table. */

@@ -9,6 +9,7 @@ import * as fs from 'node:fs';
 import * as http from 'node:http';
 import * as os from 'node:os';
 import * as path from 'node:path';
+import type { Browser, BrowserContext, Page } from 'playwright-core';
 import { freePort } from './net';
 
 const ROOT = path.resolve(__dirname, '../../..');
@@ -73,4 +74,26 @@ export async function startNodeRedProcess(flow: object[], extraSettings: object 
     throw err;
   }
   return { url, stop };
+}
+
+/**
+ * The editor of `red` in a new browser context of `locale` (a BCP 47 tag,
+ * e.g. `de-DE`), once node `nodeId` of the deployed flow is loaded and drawn;
+ * page errors are collected in `errors`.
+ */
+export async function openEditor(
+  browser: Browser,
+  red: NodeRedProcess,
+  locale: string,
+  nodeId: string,
+): Promise<{ context: BrowserContext; page: Page; errors: Error[] }> {
+  const context = await browser.newContext({ locale });
+  const page = await context.newPage();
+  const errors: Error[] = [];
+  page.on('pageerror', (err) => errors.push(err));
+  await page.goto(red.url, { waitUntil: 'domcontentloaded' });
+  await page.waitForFunction((id) => (globalThis as any).RED?.nodes?.node(id) && (globalThis as any).document.getElementById(id), nodeId, {
+    timeout: 30_000,
+  });
+  return { context, page, errors };
 }
