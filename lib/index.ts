@@ -95,7 +95,7 @@ export {
   type S7RequestEvent,
 } from './s7/server';
 export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
-export type { CpuServices, ServiceSession } from './s7/server-services';
+export type { CpuServices, ServiceSession } from './s7/server/services';
 export { type PlcInfo, type ClockOptions } from './s7/services';
 export { diagnose, type DoctorStep, type DoctorReport, type DiagnoseOptions } from './s7/doctor';
 export {

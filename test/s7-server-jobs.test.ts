@@ -2,7 +2,7 @@ import { expect } from 'chai';
 import fc from 'fast-check';
 import { ProtocolError } from '../lib/errors';
 import { decodeS7, encodeReadRequest, encodeWriteRequest, type S7Item } from '../lib/s7/codec';
-import { jobFunction, serveRead, serveWrite } from '../lib/s7/server-jobs';
+import { jobFunction, serveRead, serveWrite } from '../lib/s7/server/jobs';
 import { PlcMemory } from '../lib/sim/memory';
 import { DOC } from './fixtures/s7';
 

@@ -26,8 +26,8 @@ import {
   COLD_START_ARG,
 } from '../../lib/s7/codec';
 import { decodeDiagnosticBuffer } from '../../lib/s7/diagnostics';
-import { IDENTITIES } from '../../lib/s7/server-profiles';
-import { CpuServices, newServiceSession } from '../../lib/s7/server-services';
+import { IDENTITIES } from '../../lib/s7/server/profiles';
+import { CpuServices, newServiceSession } from '../../lib/s7/server/services';
 import {
   decodeComponentIdentification,
   decodeCpuState,

@@ -6,17 +6,17 @@
  */
 import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
-import { FrameReader } from '../link/framer';
-import { PlcMemory } from '../sim/memory';
-import { memoryFromSymbols } from '../symbols/memory';
-import type { SymbolTable } from '../symbols/model';
-import { Rosctr, S7Function, tpduBytes } from './constants';
-import { isControlJob } from './codec/control';
-import type { DiagnosticEntry } from './diagnostics';
-import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './server-services';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from './codec';
-import { firstItems } from './server-items';
-import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
+import { FrameReader } from '../../link/framer';
+import { PlcMemory } from '../../sim/memory';
+import { memoryFromSymbols } from '../../symbols/memory';
+import type { SymbolTable } from '../../symbols/model';
+import { Rosctr, S7Function, tpduBytes } from '../constants';
+import { isControlJob } from '../codec/control';
+import type { DiagnosticEntry } from '../diagnostics';
+import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './services';
+import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from '../codec';
+import { firstItems } from './items';
+import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './jobs';
 import {
   IDENTITIES,
   PROFILES,
@@ -26,10 +26,10 @@ import {
   type CpuProfile,
   type S7Layout,
   type S7Profile,
-} from './server-profiles';
+} from './profiles';
 
-export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './server-profiles';
-export { STOP_CAUSES, type SimulatorMode, type StopCause } from './server-services';
+export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './profiles';
+export { STOP_CAUSES, type SimulatorMode, type StopCause } from './services';
 
 export interface S7ServerOptions {
   /** Default 127.0.0.1: a simulator is not exposed to the network unless asked. */
@@ -50,7 +50,7 @@ export interface S7ServerOptions {
   /**
    * Serve at most this many items per job, as snap7's server (20) and the
    * devices built on it: a longer job is served for its first N items and
-   * answered as if those were all (server-items.ts). Default: no limit but
+   * answered as if those were all (items.ts). Default: no limit but
    * the PDU's, as Siemens CPUs.
    */
   maxItems?: number;

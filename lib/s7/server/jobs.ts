@@ -4,11 +4,11 @@
  * benchmark measures the simulator in requests per second). Malformed jobs
  * throw ProtocolError; the server then drops the connection like a CPU does.
  */
-import { ProtocolError } from '../errors';
-import type { PlcMemory } from '../sim/memory';
-import type { AreaName } from '../types';
-import { tpktFrame } from './codec/tpkt';
-import { dataLengthBytes, dataLengthField } from './codec/pdu';
+import { ProtocolError } from '../../errors';
+import type { PlcMemory } from '../../sim/memory';
+import type { AreaName } from '../../types';
+import { tpktFrame } from '../codec/tpkt';
+import { dataLengthBytes, dataLengthField } from '../codec/pdu';
 import {
   CotpType,
   DataTransportSize,
@@ -22,7 +22,7 @@ import {
   S7_JOB_HEADER,
   S7_PROTOCOL_ID,
   TransportSize,
-} from './constants';
+} from '../constants';
 
 export interface JobContext {
   memory: PlcMemory;

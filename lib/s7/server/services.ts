@@ -10,9 +10,9 @@
  * error answer and the connection stays up.
  */
 import { EventEmitter } from 'node:events';
-import { ProtocolError } from '../errors';
-import type { PlcMemory } from '../sim/memory';
-import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
+import { ProtocolError } from '../../errors';
+import type { PlcMemory } from '../../sim/memory';
+import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import {
   encodeBlockCounts,
   encodeBlockInfo,
@@ -21,10 +21,10 @@ import {
   decodeBlockInfoRequest,
   loadSizeOf,
   type BlockSpec,
-} from './blocks';
-import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from './codec/control';
-import { encodeErrorAck } from './codec/pdu';
-import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from './codec/userdata';
+} from '../blocks';
+import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from '../codec/control';
+import { encodeErrorAck } from '../codec/pdu';
+import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from '../codec/userdata';
 import {
   BLOCK_TYPES,
   BlockSubfunction,
@@ -39,9 +39,9 @@ import {
   UserdataType,
   blockTypeName,
   type BlockType,
-} from './constants';
-import { encodeDiagnosticBuffer, type DiagnosticEntry, type DiagnosticEvent, describeEvent } from './diagnostics';
-import type { CpuIdentity } from './server-profiles';
+} from '../constants';
+import { encodeDiagnosticBuffer, type DiagnosticEntry, type DiagnosticEvent, describeEvent } from '../diagnostics';
+import type { CpuIdentity } from './profiles';
 import {
   SZL,
   encodeCommunication,
@@ -53,7 +53,7 @@ import {
   encodeSzl,
   encodeSzlIds,
   type SzlList,
-} from './szl';
+} from '../szl';
 
 /** RUN or STOP (the simulator passes STARTUP at once). */
 export type SimulatorMode = 'RUN' | 'STOP';
