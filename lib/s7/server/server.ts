@@ -12,7 +12,7 @@ import { memoryFromSymbols } from '../../symbols/memory';
 import type { SymbolTable } from '../../symbols/model';
 import { Rosctr, S7Function, tpduBytes } from '../constants';
 import { isControlJob } from '../codec/control';
-import type { DiagnosticEntry } from '../diagnostics';
+import type { DiagnosticEntry } from '../codec/diagnostics';
 import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './services';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from '../codec';
 import { firstItems } from './items';

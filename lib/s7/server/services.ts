@@ -21,7 +21,7 @@ import {
   decodeBlockInfoRequest,
   loadSizeOf,
   type BlockSpec,
-} from '../blocks';
+} from '../codec/blocks';
 import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from '../codec/control';
 import { encodeErrorAck } from '../codec/pdu';
 import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from '../codec/userdata';
@@ -40,7 +40,7 @@ import {
   blockTypeName,
   type BlockType,
 } from '../constants';
-import { encodeDiagnosticBuffer, type DiagnosticEntry, type DiagnosticEvent, describeEvent } from '../diagnostics';
+import { encodeDiagnosticBuffer, type DiagnosticEntry, type DiagnosticEvent, describeEvent } from '../codec/diagnostics';
 import type { CpuIdentity } from './profiles';
 import {
   SZL,
@@ -53,7 +53,7 @@ import {
   encodeSzl,
   encodeSzlIds,
   type SzlList,
-} from '../szl';
+} from '../codec/szl';
 
 /** RUN or STOP (the simulator passes STARTUP at once). */
 export type SimulatorMode = 'RUN' | 'STOP';
