@@ -17,7 +17,7 @@ import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import { encodeLoadBlock, loadSizeOf } from '../codec/blocks';
 import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from '../codec/control';
 import { type DiagnosticEntry, type DiagnosticEvent, describeEvent } from '../codec/diagnostics';
-import { encodeErrorAck } from '../codec/pdu';
+import { encodeHeaderErrorAck } from '../codec/pdu';
 import { encodeSzl, type SzlList } from '../codec/szl';
 import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from '../codec/userdata';
 import {
@@ -392,5 +392,5 @@ export class CpuServices extends EventEmitter {
 
 /** An ack (ROSCTR 2) without parameters carrying a service error as its header error. */
 function refusal(pduRef: number, code: number): Buffer {
-  return encodeErrorAck(pduRef, code >> 8, code & 0xff);
+  return encodeHeaderErrorAck(pduRef, code);
 }
