@@ -120,8 +120,21 @@ export {
   type CpuMode,
   type Led,
 } from './s7/codec/szl';
-export { decodeDiagnosticBuffer, describeEvent, EVENT_DESCRIPTIONS, type DiagnosticEntry, type DiagnosticEvent } from './s7/codec/diagnostics';
-export { decodeBlockInfo, decodeBlockCounts, decodeLoadBlock, type BlockInfo, type BlockCounts, type UploadedBlock } from './s7/codec/blocks';
+export {
+  decodeDiagnosticBuffer,
+  describeEvent,
+  EVENT_DESCRIPTIONS,
+  type DiagnosticEntry,
+  type DiagnosticEvent,
+} from './s7/codec/diagnostics';
+export {
+  decodeBlockInfo,
+  decodeBlockCounts,
+  decodeLoadBlock,
+  type BlockInfo,
+  type BlockCounts,
+  type UploadedBlock,
+} from './s7/codec/blocks';
 export { BLOCK_TYPES, BLOCK_LANGUAGES, SERVICE_ERRORS, type BlockType } from './s7/constants';
 export * as fetchwrite from './fetchwrite/codec';
 export { FetchWriteClient } from './fetchwrite/client';
