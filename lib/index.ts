@@ -95,7 +95,7 @@ export {
   type S7RequestEvent,
 } from './s7/server';
 export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
-export type { CpuServices, ServiceSession } from './s7/server-services';
+export type { CpuServices, ServiceSession } from './s7/server/services';
 export { type PlcInfo, type ClockOptions } from './s7/services';
 export { diagnose, type DoctorStep, type DoctorReport, type DiagnoseOptions } from './s7/doctor';
 export {
@@ -119,9 +119,22 @@ export {
   type CpuState,
   type CpuMode,
   type Led,
-} from './s7/szl';
-export { decodeDiagnosticBuffer, describeEvent, EVENT_DESCRIPTIONS, type DiagnosticEntry, type DiagnosticEvent } from './s7/diagnostics';
-export { decodeBlockInfo, decodeBlockCounts, decodeLoadBlock, type BlockInfo, type BlockCounts, type UploadedBlock } from './s7/blocks';
+} from './s7/codec/szl';
+export {
+  decodeDiagnosticBuffer,
+  describeEvent,
+  EVENT_DESCRIPTIONS,
+  type DiagnosticEntry,
+  type DiagnosticEvent,
+} from './s7/codec/diagnostics';
+export {
+  decodeBlockInfo,
+  decodeBlockCounts,
+  decodeLoadBlock,
+  type BlockInfo,
+  type BlockCounts,
+  type UploadedBlock,
+} from './s7/codec/blocks';
 export { BLOCK_TYPES, BLOCK_LANGUAGES, SERVICE_ERRORS, type BlockType } from './s7/constants';
 export * as fetchwrite from './fetchwrite/codec';
 export { FetchWriteClient } from './fetchwrite/client';

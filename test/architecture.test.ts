@@ -89,8 +89,8 @@ describe('architecture of lib/', () => {
     // Guards the checks below against a reader that silently sees nothing.
     const main = GRAPH.get('lib/cli/main.ts')!.map((e) => e.to ?? e.spec);
     expect(main).to.include.members(['lib/cli/io.ts', 'lib/cli/args.ts', 'lib/cli/demo.ts', 'lib/connect.ts']);
-    const server = GRAPH.get('lib/s7/server.ts')!;
-    expect(server.find((e) => e.to === 'lib/s7/server-profiles.ts' && !e.typeOnly)).to.not.equal(undefined);
+    const server = GRAPH.get('lib/s7/server/server.ts')!;
+    expect(server.find((e) => e.to === 'lib/s7/server/profiles.ts' && !e.typeOnly)).to.not.equal(undefined);
     expect(GRAPH.get('lib/s7/codec/tpkt.ts')!.find((e) => e.to === 'lib/link/framer.ts')?.typeOnly).to.equal(true);
     expect(GRAPH.size).to.be.greaterThan(50);
   });
@@ -139,11 +139,25 @@ describe('architecture of lib/', () => {
   it('the codecs are pure: no Node or npm module, no run-time import of link/ (only its FrameCheck contract as a type)', () => {
     const codecs = [...GRAPH.keys()].filter(isCodec);
     expect(codecs).to.include.members(['lib/s7/codec/pdu.ts', 'lib/fetchwrite/codec.ts', 'lib/freeport/codec.ts']);
+    // The S7 payload codecs (SZL, blocks, diagnostic buffer) are codecs too, and checked as such.
+    expect(codecs).to.include.members(['lib/s7/codec/szl.ts', 'lib/s7/codec/blocks.ts', 'lib/s7/codec/diagnostics.ts']);
     const bad = violations(
       isCodec,
       (e) => (e.to === undefined && e.spec !== 'node:buffer') || (e.to?.startsWith('lib/link/') === true && !e.typeOnly),
     );
     expect(bad).to.deep.equal([]);
+  });
+
+  it('the shared link layer (lib/link/) imports nothing of a protocol, type imports included', () => {
+    const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|fetchwrite|freeport)\//.test(to);
+    const links = [...GRAPH.keys()].filter((f) => f.startsWith('lib/link/'));
+    expect(links).to.include.members(['lib/link/serial.ts', 'lib/link/client-base.ts', 'lib/link/driver.ts']);
+    expect(
+      violations(
+        (f) => f.startsWith('lib/link/'),
+        (e) => e.to !== undefined && protocol(e.to),
+      ),
+    ).to.deep.equal([]);
   });
 
   it('has no unused file, export or type (knip)', function () {

@@ -2,7 +2,8 @@ import { expect } from 'chai';
 import fc from 'fast-check';
 import { ProtocolError } from '../lib/errors';
 import { decodeS7, encodeReadRequest, encodeWriteRequest, type S7Item } from '../lib/s7/codec';
-import { jobFunction, serveRead, serveWrite } from '../lib/s7/server-jobs';
+import { HeaderError, HeaderErrorClass, Rosctr } from '../lib/s7/constants';
+import { jobFunction, refuseJob, serveRead, serveWrite } from '../lib/s7/server/jobs';
 import { PlcMemory } from '../lib/sim/memory';
 import { DOC } from './fixtures/s7';
 
@@ -75,5 +76,19 @@ describe('S7 simulator job service (properties)', () => {
     );
     // the generator reaches every outcome, so the property is not vacuous
     for (const [kind, n] of Object.entries(seen)) expect(n, kind).to.be.above(0);
+  });
+
+  it('refuses a whole job with a named header error: an ack whose header carries its class and code', () => {
+    // Header bytes 10 and 11 (frame offsets 17, 18) after TPKT (4) and COTP DT (3).
+    const cases: [HeaderError, number, number][] = [
+      [HeaderError.FunctionNotSupported, HeaderErrorClass.ApplicationRelationship, 0x04],
+      [HeaderError.PduTooLarge, HeaderErrorClass.Supplies, 0x00],
+      [HeaderError.ProtectionLevel, 0xd2, 0x41],
+    ];
+    for (const [error, errorClass, errorCode] of cases) {
+      const frame = refuseJob(0x1234, error);
+      expect([...frame.subarray(7, 19)]).to.deep.equal([0x32, Rosctr.Ack, 0, 0, 0x12, 0x34, 0, 0, 0, 0, errorClass, errorCode]);
+      expect(decodeS7(frame)).to.deep.include({ kind: 'error', pduRef: 0x1234, errorClass, errorCode, rosctr: Rosctr.Ack });
+    }
   });
 });

@@ -478,7 +478,7 @@ describe('S7Server', () => {
     });
 
     // Counters and timers as other clients ask for them (each item's origin in its comment; the CPU's rules
-    // and their sources are in lib/s7/server-jobs.ts). Address field: the counter/timer number.
+    // and their sources are in lib/s7/server/jobs.ts). Address field: the counter/timer number.
     it('serves C and T items of their own transport size and answers 0x05 to any other, as a CPU does', async () => {
       const server = await start('s7-300');
       const c = server.memory.area('C', 0)!;

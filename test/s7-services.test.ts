@@ -2,7 +2,7 @@ import { expect } from 'chai';
 import { PlcError } from '../lib/errors';
 import { S7Client } from '../lib/s7/client';
 import { S7Server, type S7Profile, type S7RequestEvent } from '../lib/s7/server';
-import { decodeLeds, decodeModuleIdentification, decodeSzlIds, SZL } from '../lib/s7/szl';
+import { decodeLeds, decodeModuleIdentification, decodeSzlIds, SZL } from '../lib/s7/codec/szl';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { waitFor } from './support/wait';
 

@@ -9,7 +9,7 @@ import {
   encodeBlockInfo,
   encodeLoadBlock,
   type BlockSpec,
-} from '../lib/s7/blocks';
+} from '../lib/s7/codec/blocks';
 import {
   decodeControl,
   decodeUserdata,
@@ -28,7 +28,7 @@ import {
   encodePassword,
 } from '../lib/s7/codec';
 import { SERVICE_ERRORS, serviceError } from '../lib/s7/constants';
-import { decodeDiagnosticBuffer, describeEvent, encodeDiagnosticBuffer } from '../lib/s7/diagnostics';
+import { decodeDiagnosticBuffer, describeEvent, encodeDiagnosticBuffer } from '../lib/s7/codec/diagnostics';
 import {
   decodeComponentIdentification,
   decodeCpuState,
@@ -39,7 +39,7 @@ import {
   encodeModuleIdentification,
   encodeSzl,
   parseSzl,
-} from '../lib/s7/szl';
+} from '../lib/s7/codec/szl';
 import { show } from './fixtures/s7';
 import { CONTROL, CPU315, SNAP7, UD } from './fixtures/s7-userdata';
 

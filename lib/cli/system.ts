@@ -7,7 +7,7 @@
 import { PlcError } from '../errors';
 import { S7Client } from '../s7/client';
 import { BLOCK_TYPES, type BlockType } from '../s7/constants';
-import { decodeDiagnosticBuffer } from '../s7/diagnostics';
+import { decodeDiagnosticBuffer } from '../s7/codec/diagnostics';
 import { diagnose, type DoctorStep } from '../s7/doctor';
 import {
   decodeCommunication,
@@ -18,7 +18,7 @@ import {
   decodeProtection,
   decodeSzlIds,
   type SzlList,
-} from '../s7/szl';
+} from '../s7/codec/szl';
 import { endpointName, isLoopback, parseUrl, type S7Endpoint } from '../url';
 import { UsageError, intFlag, stringFlag, withTimeout, type ParsedArgs } from './args';
 import { EXIT, confirm, withClient, type CliIo } from './io';

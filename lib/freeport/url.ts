@@ -6,8 +6,9 @@
 import type { UrlScheme } from '../link/driver';
 import { hostPart, portOf, requireHost, urlError, type UrlParams } from '../link/url-params';
 import type { SafetyOptions } from '../link/url-params';
+import type { Parity } from '../link/serial';
 
-export type Parity = 'none' | 'even' | 'odd';
+export type { Parity } from '../link/serial';
 
 /** The line to the stations: a serial port, or TCP to a serial device server. */
 export type FreeportLine =

@@ -9,7 +9,9 @@ import type { BindingInterface } from '@serialport/bindings-interface';
 import { SerialPortStream } from '@serialport/stream';
 import { SerialPort } from 'serialport';
 import { ConnectionError, PlcError, toPlcError } from '../errors';
-import type { Parity } from '../url';
+
+/** Parity of a serial line. */
+export type Parity = 'none' | 'even' | 'odd';
 
 /** A line's parameters, as a freeport endpoint gives them. */
 export interface SerialLine {

@@ -27,11 +27,11 @@ import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadA
 import { CotpType, DEFAULT_MAX_ITEMS, describeReturnCode, headerError } from './constants';
 import { openS7Session, S7Session } from './client-session';
 import { maxReadItems, planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './plan';
-import type { BlockCounts, BlockInfo, UploadedBlock } from './blocks';
+import type { BlockCounts, BlockInfo, UploadedBlock } from './codec/blocks';
 import type { BlockType } from './constants';
-import type { DiagnosticEntry } from './diagnostics';
+import type { DiagnosticEntry } from './codec/diagnostics';
 import { S7Services, type ClockOptions, type PlcInfo } from './services';
-import type { CpuState, SzlList } from './szl';
+import type { CpuState, SzlList } from './codec/szl';
 
 export { S7Session } from './client-session';
 export { localTsapFor } from './tsap';

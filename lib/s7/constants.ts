@@ -30,6 +30,23 @@ export const MIN_PDU_SIZE = 64;
 export const MAX_PDU_SIZE = 0xffff;
 /** TPKT + COTP DT in front of every S7 PDU. */
 export const FRAME_OVERHEAD = TPKT_HEADER + COTP_DT_HEADER;
+/**
+ * The largest frame the client, the doctor and the simulator buffer: more
+ * than a TPKT's 16-bit length field can announce, so a peer can never make
+ * them hold more than one whole TPKT packet.
+ */
+export const MAX_FRAME = 0x10000 + 16;
+
+// ---------------------------------------------------------------- the handshake
+
+/** Parallel jobs (AmQ) a client asks for in setup communication; the PLC answers with what it grants. */
+export const REQUESTED_AMQ = 8;
+/** TPDU size code a client asks for in its COTP connection request: 0x0A = 1024 bytes (S7-1500 offers PDU 960 only with it). */
+export const TPDU_SIZE_CODE = 0x0a;
+/** COTP disconnect reasons (ISO 8073 = RFC 905, §13.5.3, class 0): 1 congestion at the TSAP (all connections in use). */
+export const DR_CONGESTION = 1;
+/** 3: the called TSAP (address) is unknown. */
+export const DR_ADDRESS_UNKNOWN = 3;
 
 export const enum CotpType {
   CR = 0xe0,
@@ -170,6 +187,36 @@ export function returnCodeError(returnCode: number, context: string, tag?: strin
     `${context}: the PLC answered ${hex}: ${text}`,
     tag === undefined ? { plcCode: returnCode } : { plcCode: returnCode, tag },
   );
+}
+
+/**
+ * Error class of an ack or ack-data header (its byte 10), with the names of
+ * the S7comm dissector's error-class table (wireshark/wireshark,
+ * epan/dissectors/packet-s7comm.c, `errcls_names`).
+ */
+export const enum HeaderErrorClass {
+  NoError = 0x00,
+  ApplicationRelationship = 0x81,
+  ObjectDefinition = 0x82,
+  NoResources = 0x83,
+  ServiceProcessing = 0x84,
+  Supplies = 0x85,
+  Access = 0x87,
+}
+
+/**
+ * The header errors (class << 8 | code) a simulated CPU refuses a whole job
+ * with; the words are HEADER_ERRORS' and SERVICE_ERRORS'. 0x8104: class 0x81,
+ * code 4, "function not supported" (S7NetPlus/s7netplus#403 shows an
+ * S7-1200/1500 without PUT/GET answering `32 02 … 81 04`); 0x8500: class 0x85,
+ * code 0, the PDU does not fit the negotiated size; 0xD241: the protection
+ * level forbids the job (the error field of the CPU services, sent as the
+ * header error of an ack).
+ */
+export const enum HeaderError {
+  FunctionNotSupported = (HeaderErrorClass.ApplicationRelationship << 8) | 0x04,
+  PduTooLarge = (HeaderErrorClass.Supplies << 8) | 0x00,
+  ProtectionLevel = 0xd241,
 }
 
 /** Header error class (ack and ack-data PDUs). */

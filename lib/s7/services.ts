@@ -19,7 +19,7 @@ import {
   type BlockCounts,
   type BlockInfo,
   type UploadedBlock,
-} from './blocks';
+} from './codec/blocks';
 import {
   COLD_START_ARG,
   decodeControl,
@@ -44,7 +44,7 @@ import {
   serviceError,
   type BlockType,
 } from './constants';
-import { decodeDiagnosticBuffer, type DiagnosticEntry } from './diagnostics';
+import { decodeDiagnosticBuffer, type DiagnosticEntry } from './codec/diagnostics';
 import {
   SZL,
   decodeComponentIdentification,
@@ -56,7 +56,7 @@ import {
   type CpuState,
   type Protection,
   type SzlList,
-} from './szl';
+} from './codec/szl';
 
 /** What `info()` gathers in one object. A field the CPU does not give is undefined. */
 export interface PlcInfo {

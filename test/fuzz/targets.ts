@@ -10,7 +10,7 @@ import {
 } from '../../lib/freeport/codec';
 import { FreeportParser } from '../../lib/freeport/parser';
 import { DEFAULT_FREEPORT_PROFILE } from '../../lib/freeport/profile';
-import { decodeBlockCounts, decodeBlockInfo, decodeBlockListEntries, decodeLoadBlock, encodeBlockInfo } from '../../lib/s7/blocks';
+import { decodeBlockCounts, decodeBlockInfo, decodeBlockListEntries, decodeLoadBlock, encodeBlockInfo } from '../../lib/s7/codec/blocks';
 import {
   decodeControl,
   decodeUserdata,
@@ -25,9 +25,9 @@ import {
   encodeUserdataResponse,
   COLD_START_ARG,
 } from '../../lib/s7/codec';
-import { decodeDiagnosticBuffer } from '../../lib/s7/diagnostics';
-import { IDENTITIES } from '../../lib/s7/server-profiles';
-import { CpuServices, newServiceSession } from '../../lib/s7/server-services';
+import { decodeDiagnosticBuffer } from '../../lib/s7/codec/diagnostics';
+import { IDENTITIES } from '../../lib/s7/server/profiles';
+import { CpuServices, newServiceSession } from '../../lib/s7/server/services';
 import {
   decodeComponentIdentification,
   decodeCpuState,
@@ -36,7 +36,7 @@ import {
   decodeProtection,
   decodeSzlIds,
   parseSzl,
-} from '../../lib/s7/szl';
+} from '../../lib/s7/codec/szl';
 import { PlcMemory } from '../../lib/sim/memory';
 import type { FuzzTarget } from './engine';
 

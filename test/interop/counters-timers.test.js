@@ -1,7 +1,7 @@
 'use strict';
 // Counters and timers asked for the way snap7, nodes7 and @st-one-io/nodes7
 // ask, against our S7Server (the CPU's rules and their sources are in
-// lib/s7/server-jobs.ts, COUNTERS_AND_TIMERS).
+// lib/s7/server/jobs.ts, COUNTERS_AND_TIMERS).
 const { once } = require('node:events');
 const path = require('node:path');
 const { expect } = require('chai');

@@ -270,7 +270,7 @@ describe('interop: reading and writing by symbol against snap7 server', function
 
   it("snap7's answer to block info of a DB it does not have, as recorded in test/fixtures/s7-userdata.ts: a TPKT frame 78 bytes longer than its S7 lengths, its header left over from earlier answers", async () => {
     const { encodeUserdataRequest, decodeUserdata } = dist('lib/s7/codec/index.js');
-    const { encodeBlockInfoRequest, decodeBlockInfo } = dist('lib/s7/blocks.js');
+    const { encodeBlockInfoRequest, decodeBlockInfo } = dist('lib/s7/codec/blocks.js');
     const { SNAP7 } = dist('test/fixtures/s7-userdata.js');
     const blockInfo = (db) => encodeUserdataRequest(3, 3, encodeBlockInfoRequest(0x41, db));
     const raw = await rawS7(peer.port);

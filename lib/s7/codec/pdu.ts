@@ -262,6 +262,11 @@ export function encodeErrorAck(pduRef: number, errorClass: number, errorCode: nu
   return frame;
 }
 
+/** An ack without parameters refusing a whole job with a header error given as class << 8 | code (0x8104, 0x8500 …). */
+export function encodeHeaderErrorAck(pduRef: number, error: number): Buffer {
+  return encodeErrorAck(pduRef, error >> 8, error & 0xff);
+}
+
 function checkCount(n: number): void {
   if (n > 255) throw new RangeError(`an S7 job carries at most 255 items, got ${n}`);
 }
@@ -328,6 +333,21 @@ export function decodeS7(frame: Buffer): S7Message {
 
 /** Where the S7 header starts in a frame with the plain 3-byte COTP DT header (TPKT 4 + LI, code, EOT). */
 const PLAIN_S7_AT = FRAME_OVERHEAD;
+
+/** The ROSCTR of the S7 PDU in a frame with the plain 3-byte COTP DT header (header byte 1). */
+export function s7Rosctr(frame: Buffer): number {
+  return frame[PLAIN_S7_AT + 1]!;
+}
+
+/** The PDU reference of the S7 PDU in a frame with the plain 3-byte COTP DT header (header bytes 4–5). */
+export function s7PduRef(frame: Buffer): number {
+  return (frame[PLAIN_S7_AT + 4]! << 8) | frame[PLAIN_S7_AT + 5]!;
+}
+
+/** The item count of a Read/Write Var job (its second parameter byte). */
+export function jobItemCount(frame: Buffer): number {
+  return frame[JOB_PARAMS + 1]!;
+}
 
 /**
  * The PDU reference of a frame carrying the last (EOT) COTP DT with a

@@ -11,8 +11,8 @@
  *   8-11   info 2/3 (two words)
  *   12-19  time stamp: DATE_AND_TIME, 8 BCD bytes — the last 8 bytes of the entry
  */
-import { ProtocolError } from '../errors';
-import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
+import { ProtocolError } from '../../errors';
+import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import { SZL, type SzlList } from './szl';
 
 const DIAGNOSTIC_ENTRY = 20;

@@ -1,6 +1,6 @@
 /** CPU profiles and memory layouts of the S7 simulator. */
-import type { MemoryLayout } from '../sim/memory';
-import { rackSlotOf } from './tsap';
+import type { MemoryLayout } from '../../sim/memory';
+import { rackSlotOf } from '../tsap';
 
 export type S7Profile = 's7-300' | 's7-400' | 's7-1200' | 's7-1500' | 's7-200' | 'logo';
 
@@ -43,7 +43,7 @@ export interface CpuProfile {
  * README and plcpeople/nodeS7#49: "V0.0 … use DB1,X0.0"), 10240 bytes as a
  * CPU 226 has; I, Q 16 bytes and M 32 bytes as a CPU 22x. Its counters and
  * timers are not the S5 areas: S7-200 SMART CPUs answer 0x03 there (see
- * COUNTERS_AND_TIMERS in server-jobs.ts). PDU 240 and one job at a time are
+ * COUNTERS_AND_TIMERS in jobs.ts). PDU 240 and one job at a time are
  * the simulator's choice (no capture of a CP 243-1's setup answer was found).
  */
 const S7_200: CpuProfile = Object.freeze({

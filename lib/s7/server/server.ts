@@ -6,17 +6,19 @@
  */
 import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
-import { FrameReader } from '../link/framer';
-import { PlcMemory } from '../sim/memory';
-import { memoryFromSymbols } from '../symbols/memory';
-import type { SymbolTable } from '../symbols/model';
-import { Rosctr, S7Function, tpduBytes } from './constants';
-import { isControlJob } from './codec/control';
-import type { DiagnosticEntry } from './diagnostics';
-import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './server-services';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from './codec';
-import { firstItems } from './server-items';
-import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './server-jobs';
+import { FrameReader } from '../../link/framer';
+import { PlcMemory } from '../../sim/memory';
+import { memoryFromSymbols } from '../../symbols/memory';
+import type { SymbolTable } from '../../symbols/model';
+import { ProtocolError } from '../../errors';
+import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, HeaderError, MAX_FRAME, MIN_PDU_SIZE, Rosctr, S7Function, tpduBytes } from '../constants';
+import { jobItemCount, s7Rosctr } from '../codec/pdu';
+import { isControlJob } from '../codec/control';
+import type { DiagnosticEntry } from '../codec/diagnostics';
+import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './services';
+import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from '../codec';
+import { firstItems } from './items';
+import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './jobs';
 import {
   IDENTITIES,
   PROFILES,
@@ -26,10 +28,10 @@ import {
   type CpuProfile,
   type S7Layout,
   type S7Profile,
-} from './server-profiles';
+} from './profiles';
 
-export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './server-profiles';
-export { STOP_CAUSES, type SimulatorMode, type StopCause } from './server-services';
+export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './profiles';
+export { STOP_CAUSES, type SimulatorMode, type StopCause } from './services';
 
 export interface S7ServerOptions {
   /** Default 127.0.0.1: a simulator is not exposed to the network unless asked. */
@@ -50,7 +52,7 @@ export interface S7ServerOptions {
   /**
    * Serve at most this many items per job, as snap7's server (20) and the
    * devices built on it: a longer job is served for its first N items and
-   * answered as if those were all (server-items.ts). Default: no limit but
+   * answered as if those were all (items.ts). Default: no limit but
    * the PDU's, as Siemens CPUs.
    */
   maxItems?: number;
@@ -90,17 +92,12 @@ export interface S7RefusedEvent {
   message: string;
 }
 
-/** COTP disconnect reasons (ISO 8073 §13.5.3, class 0): 1 congestion at TSAP, 3 address unknown. */
-const DR_CONGESTION = 1;
-const DR_ADDRESS_UNKNOWN = 3;
 /** The CPU's COTP source reference. */
 const CPU_REF = 0x0001;
 /** The largest TPDU a CPU confirms (code 0x0A = 1024 bytes). */
 const MAX_TPDU = 0x0a;
 /** Jobs a client may queue beyond AmQ before it is treated as hostile. */
 const MAX_QUEUED = 256;
-/** A request PDU size below this is nonsense (one item and its answer do not fit); the offer is used. */
-const MIN_PDU = 64;
 
 interface Connection {
   socket: net.Socket;
@@ -261,7 +258,7 @@ export class S7Server extends EventEmitter {
     const conn: Connection = {
       socket,
       // The socket's chunks are ours: frames are cut from them without a copy.
-      reader: new FrameReader(checkTpkt, 0x10000 + 4, { copy: false }),
+      reader: new FrameReader(checkTpkt, MAX_FRAME, { copy: false }),
       stage: 'cotp',
       pduLimit: this.profile.pduSize,
       ctx: {
@@ -332,24 +329,30 @@ export class S7Server extends EventEmitter {
       if (func !== 0) {
         if (this.listenerCount('request') > 0) {
           const kind = func === S7Function.ReadVar ? 'read' : 'write';
-          this.emit('request', { kind, pduRef: jobPduRef(frame), items: frame[18]!, bytes: frame.length } satisfies S7RequestEvent);
+          this.emit('request', {
+            kind,
+            pduRef: jobPduRef(frame),
+            items: jobItemCount(frame),
+            bytes: frame.length,
+          } satisfies S7RequestEvent);
         }
         return this.enqueue(conn, frame);
       }
       // Anything else must still be well-formed S7 (decodeS7 throws otherwise); it is refused in order with the jobs.
       const message = decodeS7(frame);
-      if (message.kind === 'setup-request') throw new Error('setup communication sent twice');
-      if (this.listenerCount('request') > 0 && (frame[8] === Rosctr.UserData || isControlJob(frame))) {
-        const kind = frame[8] === Rosctr.UserData ? 'userdata' : 'control';
+      if (message.kind === 'setup-request') throw new ProtocolError('setup communication sent twice');
+      if (this.listenerCount('request') > 0 && (s7Rosctr(frame) === Rosctr.UserData || isControlJob(frame))) {
+        const kind = s7Rosctr(frame) === Rosctr.UserData ? 'userdata' : 'control';
         this.emit('request', { kind, pduRef: message.pduRef, items: 0, bytes: frame.length } satisfies S7RequestEvent);
       }
       return this.enqueue(conn, frame);
     }
     if (conn.stage === 'cotp') return this.onConnectionRequest(conn, frame);
     const message = decodeS7(frame);
-    if (message.kind !== 'setup-request') throw new Error(`expected setup communication, got ${message.kind}`);
+    if (message.kind !== 'setup-request') throw new ProtocolError(`expected setup communication, got ${message.kind}`);
     const { pduSize, maxAmqCalling } = message.params;
-    const pdu = pduSize < MIN_PDU ? conn.pduLimit : Math.min(pduSize, conn.pduLimit);
+    // A request PDU size below MIN_PDU_SIZE is nonsense (one item and its answer do not fit): the offer is used.
+    const pdu = pduSize < MIN_PDU_SIZE ? conn.pduLimit : Math.min(pduSize, conn.pduLimit);
     conn.maxJobs = Math.max(1, Math.min(maxAmqCalling, this.profile.maxJobs));
     conn.ctx.pduSize = pdu;
     conn.ctx.missingDb = this.missingDb;
@@ -359,7 +362,7 @@ export class S7Server extends EventEmitter {
 
   private onConnectionRequest(conn: Connection, frame: Buffer): void {
     const cr = decodeCotp(frame);
-    if (cr.type !== 'CR') throw new Error(`expected a COTP connection request, got ${cr.type}`);
+    if (cr.type !== 'CR') throw new ProtocolError(`expected a COTP connection request, got ${cr.type}`);
     const refuse = (reason: S7RefusedEvent['reason'], drReason: number, message: string) => {
       this.emit('refused', { reason, message } satisfies S7RefusedEvent);
       conn.socket.end(encodeDisconnectRequest(cr.sourceRef, CPU_REF, drReason));
@@ -396,7 +399,7 @@ export class S7Server extends EventEmitter {
       if (!this.faults.silent) conn.socket.write(this.answer(conn, frame));
       return;
     }
-    if (conn.queue.length >= MAX_QUEUED) throw new Error(`client queued more than ${MAX_QUEUED} jobs beyond AmQ ${conn.maxJobs}`);
+    if (conn.queue.length >= MAX_QUEUED) throw new ProtocolError(`client queued more than ${MAX_QUEUED} jobs beyond AmQ ${conn.maxJobs}`);
     conn.queue.push(frame);
     this.pump(conn);
   }
@@ -436,15 +439,15 @@ export class S7Server extends EventEmitter {
     const pduRef = jobPduRef(frame);
     if (func === 0) {
       // System services: userdata (SZL, clock, blocks, password) and the control jobs (stop, start, upload).
-      if (frame[8] === Rosctr.UserData) return this.cpu.serveUserdata(frame, conn.services, conn.ctx.pduSize);
+      if (s7Rosctr(frame) === Rosctr.UserData) return this.cpu.serveUserdata(frame, conn.services, conn.ctx.pduSize);
       if (isControlJob(frame)) return this.cpu.serveControl(frame, conn.services, conn.ctx.pduSize);
       // Any other job: "function not supported".
-      return refuseJob(pduRef, 0x81, 0x04);
+      return refuseJob(pduRef, HeaderError.FunctionNotSupported);
     }
     // S7-1200/1500 without PUT/GET: ack with header error 0x8104 (S7NetPlus/s7netplus#403 shows `32 02 … 81 04`).
-    if (this.faults.accessDenied) return refuseJob(pduRef, 0x81, 0x04);
+    if (this.faults.accessDenied) return refuseJob(pduRef, HeaderError.FunctionNotSupported);
     // Protection level 2 refuses writes, 3 reads too, until the connection gave the password.
-    if (this.cpu.refusesData(conn.services, func)) return refuseJob(pduRef, 0xd2, 0x41);
+    if (this.cpu.refusesData(conn.services, func)) return refuseJob(pduRef, HeaderError.ProtectionLevel);
     const job = this.maxItems === undefined ? frame : firstItems(frame, this.maxItems);
     return func === S7Function.ReadVar ? serveRead(job, conn.ctx) : serveWrite(job, conn.ctx);
   }

@@ -7,27 +7,20 @@
  * answered the way a CPU of the profile answers, refusals included.
  * Malformed requests throw ProtocolError (the server drops that connection);
  * well-formed requests for something the CPU does not offer get the CPU's
- * error answer and the connection stays up.
+ * error answer and the connection stays up. The SZL lists are built in
+ * szl-lists.ts, the blocks and block functions in blocks.ts.
  */
 import { EventEmitter } from 'node:events';
-import { ProtocolError } from '../errors';
-import type { PlcMemory } from '../sim/memory';
-import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
+import { ProtocolError } from '../../errors';
+import type { PlcMemory } from '../../sim/memory';
+import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
+import { encodeLoadBlock, loadSizeOf } from '../codec/blocks';
+import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from '../codec/control';
+import { type DiagnosticEntry, type DiagnosticEvent, describeEvent } from '../codec/diagnostics';
+import { encodeHeaderErrorAck } from '../codec/pdu';
+import { encodeSzl, type SzlList } from '../codec/szl';
+import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from '../codec/userdata';
 import {
-  encodeBlockCounts,
-  encodeBlockInfo,
-  encodeBlockListEntries,
-  encodeLoadBlock,
-  decodeBlockInfoRequest,
-  loadSizeOf,
-  type BlockSpec,
-} from './blocks';
-import { decodeControl, encodeControlAck, encodeStartUploadAck, encodeUploadAck } from './codec/control';
-import { encodeErrorAck } from './codec/pdu';
-import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHEAD, type UserdataPdu } from './codec/userdata';
-import {
-  BLOCK_TYPES,
-  BlockSubfunction,
   ControlFunction,
   CpuSubfunction,
   FRAME_OVERHEAD,
@@ -39,21 +32,11 @@ import {
   UserdataType,
   blockTypeName,
   type BlockType,
-} from './constants';
-import { encodeDiagnosticBuffer, type DiagnosticEntry, type DiagnosticEvent, describeEvent } from './diagnostics';
-import type { CpuIdentity } from './server-profiles';
-import {
-  SZL,
-  encodeCommunication,
-  encodeComponentIdentification,
-  encodeCpuState,
-  encodeLeds,
-  encodeModuleIdentification,
-  encodeProtection,
-  encodeSzl,
-  encodeSzlIds,
-  type SzlList,
-} from './szl';
+} from '../constants';
+import { blockNumbers, blockSpec, serveBlockFunction, type SimulatedBlock } from './blocks';
+import type { CpuIdentity } from './profiles';
+import { SERVICE_CODE as E } from './service-codes';
+import { SZL_IDS, szlList } from './szl-lists';
 
 /** RUN or STOP (the simulator passes STARTUP at once). */
 export type SimulatorMode = 'RUN' | 'STOP';
@@ -87,35 +70,10 @@ export function newServiceSession(): ServiceSession {
   return { pending: undefined, uploads: new Map(), nextRef: 0, authorized: false };
 }
 
-/** Service error codes the simulator answers with (SERVICE_ERRORS). */
-const E = Object.freeze({
-  NOT_IMPLEMENTED: 0x8104,
-  STATE: 0x8402,
-  NEED_PASSWORD: 0xd241,
-  BLOCK_NOT_FOUND: 0xd209,
-  NO_BLOCKS: 0xd20e,
-  SZL_ID: 0xd401,
-  SZL_INDEX: 0xd402,
-  SYNTAX: 0xd405,
-  WRONG_PASSWORD: 0xd602,
-  NO_PASSWORD: 0xd605,
-  BAD_TIME: 0xdc01,
-});
-
 const DIAGNOSTIC_CAPACITY = 100;
 /** The range of a DATE_AND_TIME, with a day's margin at the end so the running clock stays inside. */
 const CLOCK_MIN = Date.UTC(1990, 0, 1);
 const CLOCK_MAX = Date.UTC(2089, 11, 30);
-const FIXED_BLOCKS: Readonly<Partial<Record<BlockType, readonly number[]>>> = Object.freeze({
-  OB: [1, 35, 80, 82, 86, 100, 121, 122],
-  FB: [1],
-  FC: [1, 2],
-  SDB: [0, 1, 2, 7],
-  SFC: [0, 1, 14, 15, 20, 46, 51, 52],
-  SFB: [0, 1, 2, 3, 4, 5],
-});
-/** MC7 of a block that does nothing: BE (block end). */
-const EMPTY_CODE = Buffer.of(0x65, 0x00);
 
 /**
  * The system side of a simulated CPU, shared by all its connections.
@@ -354,128 +312,34 @@ export class CpuServices extends EventEmitter {
   }
 
   /** The SZL IDs served (0x0Fxx header-only extracts of the 0x00xx lists included). */
-  static readonly SZL_IDS: readonly number[] = Object.freeze([
-    0x0000, 0x0011, 0x0111, 0x001c, 0x011c, 0x0131, 0x0232, 0x0424, 0x0074, 0x00a0, 0x01a0, 0x0f00, 0x0f11, 0x0f1c, 0x0f74, 0x0fa0,
-  ]);
+  static readonly SZL_IDS: readonly number[] = SZL_IDS;
 
   private szl(id: number, index: number, s: ServiceSession, pduSize: number): SzlList | number {
-    const i = this.identity;
-    switch (id) {
-      case SZL.IDS:
-        return encodeSzlIds(CpuServices.SZL_IDS);
-      case SZL.MODULE_ID:
-      case 0x0111: {
-        if (id === 0x0111 && ![1, 6, 7].includes(index)) return E.SZL_INDEX;
-        return encodeModuleIdentification(i.orderCode, i.hardwareVersion, i.firmware, id === 0x0111 ? index : 0);
-      }
-      case SZL.COMPONENT_ID:
-      case 0x011c: {
-        const fields = {
-          asName: i.asName,
-          moduleName: i.moduleName,
-          plantId: i.plantId,
-          copyright: i.copyright,
-          serialNumber: i.serialNumber,
-          moduleTypeName: i.moduleTypeName,
-        };
-        const list = encodeComponentIdentification(fields, id === 0x011c ? index : 0);
-        return list.records.length === 0 ? E.SZL_INDEX : list;
-      }
-      case SZL.COMMUNICATION:
-        if (index !== 1) return E.SZL_INDEX;
-        return encodeCommunication({ maxPdu: pduSize, maxConnections: this.limits.maxConnections, mpiRate: 187_500, busRate: 10_000_000 });
-      case SZL.PROTECTION:
-        if (index !== 4) return E.SZL_INDEX;
-        return encodeProtection({
-          level: this.levelFor(s),
-          switchLevel: 1,
-          configuredLevel: this.level > 1 ? this.level : 0,
-          keySwitch: this.identity.blockFunctions ? 'RUN-P' : 'RUN',
-        });
-      case SZL.CPU_STATE:
-        return encodeCpuState(this.modeNow === 'RUN' ? 8 : 4, this.lastTransition.eventId, this.lastTransition.time);
-      case SZL.LEDS: {
-        const run = this.modeNow === 'RUN';
-        return encodeLeds([
-          { id: 0x01, on: false },
-          { id: 0x04, on: run },
-          { id: 0x05, on: !run },
-          { id: 0x06, on: false },
-        ]);
-      }
-      case SZL.DIAGNOSTICS:
-        return encodeDiagnosticBuffer(this.log);
-      case 0x01a0:
-        if (index === 0) return E.SZL_INDEX;
-        return encodeDiagnosticBuffer(this.log, index);
-      default:
-        return E.SZL_ID;
-    }
+    return szlList(id, index, {
+      identity: this.identity,
+      maxConnections: this.limits.maxConnections,
+      pduSize,
+      level: this.levelFor(s),
+      configuredLevel: this.level,
+      mode: this.modeNow,
+      lastTransition: this.lastTransition,
+      log: this.log,
+    });
   }
 
   // ---------------------------------------------------------------- blocks
 
   /** Every block of the simulated CPU: a DB per data block of the memory, and the fixed OBs, FCs … */
   blockNumbers(type: BlockType): number[] {
-    if (type === 'DB') return this.memory.dataBlockNumbers();
-    return [...(FIXED_BLOCKS[type] ?? [])];
+    return blockNumbers(this.memory, type);
   }
 
-  private blockSpec(type: BlockType, number: number): { spec: BlockSpec; code: Buffer } | undefined {
-    let code: Buffer;
-    if (type === 'DB') {
-      const db = this.memory.area('DB', number);
-      if (!db) return undefined;
-      code = db;
-    } else {
-      if (!this.blockNumbers(type).includes(number)) return undefined;
-      code = EMPTY_CODE;
-    }
-    let checksum = 0;
-    for (let k = 0; k < code.length; k++) checksum = (checksum + code[k]! * ((k % 7) + 1)) & 0xffff;
-    return {
-      code,
-      spec: {
-        type,
-        number,
-        languageCode: type === 'DB' ? 0x05 : type === 'SDB' ? 0x07 : 0x01,
-        mc7Size: code.length,
-        author: 'PLCWIRE',
-        family: 'SIM',
-        name: `${type}${number}`,
-        version: 0x10,
-        checksum,
-        codeTime: this.created,
-        interfaceTime: this.created,
-      },
-    };
+  private blockSpec(type: BlockType, number: number): SimulatedBlock | undefined {
+    return blockSpec(this.memory, this.created, type, number);
   }
 
   private blockFunction(u: UserdataPdu, s: ServiceSession, pduSize: number): Buffer {
-    const { group, subfunction } = u.params;
-    const error = (errorCode: number) => encodeUserdataResponse(u.pduRef, group, subfunction, { errorCode });
-    if (subfunction === BlockSubfunction.ListAll) {
-      const counts = Object.fromEntries((Object.keys(BLOCK_TYPES) as BlockType[]).map((t) => [t, this.blockNumbers(t).length]));
-      return encodeUserdataResponse(u.pduRef, group, subfunction, { data: encodeBlockCounts(counts) });
-    }
-    if (subfunction === BlockSubfunction.ListType) {
-      if (u.data.length !== 2 || u.data[0] !== 0x30) return error(E.SYNTAX);
-      const type = blockTypeName(u.data[1]!);
-      if (!type) return error(E.SYNTAX);
-      const numbers = this.blockNumbers(type);
-      if (numbers.length === 0) return error(E.NO_BLOCKS);
-      const language = type === 'DB' ? 0x05 : type === 'SDB' ? 0x07 : 0x01;
-      const bytes = encodeBlockListEntries(numbers.map((number) => ({ number, flags: 0x22, language })));
-      return this.part(s, u, pduSize, bytes, this.nextSequence(s));
-    }
-    if (subfunction === BlockSubfunction.BlockInfo) {
-      const { typeCode, number } = decodeBlockInfoRequest(u.data);
-      const type = blockTypeName(typeCode);
-      const block = type ? this.blockSpec(type, number) : undefined;
-      if (!block) return error(E.BLOCK_NOT_FOUND);
-      return encodeUserdataResponse(u.pduRef, group, subfunction, { data: encodeBlockInfo(block.spec) });
-    }
-    return error(E.NOT_IMPLEMENTED);
+    return serveBlockFunction(u, this.memory, this.created, (bytes) => this.part(s, u, pduSize, bytes, this.nextSequence(s)));
   }
 
   // ---------------------------------------------------------------- control jobs
@@ -528,5 +392,5 @@ export class CpuServices extends EventEmitter {
 
 /** An ack (ROSCTR 2) without parameters carrying a service error as its header error. */
 function refusal(pduRef: number, code: number): Buffer {
-  return encodeErrorAck(pduRef, code >> 8, code & 0xff);
+  return encodeHeaderErrorAck(pduRef, code);
 }

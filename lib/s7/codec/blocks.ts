@@ -14,8 +14,8 @@
  *   67 reserved   68 checksum (2)   70 reserved (8)
  * A time stamp is milliseconds since midnight (4) and days since 1984-01-01 (2).
  */
-import { ProtocolError } from '../errors';
-import { BLOCK_LANGUAGES, BLOCK_TYPES, SUBBLOCK_TYPES, blockTypeName, type BlockType } from './constants';
+import { ProtocolError } from '../../errors';
+import { BLOCK_LANGUAGES, BLOCK_TYPES, SUBBLOCK_TYPES, blockTypeName, type BlockType } from '../constants';
 
 /** Block counts per type (`listBlocks()`). */
 export type BlockCounts = Record<BlockType, number>;

@@ -10,8 +10,8 @@
  * The ID's high byte selects the extract: 0x00xx all records, 0x01xx one
  * record or group given by the index, 0x0Fxx the header only.
  */
-import { ProtocolError } from '../errors';
-import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
+import { ProtocolError } from '../../errors';
+import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 
 /** One SZL list as read (`readSzl`). Records are copies (they do not keep the frames alive). */
 export interface SzlList {

@@ -4,15 +4,16 @@
  * benchmark measures the simulator in requests per second). Malformed jobs
  * throw ProtocolError; the server then drops the connection like a CPU does.
  */
-import { ProtocolError } from '../errors';
-import type { PlcMemory } from '../sim/memory';
-import type { AreaName } from '../types';
-import { tpktFrame } from './codec/tpkt';
-import { dataLengthBytes, dataLengthField } from './codec/pdu';
+import { ProtocolError } from '../../errors';
+import type { PlcMemory } from '../../sim/memory';
+import type { AreaName } from '../../types';
+import { dataLengthBytes, dataLengthField, encodeHeaderErrorAck, s7Frame, s7PduRef, s7Rosctr } from '../codec/pdu';
 import {
+  COTP_DT_HEADER,
   CotpType,
   DataTransportSize,
   FRAME_OVERHEAD,
+  HeaderError,
   READ_ITEM,
   ReturnCode,
   Rosctr,
@@ -21,8 +22,10 @@ import {
   S7_ACK_HEADER,
   S7_JOB_HEADER,
   S7_PROTOCOL_ID,
+  TPKT_HEADER,
   TransportSize,
-} from './constants';
+  VAR_PARAMETER_HEAD,
+} from '../constants';
 
 export interface JobContext {
   memory: PlcMemory;
@@ -37,6 +40,11 @@ export interface JobContext {
 /** Where the S7 parameters of a job start in a frame with the usual 3-byte COTP DT header. */
 const PARAMS = FRAME_OVERHEAD + S7_JOB_HEADER;
 const ACK_PARAMS = FRAME_OVERHEAD + S7_ACK_HEADER;
+/** The COTP DT header after TPKT: its length indicator (2), its code (DT) and EOT (0x80, the last data unit). */
+const COTP_LI = TPKT_HEADER;
+const COTP_CODE = TPKT_HEADER + 1;
+const COTP_EOT_AT = TPKT_HEADER + 2;
+const EOT = 0x80;
 
 /**
  * COUNTERS_AND_TIMERS: how an S7-300/400 CPU serves the S5 counter (0x1C) and
@@ -119,14 +127,15 @@ function areaName(code: number, forWrite: boolean): AreaName | undefined {
 
 /** What a job frame is, without allocating: its function when it is a well-formed Read/Write Var job, else 0. */
 export function jobFunction(frame: Buffer): number {
-  if (frame.length < PARAMS + 2 || frame[4] !== 2 || frame[5] !== CotpType.DT || frame[6] !== 0x80) return 0;
-  if (frame[7] !== S7_PROTOCOL_ID || frame[8] !== Rosctr.Job) return 0;
+  if (frame.length < PARAMS + 2 || frame[COTP_LI] !== COTP_DT_HEADER - 1 || frame[COTP_CODE] !== CotpType.DT || frame[COTP_EOT_AT] !== EOT)
+    return 0;
+  if (frame[FRAME_OVERHEAD] !== S7_PROTOCOL_ID || s7Rosctr(frame) !== Rosctr.Job) return 0;
   const func = frame[PARAMS]!;
   return func === S7Function.ReadVar || func === S7Function.WriteVar ? func : 0;
 }
 
 export function jobPduRef(frame: Buffer): number {
-  return (frame[11]! << 8) | frame[12]!;
+  return s7PduRef(frame);
 }
 
 /** Scratch per item, reused by every job (jobs are served synchronously, one at a time). */
@@ -200,41 +209,17 @@ function locate(frame: Buffer, i: number, o: number, ctx: JobContext, forWrite: 
   return ReturnCode.Success;
 }
 
-/** An ack with a header error and no parameters (how a CPU refuses a whole job). */
-export function refuseJob(pduRef: number, errorClass: number, errorCode: number): Buffer {
-  const frame = tpktFrame(3 + S7_ACK_HEADER);
-  frame[4] = 2;
-  frame[5] = CotpType.DT;
-  frame[6] = 0x80;
-  frame[7] = S7_PROTOCOL_ID;
-  frame[8] = Rosctr.Ack;
-  frame.fill(0, 9, 17);
-  frame[11] = (pduRef >> 8) & 0xff;
-  frame[12] = pduRef & 0xff;
-  frame[17] = errorClass;
-  frame[18] = errorCode;
-  return frame;
+/** An ack with a header error (class << 8 | code) and no parameters: how a CPU refuses a whole job. */
+export function refuseJob(pduRef: number, error: HeaderError): Buffer {
+  return encodeHeaderErrorAck(pduRef, error);
 }
 
-/** Starts an ack-data frame for Read/Write Var with `count` items and `dataLength` data bytes. */
-function ackData(frame: Buffer, pduRef: number, func: number, count: number, dataLength: number): void {
-  frame[4] = 2;
-  frame[5] = CotpType.DT;
-  frame[6] = 0x80;
-  frame[7] = S7_PROTOCOL_ID;
-  frame[8] = Rosctr.AckData;
-  frame[9] = 0;
-  frame[10] = 0;
-  frame[11] = (pduRef >> 8) & 0xff;
-  frame[12] = pduRef & 0xff;
-  frame[13] = 0;
-  frame[14] = 2;
-  frame[15] = (dataLength >> 8) & 0xff;
-  frame[16] = dataLength & 0xff;
-  frame[17] = 0;
-  frame[18] = 0;
+/** An ack-data frame for Read/Write Var with `count` items and `dataLength` data bytes, header and parameters written. */
+function ackData(pduRef: number, func: number, count: number, dataLength: number): Buffer {
+  const frame = s7Frame(Rosctr.AckData, pduRef, VAR_PARAMETER_HEAD, dataLength);
   frame[ACK_PARAMS] = func;
   frame[ACK_PARAMS + 1] = count;
+  return frame;
 }
 
 /** Serves a Read Var job frame (jobFunction(frame) === ReadVar); returns the whole answer frame. */
@@ -242,7 +227,7 @@ export function serveRead(frame: Buffer, ctx: JobContext): Buffer {
   const pduRef = jobPduRef(frame);
   const { count, dataLength } = checkLengths(frame);
   if (dataLength !== 0) throw new ProtocolError(`read request with ${dataLength} data bytes`);
-  if (frame.length - FRAME_OVERHEAD > ctx.pduSize) return refuseJob(pduRef, 0x85, 0x00);
+  if (frame.length - FRAME_OVERHEAD > ctx.pduSize) return refuseJob(pduRef, HeaderError.PduTooLarge);
   let data = 0;
   for (let i = 0; i < count; i++) {
     const code = locate(frame, i, PARAMS + 2 + READ_ITEM * i, ctx, false);
@@ -251,9 +236,8 @@ export function serveRead(frame: Buffer, ctx: JobContext): Buffer {
     const len = itemLength[i]!;
     data += 4 + len + (len & 1 && i < count - 1 ? 1 : 0);
   }
-  if (S7_ACK_HEADER + 2 + data > ctx.pduSize) return refuseJob(pduRef, 0x85, 0x00);
-  const reply = tpktFrame(3 + S7_ACK_HEADER + 2 + data);
-  ackData(reply, pduRef, S7Function.ReadVar, count, data);
+  if (S7_ACK_HEADER + 2 + data > ctx.pduSize) return refuseJob(pduRef, HeaderError.PduTooLarge);
+  const reply = ackData(pduRef, S7Function.ReadVar, count, data);
   const notify = ctx.memory.listenerCount('read') > 0;
   let p = ACK_PARAMS + 2;
   for (let i = 0; i < count; i++) {
@@ -302,9 +286,8 @@ export function serveWrite(frame: Buffer, ctx: JobContext): Buffer {
     if (len & 1 && i < count - 1) p++;
   }
   if (frame.length - p > 1) throw new ProtocolError(`${frame.length - p} stray bytes after the data items`);
-  if (frame.length - FRAME_OVERHEAD > ctx.pduSize) return refuseJob(pduRef, 0x85, 0x00);
-  const reply = tpktFrame(3 + S7_ACK_HEADER + 2 + count);
-  ackData(reply, pduRef, S7Function.WriteVar, count, count);
+  if (frame.length - FRAME_OVERHEAD > ctx.pduSize) return refuseJob(pduRef, HeaderError.PduTooLarge);
+  const reply = ackData(pduRef, S7Function.WriteVar, count, count);
   const notify = ctx.memory.listenerCount('write') > 0;
   for (let i = 0; i < count; i++) {
     let code = locate(frame, i, PARAMS + 2 + READ_ITEM * i, ctx, true);
