@@ -5,8 +5,10 @@
  * optimized one) with what to change.
  */
 import { PlcError, toPlcError } from '../errors';
+import { formatAddress, S7_TAG_SYNTAX } from '../address';
+import type { SymbolTable } from '../symbols/model';
 import type { Tag } from '../types';
-import { valueToText } from '../values/text';
+import { textOf } from '../values/text';
 import type { S7Client } from './client';
 
 export type Family = 'S7-300' | 'S7-400' | 'S7-1200' | 'S7-1500' | 'S7-200' | 'LOGO!';
@@ -28,9 +30,99 @@ export class TagSteps {
   constructor(
     private readonly c: StepContext,
     private readonly family: Family | undefined,
+    /** The table the doctor's client resolves names with (DiagnoseOptions.symbols). */
+    private readonly symbols?: SymbolTable,
   ) {}
 
-  async address(address: string): Promise<void> {
+  /**
+   * One step per given text: an S7 address is read as such; anything else is
+   * a name, resolved by the client as a read resolves it (the symbol table
+   * given to the doctor, lib/symbols/resolve.ts) and read at its address.
+   */
+  async check(text: string): Promise<void> {
+    let asAddress: Error | undefined;
+    try {
+      S7_TAG_SYNTAX.parse(text);
+    } catch (err) {
+      asAddress = err as Error;
+    }
+    if (!asAddress) return this.address(text);
+    if (!this.symbols) return this.withoutTable(text, asAddress);
+    return this.symbol(text);
+  }
+
+  /** Text that is no address, and no table to look it up in: the step says to give the sources. */
+  private withoutTable(text: string, asAddress: Error): never {
+    const give =
+      "give the doctor the sources that declare it: --symbols FILE (with --db NAME=N for TIA's DB sources), or the connection node's Symbol sources";
+    if (text.includes('"')) {
+      this.c.fail(
+        `symbol ${text}`,
+        `${text} is a name from the PLC program, and the doctor was given no symbol table to look it up in`,
+        `To check a name, ${give}; or give its absolute address (e.g. DB1,REAL0).`,
+      );
+    }
+    this.c.fail(
+      `address ${text}`,
+      `${asAddress.message}; no symbol table was given to look it up as a name`,
+      `Write the address in one of the S7 syntaxes (README, "Addresses"), e.g. DB1,INT0 or DB1.DBW0; if it is a name from the PLC program, ${give}.`,
+    );
+  }
+
+  /** A name: resolved by the client (its one path for names), then read by that address like one given as such. */
+  private async symbol(name: string): Promise<void> {
+    const step = `symbol ${name}`;
+    let tag: Tag;
+    try {
+      tag = this.c.client.tag(name);
+    } catch (err) {
+      this.c.fail(
+        step,
+        (err as Error).message,
+        'Check the name against the sources (plcwire symbols FILE lists every name they declare), or add the source that declares it.',
+      );
+    }
+    const where = `${name} is ${formatAddress(tag)}`;
+    if (tag.area === 'DB') await this.layout(step, where, tag.dbNumber);
+    const named: StepContext = {
+      ...this.c,
+      pass: (s, detail, hint) => this.c.pass(s, `${where}; ${detail}`, hint),
+      fail: (s, detail, hint) => this.c.fail(s, `${where}; ${detail}`, hint),
+    };
+    await new TagSteps(named, this.family).read(step, name, tag);
+  }
+
+  /**
+   * The client's layout check of the name's DB (the one it starts on
+   * connect, shared): a DB whose length in the PLC differs from the sources'
+   * has its names at other offsets than the PLC program, a failed step. A
+   * PLC that cannot tell (S7-1200/1500) leaves the read to speak.
+   */
+  private async layout(step: string, where: string, db: number): Promise<void> {
+    let checks;
+    try {
+      checks = await this.c.client.checkLayout({ signal: this.c.signal });
+    } catch (err) {
+      if (this.c.signal.aborted) return this.c.failed(step, err, (p) => this.c.fail(step, p.message));
+      return; // the link dropped during the check: the read below reconnects and tells
+    }
+    const c = checks.find((x) => x.db === db);
+    if (c?.status !== 'mismatch') return;
+    const block = c.block === `DB${db}` ? `DB${db}` : `DB${db} "${c.block}"`;
+    if (c.actual === null)
+      this.c.fail(
+        step,
+        `${where}; ${block} is not in the PLC (the sources declare it with ${c.declared} bytes)`,
+        'Check the DB number (--db NAME=N, or the DB numbers of the connection) against the PLC program, and that the DB is downloaded to the CPU.',
+      );
+    this.c.fail(
+      step,
+      `${where}; ${block} is ${c.actual} bytes in the PLC, the sources declare ${c.declared}: the PLC program's DB is not the one the sources describe, and names after the first change would read other members' bytes`,
+      'Export the DB source again from the PLC project (TIA Portal: right-click the DB → Generate source from blocks) and give that one, or download the DB as the sources declare it.',
+    );
+  }
+
+  private async address(address: string): Promise<void> {
     const step = `address ${address}`;
     const client = this.c.client;
     let tag: Tag;
@@ -43,11 +135,16 @@ export class TagSteps {
         'Write the address in one of the S7 syntaxes (README, "Addresses"), e.g. DB1,INT0 or DB1.DBW0.',
       );
     }
+    await this.read(step, address, tag);
+  }
+
+  private async read(step: string, address: string, tag: Tag): Promise<void> {
+    const client = this.c.client;
     try {
       if (tag.area === 'DB') await this.dbAddress(step, tag);
       else {
         const r = (await client.readDetailed([address], { signal: this.c.signal }))[address]!;
-        if (r.ok) this.c.pass(step, `${address} = ${valueToText(r.value)}`);
+        if (r.ok) this.c.pass(step, `${address} = ${textOf(r.value)}`);
         else
           this.c.fail(
             step,
@@ -115,7 +212,7 @@ export class TagSteps {
     if (r.ok) {
       const size =
         length !== undefined ? `${length} bytes (block info)` : 'its length is not known (this CPU offers no block info over S7comm)';
-      return this.c.pass(step, `DB${db} exists, ${size}; ${tag.address} = ${valueToText(r.value)}`);
+      return this.c.pass(step, `DB${db} exists, ${size}; ${tag.address} = ${textOf(r.value)}`);
     }
     if (r.error.code === 'OBJECT_DOES_NOT_EXIST') missing(`the CPU answered the read: ${r.error.message}`);
     if (r.error.code !== 'ADDRESS_OUT_OF_RANGE' || length !== undefined) this.c.fail(step, r.error.message);

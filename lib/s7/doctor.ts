@@ -16,6 +16,7 @@ import { S7_CPU_PRESETS, parseUrl, type S7CpuPreset, type S7Endpoint } from '../
 import { valueToText } from '../values/text';
 import { S7Client } from './client';
 import { TagSteps, type Family, type StepContext } from './doctor-tags';
+import type { SymbolTable } from '../symbols/model';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
 import { headerError } from './constants';
 import { localTsapFor, remoteTsapFor } from './tsap';
@@ -42,6 +43,15 @@ export interface DiagnoseOptions {
   signal?: AbortSignal;
   /** Called with each step as soon as it is known. */
   onStep?: (step: DoctorStep) => void;
+  /**
+   * A compiled symbol table (compileSymbols), as connect(url, { symbols })
+   * takes it: each given text that is not an S7 address is then a name,
+   * resolved as a read resolves it and read at its address; an unknown name
+   * is a failed step with the closest names the table has.
+   */
+  symbols?: SymbolTable;
+  /** Names in a DB whose length in the PLC differs from the sources' are refused, as with ClientOptions.strictSymbols. */
+  strictSymbols?: boolean;
 }
 
 const DEFAULT_DEADLINE = 20_000;
@@ -255,8 +265,8 @@ class Doctor {
       this.protection(info);
       const family = info.family;
       await this.putGet(family);
-      const tags = new TagSteps(this.context(), family);
-      for (const a of addresses) await tags.address(a);
+      const tags = new TagSteps(this.context(), family, this.options.symbols);
+      for (const a of addresses) await tags.check(a);
     } catch (err) {
       if (err instanceof Stop) return;
       if (this.options.signal?.aborted) throw new PlcError('ABORTED', 'the connection doctor was aborted', { cause: err });
@@ -510,7 +520,11 @@ class Doctor {
   }
 
   private async identity(e: S7Endpoint): Promise<PlcInfo & { family: Family | undefined }> {
-    const client = new S7Client({ ...e, timeout: this.stepTimeout(e) });
+    const { symbols, strictSymbols } = this.options;
+    const client = new S7Client(
+      { ...e, timeout: this.stepTimeout(e) },
+      symbols ? { symbols, ...(strictSymbols ? { strictSymbols } : {}) } : {},
+    );
     this.client = client;
     client.on('error', () => undefined);
     const onAbort = () => void client.close();
