@@ -276,12 +276,25 @@ module.exports = function (RED) {
     res.json(plc.S7_CPU_PRESETS);
   });
 
+  /** Whether text is an S7 address (anything else the doctor takes for a name). */
+  function isAddress(text) {
+    try {
+      plc.parseAddress(text);
+      return true;
+    } catch {
+      return false;
+    }
+  }
+
   /** The longest a Test connection may take (the doctor's deadline; a request may ask for less). */
   const DOCTOR_TIMEOUT_MS = 15000;
 
   /**
-   * Test connection: POST { url, addresses?, timeout? } → the library's
-   * connection doctor, { ok, steps: [{ step, ok, detail, hint? }] }. It never
+   * Test connection: POST { url, addresses?, timeout?, symbolSources?,
+   * dbNumbers?, strictSymbols? } → the library's connection doctor, { ok,
+   * steps: [{ step, ok, detail, hint? }] }; names among the addresses resolve
+   * through the sources as the connection's reads will (a `symbols` step
+   * names the file and line when they do not compile). It never
    * outlives its request: when the editor closes it (dialog closed, page left),
    * the walk is aborted, and the doctor closes every socket it opened on every
    * path. Nothing is written to the PLC.
@@ -289,7 +302,26 @@ module.exports = function (RED) {
   RED.httpAdmin.post('/plcwire/doctor', canRead, function (req, res) {
     const body = req.body || {};
     const url = String(body.url || '').trim();
-    const addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 100).map(String) : [];
+    let addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 100).map(String) : [];
+    // The dialog's sources as it holds them (not yet deployed ones too), compiled as the connection node compiles them at start.
+    const compiled = symbols.compileCached(symbolConfig(body));
+    let sourcesStep;
+    if (compiled.problems) {
+      // Names cannot be looked up: they are left out, and one step says why, with the file and line of the first error.
+      const names = addresses.filter((a) => !isAddress(a));
+      addresses = addresses.filter(isAddress);
+      const p = compiled.problems[0];
+      const more = compiled.problems.length > 1 ? RED._('plcwire-connection.errors.more', { n: compiled.problems.length - 1 }) : '';
+      sourcesStep = {
+        step: 'symbols',
+        ok: false,
+        detail:
+          RED._('plcwire-connection.doctor.sources', { problem: p.message }) +
+          more +
+          (names.length > 0 ? RED._('plcwire-connection.doctor.namesNotChecked', { names: names.join(', ') }) : ''),
+        hint: RED._('plcwire-connection.doctor.sourcesHint'),
+      };
+    }
     const asked = Number(body.timeout);
     const timeout = asked > 0 ? Math.min(asked, DOCTOR_TIMEOUT_MS) : DOCTOR_TIMEOUT_MS;
     const stop = new AbortController();
@@ -298,7 +330,11 @@ module.exports = function (RED) {
     };
     res.on('close', onClose);
     plc
-      .diagnose(url, addresses, { timeout, signal: stop.signal })
+      .diagnose(url, addresses, {
+        timeout,
+        signal: stop.signal,
+        ...(compiled.table ? { symbols: compiled.table, strictSymbols: body.strictSymbols === true } : {}),
+      })
       .then(
         (report) => report,
         (err) => {
@@ -309,6 +345,7 @@ module.exports = function (RED) {
         },
       )
       .then((answer) => {
+        if (sourcesStep) answer = { ...answer, ok: false, steps: [...answer.steps, sourcesStep] };
         res.off('close', onClose);
         if (!stop.signal.aborted && !res.writableEnded) res.json(answer);
       });

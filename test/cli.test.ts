@@ -1,6 +1,7 @@
 import { expect } from 'chai';
 import { spawn, type ChildProcess } from 'node:child_process';
 import { once } from 'node:events';
+import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { PassThrough } from 'node:stream';
 import { parseAddress } from '../lib/address';
@@ -8,6 +9,7 @@ import { EXIT } from '../lib/cli/io';
 import { main } from '../lib/cli/main';
 import { toJson } from '../lib/cli/values';
 import { S7Server, type S7Profile } from '../lib/s7/server';
+import { compileSymbols } from '../lib/symbols/compile';
 import type { DataTypeName } from '../lib/types';
 import { encodeInto, JS_TYPES } from '../lib/values';
 import { freePort } from './support/net';
@@ -620,6 +622,41 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect(r.out).to.contain('use ?rack=0&slot=2 in the URL');
     r = await plcwire(['doctor', 's7://127.0.0.1?slot=42']);
     expect(r.code).to.equal(EXIT.USAGE);
+    await until(() => server.connectionCount === 0, 2000, 'no connection left');
+  });
+
+  it('doctor resolves names through --symbols and --db as read does: the name step shows its address, an unknown name exits 1 with the closest names', async () => {
+    const plantDb = path.resolve(__dirname, '../../demo/Plant.db');
+    server = new S7Server({
+      port: 0,
+      profile: 's7-300',
+      symbols: compileSymbols([{ name: 'Plant.db', content: fs.readFileSync(plantDb) }], { db: { Plant: 1 } }),
+    });
+    const url = `s7://127.0.0.1:${await server.listen()}?rack=0&slot=2`;
+    let r = await plcwire(['doctor', url, '"Plant".Level', 'DB1,INT4', '--symbols', plantDb, '--db', 'Plant=1', '--json']);
+    expect(r.code, r.out + r.err).to.equal(0);
+    const report = JSON.parse(r.out) as { ok: boolean; steps: { step: string; ok: boolean; detail: string }[] };
+    expect(report.ok).to.equal(true);
+    expect(report.steps.slice(-2)).to.deep.equal([
+      {
+        step: 'symbol "Plant".Level',
+        ok: true,
+        detail: '"Plant".Level is DB1.DBD0:REAL; DB1 exists, 20 bytes (block info); "Plant".Level = 20',
+      },
+      { step: 'address DB1,INT4', ok: true, detail: 'DB1 exists, 20 bytes (block info); DB1,INT4 = 0' },
+    ]);
+    r = await plcwire(['doctor', url, 'Plant.Levle', '--symbols', plantDb, '--db', 'Plant=1', '--strict-symbols']);
+    expect(r.code, r.out + r.err).to.equal(EXIT.TAG_ERROR);
+    expect(r.out).to.match(/^FAIL symbol Plant\.Levle: unknown symbol Plant\.Levle; did you mean "Plant"\.Level\?/m);
+    // Without --symbols the name's step says to give them (it used to fail as "not an S7 address").
+    r = await plcwire(['doctor', url, '"Plant".Level']);
+    expect(r.code).to.equal(EXIT.TAG_ERROR);
+    expect(r.out).to.match(/^FAIL symbol "Plant"\.Level: .*no symbol table/m);
+    expect(r.out).to.contain('--symbols FILE');
+    // The flags are checked as read checks them, before anything is sent.
+    r = await plcwire(['doctor', url, '"Plant".Level', '--db', 'Plant=1']);
+    expect(r.code).to.equal(EXIT.USAGE);
+    expect(r.err).to.contain('--db numbers the blocks of --symbols files: give --symbols too');
     await until(() => server.connectionCount === 0, 2000, 'no connection left');
   });
 

@@ -2,9 +2,13 @@ import { expect } from 'chai';
 import { spawn, spawnSync, type ChildProcess } from 'node:child_process';
 import { once } from 'node:events';
 import * as net from 'node:net';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
 import { PlcError } from '../lib/errors';
 import { diagnose, familyOf, type DoctorReport, type DoctorStep } from '../lib/s7/doctor';
 import { S7Server, type S7Profile } from '../lib/s7/server';
+import { compileSymbols } from '../lib/symbols/compile';
+import type { SymbolTable } from '../lib/symbols/model';
 import { freePort } from './support/net';
 import { skipBecause } from './support/skip';
 import { until } from './support/wait';
@@ -16,6 +20,12 @@ const ALL = [...HANDSHAKE, 'identity', 'protection', 'putget'];
 /** Every TCP connection the simulator holds, COTP-confirmed or not. */
 function openSockets(server: S7Server): number {
   return (server as unknown as { connections: Set<unknown> }).connections.size;
+}
+
+/** The demo plant's DB source, as shipped (`npm start` and its Test connection use it), numbered as the demo numbers it. */
+const PLANT_DB = fs.readFileSync(path.resolve(__dirname, '../../demo/Plant.db'));
+function plant(content: Buffer | string = PLANT_DB): SymbolTable {
+  return compileSymbols([{ name: 'Plant.db', content }], { db: { Plant: 1 } });
 }
 
 function names(r: DoctorReport): string[] {
@@ -103,6 +113,83 @@ describe('connection doctor', function () {
       expect(familyOf({ orderCode: '6ED1052-1MD08-0BA1', moduleTypeName: undefined })).to.equal('LOGO!');
       expect(familyOf({ orderCode: undefined, moduleTypeName: 'CPU 1212C AC/DC/Rly' })).to.equal('S7-1200');
       expect(familyOf({ orderCode: 'X', moduleTypeName: 'ET 200S' })).to.equal(undefined);
+    });
+  });
+
+  describe('names, with the symbol table of demo/Plant.db', () => {
+    async function plantSim(profile: S7Profile): Promise<S7Server> {
+      const server = new S7Server({ port: 0, profile, symbols: plant() });
+      await server.listen();
+      servers.push(server);
+      return server;
+    }
+
+    it('resolves each name as a read does and reads it at its address; the step shows the name and the address', async () => {
+      const server = await plantSim('s7-300');
+      const r = await run(server, url(server, 'slot=2'), ['"Plant".Level', 'Plant.MotorSpeed', '"Plant"', 'DB1,INT0'], {
+        symbols: plant(),
+      });
+      expect(r.ok, JSON.stringify(r.steps)).to.equal(true);
+      expect(names(r)).to.deep.equal([...ALL, 'symbol "Plant".Level', 'symbol Plant.MotorSpeed', 'symbol "Plant"', 'address DB1,INT0']);
+      const by = Object.fromEntries(r.steps.map((s) => [s.step, s]));
+      expect(by['symbol "Plant".Level']!.detail).to.equal(
+        '"Plant".Level is DB1.DBD0:REAL; DB1 exists, 20 bytes (block info); "Plant".Level = 20',
+      );
+      expect(by['symbol Plant.MotorSpeed']!.detail).to.equal(
+        'Plant.MotorSpeed is DB1.DBW6:INT; DB1 exists, 20 bytes (block info); Plant.MotorSpeed = 0',
+      );
+      // The whole block: one read of its bytes, shown member by member.
+      expect(by['symbol "Plant"']!.detail).to.match(
+        /^"Plant" is DB1\.DBB0:BYTE\[20\]; DB1 exists, 20 bytes \(block info\); "Plant" = \{ Level: 20, MotorRun: false, .*Temperature: 20 \}$/,
+      );
+    });
+
+    it('on a CPU without block info (S7-1500) a name is read all the same', async () => {
+      const server = await plantSim('s7-1500');
+      const r = await run(server, url(server, 'slot=1'), ['"Plant".Temperature'], { symbols: plant() });
+      expect(r.ok, JSON.stringify(r.steps)).to.equal(true);
+      expect(last(r)).to.deep.equal({
+        step: 'symbol "Plant".Temperature',
+        ok: true,
+        detail:
+          '"Plant".Temperature is DB1.DBD16:REAL; DB1 exists, its length is not known (this CPU offers no block info over S7comm); "Plant".Temperature = 20',
+      });
+    });
+
+    it('an unknown name is its own failed step naming it and the closest names; the walk stops there', async () => {
+      const server = await plantSim('s7-300');
+      const r = await run(server, url(server, 'slot=2'), ['"Plant".Levle', 'DB1,INT0'], { symbols: plant() });
+      expect(r.ok).to.equal(false);
+      expect(names(r)).to.deep.equal([...ALL, 'symbol "Plant".Levle']);
+      expect(last(r).ok).to.equal(false);
+      expect(last(r).detail).to.equal('unknown symbol "Plant".Levle; did you mean "Plant".Level?');
+      expect(last(r).hint).to.contain('plcwire symbols FILE');
+    });
+
+    it('a name without a symbol table: the step says to give the sources (it used to fail as "not an S7 address")', async () => {
+      const server = await plantSim('s7-300');
+      const r = await run(server, url(server, 'slot=2'), ['"Plant".Level']);
+      expect(names(r)).to.deep.equal([...ALL, 'symbol "Plant".Level']);
+      expect(last(r).ok).to.equal(false);
+      expect(last(r).detail).to.equal(
+        '"Plant".Level is a name from the PLC program, and the doctor was given no symbol table to look it up in',
+      );
+      expect(last(r).hint).to.contain('--symbols FILE').and.contain("the connection node's Symbol sources");
+      // Unquoted, it may be a mistyped address or a name: the step says both.
+      const u = await run(server, url(server, 'slot=2'), ['Plant.Level']);
+      expect(last(u).step).to.equal('address Plant.Level');
+      expect(last(u).detail).to.match(/^invalid address "Plant\.Level": .*; no symbol table was given to look it up as a name$/);
+      expect(last(u).hint).to.contain('--symbols FILE');
+    });
+
+    it('sources that declare the DB longer than the PLC has it: the name step fails before showing a shifted value', async () => {
+      const server = await plantSim('s7-300');
+      const longer = PLANT_DB.toString('utf8').replace('END_STRUCT;', '   Extra : Int;\r\n   END_STRUCT;');
+      const r = await run(server, url(server, 'slot=2'), ['"Plant".Level'], { symbols: plant(longer) });
+      expect(names(r)).to.deep.equal([...ALL, 'symbol "Plant".Level']);
+      expect(last(r).ok).to.equal(false);
+      expect(last(r).detail).to.match(/^"Plant"\.Level is DB1\.DBD0:REAL; DB1 "Plant" is 20 bytes in the PLC, the sources declare 22: /);
+      expect(last(r).hint).to.contain('Generate source from blocks');
     });
   });
 

@@ -27,7 +27,7 @@ const USAGE = `usage:
   plcwire clock <url> [--set now|<ISO time>] [--yes] [--json]
   plcwire blocks <url> [TYPE [NUMBER]] [--json]          (OB, FB, FC, DB, SDB, SFC, SFB)
   plcwire cpu   <url> stop|start|cold-start [--yes] [--json]   (the URL needs control=true)
-  plcwire doctor <url> [address...] [--json] [--timeout ms]
+  plcwire doctor <url> [address|symbol...] [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
   plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json] [--max-items N]
                    [--source Tank.db... --db Tank=1...]
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]

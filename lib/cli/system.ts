@@ -22,6 +22,7 @@ import {
 import { endpointName, isLoopback, parseUrl, type S7Endpoint } from '../url';
 import { UsageError, intFlag, stringFlag, withTimeout, type ParsedArgs } from './args';
 import { EXIT, confirm, withClient, type CliIo } from './io';
+import { symbolOptions } from './symbols';
 import { toJson, valueToText } from './values';
 
 /** The S7 endpoint of the first positional; anything else is a usage error. */
@@ -207,9 +208,9 @@ export async function cpu(rest: string[], args: ParsedArgs, io: CliIo): Promise<
   return EXIT.OK;
 }
 
-/** A failed step's exit code: an address is a tag error (1), anything before it a connection error (3). */
+/** A failed step's exit code: an address or a name is a tag error (1), anything before it a connection error (3). */
 function doctorExit(step: DoctorStep): number {
-  return step.step.startsWith('address ') ? EXIT.TAG_ERROR : EXIT.CONNECTION;
+  return step.step.startsWith('address ') || step.step.startsWith('symbol ') ? EXIT.TAG_ERROR : EXIT.CONNECTION;
 }
 
 export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
@@ -219,6 +220,8 @@ export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promi
   if (parseUrl(url).protocol !== 's7') throw new UsageError('doctor speaks S7 only: give an s7:// URL');
   const json = args.flags.has('json');
   const timeout = args.flags.has('timeout') ? intFlag(args, 'timeout', 20_000, 1, 600_000) : undefined;
+  // Names resolve through --symbols (with --db, --strict-symbols) as they do for read: the same parsing, the same table.
+  const { options: named } = symbolOptions(args);
   const onStep = json
     ? undefined
     : (s: DoctorStep) => {
@@ -227,6 +230,7 @@ export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promi
       };
   const report = await diagnose(url, rest.slice(1), {
     signal: io.signal,
+    ...named,
     ...(timeout !== undefined ? { timeout } : {}),
     ...(onStep ? { onStep } : {}),
   });

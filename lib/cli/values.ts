@@ -1,19 +1,7 @@
 import { ValueError } from '../errors';
 import type { DataTypeName, PlcScalar, PlcValue } from '../types';
-import { valueToText } from '../values/text';
-export { valueToText };
-
-/**
- * Text for people of any value read: as valueToText, and a STRUCT (an object
- * keyed by member name, read by symbol) as `{ Speed: 1.5, On: true }`, a key
- * quoted when it is not a plain name.
- */
-export function textOf(value: unknown): string {
-  if (Array.isArray(value)) return `[${value.map(textOf).join(', ')}]`;
-  if (typeof value !== 'object' || value === null || value instanceof Date) return valueToText(value);
-  const members = Object.entries(value).map(([k, v]) => `${/^[A-Za-z_]\w*$/.test(k) ? k : JSON.stringify(k)}: ${textOf(v)}`);
-  return members.length === 0 ? '{}' : `{ ${members.join(', ')} }`;
-}
+import { textOf, valueToText } from '../values/text';
+export { textOf, valueToText };
 
 /** The part of a tag the CLI needs to turn text into a value. */
 export interface TypedTag {

@@ -12,10 +12,11 @@ import * as net from 'node:net';
 import { ConnectionError, PlcError, toPlcError } from '../errors';
 import { FrameReader } from '../link/framer';
 import { openTcp } from '../link/tcp';
-import type { Tag } from '../types';
 import { S7_CPU_PRESETS, parseUrl, type S7CpuPreset, type S7Endpoint } from '../url';
 import { valueToText } from '../values/text';
 import { S7Client } from './client';
+import { TagSteps, type Family, type StepContext } from './doctor-tags';
+import type { SymbolTable } from '../symbols/model';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
 import { headerError } from './constants';
 import { localTsapFor, remoteTsapFor } from './tsap';
@@ -42,6 +43,15 @@ export interface DiagnoseOptions {
   signal?: AbortSignal;
   /** Called with each step as soon as it is known. */
   onStep?: (step: DoctorStep) => void;
+  /**
+   * A compiled symbol table (compileSymbols), as connect(url, { symbols })
+   * takes it: each given text that is not an S7 address is then a name,
+   * resolved as a read resolves it and read at its address; an unknown name
+   * is a failed step with the closest names the table has.
+   */
+  symbols?: SymbolTable;
+  /** Names in a DB whose length in the PLC differs from the sources' are refused, as with ClientOptions.strictSymbols. */
+  strictSymbols?: boolean;
 }
 
 const DEFAULT_DEADLINE = 20_000;
@@ -57,10 +67,6 @@ const PASSWORD_NEEDED = 0xd241;
 
 const PUT_GET_HINT =
   'Allow PUT/GET in the CPU: TIA Portal → the CPU\'s Properties → Protection & Security → Connection mechanisms → tick "Permit access with PUT/GET communication from remote partner", then download the hardware configuration.';
-const OPTIMIZED_HINT =
-  'Switch the DB to standard access: TIA Portal → the DB\'s Properties → Attributes → untick "Optimized block access", compile and download; the DB editor then shows each variable\'s absolute offset (the Offset column) to use in the address.';
-
-type Family = 'S7-300' | 'S7-400' | 'S7-1200' | 'S7-1500' | 'S7-200' | 'LOGO!';
 
 /** How a CPU family is reached, from the connection presets (url.ts S7_CPU_PRESETS). */
 function usualAddressing(): string {
@@ -208,6 +214,17 @@ class Doctor {
     return Math.max(1, Math.min(e.timeout, this.deadline - Date.now()));
   }
 
+  /** What the tag steps (doctor-tags.ts) use of this walk. */
+  private context(): StepContext {
+    return {
+      client: this.client!,
+      signal: this.signal,
+      pass: (step, detail, hint) => this.pass(step, detail, hint),
+      fail: (step, detail, hint) => this.fail(step, detail, hint),
+      failed: (step, err, other) => this.failed(step, err, other),
+    };
+  }
+
   private record(step: DoctorStep): void {
     const s: DoctorStep = { step: step.step, ok: step.ok, detail: step.detail };
     if (step.hint !== undefined) s.hint = step.hint;
@@ -248,7 +265,8 @@ class Doctor {
       this.protection(info);
       const family = info.family;
       await this.putGet(family);
-      for (const a of addresses) await this.address(a, family);
+      const tags = new TagSteps(this.context(), family, this.options.symbols);
+      for (const a of addresses) await tags.check(a);
     } catch (err) {
       if (err instanceof Stop) return;
       if (this.options.signal?.aborted) throw new PlcError('ABORTED', 'the connection doctor was aborted', { cause: err });
@@ -502,7 +520,11 @@ class Doctor {
   }
 
   private async identity(e: S7Endpoint): Promise<PlcInfo & { family: Family | undefined }> {
-    const client = new S7Client({ ...e, timeout: this.stepTimeout(e) });
+    const { symbols, strictSymbols } = this.options;
+    const client = new S7Client(
+      { ...e, timeout: this.stepTimeout(e) },
+      symbols ? { symbols, ...(strictSymbols ? { strictSymbols } : {}) } : {},
+    );
     this.client = client;
     client.on('error', () => undefined);
     const onAbort = () => void client.close();
@@ -588,133 +610,6 @@ class Doctor {
     } catch (err) {
       return this.failed('putget', err, (p) => this.fail('putget', p.message));
     }
-  }
-
-  private async address(address: string, family: Family | undefined): Promise<void> {
-    const step = `address ${address}`;
-    const client = this.client!;
-    let tag: Tag;
-    try {
-      tag = client.tag(address);
-    } catch (err) {
-      this.fail(
-        step,
-        (err as Error).message,
-        'Write the address in one of the S7 syntaxes (README, "Addresses"), e.g. DB1,INT0 or DB1.DBW0.',
-      );
-    }
-    try {
-      if (tag.area === 'DB') await this.dbAddress(step, tag, family);
-      else {
-        const r = (await client.readDetailed([address], { signal: this.signal }))[address]!;
-        if (r.ok) this.pass(step, `${address} = ${valueToText(r.value)}`);
-        else
-          this.fail(
-            step,
-            r.error.message,
-            r.error.code === 'ADDRESS_OUT_OF_RANGE'
-              ? `The ${tag.area} area of this CPU is smaller than the address needs: check the offset.`
-              : undefined,
-          );
-      }
-    } catch (err) {
-      return this.failed(step, err, (p) => this.fail(step, p.message));
-    }
-  }
-
-  /** Waits until the client is connected again (it reconnects by itself after a dropped link), within the deadline. */
-  private async reconnected(): Promise<void> {
-    const client = this.client!;
-    if (client.state === 'connected') return;
-    await new Promise<void>((resolve, reject) => {
-      const done = (err?: Error) => {
-        client.removeListener('connected', onConnected);
-        this.signal.removeEventListener('abort', onAbort);
-        if (err) reject(err);
-        else resolve();
-      };
-      const onConnected = () => done();
-      const onAbort = () => done(new PlcError('ABORTED', 'aborted'));
-      if (this.signal.aborted) return onAbort();
-      client.on('connected', onConnected);
-      this.signal.addEventListener('abort', onAbort, { once: true });
-    });
-  }
-
-  private async dbAddress(step: string, tag: Tag, family: Family | undefined): Promise<void> {
-    const client = this.client!;
-    const db = tag.dbNumber;
-    const end = tag.byteOffset + tag.byteLength;
-    const needs = `${tag.address} needs bytes ${tag.byteOffset}..${end - 1}`;
-    const missing = (how: string) =>
-      this.fail(
-        step,
-        `DB${db} does not exist (${how})`,
-        `Check the DB number in the PLC program and that the DB is downloaded to the CPU (an instance DB counts too).`,
-      );
-    let length: number | undefined;
-    try {
-      length = (await client.blockInfo('DB', db, { signal: this.signal })).mc7Size;
-    } catch (err) {
-      const e = toPlcError(err);
-      if (e.code === 'OBJECT_DOES_NOT_EXIST') missing('block info: no such block');
-      // S7-1200/1500 (and S7-200, LOGO!) offer no block info over S7comm: the reads below tell.
-      // A malformed answer (snap7's server answers block info of a missing DB so) dropped the link: read once it is back.
-      if (e.code === 'PROTOCOL_ERROR') await this.reconnected();
-      else if (e.code !== 'NOT_SUPPORTED' && e.code !== 'ACCESS_DENIED') throw err;
-    }
-    if (length !== undefined && end > length) {
-      this.fail(
-        step,
-        `DB${db} has ${length} bytes (block info); ${needs}`,
-        `The address lies past the end of DB${db}: check the offset against the DB (the Offset column of the DB editor), or extend the DB and download it.`,
-      );
-    }
-    const read = async (address: string) => (await client.readDetailed([address], { signal: this.signal }))[address]!;
-    const r = await read(tag.address);
-    if (r.ok) {
-      const size =
-        length !== undefined ? `${length} bytes (block info)` : 'its length is not known (this CPU offers no block info over S7comm)';
-      return this.pass(step, `DB${db} exists, ${size}; ${tag.address} = ${valueToText(r.value)}`);
-    }
-    if (r.error.code === 'OBJECT_DOES_NOT_EXIST') missing(`the CPU answered the read: ${r.error.message}`);
-    if (r.error.code !== 'ADDRESS_OUT_OF_RANGE' || length !== undefined) this.fail(step, r.error.message);
-    // No block info: the CPU said "out of range". Byte 0 tells a short DB from one that serves no absolute address.
-    const readable = async (offset: number) => {
-      const b = await read(`DB${db},B${offset}`);
-      if (b.ok) return true;
-      if (b.error.code === 'ADDRESS_OUT_OF_RANGE') return false;
-      throw b.error;
-    };
-    if (!(await readable(0))) {
-      const modern = family === 'S7-1200' || family === 'S7-1500' || family === undefined;
-      if (!modern)
-        this.fail(
-          step,
-          `DB${db} exists but not even its byte 0 can be read: it is empty`,
-          'Give the DB its variables in the PLC program and download it.',
-        );
-      this.fail(
-        step,
-        `DB${db} exists (the CPU did not answer "object does not exist") but not even its byte 0 can be read: it is probably an optimized DB ` +
-          '(an S7-1200/1500 answers "address out of range" for every absolute address of a DB with optimized block access; an empty DB answers the same)',
-        OPTIMIZED_HINT,
-      );
-    }
-    // The DB's length: the first byte that cannot be read, by bisection (about 16 one-byte reads at most).
-    let lo = 0; // readable
-    let hi = end - 1; // the address's last byte
-    if (await readable(hi)) this.fail(step, r.error.message);
-    while (hi - lo > 1) {
-      const mid = (lo + hi) >> 1;
-      if (await readable(mid)) lo = mid;
-      else hi = mid;
-    }
-    this.fail(
-      step,
-      `DB${db} has ${hi} bytes (found by reading single bytes); ${needs}`,
-      `The address lies past the end of DB${db}: check the offset against the DB (the Offset column of the DB editor), or extend the DB and download it.`,
-    );
   }
 }
 
