@@ -64,16 +64,47 @@ describe('symbols layout: standard access offsets', () => {
     });
   });
 
-  it('gives a STRING[11] 13 bytes on an even byte and starts what follows (INT or BYTE) on the next even byte', () => {
+  it('gives a STRING[11] 13 bytes on an even byte and puts a BYTE after it on the very next byte, an INT on the next even one', () => {
     const decl = db('Text', [m('b', el('BYTE')), m('s', str(11)), m('n', el('INT')), m('t', str(11)), m('after', el('BYTE'))]);
     expect(layoutOf(decl)).to.deep.equal({
-      length: 34,
+      length: 32,
       rows: [
         ['.b', 0, null, 1],
         ['.s', 2, null, 13],
         ['.n', 16, null, 2],
         ['.t', 18, null, 13],
-        ['.after', 32, null, 1],
+        ['.after', 31, null, 1],
+      ],
+    });
+  });
+
+  it('puts a BOOL, CHAR, SINT or USINT after an odd STRING[n] on the very next byte, and still pads a struct that ends with one', () => {
+    const decl = db('Odd', [
+      m('s', str(3)),
+      m('x', el('BOOL')),
+      m('t', str(5)),
+      m('c', el('CHAR')),
+      m('u', str(1)),
+      m('i', el('SINT')),
+      m('v', str(7)),
+      m('k', el('USINT')),
+      m('st', struct([m('w', str(3))])),
+      m('after', el('BOOL')),
+    ]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 36,
+      rows: [
+        ['.s', 0, null, 5],
+        ['.x', 5, 0, 1],
+        ['.t', 6, null, 7],
+        ['.c', 13, null, 1],
+        ['.u', 14, null, 3],
+        ['.i', 17, null, 1],
+        ['.v', 18, null, 9],
+        ['.k', 27, null, 1],
+        ['.st', 28, null, 6],
+        ['.st.w', 28, null, 5],
+        ['.after', 34, 0, 1],
       ],
     });
   });
@@ -650,7 +681,7 @@ describe('symbols compileSymbols: files by extension', () => {
       { name: 'step7.awl', content: fs.readFileSync(path.join(GOLDEN, 'step7.awl')) },
       { name: 'Symbols.sdf', content: `${sdf}\r\n` },
     ]);
-    expect(table.blocks).to.deep.equal([{ name: 'Tank', db: 10, length: 24, file: 'step7.awl' }]);
+    expect(table.blocks).to.deep.equal([{ name: 'Tank', db: 10, length: 22, file: 'step7.awl' }]);
     expect(table.lookup('Tank.Motor.Run')?.address).to.equal('DB10.DBX10.0');
     expect(table.lookup('"Start"')?.address).to.equal('I0.0');
     expect(table.suggest('"Tank".Levle')).to.deep.equal(['"Tank".Level']);

@@ -11,8 +11,9 @@
  *  - BYTE, CHAR, SINT, USINT the next whole byte;
  *  - every type of 16 bits or more (WORD … LREAL, DATE_AND_TIME, DTL) starts
  *    on the next even byte;
- *  - STRING[n] (n+2 bytes) and WSTRING[n] (4+2n bytes) start on an even byte,
- *    and what follows them starts on an even byte too;
+ *  - STRING[n] (n+2 bytes) and WSTRING[n] (4+2n bytes) start on an even byte;
+ *    no pad follows them: a BYTE or BOOL after an odd STRING[n] takes the
+ *    very next byte;
  *  - a STRUCT, a UDT and an ARRAY start on an even byte and occupy memory
  *    up to the next word limit (what follows starts on an even byte);
  *  - array elements follow each other by these same rules (BOOL elements
@@ -300,9 +301,9 @@ class Engine {
       at,
       ...base,
     };
-    const end = start + bytes * 8;
-    // A STRING ends at a word limit: what follows an odd STRING[n] starts on the next even byte.
-    return { node, next: stringLength > 0 ? nextWord(end) : end };
+    // A STRING[n] starts on an even byte and takes n + 2 bytes, no pad after it: a BYTE or BOOL after an odd
+    // STRING[n] takes the very next byte (the struct, UDT or array around it still ends on a word limit).
+    return { node, next: start + bytes * 8 };
   }
 
   private struct(
