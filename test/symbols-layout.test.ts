@@ -637,7 +637,7 @@ describe('symbols compile: names, numbers, addresses, start values', () => {
 
 const GOLDEN = path.join(__dirname, '../../test/fixtures/symbols/golden');
 /** The numbers the golden TIA blocks get (a STEP 7 block carries its own). */
-const GOLDEN_NUMBERS: Record<string, number> = { Guideline: 1, TestStruct: 1, Corners: 3 };
+const GOLDEN_NUMBERS: Record<string, number> = { Guideline: 1, TestStruct: 1, Corners: 3, Tank: 7, Valve1: 8, conn: 9, Conn: 10, Comm: 11 };
 
 /** A compiled table as the golden files write it: one line per block, then one per entry. */
 function goldenText(table: SymbolTable): string {
@@ -650,7 +650,15 @@ describe('symbols layout: golden tables from source files', () => {
   const sources = fs.readdirSync(GOLDEN).filter((f) => /\.(db|udt|scl|awl)$/.test(f));
 
   it('has the golden sources', () => {
-    expect(sources).to.include.members(['siemens-guideline.db', 's7netplus-teststruct.db', 'corners.db', 'step7.awl']);
+    expect(sources).to.include.members([
+      'siemens-guideline.db',
+      's7netplus-teststruct.db',
+      'corners.db',
+      'step7.awl',
+      'tia-var.db',
+      'tia-instance.db',
+      'tia-system.db',
+    ]);
   });
 
   for (const file of sources) {
