@@ -138,6 +138,11 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
         expect(r.err, bad).to.match(message);
         expect(r.out).to.equal('');
       }
+      const misspelt = await done(['symbols', 'Tank.db', '--db', 'Tnak=7']);
+      expect(misspelt.code).to.equal(EXIT.USAGE);
+      expect(misspelt.err).to.contain('a number is given for "Tnak", which is not a DB of the sources (did you mean "Tank"? DBs: "Tank")');
+      expect(misspelt.err).to.not.contain('has no number');
+      expect(misspelt.out).to.equal('');
       const twice = await done(['symbols', 'Mix.db', '--db', 'Mix=2', '--db', 'Mix=3']);
       expect(twice.err).to.match(/--db gives "Mix" two numbers: 2 and 3/);
       const shared = await done(['symbols', 'Mix.db', 'Tank.db', '--db', 'Mix=2', '--db', 'Tank=2']);

@@ -514,6 +514,10 @@ describe('symbols compile: names, numbers, addresses, start values', () => {
     expect(compileRefusal([db('A', [])], { db: { A: 1, Tnk: 2 } }).message).to.contain(
       'a number is given for "Tnk", which is not a DB of the sources (DBs: "A")',
     );
+    // A misspelt name is what is wrong, not the block left without its number.
+    expect(compileRefusal([db('Tank', []), db('Mix', [])], { db: { Tnak: 7 } }).message).to.equal(
+      'options.db:0:0: a number is given for "Tnak", which is not a DB of the sources (did you mean "Tank"? DBs: "Tank", "Mix")',
+    );
     expect(compileRefusal([db('A', [])], { db: { A: 0 } }).message).to.contain('a DB number is 1..65535');
     expect(compileRefusal([db('DB10', [], { number: 10 })], { db: { DB10: 11 } }).message).to.contain('is DB 10 in its source');
   });
