@@ -396,13 +396,14 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
 
   it("the README's table of demo/Plant.db is what plcwire symbols prints", async () => {
     const readme = fs.readFileSync(path.resolve(__dirname, '../../README.md'), 'utf8');
-    const block = /```sh\n\s*npx plcwire symbols Plant\.db --db Plant=1\n((?:\s*# .*\n)+)/.exec(readme);
+    // Copy-pasteable from the repository's root, as the section says.
+    const block = /```sh\n\s*npx plcwire symbols demo\/Plant\.db --db Plant=1\n((?:\s*# .*\n)+)/.exec(readme);
     expect(block, 'the README shows the command and its output').to.not.equal(null);
     const shown = block![1]!
       .split('\n')
       .filter(Boolean)
       .map((l) => l.replace(/^\s*# /, ''));
-    const child = spawn(process.execPath, [BIN, 'symbols', 'Plant.db', '--db', 'Plant=1'], { cwd: path.resolve(__dirname, '../../demo') });
+    const child = spawn(process.execPath, [BIN, 'symbols', 'demo/Plant.db', '--db', 'Plant=1'], { cwd: path.resolve(__dirname, '../..') });
     let out = '';
     child.stdout.on('data', (d: Buffer) => (out += d.toString()));
     const [code] = await once(child, 'exit');
