@@ -723,3 +723,41 @@ describe('symbols compileSymbols: start values evaluated', () => {
     expect(initial('"Corners".Flag')).to.equal(undefined);
   });
 });
+
+describe('symbols layout: system types (lib/symbols/system-types.ts)', () => {
+  it('names the members of a system type as Siemens does and evaluates the BEGIN values for them', () => {
+    const table = compileSymbols([{ name: 'tia-system.db', content: fs.readFileSync(path.join(GOLDEN, 'tia-system.db')) }], {
+      db: { Conn: 10, Comm: 11 },
+    });
+    expect(table.blocks.map((b) => [b.name, b.length, b.instanceOf])).to.deep.equal([
+      ['Conn', 14, 'TCON_IP_v4'],
+      ['Comm', 106, undefined],
+    ]);
+    expect(table.lookup('"Conn".RemoteAddress.ADDR[1]')).to.include({ address: 'DB10.DBB6', initial: 192 });
+    expect(table.lookup('conn.remoteport')).to.include({ address: 'DB10.DBW10:UINT', initial: 2000 });
+    expect(table.lookup('"Conn".ActiveEstablished')).to.include({ address: 'DB10.DBX5.0', initial: true });
+    expect(table.lookup('"Comm".Links[2].LocalPort')?.address).to.equal('DB11.DBW104:UINT');
+  });
+
+  it('takes a UDT of the sources over the system type of the same name', () => {
+    const own = udt('TCON_IP_v4', [m('Mine', el('DINT'))]);
+    const table = compiled([own, db('C', named('TCON_IP_v4'))], { db: { C: 1 } });
+    expect(table.blocks[0]).to.include({ length: 4, instanceOf: '"TCON_IP_v4"' });
+    expect(table.entries.map((e) => e.name)).to.deep.equal(['"C".Mine']);
+  });
+
+  it('refuses a system type whose standard layout it does not know by name, as a member and as an instance DB', () => {
+    const member = refusal([db('T', [m('t', named('IEC_TIMER', at(3, 9)))])]);
+    expect(member.message).to.match(
+      /^hand\.db:3:9: "T"\.t is of type IEC_TIMER, a system type whose layout .* does not know \(it knows TCON_IP_v4/,
+    );
+    const instance = refusal([db('T1', named('TON_TIME'), { at: at(1, 1, 'T1.db') })]);
+    expect(instance.message).to.match(
+      /^T1\.db:1:1: DB "T1" is an instance of TON_TIME, a system type whose layout .*read the block by absolute address/,
+    );
+    // A name that is no system type keeps the refusal of an unknown UDT.
+    expect(refusal([db('X', named('NoSuchType'))]).message).to.match(
+      /DB "X" is an instance of "NoSuchType", which is not a UDT of the sources/,
+    );
+  });
+});
