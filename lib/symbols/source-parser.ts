@@ -4,7 +4,8 @@
  *
  * - TIA Portal, "Generate source from blocks" (.db, .udt, .scl):
  *   `TYPE "Motor" … STRUCT … END_STRUCT; END_TYPE`,
- *   `DATA_BLOCK "Tank" { S7_Optimized_Access := 'FALSE' } … BEGIN … END_DATA_BLOCK`;
+ *   `DATA_BLOCK "Tank" { S7_Optimized_Access := 'FALSE' } … VAR … END_VAR BEGIN … END_DATA_BLOCK`
+ *   (older versions: `STRUCT … END_STRUCT;` in place of the VAR sections);
  * - STEP 7 (classic) AWL sources: `TYPE UDT 1 …`, `DATA_BLOCK DB 10 …`,
  *   `DATA_BLOCK DB 11 UDT 1`, or with symbolic names (`DATA_BLOCK "Tank"`).
  *
