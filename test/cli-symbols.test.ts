@@ -138,6 +138,11 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
         expect(r.err, bad).to.match(message);
         expect(r.out).to.equal('');
       }
+      const misspelt = await done(['symbols', 'Tank.db', '--db', 'Tnak=7']);
+      expect(misspelt.code).to.equal(EXIT.USAGE);
+      expect(misspelt.err).to.contain('a number is given for "Tnak", which is not a DB of the sources (did you mean "Tank"? DBs: "Tank")');
+      expect(misspelt.err).to.not.contain('has no number');
+      expect(misspelt.out).to.equal('');
       const twice = await done(['symbols', 'Mix.db', '--db', 'Mix=2', '--db', 'Mix=3']);
       expect(twice.err).to.match(/--db gives "Mix" two numbers: 2 and 3/);
       const shared = await done(['symbols', 'Mix.db', 'Tank.db', '--db', 'Mix=2', '--db', 'Tank=2']);
@@ -391,13 +396,14 @@ describe('plcwire symbols and tags by name (the installed binary)', function () 
 
   it("the README's table of demo/Plant.db is what plcwire symbols prints", async () => {
     const readme = fs.readFileSync(path.resolve(__dirname, '../../README.md'), 'utf8');
-    const block = /```sh\n\s*npx plcwire symbols Plant\.db --db Plant=1\n((?:\s*# .*\n)+)/.exec(readme);
+    // Copy-pasteable from the repository's root, as the section says.
+    const block = /```sh\n\s*npx plcwire symbols demo\/Plant\.db --db Plant=1\n((?:\s*# .*\n)+)/.exec(readme);
     expect(block, 'the README shows the command and its output').to.not.equal(null);
     const shown = block![1]!
       .split('\n')
       .filter(Boolean)
       .map((l) => l.replace(/^\s*# /, ''));
-    const child = spawn(process.execPath, [BIN, 'symbols', 'Plant.db', '--db', 'Plant=1'], { cwd: path.resolve(__dirname, '../../demo') });
+    const child = spawn(process.execPath, [BIN, 'symbols', 'demo/Plant.db', '--db', 'Plant=1'], { cwd: path.resolve(__dirname, '../..') });
     let out = '';
     child.stdout.on('data', (d: Buffer) => (out += d.toString()));
     const [code] = await once(child, 'exit');

@@ -110,11 +110,20 @@ const noLiterals = (): never => {
   throw new Error('no start values are generated');
 };
 
-describe('symbols layout: properties over 2,000 random blocks', () => {
-  it('keeps elementary members apart, inside the block, aligned, inside their parents, with addresses that read back', () => {
+/** The budget: a fixed number of random blocks (with a fixed seed), never a time. */
+const NUM_RUNS = 2000;
+/**
+ * Far above what the budget takes (~1.5 s on an idle 2-core machine, a few
+ * seconds at a load of 10), so that only a hang trips it, not a slow machine.
+ */
+const TIMEOUT_PER_RUN_MS = 100;
+
+describe(`symbols layout: properties over ${NUM_RUNS.toLocaleString('en-US')} random blocks`, () => {
+  it('keeps elementary members apart, inside the block, aligned, inside their parents, with addresses that read back', function () {
+    this.timeout(NUM_RUNS * TIMEOUT_PER_RUN_MS);
     const gen = new Generator(prng(0x5eed));
     let entries = 0;
-    for (let n = 1; n <= 2000; n++) {
+    for (let n = 1; n <= NUM_RUNS; n++) {
       const blocks = gen.blocks(n);
       const table = compileDeclarations(blocks, [], { db: { [`B${n}`]: n } }, noLiterals);
       const { length } = table.blocks[0]!;

@@ -64,16 +64,47 @@ describe('symbols layout: standard access offsets', () => {
     });
   });
 
-  it('gives a STRING[11] 13 bytes on an even byte and starts what follows (INT or BYTE) on the next even byte', () => {
+  it('gives a STRING[11] 13 bytes on an even byte and puts a BYTE after it on the very next byte, an INT on the next even one', () => {
     const decl = db('Text', [m('b', el('BYTE')), m('s', str(11)), m('n', el('INT')), m('t', str(11)), m('after', el('BYTE'))]);
     expect(layoutOf(decl)).to.deep.equal({
-      length: 34,
+      length: 32,
       rows: [
         ['.b', 0, null, 1],
         ['.s', 2, null, 13],
         ['.n', 16, null, 2],
         ['.t', 18, null, 13],
-        ['.after', 32, null, 1],
+        ['.after', 31, null, 1],
+      ],
+    });
+  });
+
+  it('puts a BOOL, CHAR, SINT or USINT after an odd STRING[n] on the very next byte, and still pads a struct that ends with one', () => {
+    const decl = db('Odd', [
+      m('s', str(3)),
+      m('x', el('BOOL')),
+      m('t', str(5)),
+      m('c', el('CHAR')),
+      m('u', str(1)),
+      m('i', el('SINT')),
+      m('v', str(7)),
+      m('k', el('USINT')),
+      m('st', struct([m('w', str(3))])),
+      m('after', el('BOOL')),
+    ]);
+    expect(layoutOf(decl)).to.deep.equal({
+      length: 36,
+      rows: [
+        ['.s', 0, null, 5],
+        ['.x', 5, 0, 1],
+        ['.t', 6, null, 7],
+        ['.c', 13, null, 1],
+        ['.u', 14, null, 3],
+        ['.i', 17, null, 1],
+        ['.v', 18, null, 9],
+        ['.k', 27, null, 1],
+        ['.st', 28, null, 6],
+        ['.st.w', 28, null, 5],
+        ['.after', 34, 0, 1],
       ],
     });
   });
@@ -483,6 +514,10 @@ describe('symbols compile: names, numbers, addresses, start values', () => {
     expect(compileRefusal([db('A', [])], { db: { A: 1, Tnk: 2 } }).message).to.contain(
       'a number is given for "Tnk", which is not a DB of the sources (DBs: "A")',
     );
+    // A misspelt name is what is wrong, not the block left without its number.
+    expect(compileRefusal([db('Tank', []), db('Mix', [])], { db: { Tnak: 7 } }).message).to.equal(
+      'options.db:0:0: a number is given for "Tnak", which is not a DB of the sources (did you mean "Tank"? DBs: "Tank", "Mix")',
+    );
     expect(compileRefusal([db('A', [])], { db: { A: 0 } }).message).to.contain('a DB number is 1..65535');
     expect(compileRefusal([db('DB10', [], { number: 10 })], { db: { DB10: 11 } }).message).to.contain('is DB 10 in its source');
   });
@@ -606,7 +641,7 @@ describe('symbols compile: names, numbers, addresses, start values', () => {
 
 const GOLDEN = path.join(__dirname, '../../test/fixtures/symbols/golden');
 /** The numbers the golden TIA blocks get (a STEP 7 block carries its own). */
-const GOLDEN_NUMBERS: Record<string, number> = { Guideline: 1, TestStruct: 1, Corners: 3 };
+const GOLDEN_NUMBERS: Record<string, number> = { Guideline: 1, TestStruct: 1, Corners: 3, Tank: 7, Valve1: 8, conn: 9, Conn: 10, Comm: 11 };
 
 /** A compiled table as the golden files write it: one line per block, then one per entry. */
 function goldenText(table: SymbolTable): string {
@@ -619,7 +654,15 @@ describe('symbols layout: golden tables from source files', () => {
   const sources = fs.readdirSync(GOLDEN).filter((f) => /\.(db|udt|scl|awl)$/.test(f));
 
   it('has the golden sources', () => {
-    expect(sources).to.include.members(['siemens-guideline.db', 's7netplus-teststruct.db', 'corners.db', 'step7.awl']);
+    expect(sources).to.include.members([
+      'siemens-guideline.db',
+      's7netplus-teststruct.db',
+      'corners.db',
+      'step7.awl',
+      'tia-var.db',
+      'tia-instance.db',
+      'tia-system.db',
+    ]);
   });
 
   for (const file of sources) {
@@ -650,7 +693,7 @@ describe('symbols compileSymbols: files by extension', () => {
       { name: 'step7.awl', content: fs.readFileSync(path.join(GOLDEN, 'step7.awl')) },
       { name: 'Symbols.sdf', content: `${sdf}\r\n` },
     ]);
-    expect(table.blocks).to.deep.equal([{ name: 'Tank', db: 10, length: 24, file: 'step7.awl' }]);
+    expect(table.blocks).to.deep.equal([{ name: 'Tank', db: 10, length: 22, file: 'step7.awl' }]);
     expect(table.lookup('Tank.Motor.Run')?.address).to.equal('DB10.DBX10.0');
     expect(table.lookup('"Start"')?.address).to.equal('I0.0');
     expect(table.suggest('"Tank".Levle')).to.deep.equal(['"Tank".Level']);
@@ -678,5 +721,43 @@ describe('symbols compileSymbols: start values evaluated', () => {
     expect([1, 2, 3].map((j) => initial(`"Corners".Matrix[1,${j}]`))).to.deep.equal([1, 2, 3]);
     expect([1, 2, 3].map((j) => initial(`"Corners".Matrix[2,${j}]`))).to.deep.equal([0, 0, 23]);
     expect(initial('"Corners".Flag')).to.equal(undefined);
+  });
+});
+
+describe('symbols layout: system types (lib/symbols/system-types.ts)', () => {
+  it('names the members of a system type as Siemens does and evaluates the BEGIN values for them', () => {
+    const table = compileSymbols([{ name: 'tia-system.db', content: fs.readFileSync(path.join(GOLDEN, 'tia-system.db')) }], {
+      db: { Conn: 10, Comm: 11 },
+    });
+    expect(table.blocks.map((b) => [b.name, b.length, b.instanceOf])).to.deep.equal([
+      ['Conn', 14, 'TCON_IP_v4'],
+      ['Comm', 106, undefined],
+    ]);
+    expect(table.lookup('"Conn".RemoteAddress.ADDR[1]')).to.include({ address: 'DB10.DBB6', initial: 192 });
+    expect(table.lookup('conn.remoteport')).to.include({ address: 'DB10.DBW10:UINT', initial: 2000 });
+    expect(table.lookup('"Conn".ActiveEstablished')).to.include({ address: 'DB10.DBX5.0', initial: true });
+    expect(table.lookup('"Comm".Links[2].LocalPort')?.address).to.equal('DB11.DBW104:UINT');
+  });
+
+  it('takes a UDT of the sources over the system type of the same name', () => {
+    const own = udt('TCON_IP_v4', [m('Mine', el('DINT'))]);
+    const table = compiled([own, db('C', named('TCON_IP_v4'))], { db: { C: 1 } });
+    expect(table.blocks[0]).to.include({ length: 4, instanceOf: '"TCON_IP_v4"' });
+    expect(table.entries.map((e) => e.name)).to.deep.equal(['"C".Mine']);
+  });
+
+  it('refuses a system type whose standard layout it does not know by name, as a member and as an instance DB', () => {
+    const member = refusal([db('T', [m('t', named('IEC_TIMER', at(3, 9)))])]);
+    expect(member.message).to.match(
+      /^hand\.db:3:9: "T"\.t is of type IEC_TIMER, a system type whose layout .* does not know \(it knows TCON_IP_v4/,
+    );
+    const instance = refusal([db('T1', named('TON_TIME'), { at: at(1, 1, 'T1.db') })]);
+    expect(instance.message).to.match(
+      /^T1\.db:1:1: DB "T1" is an instance of TON_TIME, a system type whose layout .*read the block by absolute address/,
+    );
+    // A name that is no system type keeps the refusal of an unknown UDT.
+    expect(refusal([db('X', named('NoSuchType'))]).message).to.match(
+      /DB "X" is an instance of "NoSuchType", which is not a UDT of the sources/,
+    );
   });
 });

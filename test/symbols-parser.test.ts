@@ -317,7 +317,7 @@ describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
   });
 
   it('takes the glued forms DB10, UDT1 and the type aliases DT and TOD', () => {
-    const [t, d] = parse('TYPE UDT2 STRUCT a : DT ; b : tod ; END_STRUCT END_TYPE DATA_BLOCK DB10 UDT2 BEGIN END_DATA_BLOCK');
+    const [t, d] = parse('TYPE UDT2 STRUCT a : DT ; b : tod ; END_STRUCT ; END_TYPE DATA_BLOCK DB10 UDT2 BEGIN END_DATA_BLOCK');
     expect([t!.name, t!.number, d!.name, d!.number]).to.deep.equal(['UDT2', 2, 'DB10', 10]);
     expect(shape((t as TypeDecl).body)).to.deep.equal({ a: 'DATE_AND_TIME', b: 'TIME_OF_DAY' });
     expect(shape((d as DataBlockDecl).body)).to.equal('UDT2#2');
@@ -328,6 +328,36 @@ describe('symbols: STEP 7 AWL sources (parseBlockSource)', () => {
     expect(shape((b as DataBlockDecl).body)).to.deep.equal({ t: '"IEC_TIMER"', a: '"DB_ANY"', c: 'COUNTER', d: 'TIMER' });
     const [inst] = parse('DATA_BLOCK "T1" TON_TIME BEGIN END_DATA_BLOCK');
     expect(shape((inst as DataBlockDecl).body)).to.equal('"TON_TIME"');
+  });
+});
+
+describe('symbols: the VAR form TIA Portal writes today', () => {
+  it('reads a DB of several VAR sections (VAR, VAR RETAIN) as one block of members, with per-member attributes', () => {
+    const blocks = parse(fixture('tia-var.db'), 'tia-var.db');
+    const d = db(blocks, 'Mixed');
+    expect(d.retain).to.equal(false);
+    expect(d.optimized).to.equal(true);
+    expect(shape(d.body)).to.deep.equal({ Speed: 'REAL', Recipe: 'DTL', Total: 'DINT', Steps: { First: 'INT' } });
+    expect(member(d.body, 'Recipe').attributes).to.deep.equal({
+      InstructionName: 'DTL',
+      LibVersion: '1.0',
+      ExternalAccessible: 'False',
+      ExternalVisible: 'False',
+      ExternalWritable: 'False',
+    });
+    expect(member(d.body, 'Total').comment).to.equal('retentive');
+    expect(member(d.body, 'Total').at).to.deep.include({ line: 10, column: 7 });
+    expect(d.startValues.map((v) => v.path)).to.deep.equal(['Speed']);
+  });
+
+  it('leaves out the members of VAR CONSTANT (no data of the block) and takes a ; after END_VAR', () => {
+    const d = db(parse('DATA_BLOCK "D"\nVAR\n  a : Int;\nEND_VAR;\nVAR CONSTANT\n  N : Int := 3;\nEND_VAR\nBEGIN\nEND_DATA_BLOCK'), 'D');
+    expect(members(d.body).map((m) => m.name)).to.deep.equal(['a']);
+  });
+
+  it('reads an instance DB of a type TIA writes unquoted, whatever its name (looked up later, sources first)', () => {
+    const d = db(parse('DATA_BLOCK "conn"\nNON_RETAIN\nTCON_PAR\n\nBEGIN\nEND_DATA_BLOCK'), 'conn');
+    expect(shape(d.body)).to.equal('"TCON_PAR"');
   });
 });
 
@@ -492,7 +522,42 @@ describe('symbols: source errors name the place and the problem', () => {
       'DATA_BLOCK "D"\nVERSION : 0.1\nBEGIN\nEND_DATA_BLOCK',
       3,
       1,
-      /expected STRUCT, or the UDT or FB that DATA_BLOCK D is an instance of, found BEGIN/,
+      /expected VAR, STRUCT, or the UDT or FB that DATA_BLOCK D is an instance of, found BEGIN/,
+    ],
+    [
+      "a DB's END_STRUCT without ';'",
+      'DATA_BLOCK "D"\n{ S7_Optimized_Access := \'FALSE\' }\n   STRUCT\n      x : Int;\n   END_STRUCT\nBEGIN\nEND_DATA_BLOCK',
+      5,
+      4,
+      /';' missing after END_STRUCT: the STRUCT of DATA_BLOCK D \(opened at 3:4\) must end with END_STRUCT; \(found BEGIN\)/,
+    ],
+    [
+      "a UDT's END_STRUCT without ';'",
+      'TYPE "T"\nVERSION : 0.1\n   STRUCT\n      x : Int;\n   END_STRUCT\n\nEND_TYPE',
+      5,
+      4,
+      /';' missing after END_STRUCT: the STRUCT of TYPE T \(opened at 3:4\) must end with END_STRUCT; \(found END_TYPE\)/,
+    ],
+    [
+      'a missing END_VAR',
+      'DATA_BLOCK "D"\nNON_RETAIN\n   VAR\n      x : Int;\nBEGIN\nEND_DATA_BLOCK',
+      5,
+      1,
+      /END_VAR missing for VAR opened at 3:4, found BEGIN/,
+    ],
+    [
+      'a member twice in two VAR sections',
+      'DATA_BLOCK "D"\n   VAR\n      x : Int;\n   END_VAR\n   VAR RETAIN\n      X : Real;\n   END_VAR\nBEGIN\nEND_DATA_BLOCK',
+      6,
+      7,
+      /X is declared twice in this block \(first at 3:7\)/,
+    ],
+    [
+      'no member name in a VAR section',
+      'DATA_BLOCK "D"\n   VAR\n      12 : Int;\n   END_VAR\nEND_DATA_BLOCK',
+      3,
+      7,
+      /expected a member name or END_VAR \(for VAR opened at 2:4\), found 12/,
     ],
     [
       'a bad S7_Optimized_Access',

@@ -1,7 +1,8 @@
 /**
  * The demo plant's DB1 as its PLC programmer would hand it over: the source
  * TIA Portal writes with "Generate source from blocks" for a global DB
- * "Plant" with standard access (S7_Optimized_Access := 'FALSE'), DB number 1.
+ * "Plant" with standard access (S7_Optimized_Access := 'FALSE'), DB number 1,
+ * in the `VAR … END_VAR` form TIA Portal writes global DBs in today.
  * Compiled (compileSymbols) it places every member exactly where the demo
  * process reads and writes it (DEMO_TAGS, lib/plant/process.ts); a test
  * holds the two together, and holds demo/Plant.db (the same text as the
@@ -23,7 +24,7 @@ NAME : Plant
 VERSION : 0.1
 RETAIN
 //Demo plant: heated tank with feed motor, parts counter and the life signs between PLC and PC. Standard access (PUT/GET reads it by offset).
-   STRUCT 
+   VAR 
       Level : Real := 20.0;   // Tank level in %; fills at 4 %/s up to 90 %, drains at 3 %/s down to 10 %
       MotorRun : Bool;   // Run command from the operator (dashboard switch, HMI)
       MotorRunning : Bool;   // Motor turns (speed > 0)
@@ -33,7 +34,7 @@ RETAIN
       PlcHeartbeat : Int;   // PLC life sign: +1 every 500 ms in RUN, 0..32767
       PcHeartbeat : Int;   // PC life sign: written by the PC (Node-RED heartbeat node), not used by the PLC
       Temperature : Real := 20.0;   // Tank temperature in °C
-   END_STRUCT;
+   END_VAR
 
 
 BEGIN

@@ -11,7 +11,7 @@ import { PlcError, SourceError } from '../errors';
 import type { DataTypeName, PlcScalar } from '../types';
 import { literalValue } from './literals';
 import { NameIndex } from './names';
-import { parseBlockSource } from './source-parser';
+import { distance, parseBlockSource } from './source-parser';
 import { readSymbolTable } from './symbol-files';
 import { blockRef, elementIndex, layoutBlocks, memberRef, type BlockLayout, type LayoutNode } from './layout';
 import type {
@@ -313,13 +313,23 @@ function numberBlocks(dbs: readonly DataBlockDecl[], facts: TableFacts, options:
       throw new SourceError(OPTIONS_AT, `the number given for "${optionKey(written)}" is ${number}: a DB number is 1..${MAX_DB_NUMBER}`);
     given.set(optionKey(written), { number, written });
   }
-  const used = new Set<string>();
+  // A name no block has is the mistake to report, before any block is found without its number.
+  const known = new Set(dbs.flatMap((d) => [key(d.name), ...(d.number === undefined ? [] : [key(`DB${d.number}`)])]));
+  for (const [k, g] of given)
+    if (!known.has(k)) {
+      const near = dbs
+        .map((d) => ({ d, by: distance(k, key(d.name)) }))
+        .filter((c) => c.by <= Math.max(1, Math.floor(k.length / 3)))
+        .sort((a, b) => a.by - b.by)[0];
+      const list = dbs.map((d) => blockRef(d)).join(', ') || 'none';
+      const hint = near ? `did you mean ${blockRef(near.d)}? DBs: ${list}` : `DBs: ${list}`;
+      throw new SourceError(OPTIONS_AT, `a number is given for "${g.written}", which is not a DB of the sources (${hint})`);
+    }
   const numbers = new Map<DataBlockDecl, number>();
   const byNumber = new Map<number, DataBlockDecl>();
   for (const db of dbs) {
     const names = [key(db.name), ...(db.number === undefined ? [] : [key(`DB${db.number}`)])];
     const option = names.map((n) => given.get(n)).find((g) => g !== undefined);
-    for (const n of names) if (given.has(n)) used.add(n);
     const row = facts.dbNumbers.get(key(db.name));
     let number: number;
     if (db.number !== undefined) {
@@ -343,11 +353,6 @@ function numberBlocks(dbs: readonly DataBlockDecl[], facts: TableFacts, options:
     byNumber.set(number, db);
     numbers.set(db, number);
   }
-  for (const [k, g] of given)
-    if (!used.has(k)) {
-      const known = dbs.map((d) => blockRef(d)).join(', ') || 'none';
-      throw new SourceError(OPTIONS_AT, `a number is given for "${g.written}", which is not a DB of the sources (DBs: ${known})`);
-    }
   return numbers;
 }
 

@@ -11,8 +11,9 @@
  *  - BYTE, CHAR, SINT, USINT the next whole byte;
  *  - every type of 16 bits or more (WORD … LREAL, DATE_AND_TIME, DTL) starts
  *    on the next even byte;
- *  - STRING[n] (n+2 bytes) and WSTRING[n] (4+2n bytes) start on an even byte,
- *    and what follows them starts on an even byte too;
+ *  - STRING[n] (n+2 bytes) and WSTRING[n] (4+2n bytes) start on an even byte;
+ *    no pad follows them: a BYTE or BOOL after an odd STRING[n] takes the
+ *    very next byte;
  *  - a STRUCT, a UDT and an ARRAY start on an even byte and occupy memory
  *    up to the next word limit (what follows starts on an even byte);
  *  - array elements follow each other by these same rules (BOOL elements
@@ -25,6 +26,7 @@ import { SourceError } from '../errors';
 import type { DataTypeName } from '../types';
 import { elementByteLength } from '../values/types-table';
 import type { BlockDecl, DataBlockDecl, MemberDecl, SourcePosition, TypeDecl, TypeRef } from './model';
+import { isSystemDecl, isSystemTypeName, KNOWN_LAYOUTS, systemAlias, systemStructure } from './system-types';
 
 /** Bytes a data block with standard access can hold: 64 KB (S7-300/400 and S7-1200/1500 with standard access); the last byte, 65535, is the last our addresses reach. */
 const MAX_BLOCK_BYTES = 65536;
@@ -153,6 +155,7 @@ export function memberRef(name: string): string {
 
 /** A UDT as TIA writes it: `"Motor"`; a STEP 7 UDT without symbol: `UDT 5`. */
 function typeRef(decl: TypeDecl): string {
+  if (isSystemDecl(decl)) return decl.name;
   return decl.number !== undefined && decl.name.toUpperCase() === `UDT${decl.number}` ? `UDT ${decl.number}` : `"${decl.name}"`;
 }
 
@@ -217,14 +220,26 @@ class Engine {
     }
   }
 
-  /** The UDT a named reference stands for, or undefined. */
+  /** The UDT a named reference stands for: one of the sources, else a system structure (system-types.ts); or undefined. */
   find(ref: Extract<TypeRef, { kind: 'named' }>): TypeDecl | undefined {
     if (ref.number !== undefined) return this.byNumber.get(ref.number);
     const key = ref.name.toLowerCase();
     const byName = this.byName.get(key);
     if (byName) return byName;
     const number = this.typeNumbers.get(key);
-    return number === undefined ? undefined : this.byNumber.get(number);
+    return (number === undefined ? undefined : this.byNumber.get(number)) ?? systemStructure(ref.name);
+  }
+
+  /** The refusal of a named type neither the sources nor the system table know. */
+  unknown(ref: Extract<TypeRef, { kind: 'named' }>, at: SourcePosition, usedAs: string): SourceError {
+    const written = ref.number === undefined ? `"${ref.name}"` : `UDT ${ref.number}`;
+    if (ref.number === undefined && isSystemTypeName(ref.name))
+      return new SourceError(
+        at,
+        `${usedAs} ${ref.name}, a system type whose layout in a block with standard access plcwire does not know ` +
+          `(it knows ${KNOWN_LAYOUTS.join(', ')}): read the block by absolute address`,
+      );
+    return new SourceError(at, `${usedAs} ${written}, which is not a UDT of the sources`);
   }
 
   /** Lays out a type at bit `pos`; returns the node and the bit where the next member may start. */
@@ -238,10 +253,12 @@ class Engine {
         return this.struct(type.members, 'Struct', pos, where, decl, decl?.at ?? type.at, undefined);
       case 'named': {
         const udt = this.find(type);
+        if (udt) return this.udt(udt, pos, where, decl);
+        const alias = type.number === undefined ? systemAlias(type.name) : undefined;
+        if (alias) return this.elementary({ kind: 'elementary', type: alias, stringLength: 0, at: type.at }, pos, where, decl);
         const written = type.number === undefined ? `"${type.name}"` : `UDT ${type.number}`;
-        if (!udt)
-          throw new SourceError(type.at, `unknown type ${written} (used by ${whereText(where)}): no UDT of that name is among the sources`);
-        return this.udt(udt, pos, where, decl);
+        if (type.number === undefined && isSystemTypeName(type.name)) throw this.unknown(type, type.at, `${whereText(where)} is of type`);
+        throw new SourceError(type.at, `unknown type ${written} (used by ${whereText(where)}): no UDT of that name is among the sources`);
       }
     }
   }
@@ -300,9 +317,9 @@ class Engine {
       at,
       ...base,
     };
-    const end = start + bytes * 8;
-    // A STRING ends at a word limit: what follows an odd STRING[n] starts on the next even byte.
-    return { node, next: stringLength > 0 ? nextWord(end) : end };
+    // A STRING[n] starts on an even byte and takes n + 2 bytes, no pad after it: a BYTE or BOOL after an odd
+    // STRING[n] takes the very next byte (the struct, UDT or array around it still ends on a word limit).
+    return { node, next: start + bytes * 8 };
   }
 
   private struct(
@@ -470,6 +487,7 @@ function layoutBlock(engine: Engine, db: DataBlockDecl): BlockLayout {
     root = engine.place(body, 0, where, undefined).node as StructNode;
   } else if (body.kind === 'named') {
     const udt = engine.find(body);
+    if (!udt && body.number === undefined && isSystemTypeName(body.name)) throw engine.unknown(body, db.at, `DB ${name} is an instance of`);
     if (!udt) {
       const written = body.number === undefined ? `"${body.name}"` : `UDT ${body.number}`;
       throw new SourceError(

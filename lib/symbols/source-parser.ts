@@ -4,7 +4,8 @@
  *
  * - TIA Portal, "Generate source from blocks" (.db, .udt, .scl):
  *   `TYPE "Motor" … STRUCT … END_STRUCT; END_TYPE`,
- *   `DATA_BLOCK "Tank" { S7_Optimized_Access := 'FALSE' } … BEGIN … END_DATA_BLOCK`;
+ *   `DATA_BLOCK "Tank" { S7_Optimized_Access := 'FALSE' } … VAR … END_VAR BEGIN … END_DATA_BLOCK`
+ *   (older versions: `STRUCT … END_STRUCT;` in place of the VAR sections);
  * - STEP 7 (classic) AWL sources: `TYPE UDT 1 …`, `DATA_BLOCK DB 10 …`,
  *   `DATA_BLOCK DB 11 UDT 1`, or with symbolic names (`DATA_BLOCK "Tank"`).
  *
@@ -23,6 +24,7 @@ import { MAX_STRING_LENGTH, MAX_WSTRING_LENGTH } from '../address/sizes';
 import type { DataTypeName } from '../types';
 import { JS_TYPES } from '../values';
 import { tokenize, type Token } from './lexer';
+import { isSystemTypeName } from './system-types';
 import type {
   BlockDecl,
   DataBlockDecl,
@@ -49,72 +51,6 @@ const ELEMENTARY: ReadonlyMap<string, DataTypeName> = new Map<string, DataTypeNa
 const NO_LAYOUT = new Set(['VARIANT', 'ANY', 'POINTER', 'ANY_POINTER', 'REF_TO', 'BLOCK_DB', 'BLOCK_FB', 'BLOCK_FC', 'BLOCK_SDB']);
 
 /**
- * System data types and system FBs TIA writes unquoted (IEC timers and
- * counters, communication parameters, edge detection, DB_ANY …). They are
- * kept as named types; the layout knows the ones it can place and refuses
- * the others by name.
- */
-const SYSTEM_TYPES = new Set(
-  [
-    'IEC_TIMER',
-    'IEC_LTIMER',
-    'IEC_COUNTER',
-    'IEC_SCOUNTER',
-    'IEC_DCOUNTER',
-    'IEC_LCOUNTER',
-    'IEC_UCOUNTER',
-    'IEC_USCOUNTER',
-    'IEC_UDCOUNTER',
-    'IEC_ULCOUNTER',
-    'TON',
-    'TOF',
-    'TP',
-    'TONR',
-    'TON_TIME',
-    'TOF_TIME',
-    'TP_TIME',
-    'TONR_TIME',
-    'TON_LTIME',
-    'TOF_LTIME',
-    'TP_LTIME',
-    'TONR_LTIME',
-    'CTU',
-    'CTD',
-    'CTUD',
-    'CTU_INT',
-    'CTD_INT',
-    'CTUD_INT',
-    'CTU_DINT',
-    'CTD_DINT',
-    'CTUD_DINT',
-    'R_TRIG',
-    'F_TRIG',
-    'DB_ANY',
-    'DB_WWW',
-    'DB_DYN',
-    'ERROR_STRUCT',
-    'TADDR_PARAM',
-    'TCON_PARAM',
-    'TCON_IP_V4',
-    'TCON_IP_V6',
-    'TCON_IP_RFC',
-    'TCON_QDN',
-    'HW_ANY',
-    'HW_IO',
-    'HW_DEVICE',
-    'HW_SUBMODULE',
-    'CONN_ANY',
-    'CONN_OUC',
-    'LTOD',
-    'LDT',
-    'LTIME_OF_DAY',
-    'DATE_AND_LTIME',
-    'NREF',
-    'CREF',
-  ].map((s) => s.toUpperCase()),
-);
-
-/**
  * Nesting of STRUCTs, ARRAYs and start-value lists the parser follows: far
  * beyond what the engineering tools let a block nest, far within the stack.
  */
@@ -131,6 +67,9 @@ const BLOCK_ENDS = new Set([
   'FUNCTION',
   'ORGANIZATION_BLOCK',
 ]);
+
+/** Keywords that open or close a section of declarations: never a member's or a type's name. */
+const SECTION_WORDS = new Set(['VAR', 'END_VAR', 'STRUCT', 'END_STRUCT', 'VAR_INPUT', 'VAR_OUTPUT', 'VAR_IN_OUT', 'VAR_TEMP']);
 
 /** Code blocks an .scl source may hold beside its data: skipped to their END keyword. */
 const SKIPPED_BLOCKS: Readonly<Record<string, string>> = {
@@ -206,15 +145,18 @@ function describe(t: Token): string {
   }
 }
 
-/** Edit distance, for "did you mean" (type names are short). */
-function distance(a: string, b: string): number {
-  let prev = Array.from({ length: b.length + 1 }, (_, j) => j);
+/** Edit distance, for "did you mean" (type and block names are short); two swapped neighbours count as one edit. */
+export function distance(a: string, b: string): number {
+  const rows: number[][] = [Array.from({ length: b.length + 1 }, (_, j) => j)];
   for (let i = 1; i <= a.length; i++) {
     const row = [i];
-    for (let j = 1; j <= b.length; j++) row[j] = Math.min(prev[j]! + 1, row[j - 1]! + 1, prev[j - 1]! + (a[i - 1] === b[j - 1] ? 0 : 1));
-    prev = row;
+    for (let j = 1; j <= b.length; j++) {
+      row[j] = Math.min(rows[i - 1]![j]! + 1, row[j - 1]! + 1, rows[i - 1]![j - 1]! + (a[i - 1] === b[j - 1] ? 0 : 1));
+      if (i > 1 && j > 1 && a[i - 1] === b[j - 2] && a[i - 2] === b[j - 1]) row[j] = Math.min(row[j]!, rows[i - 2]![j - 2]! + 1);
+    }
+    rows.push(row);
   }
-  return prev[b.length]!;
+  return rows[a.length]![b.length]!;
 }
 
 class Parser {
@@ -262,7 +204,7 @@ class Parser {
     if (upper(structTok) !== 'STRUCT')
       throw this.error(structTok, `expected STRUCT to start the members of ${name}, found ${describe(structTok)}`);
     const body = this.struct(this.next());
-    if (this.isPunct(';')) this.next();
+    this.semicolonAfterStruct(body, `TYPE ${name}`);
     this.expectWord('END_TYPE', `END_TYPE missing for TYPE ${name} opened at ${open.line}:${open.column}`);
     return { kind: 'type', name, ...(number === undefined ? {} : { number }), attributes: attributes.values, body, at: this.pos(open) };
   }
@@ -272,7 +214,6 @@ class Parser {
     const { name, number } = this.blockName(open, 'DB');
     const head = this.header();
     const body = this.dbBody(name);
-    if (this.isPunct(';')) this.next();
     const startValues: DataBlockDecl['startValues'][number][] = [];
     if (upper(this.peek()) === 'BEGIN') {
       this.next();
@@ -388,24 +329,93 @@ class Parser {
     }
   }
 
-  /** A DB's body: its STRUCT, or the UDT or FB it is an instance of. */
+  /**
+   * A DB's body: its `VAR … END_VAR` sections (what TIA writes today), its
+   * `STRUCT … END_STRUCT;` (older TIA versions, STEP 7, generators), or the
+   * UDT, FB or system type it is an instance of: quoted (`"Motor"`), as a
+   * number (`UDT 5`, `FB 3`), or a name TIA writes unquoted (`TCON_IP_v4`),
+   * looked up by the layout among the sources first, then among the system
+   * types it knows (lib/symbols/system-types.ts).
+   */
   private dbBody(name: string): TypeRef {
     const t = this.peek();
     const kw = upper(t);
-    if (kw === 'STRUCT') return this.struct(this.next());
+    if (kw === 'VAR') return this.varSections();
+    if (kw === 'STRUCT') {
+      const body = this.struct(this.next());
+      this.semicolonAfterStruct(body, `DATA_BLOCK ${name}`);
+      return body;
+    }
     if (t.kind === 'quoted') {
       this.next();
       return { kind: 'named', name: t.text, at: this.pos(t) };
     }
-    if (t.kind === 'ident') {
+    if (t.kind === 'ident' && !BLOCK_ENDS.has(kw) && !SECTION_WORDS.has(kw)) {
       const named = this.numberedType();
       if (named) return named;
-      if (SYSTEM_TYPES.has(kw)) {
-        this.next();
-        return { kind: 'named', name: t.text, at: this.pos(t) };
+      this.next();
+      return { kind: 'named', name: t.text, at: this.pos(t) };
+    }
+    throw this.error(t, `expected VAR, STRUCT, or the UDT or FB that DATA_BLOCK ${name} is an instance of, found ${describe(t)}`);
+  }
+
+  /**
+   * The `;` TIA and STEP 7 write after the END_STRUCT that closes a TYPE's or
+   * a DB's STRUCT (`END_STRUCT;`, STEP 7: `END_STRUCT ;`). Both tools write
+   * it in every source they generate, and a member's `END_STRUCT` needs it
+   * as every declaration does, so a missing one is a damaged source.
+   */
+  private semicolonAfterStruct(body: StructRef, owner: string): void {
+    if (this.isPunct(';')) {
+      this.next();
+      return;
+    }
+    const end = this.code[this.i - 1]!;
+    throw this.error(
+      end,
+      `';' missing after END_STRUCT: the STRUCT of ${owner} (opened at ${body.at.line}:${body.at.column}) must end with END_STRUCT; (found ${describe(this.peek())})`,
+    );
+  }
+
+  /**
+   * The members of a DB in TIA's current form: one or more sections
+   * `VAR` / `VAR RETAIN` / `VAR NON_RETAIN` … `END_VAR`, their members one
+   * after the other as in one STRUCT (retentivity is no part of the layout).
+   * `VAR CONSTANT` members hold no data in the block: they are read and left
+   * out. TIA writes no `;` after END_VAR; one is accepted.
+   */
+  private varSections(): StructRef {
+    const first = this.peek();
+    const members: MemberDecl[] = [];
+    const seen = new Map<string, MemberDecl>();
+    while (upper(this.peek()) === 'VAR') {
+      const open = this.next();
+      const qualifier = upper(this.peek());
+      const constant = qualifier === 'CONSTANT';
+      if (constant || qualifier === 'RETAIN' || qualifier === 'NON_RETAIN' || qualifier === 'DB_SPECIFIC') this.next();
+      for (;;) {
+        const t = this.peek();
+        const kw = upper(t);
+        if (kw === 'END_VAR') {
+          this.next();
+          if (this.isPunct(';')) this.next();
+          break;
+        }
+        if (t.kind === 'eof' || BLOCK_ENDS.has(kw) || SECTION_WORDS.has(kw))
+          throw this.error(t, `END_VAR missing for VAR opened at ${open.line}:${open.column}, found ${describe(t)}`);
+        const member = this.member(open);
+        const key = member.name.toUpperCase();
+        const before = seen.get(key);
+        if (before)
+          throw new SourceError(
+            member.at,
+            `${member.name} is declared twice in this block (first at ${before.at.line}:${before.at.column})`,
+          );
+        seen.set(key, member);
+        if (!constant) members.push(member);
       }
     }
-    throw this.error(t, `expected STRUCT, or the UDT or FB that DATA_BLOCK ${name} is an instance of, found ${describe(t)}`);
+    return { kind: 'struct', members, at: this.pos(first) };
   }
 
   /**
@@ -468,9 +478,10 @@ class Parser {
     const first = this.i;
     const nameTok = this.next();
     if (nameTok.kind !== 'ident' && nameTok.kind !== 'quoted') {
+      const kw = open.text.toUpperCase();
       throw this.error(
         nameTok,
-        `expected a member name or END_STRUCT (for STRUCT opened at ${open.line}:${open.column}), found ${describe(nameTok)}`,
+        `expected a member name or END_${kw} (for ${kw} opened at ${open.line}:${open.column}), found ${describe(nameTok)}`,
       );
     }
     const name = nameTok.text;
@@ -533,7 +544,7 @@ class Parser {
     if (NO_LAYOUT.has(kw)) {
       throw this.error(t, `member ${member} has the type ${t.text}, which has no fixed place in a data block plcwire could read`);
     }
-    if (SYSTEM_TYPES.has(kw)) return { kind: 'named', name: t.text, at: this.pos(t) };
+    if (isSystemTypeName(kw)) return { kind: 'named', name: t.text, at: this.pos(t) };
     const near = [...ELEMENTARY.keys()]
       .map((n) => ({ n, d: distance(kw, n) }))
       .filter((c) => c.d <= Math.max(1, Math.floor(kw.length / 3)))
