@@ -184,7 +184,7 @@ describe('connection doctor', function () {
 
     it('sources that declare the DB longer than the PLC has it: the name step fails before showing a shifted value', async () => {
       const server = await plantSim('s7-300');
-      const longer = PLANT_DB.toString('utf8').replace('END_STRUCT;', '   Extra : Int;\r\n   END_STRUCT;');
+      const longer = PLANT_DB.toString('utf8').replace(/END_VAR/, '   Extra : Int;\r\n   END_VAR');
       const r = await run(server, url(server, 'slot=2'), ['"Plant".Level'], { symbols: plant(longer) });
       expect(names(r)).to.deep.equal([...ALL, 'symbol "Plant".Level']);
       expect(last(r).ok).to.equal(false);
