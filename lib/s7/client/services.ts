@@ -5,10 +5,10 @@
  * like a Read Var; a multi-part answer is asked for part by part.
  * S7Client delegates to this class; its methods carry the documentation.
  */
-import { PlcError, ProtocolError } from '../errors';
-import type { RequestOptions } from '../types';
-import type { S7Endpoint } from '../url';
-import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
+import { PlcError, ProtocolError } from '../../errors';
+import type { RequestOptions } from '../../types';
+import type { S7Endpoint } from '../../url';
+import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import {
   decodeBlockCounts,
   decodeBlockInfo,
@@ -19,7 +19,7 @@ import {
   type BlockCounts,
   type BlockInfo,
   type UploadedBlock,
-} from './codec/blocks';
+} from '../codec/blocks';
 import {
   COLD_START_ARG,
   decodeControl,
@@ -29,8 +29,8 @@ import {
   encodeStartUpload,
   encodeUpload,
   type ControlMessage,
-} from './codec/control';
-import { decodeUserdata, encodePassword, encodeUserdataNext, encodeUserdataRequest, type UserdataPdu } from './codec/userdata';
+} from '../codec/control';
+import { decodeUserdata, encodePassword, encodeUserdataNext, encodeUserdataRequest, type UserdataPdu } from '../codec/userdata';
 import {
   BLOCK_TYPES,
   BlockSubfunction,
@@ -43,8 +43,8 @@ import {
   blockTypeCode,
   serviceError,
   type BlockType,
-} from './constants';
-import { decodeDiagnosticBuffer, type DiagnosticEntry } from './codec/diagnostics';
+} from '../constants';
+import { decodeDiagnosticBuffer, type DiagnosticEntry } from '../codec/diagnostics';
 import {
   SZL,
   decodeComponentIdentification,
@@ -56,7 +56,7 @@ import {
   type CpuState,
   type Protection,
   type SzlList,
-} from './codec/szl';
+} from '../codec/szl';
 
 /** What `info()` gathers in one object. A field the CPU does not give is undefined. */
 export interface PlcInfo {

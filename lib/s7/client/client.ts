@@ -16,25 +16,25 @@
  * `itemLimit` ({ limit, was }), and reads again with a plan for that limit,
  * or sends the items of a write the answer left out again.
  */
-import { formatAddress, S7_TAG_SYNTAX } from '../address';
-import { ConnectionError, isLinkError, PlcError, ProtocolError, tagError as namedTagError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../link/client-base';
-import type { Driver, ReadValues } from '../link/driver';
-import type { PlcValue, Protocol, RequestOptions, Tag } from '../types';
-import { endpointName, type S7Endpoint } from '../url';
-import { decodeTag, tagDecoder, type TagDecoder } from '../values';
-import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadAck, type ReadItemTable, type S7Message } from './codec';
-import { CotpType, DEFAULT_MAX_ITEMS, describeReturnCode, headerError } from './constants';
-import { openS7Session, S7Session } from './client-session';
-import { maxReadItems, planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from './plan';
-import type { BlockCounts, BlockInfo, UploadedBlock } from './codec/blocks';
-import type { BlockType } from './constants';
-import type { DiagnosticEntry } from './codec/diagnostics';
+import { formatAddress, S7_TAG_SYNTAX } from '../../address';
+import { ConnectionError, isLinkError, PlcError, ProtocolError, tagError as namedTagError, toPlcError, type TagResult } from '../../errors';
+import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../link/client-base';
+import type { Driver, ReadValues } from '../../link/driver';
+import type { PlcValue, Protocol, RequestOptions, Tag } from '../../types';
+import { endpointName, type S7Endpoint } from '../../url';
+import { decodeTag, tagDecoder, type TagDecoder } from '../../values';
+import { decodeS7, encodeReadRequest, encodeWriteRequest, s7AnswerRef, scanReadAck, type ReadItemTable, type S7Message } from '../codec';
+import { CotpType, DEFAULT_MAX_ITEMS, describeReturnCode, headerError } from '../constants';
+import { openS7Session, S7Session } from './session';
+import { maxReadItems, planRead, planWrite, ReadPlanCache, tagData, type PlannedWriteItem, type PlanOptions, type ReadPlan } from '../plan';
+import type { BlockCounts, BlockInfo, UploadedBlock } from '../codec/blocks';
+import type { BlockType } from '../constants';
+import type { DiagnosticEntry } from '../codec/diagnostics';
 import { S7Services, type ClockOptions, type PlcInfo } from './services';
-import type { CpuState, SzlList } from './codec/szl';
+import type { CpuState, SzlList } from '../codec/szl';
 
-export { S7Session } from './client-session';
-export { localTsapFor } from './tsap';
+export { S7Session } from './session';
+export { localTsapFor } from '../tsap';
 
 /** Counters for diagnostics and the benchmark (cumulative over reconnects). */
 export interface S7Stats {

@@ -4,14 +4,14 @@
  * handshake (COTP CR/CC, setup communication) is `openS7Session`.
  */
 import type * as net from 'node:net';
-import { abortError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
-import { Fifo } from '../link/fifo';
-import { FrameReader } from '../link/framer';
-import { openTcp } from '../link/tcp';
-import type { S7Endpoint } from '../url';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
-import { headerError } from './constants';
-import { localTsapFor, remoteTsapFor } from './tsap';
+import { abortError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../../errors';
+import { Fifo } from '../../link/fifo';
+import { FrameReader } from '../../link/framer';
+import { openTcp } from '../../link/tcp';
+import type { S7Endpoint } from '../../url';
+import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from '../codec';
+import { headerError } from '../constants';
+import { localTsapFor, remoteTsapFor } from '../tsap';
 
 /** The largest TPKT frame we accept (the biggest S7 PDU is 65535 anyway; the PLC cannot make us buffer more). */
 const MAX_FRAME = 0x10000 + 16;
