@@ -72,7 +72,7 @@ export type { FrameCheck } from './link/framer';
 
 export * as s7 from './s7/codec';
 export { S7Client, type ItemLimitEvent, type S7Stats } from './s7/client';
-export type { S7Session } from './s7/client-session';
+export type { S7Session } from './s7/client';
 export {
   planRead,
   planWrite,
@@ -96,7 +96,7 @@ export {
 } from './s7/server';
 export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type SimulatorMode, type StopCause } from './s7/server';
 export type { CpuServices, ServiceSession } from './s7/server/services';
-export { type PlcInfo, type ClockOptions } from './s7/services';
+export { type PlcInfo, type ClockOptions } from './s7/client';
 export { diagnose, type DoctorStep, type DoctorReport, type DiagnoseOptions } from './s7/doctor';
 export {
   SZL,

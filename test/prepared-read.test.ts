@@ -91,11 +91,12 @@ describe('prepared reads (client.prepare) on S7', function () {
     await c.connect();
     const prepared = c.prepare(LIST);
     const frames = new Set<Buffer>();
-    const session = (c as unknown as { session: { onSend: (f: Buffer) => void } }).session;
-    const counting = session.onSend;
-    session.onSend = (f) => {
+    // The frames the session writes to its socket (the session owns the socket: its write is watched).
+    const socket = (c as unknown as { session: { socket: { write: (f: Buffer) => boolean } } }).session.socket;
+    const writing = socket.write;
+    socket.write = function (this: unknown, f: Buffer) {
       frames.add(f);
-      counting(f);
+      return writing.call(this, f);
     };
     for (let i = 0; i < 50; i++) expect(await prepared.read()).to.deep.equal(EXPECTED);
     const pdus = c.planFor(LIST).pdus.length;
@@ -105,7 +106,7 @@ describe('prepared reads (client.prepare) on S7', function () {
     // read() of the same addresses in new arrays finds the plan and its frames in the cache.
     expect(await c.read([...LIST])).to.deep.equal(EXPECTED);
     expect(await c.read([...LIST])).to.deep.equal(EXPECTED);
-    session.onSend = counting;
+    socket.write = writing;
     expect(frames.size).to.equal(pdus);
     expect(c.stats.plansMade).to.equal(1);
     expect(Object.keys(await prepared.read())).to.deep.equal(LIST);

@@ -115,11 +115,12 @@ describe('S7 client against the S7 simulator', function () {
     await client.connect();
     const list = ['DB1,INT0', 'DB1,REAL2', 'DB1,X6.1', 'MW10', 'DB1,S8.4'];
     const frames = new Set<Buffer>();
-    const session = (client as unknown as { session: { onSend: (f: Buffer) => void } }).session;
-    const counting = session.onSend;
-    session.onSend = (f) => {
+    // The frames the session writes to its socket (the session owns the socket: its write is watched).
+    const socket = (client as unknown as { session: { socket: { write: (f: Buffer) => boolean } } }).session.socket;
+    const writing = socket.write;
+    socket.write = function (this: unknown, f: Buffer) {
       frames.add(f);
-      counting(f);
+      return writing.call(this, f);
     };
     for (let i = 0; i < 50; i++) await client.read(list);
     expect(client.stats.plansMade).to.equal(1);
@@ -130,7 +131,7 @@ describe('S7 client against the S7 simulator', function () {
     list[1] = 'DB1,REAL4'; // the caller changed its array in place: noticed
     expect(await client.read(list)).to.have.property('DB1,REAL4');
     expect(client.stats.plansMade).to.equal(2);
-    session.onSend = counting;
+    socket.write = writing;
   });
 
   it("a poll's answers and values die young: nothing links one poll to the next", async () => {

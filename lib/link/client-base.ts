@@ -218,6 +218,11 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     this.supervisor.lost(session, err);
   }
 
+  /** The error a session's requests fail with when its link goes for `cause`: CLOSED, with the cause, when close() ended it. */
+  protected lossError(cause: PlcError): PlcError {
+    return this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+  }
+
   /**
    * How a session over a stream dies, once: the returned `fail(cause)` on
    * its first call runs `teardown` with the error (CLOSED, with the cause,
@@ -229,7 +234,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     const fail = (cause: PlcError) => {
       if (lost) return;
       lost = true;
-      const err = this.state === 'closed' ? new ConnectionError('CLOSED', `${this.name}: the client was closed`, { cause }) : cause;
+      const err = this.lossError(cause);
       teardown(err);
       this.sessionLost(session, err);
     };

@@ -179,12 +179,12 @@ export function describeReturnCode(code: number): { code: PlcErrorCode; text: st
 }
 
 /** An item return code as a typed PlcError: `${context}: the PLC answered 0x0A: object does not exist (missing DB?)`. */
-export function returnCodeError(returnCode: number, context: string, tag?: string): PlcError {
+export function returnCodeError(returnCode: number, context?: string, tag?: string): PlcError {
   const { code, text } = describeReturnCode(returnCode);
   const hex = `0x${returnCode.toString(16).padStart(2, '0').toUpperCase()}`;
   return new PlcError(
     code,
-    `${context}: the PLC answered ${hex}: ${text}`,
+    `${context === undefined ? '' : `${context}: `}the PLC answered ${hex}: ${text}`,
     tag === undefined ? { plcCode: returnCode } : { plcCode: returnCode, tag },
   );
 }

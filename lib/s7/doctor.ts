@@ -20,7 +20,7 @@ import type { SymbolTable } from '../symbols/model';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
 import { headerError } from './constants';
 import { localTsapFor, remoteTsapFor } from './tsap';
-import type { PlcInfo } from './services';
+import type { PlcInfo } from './client';
 
 /** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
 export interface DoctorStep {

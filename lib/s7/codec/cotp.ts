@@ -120,3 +120,13 @@ export function decodeCotp(frame: Buffer): CotpMessage {
   }
   return { type: type === CotpType.CR ? 'CR' : 'CC', ...c };
 }
+
+/** The TPDU type of a whole frame's COTP header (CotpType: DT, DR …), without checking the rest. */
+export function cotpTpduType(frame: Buffer): number {
+  return frame[TPKT_HEADER + 1]! & 0xf0;
+}
+
+/** The reason of a COTP disconnect request (0 when the frame is too short to carry one). */
+export function disconnectReason(frame: Buffer): number {
+  return frame[TPKT_HEADER + 6] ?? 0;
+}

@@ -344,6 +344,12 @@ export function s7PduRef(frame: Buffer): number {
   return (frame[PLAIN_S7_AT + 4]! << 8) | frame[PLAIN_S7_AT + 5]!;
 }
 
+/** Sets the PDU reference of a frame with the plain 3-byte COTP DT header (a job is sent with its own). */
+export function setPduRef(frame: Buffer, ref: number): void {
+  frame[PLAIN_S7_AT + 4] = (ref >> 8) & 0xff;
+  frame[PLAIN_S7_AT + 5] = ref & 0xff;
+}
+
 /** The item count of a Read/Write Var job (its second parameter byte). */
 export function jobItemCount(frame: Buffer): number {
   return frame[JOB_PARAMS + 1]!;

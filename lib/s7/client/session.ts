@@ -1,24 +1,42 @@
 /**
- * One live S7 connection: the socket, its frame reader, the negotiated PDU
- * size and parallel jobs (AmQ), PDU references and the job queue. The
- * handshake (COTP CR/CC, setup communication) is `openS7Session`.
+ * One live S7 connection: the socket and its read loop, the frame reader,
+ * the negotiated PDU size and parallel jobs (AmQ), PDU references, the jobs
+ * in flight and the job queue, the wire counters, and the loss of the link.
+ * The handshake that opens it is `openS7Session` (handshake.ts).
  */
 import type * as net from 'node:net';
-import { abortError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
-import { Fifo } from '../link/fifo';
-import { FrameReader } from '../link/framer';
-import { openTcp } from '../link/tcp';
-import type { S7Endpoint } from '../url';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
-import { headerError } from './constants';
-import { localTsapFor, remoteTsapFor } from './tsap';
+import { abortError, ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../../errors';
+import { Fifo } from '../../link/fifo';
+import type { FrameReader } from '../../link/framer';
+import { decodeS7, s7AnswerRef, type S7Message } from '../codec';
+import { cotpTpduType, disconnectReason } from '../codec/cotp';
+import { setPduRef } from '../codec/pdu';
+import { CotpType } from '../constants';
 
-/** The largest TPKT frame we accept (the biggest S7 PDU is 65535 anyway; the PLC cannot make us buffer more). */
-const MAX_FRAME = 0x10000 + 16;
-/** What we ask for in setup communication; the PLC answers with what it grants. */
-const REQUESTED_AMQ = 8;
-/** TPDU size code asked in the COTP CR: 0x0A = 1024 bytes (S7-1500 offers PDU 960 only with it). */
-const TPDU_SIZE_CODE = 0x0a;
+/** The counters a session adds to (the client's S7Stats, cumulative over reconnects). */
+export interface WireCounters {
+  /** S7 jobs sent. */
+  pdusSent: number;
+  /** Bytes written to and read from the socket, TPKT headers included. */
+  bytesSent: number;
+  bytesReceived: number;
+  /** Replies that matched no pending job (wrong, duplicated or late PDU reference). */
+  ignoredReplies: number;
+}
+
+/** What a session is given by its client when it is made, and all it reports back. */
+export interface SessionWiring {
+  /** For messages: "s7://10.0.0.2:102". */
+  name: string;
+  /** Per job, ms: a job unanswered for this long drops the link. */
+  timeout: number;
+  maxQueued: number | undefined;
+  stats: WireCounters;
+  /** The error the jobs fail with when the link goes for `cause` (the client says CLOSED when it was closed). */
+  lossError(cause: PlcError): PlcError;
+  /** Called once when the link is gone, after every job failed with `err`. */
+  lost(session: S7Session, err: PlcError): void;
+}
 
 /** Called once per job: with the PLC's answer frame (headers checked by the caller of answer()), or with the error that ended the wait. */
 export type JobDone = (err: PlcError | undefined, answer: Buffer | undefined) => void;
@@ -53,10 +71,14 @@ const DEFAULT_MAX_QUEUED = 1000;
  * No promise, closure or stack capture per job: this is the poll hot path.
  */
 export class S7Session {
-  /** Drops this session (set by the client when it attaches). */
-  lose: ((err: PlcError) => void) | undefined;
-  /** Counts each frame written (set by the client for its stats). */
-  onSend: ((frame: Buffer) => void) | undefined;
+  /** The PDU size the PLC negotiated. */
+  readonly pduSize: number;
+  /** The parallel jobs (AmQ) the PLC negotiated. */
+  readonly maxJobs: number;
+  private readonly name: string;
+  private readonly timeout: number;
+  private readonly stats: WireCounters;
+  private gone = false;
   private nextRef = 0;
   /**
    * The jobs in flight, one slot per AmQ (at most 8), found by a scan. Not a
@@ -75,18 +97,86 @@ export class S7Session {
   private corked = false;
 
   constructor(
-    readonly socket: net.Socket,
-    readonly reader: FrameReader,
-    /** The PDU size the PLC negotiated. */
-    readonly pduSize: number,
-    /** The parallel jobs (AmQ) the PLC negotiated. */
-    readonly maxJobs: number,
-    maxQueued: number | undefined,
-    private readonly timeout = 5000,
-    private readonly name = 'S7',
+    private readonly socket: net.Socket,
+    private readonly reader: FrameReader,
+    negotiated: { pduSize: number; maxJobs: number },
+    private readonly wiring: SessionWiring,
   ) {
-    this.maxQueued = maxQueued ?? DEFAULT_MAX_QUEUED;
-    this.slots = new Array<InFlight | undefined>(Math.max(1, maxJobs)).fill(undefined);
+    this.pduSize = negotiated.pduSize;
+    this.maxJobs = negotiated.maxJobs;
+    this.name = wiring.name;
+    this.timeout = wiring.timeout;
+    this.stats = wiring.stats;
+    this.maxQueued = wiring.maxQueued ?? DEFAULT_MAX_QUEUED;
+    this.slots = new Array<InFlight | undefined>(Math.max(1, this.maxJobs)).fill(undefined);
+    socket.on('data', this.receive);
+    socket.on('error', (err) => this.lose(new ConnectionError('CONNECTION_LOST', `${this.name}: ${err.message}`, { cause: err })));
+    socket.on('close', () => this.lose(new ConnectionError('CONNECTION_LOST', `${this.name} closed the connection`)));
+  }
+
+  /**
+   * The read loop: each chunk is cut into frames. A COTP disconnect request
+   * or a frame that is not S7 drops the link; an answer goes to the job with
+   * its PDU reference (the headers are checked here, the job decodes the rest).
+   */
+  private readonly receive = (chunk: Buffer): void => {
+    this.stats.bytesReceived += chunk.length;
+    let frames: Buffer[];
+    try {
+      frames = this.reader.push(chunk);
+    } catch (err) {
+      return this.lose(linkError(this.name, err));
+    }
+    for (const frame of frames) {
+      if (cotpTpduType(frame) === CotpType.DR) {
+        return this.lose(
+          new ConnectionError(
+            'CONNECTION_LOST',
+            `${this.name} disconnected (COTP disconnect request, reason 0x${disconnectReason(frame).toString(16)})`,
+          ),
+        );
+      }
+      let ref = s7AnswerRef(frame);
+      if (ref < 0) {
+        try {
+          ref = decodeS7(frame).pduRef;
+        } catch (err) {
+          return this.lose(linkError(this.name, err));
+        }
+      }
+      if (!this.answer(ref, frame)) this.stats.ignoredReplies++;
+    }
+  };
+
+  /** Drops the link, once: every job fails (with the client's word for it), the socket goes, the client is told. */
+  lose(cause: PlcError): void {
+    if (this.gone) return;
+    this.gone = true;
+    const err = this.wiring.lossError(cause);
+    this.rejectAll(err);
+    this.socket.destroy();
+    this.wiring.lost(this, err);
+  }
+
+  /** Decodes an answer; a malformed one drops the link, as any frame the client cannot make sense of does. */
+  decode(frame: Buffer): S7Message {
+    try {
+      return decodeS7(frame);
+    } catch (err) {
+      throw this.malformed(err);
+    }
+  }
+
+  /** A malformed answer: the link drops (a ProtocolError), and this is the error to throw. */
+  malformed(err: unknown): PlcError {
+    const e = linkError(this.name, err);
+    if (e.code === 'PROTOCOL_ERROR') this.lose(e);
+    return e;
+  }
+
+  /** One request frame (its PDU reference is set when sent) as a job; resolves the raw answer frame. */
+  exchange(frame: Buffer, what: string, signal?: AbortSignal): Promise<Buffer> {
+    return new Promise((resolve, reject) => this.send(frame, what, (err, answer) => (err ? reject(err) : resolve(answer!)), signal));
   }
 
   private slotOf(ref: number): number {
@@ -140,7 +230,7 @@ export class S7Session {
   }
 
   /** Hands an answer frame to the job with that PDU reference; false when none waits for it. */
-  answer(ref: number, frame: Buffer): boolean {
+  private answer(ref: number, frame: Buffer): boolean {
     const slot = this.slotOf(ref);
     if (slot < 0) return false;
     const job = this.slots[slot]!;
@@ -155,7 +245,7 @@ export class S7Session {
   }
 
   /** Fails every job, running or waiting; later sends fail with `err` at once. */
-  rejectAll(err: PlcError): void {
+  private rejectAll(err: PlcError): void {
     this.dead ??= err;
     if (this.timer) clearTimeout(this.timer);
     this.timer = undefined;
@@ -179,12 +269,12 @@ export class S7Session {
 
   private start(frame: Buffer, what: string, done: JobDone, release: (() => void) | undefined, cork = true): void {
     const ref = this.ref();
-    frame[11] = ref >> 8;
-    frame[12] = ref & 0xff;
+    setPduRef(frame, ref);
     this.slots[this.slots.indexOf(undefined)] = { ref, done, deadline: Date.now() + this.timeout, what, release };
     this.running++;
     this.timer ??= setTimeout(this.sweep, this.timeout);
-    this.onSend?.(frame);
+    this.stats.pdusSent++;
+    this.stats.bytesSent += frame.length;
     // Jobs started together (a poll's PDUs, or several freed by one answer)
     // leave in one writev: one syscall instead of one per PDU. A single job
     // freed by an answer is not held back for the tick.
@@ -255,123 +345,12 @@ export class S7Session {
     this.running--;
     const err = new TimeoutError(`${this.name} ${job.what} timed out after ${this.timeout} ms`);
     job.done?.(err, undefined);
-    this.lose?.(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
+    this.lose(new ConnectionError('CONNECTION_LOST', `${this.name} stopped answering: ${err.message}`, { cause: err }));
   };
 }
 
-export interface OpenOptions {
-  name: string;
-  /** For the TCP connect; the supervisor aborts `signal` when the whole handshake takes longer. */
-  timeout: number;
-  maxQueued: number | undefined;
-  /** Per job; defaults to `timeout`. */
-  requestTimeout?: number;
-  signal: AbortSignal;
-  /** Installs the live listeners; called before the handshake's listeners go, so no socket event is ever unheard. */
-  attach(session: S7Session): void;
-}
-
-/**
- * TCP, COTP CR → CC, setup communication → its ack. Resolves a session with
- * the negotiated PDU size and AmQ; rejects with a PlcError (CONNECT_FAILED,
- * TIMEOUT, ABORTED, ACCESS_DENIED …) and leaves no socket behind.
- */
-export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Session> {
-  const socket = await openTcp({ host: e.host, port: e.port, timeout: o.timeout, signal: o.signal });
-  // The socket's chunks are ours: frames are cut from them without a copy.
-  const reader = new FrameReader(checkTpkt, MAX_FRAME, { copy: false });
-  const next = frameWaiter(socket, reader, o.signal, o.name);
-  try {
-    const calledTsap = e.remoteTsap ?? remoteTsapFor(e.connectionType, e.rack, e.slot);
-    const callingTsap = e.localTsap ?? localTsapFor(e.connectionType);
-    socket.write(encodeConnectionRequest({ sourceRef: 0x0001, callingTsap, calledTsap, tpduSize: TPDU_SIZE_CODE }));
-    const cc = decodeCotp(await next());
-    if (cc.type !== 'CC') {
-      const where = e.remoteTsap !== undefined ? `TSAP 0x${calledTsap.toString(16).padStart(4, '0')}` : `rack ${e.rack}, slot ${e.slot}`;
-      throw new ConnectionError(
-        'CONNECT_FAILED',
-        `${o.name} refused the connection (${where}): wrong rack/slot or TSAP, or the PLC's connection limit is reached`,
-      );
-    }
-    socket.write(encodeSetupCommunication(0, { maxAmqCalling: REQUESTED_AMQ, maxAmqCalled: REQUESTED_AMQ, pduSize: e.pduSize }));
-    const ack = decodeS7(await next());
-    if (ack.kind === 'error') throw headerError(ack.errorClass, ack.errorCode, `${o.name} setup communication`);
-    if (ack.kind !== 'setup-ack') throw new ProtocolError(`${o.name}: expected the answer to setup communication, got ${ack.kind}`);
-    const { pduSize, maxAmqCalling, maxAmqCalled } = ack.params;
-    if (pduSize < 64) throw new ProtocolError(`${o.name} negotiated an unusable PDU size of ${pduSize}`);
-    // The PLC answers with what it grants; a 0 would mean "none", which no CPU sends: treat as 1.
-    // More than we asked for is not ours to use.
-    const maxJobs = Math.max(1, Math.min(maxAmqCalling, maxAmqCalled, REQUESTED_AMQ));
-    const session = new S7Session(socket, reader, pduSize, maxJobs, o.maxQueued, o.requestTimeout ?? o.timeout, o.name);
-    o.attach(session);
-    next.stop();
-    return session;
-  } catch (err) {
-    next.stop();
-    socket.destroy();
-    if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
-    const e2 = toPlcError(err, 'CONNECT_FAILED');
-    throw e2.code === 'PROTOCOL_ERROR' ? new ConnectionError('CONNECT_FAILED', `${o.name}: ${e2.message}`, { cause: e2 }) : e2;
-  }
-}
-
-interface FrameWaiter {
-  (): Promise<Buffer>;
-  stop(): void;
-}
-
-/** Whole frames from the socket during the handshake; each call resolves the next one, or rejects on close/error/abort. */
-function frameWaiter(socket: net.Socket, reader: FrameReader, signal: AbortSignal, name: string): FrameWaiter {
-  const frames: Buffer[] = [];
-  let waiting: { resolve: (b: Buffer) => void; reject: (e: Error) => void } | undefined;
-  let failure: Error | undefined;
-  const flush = () => {
-    if (!waiting) return;
-    const w = waiting;
-    if (frames.length > 0) {
-      waiting = undefined;
-      w.resolve(frames.shift()!);
-    } else if (failure) {
-      waiting = undefined;
-      w.reject(failure);
-    }
-  };
-  const fail = (err: Error) => {
-    failure ??= err;
-    flush();
-  };
-  const onData = (chunk: Buffer) => {
-    try {
-      frames.push(...reader.push(chunk));
-    } catch (err) {
-      failure ??= toPlcError(err, 'PROTOCOL_ERROR');
-    }
-    flush();
-  };
-  const onClose = () =>
-    fail(
-      new ConnectionError(
-        'CONNECT_FAILED',
-        `${name} closed the connection during the handshake (wrong rack/slot or TSAP, or the connection limit is reached)`,
-      ),
-    );
-  const onError = (err: Error) => fail(new ConnectionError('CONNECT_FAILED', `${name}: ${err.message}`, { cause: err }));
-  const onAbort = () => fail(abortError(`connecting to ${name}`, signal));
-  socket.on('data', onData);
-  socket.on('close', onClose);
-  socket.on('error', onError);
-  signal.addEventListener('abort', onAbort, { once: true });
-  const next = () =>
-    new Promise<Buffer>((resolve, reject) => {
-      waiting = { resolve, reject };
-      flush();
-    });
-  return Object.assign(next, {
-    stop() {
-      socket.removeListener('data', onData);
-      socket.removeListener('close', onClose);
-      socket.removeListener('error', onError);
-      signal.removeEventListener('abort', onAbort);
-    },
-  });
+/** A frame the session cannot make sense of, named after the link: a ProtocolError drops it. */
+export function linkError(name: string, err: unknown): PlcError {
+  const e = toPlcError(err, 'PROTOCOL_ERROR');
+  return e instanceof ProtocolError ? new ProtocolError(`${name}: ${e.message}`, { cause: e }) : e;
 }

@@ -5,10 +5,12 @@
  * like a Read Var; a multi-part answer is asked for part by part.
  * S7Client delegates to this class; its methods carry the documentation.
  */
-import { PlcError, ProtocolError } from '../errors';
-import type { RequestOptions } from '../types';
-import type { S7Endpoint } from '../url';
-import { decodeDateAndTime, encodeDateAndTime } from '../values/time';
+import { PlcError, ProtocolError } from '../../errors';
+import { readDbBytes } from './db-read';
+import { linkError, type S7Session } from './session';
+import type { RequestOptions } from '../../types';
+import type { S7Endpoint } from '../../url';
+import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import {
   decodeBlockCounts,
   decodeBlockInfo,
@@ -19,7 +21,7 @@ import {
   type BlockCounts,
   type BlockInfo,
   type UploadedBlock,
-} from './codec/blocks';
+} from '../codec/blocks';
 import {
   COLD_START_ARG,
   decodeControl,
@@ -29,8 +31,8 @@ import {
   encodeStartUpload,
   encodeUpload,
   type ControlMessage,
-} from './codec/control';
-import { decodeUserdata, encodePassword, encodeUserdataNext, encodeUserdataRequest, type UserdataPdu } from './codec/userdata';
+} from '../codec/control';
+import { decodeUserdata, encodePassword, encodeUserdataNext, encodeUserdataRequest, type UserdataPdu } from '../codec/userdata';
 import {
   BLOCK_TYPES,
   BlockSubfunction,
@@ -43,8 +45,8 @@ import {
   blockTypeCode,
   serviceError,
   type BlockType,
-} from './constants';
-import { decodeDiagnosticBuffer, type DiagnosticEntry } from './codec/diagnostics';
+} from '../constants';
+import { decodeDiagnosticBuffer, type DiagnosticEntry } from '../codec/diagnostics';
 import {
   SZL,
   decodeComponentIdentification,
@@ -56,7 +58,7 @@ import {
   type CpuState,
   type Protection,
   type SzlList,
-} from './codec/szl';
+} from '../codec/szl';
 
 /** What `info()` gathers in one object. A field the CPU does not give is undefined. */
 export interface PlcInfo {
@@ -83,18 +85,14 @@ export interface ClockOptions extends RequestOptions {
   timeZone?: 'utc' | 'local';
 }
 
-/** What the services need from S7Client. */
+/** What the services need from S7Client: its name, its endpoint, and its live session, whose exchange they talk to. */
 export interface ServiceHost {
   readonly name: string;
   readonly endpoint: S7Endpoint;
-  readonly pduSize: number;
-  readonly maxJobs: number;
-  /** Sends one request frame as a job on the live session (NOT_CONNECTED when there is none) and resolves the answer frame. */
-  exchange(frame: Buffer, what: string, signal?: AbortSignal): Promise<Buffer>;
-  /** A malformed answer: drops the link (as any frame the client cannot make sense of) and gives the error to throw. */
-  malformed(err: unknown): PlcError;
-  /** Reads `length` bytes of a DB from 0 with Read Var. */
-  readBytes(db: number, length: number, options?: RequestOptions): Promise<Buffer>;
+  /** The live session; throws NOT_CONNECTED when there is none. */
+  session(): S7Session;
+  /** The live session, if any. */
+  current(): S7Session | undefined;
 }
 
 /** A multi-part answer longer than this many parts is not a CPU's. */
@@ -123,13 +121,18 @@ export class S7Services {
 
   // ---------------------------------------------------------------- transport
 
+  /** A malformed answer: the live link drops (as for any frame the client cannot make sense of); the error to throw. */
+  private malformed(err: unknown): PlcError {
+    return this.host.current()?.malformed(err) ?? linkError(this.host.name, err);
+  }
+
   /** Asks for a userdata service: one request, its answer checked (the first part of a multi-part one). */
   private request(service: Service, what: string, signal?: AbortSignal, data?: Buffer): Promise<UserdataPdu> {
     return this.userdata(encodeUserdataRequest(service.group, service.subfunction, data), service, what, signal);
   }
 
   private async userdata(frame: Buffer, { group, subfunction }: Service, what: string, signal?: AbortSignal): Promise<UserdataPdu> {
-    const answer = await this.host.exchange(frame, what, signal);
+    const answer = await this.host.session().exchange(frame, what, signal);
     let u: UserdataPdu;
     try {
       u = decodeUserdata(answer);
@@ -139,7 +142,7 @@ export class S7Services {
       }
       if (p.errorCode === undefined) throw new ProtocolError(`the answer to ${what} has no error field (8-byte parameters)`);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
     if (u.params.errorCode) throw serviceError(u.params.errorCode, `${this.host.name} ${what}`);
     return u;
@@ -150,7 +153,7 @@ export class S7Services {
     const parts = [first.data];
     let u = first;
     while (u.params.lastDataUnit === false) {
-      if (parts.length >= MAX_PARTS) throw this.host.malformed(new ProtocolError(`${what}: more than ${MAX_PARTS} parts`));
+      if (parts.length >= MAX_PARTS) throw this.malformed(new ProtocolError(`${what}: more than ${MAX_PARTS} parts`));
       const next = encodeUserdataNext(service.group, service.subfunction, u.params.sequence, u.params.dataUnitRef ?? 0);
       u = await this.userdata(next, service, `${what} (part ${parts.length + 1})`, signal);
       parts.push(u.data);
@@ -159,11 +162,11 @@ export class S7Services {
   }
 
   private async control(frame: Buffer, what: string, signal?: AbortSignal): Promise<ControlMessage> {
-    const answer = await this.host.exchange(frame, what, signal);
+    const answer = await this.host.session().exchange(frame, what, signal);
     try {
       return decodeControl(answer);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
   }
 
@@ -191,7 +194,7 @@ export class S7Services {
     try {
       return parseSzl(bytes);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
   }
 
@@ -200,7 +203,7 @@ export class S7Services {
     try {
       return decode(list);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
   }
 
@@ -262,8 +265,8 @@ export class S7Services {
       copyright: component?.copyright,
       state: state?.mode,
       protection,
-      pduSize: this.host.pduSize,
-      maxJobs: this.host.maxJobs,
+      pduSize: this.host.current()?.pduSize ?? 0,
+      maxJobs: this.host.current()?.maxJobs ?? 0,
       clock,
     };
   }
@@ -274,7 +277,7 @@ export class S7Services {
     const what = 'read clock';
     const u = await this.request(SERVICE.readClock, what, options.signal);
     if (u.returnCode !== 0xff || u.data.length !== 10) {
-      throw this.host.malformed(
+      throw this.malformed(
         new ProtocolError(`${what}: ${u.data.length} data bytes (return code 0x${u.returnCode.toString(16)}), expected 10`),
       );
     }
@@ -310,11 +313,11 @@ export class S7Services {
     const refusal = this.controlRefusal(what);
     if (refusal) throw refusal;
     const m = await this.control(frame, what, signal);
-    if (m.kind !== 'control-ack') throw this.host.malformed(new ProtocolError(`the answer to ${what} is a ${m.kind}`));
+    if (m.kind !== 'control-ack') throw this.malformed(new ProtocolError(`the answer to ${what} is a ${m.kind}`));
     // Already in the wanted mode: done (the CPU says so with its state error and this parameter).
     if (m.error !== 0 && m.status === already) return;
     if (m.error !== 0) throw serviceError(m.error, `${this.host.name} ${what}`);
-    if (m.func !== func) throw this.host.malformed(new ProtocolError(`the answer to ${what} echoes function 0x${m.func.toString(16)}`));
+    if (m.func !== func) throw this.malformed(new ProtocolError(`the answer to ${what} echoes function 0x${m.func.toString(16)}`));
   }
 
   stop(options: RequestOptions = {}): Promise<void> {
@@ -338,7 +341,7 @@ export class S7Services {
     try {
       return decodeBlockCounts(bytes);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
   }
 
@@ -357,7 +360,7 @@ export class S7Services {
     try {
       return decodeBlockListEntries(bytes).map((e) => e.number);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
   }
 
@@ -373,7 +376,7 @@ export class S7Services {
     try {
       return decodeBlockInfo(u.data);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
   }
 
@@ -383,20 +386,20 @@ export class S7Services {
     const what = `upload of ${type}${number}`;
     const start = await this.control(encodeStartUpload(code, number), `start ${what}`, options.signal);
     if (start.kind === 'control-ack' && start.error !== 0) throw serviceError(start.error, `${this.host.name} start ${what}`);
-    if (start.kind !== 'start-upload-ack') throw this.host.malformed(new ProtocolError(`the answer to start ${what} is a ${start.kind}`));
+    if (start.kind !== 'start-upload-ack') throw this.malformed(new ProtocolError(`the answer to start ${what} is a ${start.kind}`));
     const chunks: Buffer[] = [];
     let total = 0;
     try {
       for (;;) {
         const m = await this.control(encodeUpload(start.uploadId), what, options.signal);
         if (m.kind === 'control-ack' && m.error !== 0) throw serviceError(m.error, `${this.host.name} ${what}`);
-        if (m.kind !== 'upload-ack') throw this.host.malformed(new ProtocolError(`the answer to ${what} is a ${m.kind}`));
+        if (m.kind !== 'upload-ack') throw this.malformed(new ProtocolError(`the answer to ${what} is a ${m.kind}`));
         chunks.push(Buffer.from(m.chunk));
         total += m.chunk.length;
         if (total > start.loadLength)
-          throw this.host.malformed(new ProtocolError(`${what}: ${total} bytes arrived, the block has ${start.loadLength}`));
+          throw this.malformed(new ProtocolError(`${what}: ${total} bytes arrived, the block has ${start.loadLength}`));
         if (!m.more) break;
-        if (m.chunk.length === 0) throw this.host.malformed(new ProtocolError(`${what}: an empty part that says more follow`));
+        if (m.chunk.length === 0) throw this.malformed(new ProtocolError(`${what}: an empty part that says more follow`));
       }
     } finally {
       // The CPU holds the upload open until it is ended; end it even when a part failed (best effort).
@@ -406,14 +409,14 @@ export class S7Services {
     try {
       return decodeLoadBlock(bytes);
     } catch (err) {
-      throw this.host.malformed(err);
+      throw this.malformed(err);
     }
   }
 
   async readDb(number: number, options: RequestOptions = {}): Promise<Buffer> {
     const info = await this.blockInfo('DB', number, options);
     if (info.mc7Size === 0) return Buffer.alloc(0);
-    return this.host.readBytes(number, info.mc7Size, options);
+    return readDbBytes(this.host.session(), number, info.mc7Size, options.signal);
   }
 
   // ---------------------------------------------------------------- password
