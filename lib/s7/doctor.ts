@@ -55,7 +55,7 @@ export interface DiagnoseOptions {
 }
 
 const DEFAULT_DEADLINE = 20_000;
-/** What the client asks for in the handshake (client-session.ts): TPDU 1024, 8 parallel jobs. */
+/** What the client asks for in the handshake (client/session.ts): TPDU 1024, 8 parallel jobs. */
 const TPDU_SIZE_CODE = 0x0a;
 const REQUESTED_AMQ = 8;
 const MAX_FRAME = 0x10000 + 16;
