@@ -68,10 +68,14 @@ const STYLE = `/* plcwire demo: lamps for BOOLs and states, greyed-out widgets o
 .plcwire-cpu-identity b { min-width: 0; text-align: right; overflow-wrap: break-word; font-weight: 600; }
 .plcwire-cpu-diag th, .plcwire-cpu-diag td:nth-child(-n+2) { white-space: nowrap; }
 .plcwire-cpu-diag .v-table > .v-table__wrapper > table > tbody > tr > td { height: 36px; }
-/* A narrow diagnostic table is stacked, a line per cell: the title as wide as it needs, the value the rest (no sort box: newest first) */
+/* A narrow diagnostic table is stacked, a line per cell: the title as wide as it needs, the value the rest; the description
+   under its title, the card's full width (no sort box: newest first) */
 .plcwire-cpu-diag .nrdb-table--mobile thead { display: none; }
 .plcwire-cpu-diag .nrdb-table--mobile .v-table__wrapper > table > tbody > tr > td { height: auto; min-height: 28px; grid-template-columns: auto minmax(0, 1fr); gap: 12px; }
 .plcwire-cpu-diag .nrdb-table--mobile td > .nrdb-table-cell-align { text-align: right; }
+.plcwire-cpu-diag .nrdb-table--mobile .v-table__wrapper > table > tbody > tr > td[data-column-key="description"] { grid-template-columns: minmax(0, 1fr); gap: 0; padding-bottom: 6px; }
+.plcwire-cpu-diag .nrdb-table--mobile td[data-column-key="description"] > div:first-child { font-size: 12px; opacity: 0.7; }
+.plcwire-cpu-diag .nrdb-table--mobile td[data-column-key="description"] > .nrdb-table-cell-align { justify-content: start !important; text-align: left; }
 /* The motor switch's label in the text colour of the other widgets (Vuetify dims a v-label) */
 .plcwire-motor .v-label { opacity: 1; color: inherit; }
 .plcwire-cpu-diag .v-data-table-footer { display: none; }
@@ -808,7 +812,7 @@ return [{ enabled: state === 'run' }, { enabled: state === 'stop' }];`,
     resendOnRefresh: true,
     templateScope: 'site:style',
     className: '',
-    ...at(X.shape, row(0)),
+    ...at(X.widget, row(0)),
     wires: [[]],
   });
 
