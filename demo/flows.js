@@ -39,8 +39,11 @@ const PLANT_DB_NUMBERS = Object.freeze([{ block: 'Plant', db: 1 }]);
  * Editor columns (node centres): sources (polls, status, heartbeat), routing
  * and watchdogs, shaping (rounding, stale marks, the switch), dashboard widgets.
  * The flow fits the editor's workspace of a 1280 px wide browser window.
+ * An inject draws its button 25 px left of its body (editor-client view.js), so
+ * the injects sit further right than the other sources: a 160 px wide "every
+ * second" at 115 starts its button 10 px inside the canvas.
  */
-const X = Object.freeze({ source: 90, route: 285, shape: 470, widget: 660 });
+const X = Object.freeze({ source: 90, inject: 115, route: 285, shape: 470, widget: 660 });
 /** Vertical pitch of a column: a 30 px node and 10 px of air (nodes with a status get more, for its text). */
 const PITCH = 40;
 /** The class a watchdog puts on the widgets of a link that went quiet, and the one it restores. */
@@ -56,11 +59,25 @@ const STYLE = `/* plcwire demo: lamps for BOOLs and states, greyed-out widgets o
 .plcwire-lamp-on, .plcwire-lamp-green { background: radial-gradient(circle at 35% 30%, #c8f7c5, #1f9d2a 65%); box-shadow: 0 0 8px 2px rgba(31, 157, 42, 0.55); }
 .plcwire-lamp-yellow { background: radial-gradient(circle at 35% 30%, #fff1b8, #e0a100 65%); box-shadow: 0 0 8px 2px rgba(224, 161, 0, 0.55); }
 .plcwire-lamp-red { background: radial-gradient(circle at 35% 30%, #ffc9c9, #d32f2f 65%); box-shadow: 0 0 8px 2px rgba(211, 47, 47, 0.55); }
-.plcwire-cpu-identity { display: grid; grid-template-columns: 1fr 1fr; gap: 6px 24px; width: 100%; font-size: 15px; }
-.plcwire-cpu-identity > div { display: flex; justify-content: space-between; gap: 8px; white-space: nowrap; }
-.plcwire-cpu-identity b { min-width: 0; overflow: hidden; text-overflow: ellipsis; font-weight: 600; }
+/* The CPU's identity: two columns (the long values left) on a wide card, one on a narrow one; a value wraps at its spaces, never clipped */
+.plcwire-ui-cpu-identity { container-type: inline-size; }
+.plcwire-cpu-identity { display: grid; grid-template-columns: minmax(0, 3fr) minmax(0, 2fr); gap: 6px 24px; width: 100%; font-size: 15px; }
+@container (max-width: 480px) { .plcwire-cpu-identity { grid-template-columns: minmax(0, 1fr); } }
+.plcwire-cpu-identity > div { display: flex; justify-content: space-between; align-items: baseline; gap: 12px; }
+.plcwire-cpu-identity span { white-space: nowrap; }
+.plcwire-cpu-identity b { min-width: 0; text-align: right; overflow-wrap: break-word; font-weight: 600; }
 .plcwire-cpu-diag th, .plcwire-cpu-diag td:nth-child(-n+2) { white-space: nowrap; }
 .plcwire-cpu-diag .v-table > .v-table__wrapper > table > tbody > tr > td { height: 36px; }
+/* A narrow diagnostic table is stacked, a line per cell: the title as wide as it needs, the value the rest; the description
+   under its title, the card's full width (no sort box: newest first) */
+.plcwire-cpu-diag .nrdb-table--mobile thead { display: none; }
+.plcwire-cpu-diag .nrdb-table--mobile .v-table__wrapper > table > tbody > tr > td { height: auto; min-height: 28px; grid-template-columns: auto minmax(0, 1fr); gap: 12px; }
+.plcwire-cpu-diag .nrdb-table--mobile td > .nrdb-table-cell-align { text-align: right; }
+.plcwire-cpu-diag .nrdb-table--mobile .v-table__wrapper > table > tbody > tr > td[data-column-key="description"] { grid-template-columns: minmax(0, 1fr); gap: 0; padding-bottom: 6px; }
+.plcwire-cpu-diag .nrdb-table--mobile td[data-column-key="description"] > div:first-child { font-size: 12px; opacity: 0.7; }
+.plcwire-cpu-diag .nrdb-table--mobile td[data-column-key="description"] > .nrdb-table-cell-align { justify-content: start !important; text-align: left; }
+/* The motor switch's label in the text colour of the other widgets (Vuetify dims a v-label) */
+.plcwire-motor .v-label { opacity: 1; color: inherit; }
 .plcwire-cpu-diag .v-data-table-footer { display: none; }
 .plcwire-stale { position: relative; opacity: 0.45; filter: grayscale(1); }
 .plcwire-stale::after { content: 'stale'; position: absolute; top: -9px; right: 0; padding: 0 6px; border-radius: 8px;
@@ -103,6 +120,9 @@ function demoFlow(urls) {
     includeClientData: true,
     acceptsClientConfig: ['ui-notification', 'ui-control'],
     showPathInSidebar: false,
+    // No "App is offline ready" toast over the page: Dashboard 2 shows it only for an installable app
+    // ("Allow App Installation", @flowfuse/node-red-dashboard nodes/config/ui_base.js, on by default).
+    allowInstall: false,
     navigationStyle: 'none',
     titleBarStyle: 'default',
   });
@@ -304,6 +324,8 @@ function demoFlow(urls) {
     type: 'plcwire-connection',
     name: 'S7-1200 sim',
     url: `${urls.s7}${urls.s7.includes('?') ? '&' : '?'}control=true`,
+    // The dialog's CPU preset (rack 0, slot 1: what the URL says).
+    cpu: 's7-1200',
     ...symbols(),
   });
   nodes.push({ id: 'conn.fw', type: 'plcwire-connection', name: 'CP fetch/write sim', url: urls.fetchwrite, ...symbols() });
@@ -532,10 +554,10 @@ function demoFlow(urls) {
     topic: '',
     payload: '',
     payloadType: 'date',
-    ...at(X.source, row(0)),
+    ...at(X.inject, row(0)),
     wires: [['cpu.state', 'cpu.clock', 'cpu.diag']],
   });
-  control('cpu.state', 'CPU state', 'state', 0, ['cpu.lamp', 'cpu.watch']);
+  control('cpu.state', 'CPU state', 'state', 0, ['cpu.lamp', 'cpu.watch', 'cpu.buttons']);
   // state and stop/start answer { state: 'run' | 'stop' | … }.
   nodes.push({
     id: 'cpu.lamp',
@@ -601,8 +623,11 @@ return msg;`,
       { title: 'Event', key: 'event', keyType: 'key', type: 'text', width: '', align: 'start' },
       { title: 'Description', key: 'description', keyType: 'key', type: 'text', width: '', align: 'start' },
     ],
-    mobileBreakpoint: 'sm',
-    mobileBreakpointType: 'defaults',
+    // Stacked (a row per cell, the description the card's width) when the table is 576 px wide or less. In
+    // pixels: Dashboard 2 1.31's table looks "defaults: sm" (its editor's "Mobile (< 576px)") up among xs, md
+    // and lg only (ui/src/widgets/ui-table/UITable.vue checkBreakpoint), so it never stacks.
+    mobileBreakpoint: 576,
+    mobileBreakpointType: 'px',
     action: 'replace',
     className: 'plcwire-cpu-diag',
     ...at(X.widget, row(3)),
@@ -620,7 +645,7 @@ return msg;`,
     topic: '',
     payload: '',
     payloadType: 'date',
-    ...at(X.source, row(4.5)),
+    ...at(X.inject, row(4.5)),
     wires: [['cpu.info']],
   });
   control('cpu.info', 'CPU identity', 'info', 4.5, ['ui.cpu.identity']);
@@ -642,7 +667,8 @@ return msg;`,
       field('AS name', '(msg.payload || {}).asName'),
       '</div>',
     ].join('\n'),
-    2,
+    // Height 0: as tall as its fields, two columns of three on a wide card, one of six on a phone.
+    0,
   );
   const cpuButton = (id, label, action, order, color, icon, r) =>
     nodes.push({
@@ -672,9 +698,28 @@ return msg;`,
       wires: [[`cpu.${action}`]],
     });
   cpuButton('ui.cpu.stop', 'Stop CPU', 'stop', 4, '#d32f2f', 'stop', 6);
-  control('cpu.stop', 'stop CPU', 'stop', 6, ['cpu.lamp']);
+  control('cpu.stop', 'stop CPU', 'stop', 6, ['cpu.lamp', 'cpu.buttons']);
   cpuButton('ui.cpu.start', 'Start CPU', 'start', 5, '#1f9d2a', 'play', 7.5);
-  control('cpu.start', 'start CPU', 'start', 7.5, ['cpu.lamp']);
+  control('cpu.start', 'start CPU', 'start', 7.5, ['cpu.lamp', 'cpu.buttons']);
+  // Stop only in RUN, Start only in STOP (in any other state neither): Dashboard 2's msg.enabled, sent when
+  // the state changes (a dashboard opened later gets it from Dashboard 2's state store).
+  nodes.push({
+    id: 'cpu.buttons',
+    type: 'function',
+    name: 'buttons per state',
+    func: `const state = String((msg.payload || {}).state);
+if (context.get('state') === state) return null;
+context.set('state', state);
+return [{ enabled: state === 'run' }, { enabled: state === 'stop' }];`,
+    outputs: 2,
+    timeout: 0,
+    noerr: 0,
+    initialize: '',
+    finalize: '',
+    libs: [],
+    ...at(X.shape, row(6.75)),
+    wires: [['ui.cpu.stop'], ['ui.cpu.start']],
+  });
   watchdog('cpu', 3, row(9), cpuWidgets);
 
   // FETCH/WRITE: the same DB1 through the CP, by the same names (the CP serves the CPU's data blocks).
@@ -767,7 +812,7 @@ return msg;`,
     resendOnRefresh: true,
     templateScope: 'site:style',
     className: '',
-    ...at(X.shape, row(0)),
+    ...at(X.widget, row(0)),
     wires: [[]],
   });
 

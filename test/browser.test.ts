@@ -36,7 +36,9 @@ interface Demo {
     s7: {
       faults: { refuseConnections: boolean; dropConnections(): void };
       state: string;
-      cpu: { identity: { orderCode: string; firmware: string; serialNumber: string; moduleTypeName: string } };
+      cpu: {
+        identity: { orderCode: string; firmware: string; serialNumber: string; moduleTypeName: string; moduleName: string; asName: string };
+      };
       diagnostics: { eventId: number; description?: string }[];
       on(event: 'request', listener: (e: { kind: string }) => void): unknown;
       off(event: 'request', listener: (e: { kind: string }) => void): unknown;
@@ -81,12 +83,14 @@ async function drawnNodes(page: Page, z: string): Promise<Drawn[]> {
     const out: Drawn[] = [];
     RED.nodes.eachNode((n: any) => {
       if (n.z !== tab) return;
-      // What the node draws: its body, its ports and a status that is shown, in page coordinates
-      // (the corner badges for "changed" and "has a description" are left out).
+      // What the node draws: its body, its ports, its button (an inject's left of it, a debug's right) and a
+      // status that is shown, in page coordinates (the corner badges for "changed" and "has a description" are left out).
       const g = doc.getElementById(n.id);
-      const parts = [...g.querySelectorAll(':scope > rect.red-ui-flow-node, .red-ui-flow-port, .red-ui-flow-node-status-group')].filter(
-        (e: any) => (globalThis as any).getComputedStyle(e).display !== 'none',
-      );
+      const parts = [
+        ...g.querySelectorAll(
+          ':scope > rect.red-ui-flow-node, .red-ui-flow-port, .red-ui-flow-node-button-background, .red-ui-flow-node-status-group',
+        ),
+      ].filter((e: any) => (globalThis as any).getComputedStyle(e).display !== 'none');
       const rects = parts.map((e: any) => e.getBoundingClientRect());
       const box = {
         left: Math.min(...rects.map((r: any) => r.left)),
@@ -166,6 +170,122 @@ const S7_WIDGETS = [
 const CP_WIDGETS = ['plcwire-ui-fw-level', 'plcwire-ui-fw-parts'];
 const S7_200_WIDGETS = ['plcwire-ui-fp-level', 'plcwire-ui-fp-parts'];
 
+/** The CPU panel's Stop and Start buttons: whether each is enabled. */
+function cpuButtons(page: Page): Promise<{ stop: boolean; start: boolean }> {
+  return page.evaluate(() => {
+    const enabled = (cls: string) => (globalThis as any).document.querySelector(`.${cls} button`)?.disabled === false;
+    return { stop: enabled('plcwire-cpu-stop'), start: enabled('plcwire-cpu-start') };
+  });
+}
+
+function waitForButtons(page: Page, want: { stop: boolean; start: boolean }): Promise<unknown> {
+  return page.waitForFunction(
+    ([stop, start]) => {
+      const enabled = (cls: string) => (globalThis as any).document.querySelector(`.${cls} button`)?.disabled === false;
+      return enabled('plcwire-cpu-stop') === stop && enabled('plcwire-cpu-start') === start;
+    },
+    [want.stop, want.start] as const,
+    { timeout: 10_000 },
+  );
+}
+
+/**
+ * What keeps a user from reading the CPU panel at the page's width: an identity
+ * value other than expected, clipped (wider than its box, outside its card or the
+ * window, cut off by an ancestor that hides overflow) or broken over lines; a
+ * diagnostic description with fewer than 12 characters a line (a word or two a
+ * line), or (on a card narrower than 576 px, where the table is stacked)
+ * narrower than 60 % of the card.
+ */
+function cpuPanelProblems(page: Page, identity: string[]): Promise<string[]> {
+  return page.evaluate((want) => {
+    const doc = (globalThis as any).document;
+    const view = doc.documentElement.clientWidth;
+    const problems: string[] = [];
+    // Lines of text in an element: the line boxes of its text nodes, those starting within half a line of each other one line.
+    const lines = (el: any) => {
+      const walker = doc.createTreeWalker(el, 4 /* NodeFilter.SHOW_TEXT */);
+      const rects: any[] = [];
+      for (let t = walker.nextNode(); t; t = walker.nextNode()) {
+        const range = doc.createRange();
+        range.selectNodeContents(t);
+        rects.push(...[...range.getClientRects()].filter((r: any) => r.width > 0));
+      }
+      rects.sort((a, b) => a.top - b.top);
+      let count = 0;
+      let last = -Infinity;
+      for (const r of rects) {
+        if (r.top - last <= r.height / 2) continue;
+        count++;
+        last = r.top;
+      }
+      return count;
+    };
+    const values = [...doc.querySelectorAll('.plcwire-cpu-identity b')];
+    const shown = values.map((b: any) => b.textContent.trim());
+    if (JSON.stringify(shown) !== JSON.stringify(want)) problems.push(`identity shows ${JSON.stringify(shown)}`);
+    const card = doc.querySelector('.plcwire-ui-cpu-identity').closest('.nrdb-ui-group').getBoundingClientRect();
+    for (const b of values) {
+      const r = b.getBoundingClientRect();
+      const name = `"${b.textContent.trim()}"`;
+      if (b.scrollWidth > b.clientWidth) problems.push(`${name} wider (${b.scrollWidth}) than its box (${b.clientWidth})`);
+      if (r.left < Math.max(0, card.left) - 0.5 || r.right > Math.min(view, card.right) + 0.5)
+        problems.push(`${name} at ${r.left}..${r.right} outside its card ${card.left}..${card.right} or the window 0..${view}`);
+      for (let a = b.parentElement; a && a !== doc.body; a = a.parentElement) {
+        const style = (globalThis as any).getComputedStyle(a);
+        if (style.overflowX === 'visible' && style.overflowY === 'visible') continue;
+        const c = a.getBoundingClientRect();
+        if (r.left < c.left - 0.5 || r.right > c.right + 0.5 || r.top < c.top - 0.5 || r.bottom > c.bottom + 0.5)
+          problems.push(`${name} cut off by ${a.tagName.toLowerCase()}.${String(a.className).split(' ').join('.')}`);
+      }
+      if (lines(b) !== 1) problems.push(`${name} on ${lines(b)} lines`);
+    }
+    const table = doc.querySelector('.plcwire-cpu-diag').closest('.nrdb-ui-group').getBoundingClientRect();
+    const descriptions = [...doc.querySelectorAll('.plcwire-cpu-diag tbody td[data-column-key="description"] .nrdb-table-cell-align')];
+    if (descriptions.length === 0) problems.push('no diagnostic entries');
+    for (const d of descriptions) {
+      const name = `"${d.textContent.trim()}"`;
+      const text = d.textContent.trim();
+      if (text.length / lines(d) < 12) problems.push(`${name} on ${lines(d)} lines`);
+      const width = d.getBoundingClientRect().width;
+      if (table.width < 576 && width < 0.6 * table.width) problems.push(`${name} ${width} px wide on a card of ${table.width}`);
+    }
+    return problems;
+  }, identity);
+}
+
+/** Toasts and alerts on screen over a widget, and whether the page offers itself as an installable app (a web manifest). */
+function coveringToasts(page: Page): Promise<{ covering: string[]; manifest: boolean }> {
+  return page.evaluate(() => {
+    const doc = (globalThis as any).document;
+    const widgets = [...doc.querySelectorAll('.nrdb-ui-widget')];
+    const covering: string[] = [];
+    for (const t of doc.querySelectorAll('.pwa-toast, [role="alert"], .v-snackbar__wrapper')) {
+      const r = t.getBoundingClientRect();
+      if (r.width === 0 || r.height === 0) continue;
+      for (const w of widgets) {
+        const b = w.getBoundingClientRect();
+        if (r.left < b.right && b.left < r.right && r.top < b.bottom && b.top < r.bottom)
+          covering.push(`"${t.innerText.trim()}" over ${w.id}`);
+      }
+    }
+    return { covering, manifest: doc.querySelector('link[rel="manifest"]') !== null };
+  });
+}
+
+/** A widget text's colour and the opacity it is drawn with (its own and its ancestors' within the widget). */
+function shownColour(page: Page, selector: string): Promise<{ color: string; opacity: number } | null> {
+  return page.evaluate((sel) => {
+    const el = (globalThis as any).document.querySelector(sel);
+    if (!el) return null;
+    let opacity = 1;
+    for (let a = el; a && !a.classList.contains('nrdb-ui-group'); a = a.parentElement) {
+      opacity *= Number((globalThis as any).getComputedStyle(a).opacity);
+    }
+    return { color: (globalThis as any).getComputedStyle(el).color, opacity };
+  }, selector);
+}
+
 describe('browser: the npm start demo in headless Chromium', function () {
   this.timeout(120_000);
   let demo: Demo;
@@ -217,7 +337,8 @@ describe('browser: the npm start demo in headless Chromium', function () {
     expect(overlapsOf(drawn, 5)).to.deep.equal([]);
     // Drawn where the flow says: a deployed flow's x, y are the nodes' centres.
     for (const d of drawn) expect([d.x, d.y], d.label).to.deep.equal([source(d.id)!.x, source(d.id)!.y]);
-    // Nothing off to the right of the workspace (palette and sidebar open): no scrolling sideways to find a widget.
+    // Nothing off to the right of the workspace (palette and sidebar open): no scrolling sideways to find a widget;
+    // nothing cut off at its left edge either (an inject's button reaches 25 px left of its body): 5 px of air at least.
     const visible = await page.evaluate(() => {
       const chart = (globalThis as any).document.getElementById('red-ui-workspace-chart');
       return {
@@ -229,10 +350,27 @@ describe('browser: the npm start demo in headless Chromium', function () {
     expect(visible.scrolled).to.equal(0);
     expect(
       drawn
-        .filter((d) => d.box.left < visible.left || d.box.right > visible.right)
+        .filter((d) => d.box.left < visible.left + 5 || d.box.right > visible.right)
         .map((d) => `"${d.label}" at ${d.box.left}..${d.box.right}`),
       `workspace ${visible.left}..${visible.right}`,
     ).to.deep.equal([]);
+  });
+
+  it("the demo's S7 connection opens on its CPU preset, S7-1200, not custom", async () => {
+    const editor = await browser.newPage({ viewport: { width: 1280, height: 900 } });
+    try {
+      await editor.goto(demo.editor, { waitUntil: 'domcontentloaded' });
+      await editor.waitForFunction(() => (globalThis as any).RED?.nodes?.node?.('conn.s7') != null, undefined, { timeout: 30_000 });
+      await editor.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn.s7'));
+      const cpu = editor.locator('#node-config-input-cpu');
+      await cpu.waitFor({ state: 'visible', timeout: 15_000 });
+      expect(await cpu.evaluate((s: any) => s.options[s.selectedIndex].textContent.trim())).to.equal('S7-1200');
+      expect(await editor.locator('#node-config-plcwire-rack').inputValue()).to.equal('0');
+      expect(await editor.locator('#node-config-plcwire-slot').inputValue()).to.equal('1');
+      await editor.locator('#node-config-dialog-cancel').click();
+    } finally {
+      await editor.close({ runBeforeUnload: false });
+    }
   });
 
   it('the editor draws every example, imported as a new flow, with no node over another, none larger than estimated', async () => {
@@ -476,6 +614,9 @@ describe('browser: the npm start demo in headless Chromium', function () {
     const identity = await page.locator('.plcwire-ui-cpu-identity').innerText();
     for (const value of [id.moduleTypeName, id.orderCode, id.firmware, id.serialNumber]) expect(identity).to.include(value);
     await waitForCpu('RUN', 'green');
+    // In RUN the CPU can be stopped, not started.
+    await waitForButtons(page, { stop: true, start: false });
+    await page.locator('.plcwire-cpu-stop button').waitFor({ state: 'visible' });
     // The clock as the CPU gives it, and it runs.
     const clock = () =>
       page
@@ -519,6 +660,8 @@ describe('browser: the npm start demo in headless Chromium', function () {
     await until(() => demo.plant.s7.state === 'STOP', 10_000, 'the simulated CPU in STOP');
     expect(demo.plant.s7.diagnostics[0]).to.include({ eventId: 0x4304 });
     await waitForCpu('STOP', 'red');
+    // In STOP: Start enabled, Stop not.
+    await waitForButtons(page, { stop: false, start: true });
     await waitForTopRow(/16#4304\s*(\|\s*)?STOP by a programming device/);
     const held = { level: Math.round(db1.readFloatBE(0) * 10) / 10, parts: db1.readInt32BE(8) };
     // Polls served after the stop deliver the held values, and go on delivering them.
@@ -552,6 +695,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     await page.locator('.plcwire-cpu-start').locator('xpath=descendant-or-self::button').first().click();
     await until(() => demo.plant.s7.state === 'RUN', 10_000, 'the simulated CPU in RUN');
     await waitForCpu('RUN', 'green');
+    await waitForButtons(page, { stop: true, start: false });
     // A warm restart logs: manual warm restart, STOP to STARTUP, STARTUP to RUN (newest first).
     await waitForTopRow(/16#4302/);
     const rows = await diagnosticRows();
@@ -574,12 +718,48 @@ describe('browser: the npm start demo in headless Chromium', function () {
     expect((await cpuLamp()).text).to.equal('RUN');
   });
 
+  for (const [width, height] of [
+    [412, 915],
+    [1280, 800],
+  ] as const) {
+    it(`at ${width}x${height}: every CPU identity value whole on one line, diagnostic entries as lines, no toast over a widget, the motor switch's label in the text colour`, async () => {
+      // A browser of its own, as a user opening the dashboard on a phone or a desktop for the first time.
+      const own = await browser.newPage({ viewport: { width, height } });
+      try {
+        await own.goto(demo.dashboard, { waitUntil: 'domcontentloaded' });
+        const id = demo.plant.s7.cpu.identity;
+        const identity = [id.moduleTypeName, id.moduleName, id.orderCode, id.firmware, id.serialNumber, id.asName];
+        await own.waitForFunction(
+          (last) =>
+            ((globalThis as any).document.querySelector('.plcwire-ui-cpu-identity')?.innerText ?? '').includes(last) &&
+            (globalThis as any).document.querySelectorAll('.plcwire-cpu-diag tbody td[data-column-key="description"]').length > 0,
+          id.asName,
+          { timeout: 20_000 },
+        );
+        expect(await cpuPanelProblems(own, identity)).to.deep.equal([]);
+        // Dashboard 2 offers an installable app only with a web manifest; without one no "App is offline ready" toast comes.
+        expect(await coveringToasts(own)).to.deep.equal({ covering: [], manifest: false });
+        await own.waitForFunction(() => (globalThis as any).document.querySelector('.plcwire-motor .v-label') !== null, undefined, {
+          timeout: 10_000,
+        });
+        const motor = await shownColour(own, '.plcwire-motor .v-label');
+        expect(motor).to.deep.equal(await shownColour(own, '.plcwire-ui-speed .nrdb-ui-text-label'));
+        expect(motor!.opacity).to.equal(1);
+        // The CPU is in RUN (restarted above): Stop enabled, Start not, on this page too.
+        await waitForButtons(own, { stop: true, start: false });
+        expect(await cpuButtons(own)).to.deep.equal({ stop: true, start: false });
+        if (process.env.PLCWIRE_SCREENSHOT_DIR)
+          await own.screenshot({ path: path.join(process.env.PLCWIRE_SCREENSHOT_DIR, `dashboard-${width}.png`), fullPage: true });
+      } finally {
+        await own.close();
+      }
+    });
+  }
+
   it('every widget sits inside its group and on screen, at desktop, tablet and phone widths', async () => {
     if (process.env.PLCWIRE_SCREENSHOT) {
-      // Let the chart gather some history, and close the "offline ready" notice of Dashboard 2's service worker.
+      // Let the chart gather some history.
       await page.waitForTimeout(Number(process.env.PLCWIRE_SCREENSHOT_WAIT_MS ?? 0));
-      const notice = page.getByRole('button', { name: 'Close' });
-      if (await notice.isVisible()) await notice.click();
       // The page from its top down to the lowest group and its margin (the buttons clicked above may have scrolled it).
       await page.evaluate(() => (globalThis as any).window.scrollTo(0, 0));
       const bottom = await page.evaluate(() =>

@@ -10,7 +10,9 @@
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
+import * as vm from 'node:vm';
 import { formatAddress, parseAddress } from '../lib/address';
+import { parseUrl, S7_CPU_PRESETS } from '../lib/url';
 import { DEMO_SYMBOLS, DEMO_TAGS } from '../lib/plant/process';
 import { PLANT_DB_NUMBERS, PLANT_SOURCE } from '../lib/plant/source';
 import { compileSymbols } from '../lib/symbols';
@@ -62,12 +64,15 @@ describe('demo flow: tidy in the editor and on the dashboard', () => {
       // A heartbeat's status text ("alive") under it reaches the node one row (40 px) below.
       { id: 'hb', type: 'plcwire-heartbeat', name: 'life sign', x: 160, y: 500, z: tab, wires: [[]] },
       { id: 'below', type: 'status', name: 'link', x: 160, y: 540, z: tab, wires: [[]] },
+      // An inject's button, 25 px left of its body, cut off at the canvas edge though the body is not.
+      { id: 'clock', type: 'inject', name: 'every second', x: 100, y: 600, z: tab, wires: [[]] },
     ];
     expect(layoutProblems(drawnBoxes(flow, 'centred'), { canvas: true })).to.deep.equal([
       '"poll CP" (read) and "CP link" (status) overlap',
       '"A comment long enough to reach the switch to its right" (note) and "by tag" (route) overlap',
       '"cut off" (edge) reaches off the canvas (left -30, top 385)',
       '"life sign" (hb) and "link" (below) overlap',
+      '"every second" (clock) reaches off the canvas (left -5, top 585)',
     ]);
     // Imported without a tab, a node grows to the right of x - 50: a long label runs into its neighbour.
     const row: FlowNode[] = [
@@ -192,10 +197,36 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
       expect(node(button!)).to.include({ type: 'ui-button', group: 'ui.g.cpu', topic: action, topicType: 'str' });
       const [target] = (node(button!).wires as string[][])[0]!;
       expect(node(target!)).to.include({ type: 'plcwire-control', action, connection: 'conn.s7' });
-      // Its answer ({ state }) goes to the lamp, never on to another control node (msg.topic would name the action again).
-      expect((node(target!).wires as string[][])[0]).to.deep.equal(['cpu.lamp']);
+      // Its answer ({ state }) goes to the lamp and the buttons, never on to another control node (msg.topic would name the action again).
+      expect((node(target!).wires as string[][])[0]).to.deep.equal(['cpu.lamp', 'cpu.buttons']);
     }
     for (const n of flow.filter((f) => f.type === 'plcwire-control')) expect(n.connection, n.id).to.equal('conn.s7');
     expect(node('ui.cpu.diag')).to.include({ type: 'ui-table', action: 'replace', autocols: false });
+  });
+
+  it('Stop CPU is enabled only in RUN and Start CPU only in STOP, told whenever the state polled or answered by them changes', () => {
+    const buttons = node('cpu.buttons');
+    expect(buttons.wires).to.deep.equal([['ui.cpu.stop'], ['ui.cpu.start']]);
+    expect(feeding('cpu.buttons').sort()).to.deep.equal(['cpu.start', 'cpu.state', 'cpu.stop']);
+    // The function's body as Node-RED runs it: msg and a node context.
+    const store = new Map<string, unknown>();
+    const context = { get: (k: string) => store.get(k), set: (k: string, v: unknown) => store.set(k, v) };
+    const fn = vm.runInNewContext(`(function (msg, context) {\n${String(buttons.func)}\n})`) as (msg: unknown, context: unknown) => unknown;
+    // Compared as JSON: the objects come from another realm.
+    const run = (msg: unknown, ctx: unknown) => JSON.parse(JSON.stringify(fn(msg, ctx))) as unknown;
+    expect(run({ payload: { state: 'run' } }, context)).to.deep.equal([{ enabled: true }, { enabled: false }]);
+    // Polled again in RUN: nothing new to tell the dashboard.
+    expect(run({ payload: { state: 'run' } }, context)).to.equal(null);
+    expect(run({ payload: { state: 'stop' } }, context)).to.deep.equal([{ enabled: false }, { enabled: true }]);
+    expect(run({ payload: { state: 'startup' } }, context)).to.deep.equal([{ enabled: false }, { enabled: false }]);
+    expect(run({ payload: { state: 'run' } }, context)).to.deep.equal([{ enabled: true }, { enabled: false }]);
+  });
+
+  it("the S7 connection's CPU preset is S7-1200, and its URL addresses the CPU as that preset does (rack and slot)", () => {
+    const conn = node('conn.s7');
+    expect(conn.cpu).to.equal('s7-1200');
+    const preset = S7_CPU_PRESETS[conn.cpu as keyof typeof S7_CPU_PRESETS] as { rack?: number; slot?: number };
+    const endpoint = parseUrl(String(conn.url)) as { rack?: number; slot?: number };
+    expect({ rack: endpoint.rack, slot: endpoint.slot }).to.deep.equal({ rack: preset.rack, slot: preset.slot });
   });
 });

@@ -43,6 +43,14 @@ export const STATUS_BELOW = 20;
 /** Types that show a status under the node while the flow runs. */
 const SHOWS_STATUS = new Set(['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'ui-switch', 'trigger']);
 
+/**
+ * Node buttons the editor draws beside a node's body (editor-client view.js: a
+ * 32 px button at x -25, or at width - 6 for a right-aligned one): how far each
+ * reaches past the body's left or right edge.
+ */
+export const BUTTON_LEFT: Readonly<Record<string, number>> = Object.freeze({ inject: 25 });
+export const BUTTON_RIGHT: Readonly<Record<string, number>> = Object.freeze({ debug: 26 });
+
 /** Types with no input port (the editor draws them 7 px narrower). */
 const NO_INPUT = new Set(['comment', 'inject', 'catch', 'status', 'complete', 'link in', 'plcwire-heartbeat', 'http in', 'tab', 'group']);
 
@@ -68,13 +76,17 @@ function outputsOf(n: FlowNode): number {
   return Array.isArray(n.wires) ? n.wires.length : 0;
 }
 
-/** The node's box (w x h) and how far its status reaches below it (0 for nodes without one). */
-export function estimatedSize(n: FlowNode): { w: number; h: number; below: number } {
+/**
+ * The node's box (w x h), how far its status reaches below it (0 for nodes
+ * without one) and how far a button reaches past its left or right edge.
+ */
+export function estimatedSize(n: FlowNode): { w: number; h: number; below: number; left: number; right: number } {
   const h = Math.max(NODE_HEIGHT, outputsOf(n) * 15);
   const below = SHOWS_STATUS.has(n.type) || (n.type === 'debug' && n.tostatus === true) ? STATUS_BELOW : 0;
-  if (n.l === false) return { w: NODE_HEIGHT, h, below };
+  const buttons = { left: BUTTON_LEFT[n.type] ?? 0, right: BUTTON_RIGHT[n.type] ?? 0 };
+  if (n.l === false) return { w: NODE_HEIGHT, h, below, ...buttons };
   const text = nodeLabel(n).length * LABEL_PX_PER_CHAR + 50 + (NO_INPUT.has(n.type) ? 0 : 7);
-  return { w: Math.max(MIN_NODE_WIDTH, 20 * Math.ceil(text / 20)), h, below };
+  return { w: Math.max(MIN_NODE_WIDTH, 20 * Math.ceil(text / 20)), h, below, ...buttons };
 }
 
 /**
@@ -97,16 +109,23 @@ export function placementOf(flow: FlowNode[], deployed: boolean): Placement {
 /** The editor's default node width (its `node_width`). */
 const DEFAULT_NODE_WIDTH = 100;
 
-/** Nodes the editor draws on a tab (not config nodes, tabs or groups), with their estimated boxes (status included). */
+/** Nodes the editor draws on a tab (not config nodes, tabs or groups), with their estimated boxes (status and buttons included). */
 export function drawnBoxes(flow: FlowNode[], placement: Placement): Map<string, Box[]> {
   const byTab = new Map<string, Box[]>();
   for (const n of flow) {
     if (typeof n.x !== 'number' || typeof n.y !== 'number' || n.type === 'group' || n.type === 'tab') continue;
-    const { w, h, below } = estimatedSize(n);
+    const { w, h, below, left: buttonLeft, right: buttonRight } = estimatedSize(n);
     const tab = n.z ?? '';
     const boxes = byTab.get(tab) ?? [];
     const left = placement === 'centred' ? n.x - w / 2 : n.x - DEFAULT_NODE_WIDTH / 2;
-    boxes.push({ id: n.id, label: nodeLabel(n), left, right: left + w, top: n.y - h / 2, bottom: n.y + h / 2 + below });
+    boxes.push({
+      id: n.id,
+      label: nodeLabel(n),
+      left: left - buttonLeft,
+      right: left + w + buttonRight,
+      top: n.y - h / 2,
+      bottom: n.y + h / 2 + below,
+    });
     byTab.set(tab, boxes);
   }
   return byTab;
