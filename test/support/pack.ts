@@ -5,7 +5,7 @@ import * as path from 'node:path';
 export const ROOT = path.resolve(__dirname, '../../..');
 
 /**
- * Packs the package (already built by pretest) into `into`; returns the tarball's path.
+ * Packs the package in `dir` (this one, already built by pretest) into `into`; returns the tarball's path.
  *
  * No script of the package runs: npm 10 (Node 20's, and the one node-red
  * brings into node_modules/.bin, first on the PATH under `npm test`) runs
@@ -13,11 +13,11 @@ export const ROOT = path.resolve(__dirname, '../../..');
  * under the running suite and took over a minute on a loaded machine. So the
  * script shell is one that runs nothing.
  */
-export function packTarball(into: string): string {
+export function packTarball(into: string, dir = ROOT): string {
   const noScripts = path.join(into, 'no-scripts.sh');
   fs.writeFileSync(noScripts, '#!/bin/sh\nexit 0\n', { mode: 0o755 });
   const out = execFileSync('npm', ['pack', '--ignore-scripts', `--script-shell=${noScripts}`, '--json', '--pack-destination', into], {
-    cwd: ROOT,
+    cwd: dir,
     encoding: 'utf8',
     stdio: ['ignore', 'pipe', 'pipe'],
   });
