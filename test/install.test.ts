@@ -11,7 +11,7 @@ import * as http from 'node:http';
 import * as os from 'node:os';
 import * as path from 'node:path';
 import { freePort } from './support/net';
-import { waitForNodeRed } from './support/node-red-process';
+import { NodeRedPortTaken, waitForNodeRed } from './support/node-red-process';
 import { packTarball, ROOT } from './support/pack';
 
 const PACKAGE = JSON.parse(fs.readFileSync(path.join(ROOT, 'package.json'), 'utf8')) as { name: string; 'node-red': { nodes: object } };
@@ -70,20 +70,29 @@ describe('install: the tarball in a fresh Node-RED user directory', function () 
           cwd: userDir,
           stdio: 'pipe',
         });
-        const port = await freePort();
-        fs.writeFileSync(
-          path.join(userDir, 'settings.js'),
-          `module.exports = { uiHost: '127.0.0.1', uiPort: ${port}, flowFile: 'flows.json', credentialSecret: false, diagnostics: { enabled: false }, telemetry: { enabled: false }, logging: { console: { level: 'info' } } };\n`,
-        );
-        child = spawn(runtime.node, [runtime.red, '--userDir', userDir, '--settings', path.join(userDir, 'settings.js')], {
-          cwd: userDir,
-          stdio: ['ignore', 'pipe', 'pipe'],
-        });
-        child.stdout!.on('data', (d: Buffer) => (log += d.toString()));
-        child.stderr!.on('data', (d: Buffer) => (log += d.toString()));
-        base = `http://127.0.0.1:${port}`;
-        // "Started flows" comes before red.js opens the port: wait for the admin API to answer too.
-        await waitForNodeRed(child, `${base}/settings`, () => log, 240_000);
+        // A port free a moment ago may be taken before Node-RED binds it (other tests run beside): then another.
+        for (let attempt = 1; ; attempt++) {
+          const port = await freePort();
+          fs.writeFileSync(
+            path.join(userDir, 'settings.js'),
+            `module.exports = { uiHost: '127.0.0.1', uiPort: ${port}, flowFile: 'flows.json', credentialSecret: false, diagnostics: { enabled: false }, telemetry: { enabled: false }, logging: { console: { level: 'info' } } };\n`,
+          );
+          log = '';
+          child = spawn(runtime.node, [runtime.red, '--userDir', userDir, '--settings', path.join(userDir, 'settings.js')], {
+            cwd: userDir,
+            stdio: ['ignore', 'pipe', 'pipe'],
+          });
+          child.stdout!.on('data', (d: Buffer) => (log += d.toString()));
+          child.stderr!.on('data', (d: Buffer) => (log += d.toString()));
+          base = `http://127.0.0.1:${port}`;
+          try {
+            // "Started flows" comes before red.js opens the port: wait for the admin API to answer too.
+            await waitForNodeRed(child, `${base}/settings`, () => log, 240_000);
+            break;
+          } catch (err) {
+            if (!(err instanceof NodeRedPortTaken) || attempt === 3) throw err;
+          }
+        }
       });
 
       let shownLog = false;

@@ -10,15 +10,25 @@
 import { expect } from 'chai';
 import { spawn, type ChildProcess } from 'node:child_process';
 import * as http from 'node:http';
+import * as net from 'node:net';
 import { freePort } from './support/net';
-import { waitForNodeRed } from './support/node-red-process';
+import { NodeRedPortTaken, waitForNodeRed } from './support/node-red-process';
 
 const STAND_IN = `
 const http = require('node:http');
 const port = Number(process.argv[1]);
 console.log('[info] Started flows');
 process.stdin.on('data', (d) => {
-  if (String(d).includes('listen')) http.createServer((req, res) => res.end('{}')).listen(port, '127.0.0.1', () => console.log('[info] Server now running'));
+  if (String(d).includes('listen')) {
+    const server = http.createServer((req, res) => res.end('{}'));
+    // As red.js does when its port is taken: two lines, exit code 1.
+    server.on('error', (err) => {
+      console.log('[error] Unable to listen on http://127.0.0.1:' + port + '/');
+      console.log('[error] Error: port in use');
+      process.exit(1);
+    });
+    server.listen(port, '127.0.0.1', () => console.log('[info] Server now running'));
+  }
   if (String(d).includes('exit')) process.exit(3);
 });
 `;
@@ -76,9 +86,29 @@ describe('waitForNodeRed: ready means the admin API answers, not only "Started f
       () => undefined,
       (e: Error) => e,
     );
+    expect(err).to.be.instanceOf(Error).and.not.instanceOf(NodeRedPortTaken);
     expect(err?.message).to.match(
       new RegExp(`^Node-RED exited \\(3\\) before answering ${url.replace(/[./]/g, '\\$&')}:\\n\\[info\\] Started flows`),
     );
+  });
+
+  it('rejects with NodeRedPortTaken when Node-RED exits because its port was taken, so the caller can take another', async () => {
+    // Another process on the port, one that hangs up on whoever connects.
+    const taken = net.createServer((socket) => socket.destroy()).listen(Number(new URL(url).port), '127.0.0.1');
+    await new Promise((r) => taken.once('listening', r));
+    try {
+      const waiting = waitForNodeRed(child!, url, () => output);
+      while (!/Started flows/.test(output)) await new Promise((r) => child!.stdout!.once('data', r));
+      child!.stdin!.write('listen\n');
+      const err = await waiting.then(
+        () => undefined,
+        (e: Error) => e,
+      );
+      expect(err).to.be.instanceOf(NodeRedPortTaken);
+      expect(err!.message).to.match(/^Node-RED exited \(1\) before answering .*: its port was taken:\n[\s\S]*\[error\] Error: port in use/);
+    } finally {
+      await new Promise((r) => taken.close(r));
+    }
   });
 
   it('rejects at its deadline naming the probe and its last answer', async () => {

@@ -23,6 +23,17 @@ export interface NodeRedProcess {
 }
 
 export async function startNodeRedProcess(flow: object[], extraSettings: object = {}): Promise<NodeRedProcess> {
+  // The port was free a moment before Node-RED binds it; another process may take it meanwhile: then a new port.
+  for (let attempt = 1; ; attempt++) {
+    try {
+      return await startOnce(flow, extraSettings);
+    } catch (err) {
+      if (!(err instanceof NodeRedPortTaken) || attempt === 3) throw err;
+    }
+  }
+}
+
+async function startOnce(flow: object[], extraSettings: object): Promise<NodeRedProcess> {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-editor-'));
   const port = await freePort();
   fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
@@ -62,31 +73,40 @@ export async function startNodeRedProcess(flow: object[], extraSettings: object 
   return { url, stop };
 }
 
+/** Node-RED exited because another process had taken its port (red.js logs "port in use" and exits): a new port may do. */
+export class NodeRedPortTaken extends Error {}
+
 /**
  * Resolves once Node-RED in `child` is ready for clients: it logged "Started
  * flows" and `probe` (a URL of its admin API) answers 200. The log line alone
  * is not enough: red.js opens its HTTP port only after the runtime's start
  * resolves, so a request right after the line can be refused (seen on
  * Node-RED 5 under load). Rejects with the log when the process exits or
- * `ms` pass first.
+ * `ms` pass first, with a NodeRedPortTaken when it exited for want of its port.
  */
 export async function waitForNodeRed(child: ChildProcess, probe: string, output: () => string, ms = 120_000): Promise<void> {
   const deadline = Date.now() + ms;
-  const fail = (why: string) => new Error(`Node-RED ${why}:\n${output()}`);
-  // Wakes on the next chunk of output, the exit, or the deadline, whichever comes first.
+  // Exited, and its output read to the end (the last lines say why).
+  const exited = () =>
+    (child.exitCode !== null || child.signalCode !== null) &&
+    [child.stdout, child.stderr].every((s) => !s || s.readableEnded || s.destroyed);
+  const fail = (why: string) =>
+    exited() && /EADDRINUSE|port in use/i.test(output())
+      ? new NodeRedPortTaken(`Node-RED ${why}: its port was taken:\n${output()}`)
+      : new Error(`Node-RED ${why}:\n${output()}`);
+  // Wakes on the next chunk of output, the end of the process and its output, or the deadline, whichever comes first.
   const next = () =>
     new Promise<void>((resolve) => {
       const done = () => {
         clearTimeout(timer);
         child.stdout?.off('data', done);
-        child.off('exit', done);
+        child.off('close', done);
         resolve();
       };
       const timer = setTimeout(done, Math.max(0, deadline - Date.now()));
       child.stdout?.on('data', done);
-      child.once('exit', done);
+      child.once('close', done);
     });
-  const exited = () => child.exitCode !== null || child.signalCode !== null;
   while (!/Started flows/.test(output())) {
     if (exited()) throw fail(`exited (${child.exitCode ?? child.signalCode}) before starting its flows`);
     if (Date.now() > deadline) throw fail(`did not start its flows within ${ms} ms`);
