@@ -1,7 +1,7 @@
 /**
  * Runs the Node-RED node suite (dist/test/nodes) a second time on Node-RED 5
  * under Node 22 — both installed from the npm registry into test/nr5 by
- * .ci/run — and reports each of its tests here, so `npm test` covers
+ * `npm test`'s pretest (test/support/install-peers.js nr5) — and reports each of its tests here, so `npm test` covers
  * Node-RED 4 / Node 20 and Node-RED 5 / Node 22 in one summary.
  */
 import { expect } from 'chai';
@@ -28,7 +28,7 @@ describe('Node-RED 5 on Node 22', function () {
 
   before(async function () {
     if (!fs.existsSync(NODE22) || !fs.existsSync(path.join(NR5, 'node-red'))) {
-      throw new Error('Node 22 / Node-RED 5 are not installed: run `(cd test/nr5 && npm ci)` (done by .ci/run)');
+      throw new Error('Node 22 / Node-RED 5 are not installed: run `node test/support/install-peers.js nr5` (npm test does)');
     }
     const files = fs.existsSync(SUITE) ? fs.readdirSync(SUITE).filter((f) => f.endsWith('.test.js')) : [];
     if (files.length === 0) throw new Error(`no node tests in ${SUITE}`);

@@ -11,8 +11,9 @@
  * out, the fixtures' differences are listed exactly, and one test pins each
  * of them, so a new awlsim that changes them is noticed.
  *
- * awlsim is installed by .ci/run into test/interop/.venv (or found on
- * python3); without it the suite skips and says why.
+ * awlsim is installed into test/interop/.venv by `npm test`'s pretest
+ * (test/support/install-peers.js awlsim; .ci/run too), or found on python3;
+ * without it the suite skips and says why.
  */
 import { expect } from 'chai';
 import { spawnSync } from 'node:child_process';
@@ -26,8 +27,8 @@ const ROOT = path.resolve(__dirname, '../..');
 const DRIVER = path.join(ROOT, 'test/interop/awlsim/layout.py');
 const VENV_PYTHON = path.join(ROOT, 'test/interop/.venv/bin/python');
 const FIXTURES = path.join(ROOT, 'test/fixtures/symbols');
-/** The awlsim whose differences below are known; .ci/run installs it. */
-const AWLSIM_VERSION = '0.77.1';
+/** The awlsim whose differences below are known: the one test/support/install-peers.js installs. */
+const { AWLSIM_VERSION } = require(path.join(ROOT, 'test/support/install-peers.js')) as { AWLSIM_VERSION: string };
 
 interface TheirMember {
   readonly name: string;
@@ -65,8 +66,8 @@ function findAwlsim(): { python: string } | { reason: string } {
   }
   return {
     reason:
-      `awlsim ${AWLSIM_VERSION} is not installed (${tried.join('; ')}); .ci/run installs it: ` +
-      `python3 -m venv test/interop/.venv && AWLSIM_CYTHON_BUILD=0 test/interop/.venv/bin/pip install awlsim==${AWLSIM_VERSION}`,
+      `awlsim ${AWLSIM_VERSION} is not installed (${tried.join('; ')}); ` +
+      '`node test/support/install-peers.js awlsim` installs it (npm test does), with python3 and PyPI',
   };
 }
 

@@ -9,7 +9,9 @@ let snap7;
 try {
   snap7 = require('node-snap7');
 } catch (err) {
-  throw new Error(`node-snap7 is not installed: run \`(cd test/interop && npm ci)\` (done by .ci/run)\n${err.message}`, { cause: err });
+  throw new Error(`node-snap7 is not installed: run \`node test/support/install-peers.js interop\` (npm test does)\n${err.message}`, {
+    cause: err,
+  });
 }
 
 function freePort() {

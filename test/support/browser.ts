@@ -37,7 +37,7 @@ const ARGS = [
 ];
 
 export interface ChromiumExecutable {
-  /** Where it came from, for messages: "PLCWIRE_CHROMIUM", "system" or "@sparticuz/chromium 153.0.0". */
+  /** Where it came from, for messages: "PLCWIRE_CHROMIUM", "system" or "@sparticuz/chromium 143.0.4". */
   source: string;
   path: string;
 }
@@ -72,7 +72,16 @@ async function packagedChromium(): Promise<ChromiumExecutable> {
   } catch (err) {
     throw new Error(`no system Chromium and @sparticuz/chromium is not installed (npm install): ${(err as Error).message}`, { cause: err });
   }
-  const pkg = JSON.parse(fs.readFileSync(path.join(path.dirname(entry), '..', 'package.json'), 'utf8')) as { version: string };
+  // The entry point's depth differs between versions (build/index.js, build/cjs/index.cjs): its package.json is the nearest one naming it.
+  let root = path.dirname(entry);
+  const named = (dir: string) =>
+    fs.existsSync(path.join(dir, 'package.json')) &&
+    (JSON.parse(fs.readFileSync(path.join(dir, 'package.json'), 'utf8')) as { name?: string }).name === '@sparticuz/chromium';
+  while (!named(root)) {
+    if (path.dirname(root) === root) throw new Error(`@sparticuz/chromium: no package.json above ${entry}`);
+    root = path.dirname(root);
+  }
+  const pkg = JSON.parse(fs.readFileSync(path.join(root, 'package.json'), 'utf8')) as { version: string };
   const source = `@sparticuz/chromium ${pkg.version}`;
   // Per user: the unpacked binary is executable by its owner only.
   const dir = path.join(os.tmpdir(), `plcwire-sparticuz-chromium-${pkg.version}-uid${process.getuid?.() ?? 0}`);

@@ -1,40 +1,92 @@
 #!/usr/bin/env node
 'use strict';
-// Installs the test-only packages that live outside the package's own
+// Installs the test-only peers that live outside the package's own
 // dependencies when they are missing, so `npm install && npm test` works on a
-// fresh clone (and `npm run bench` finds its anchors):
+// fresh clone and runs what `.ci/run` runs (and `npm run bench` finds its anchors):
 //   interop: node-snap7 (snap7 built from source), nodes7, @st-one-io/nodes7,
 //            node-red-contrib-s7 (the Node-RED benchmark's incumbent)
 //   nr5:     Node 22 and Node-RED 5
-// Usage: node test/support/install-peers.js interop [nr5]
-// Already installed: does nothing (no network). `.ci/run` installs them itself.
+//   awlsim:  awlsim AWLSIM_VERSION, pure Python, in the venv test/interop/.venv,
+//            for the layout comparison of test/symbols-awlsim.test.ts
+// Usage: node test/support/install-peers.js interop [nr5] [awlsim]
+// Already installed: does nothing (no network). A peer that cannot be installed
+// (no network, no python3) is not fatal: the rest still runs, and the tests that
+// need it fail or skip saying so.
 const { spawnSync } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
 
 const ROOT = path.resolve(__dirname, '../..');
-const PEERS = {
+/** The awlsim whose layout differences test/symbols-awlsim.test.ts knows. */
+const AWLSIM_VERSION = '0.77.1';
+const VENV = 'test/interop/.venv';
+
+const NPM_PEERS = {
   interop: {
     dir: 'test/interop',
     has: ['node-snap7', 'nodes7', '@st-one-io/nodes7', 'node-red-contrib-s7'].map((p) => `node_modules/${p}/package.json`),
   },
   nr5: { dir: 'test/nr5', has: ['node_modules/node/bin/node', 'node_modules/node-red/package.json'] },
 };
+const SETS = [...Object.keys(NPM_PEERS), 'awlsim'];
 
-for (const name of process.argv.slice(2)) {
-  const peer = PEERS[name];
-  if (!peer) throw new Error(`install-peers: unknown set "${name}" (${Object.keys(PEERS).join(', ')})`);
+function installNpmPeer(peer) {
   const cwd = path.join(ROOT, peer.dir);
   const missing = peer.has.filter((f) => !fs.existsSync(path.join(cwd, f)));
-  if (missing.length === 0) continue;
+  if (missing.length === 0) return;
   console.log(`Installing ${peer.dir} (missing: ${missing.join(', ')})`);
   // Under `npm run`, npm_execpath is npm's own CLI: run it with this Node.
   const npm = process.env.npm_execpath;
   const r = npm
     ? spawnSync(process.execPath, [npm, 'ci', '--no-audit', '--no-fund'], { cwd, stdio: 'inherit' })
     : spawnSync('npm', ['ci', '--no-audit', '--no-fund'], { cwd, stdio: 'inherit', shell: process.platform === 'win32' });
-  if (r.status !== 0) {
-    // Not fatal: without network the rest still runs, and what needs the peers says so.
-    console.warn(`Could not install ${peer.dir} (npm ci exited ${r.status ?? r.signal}).`);
+  if (r.status !== 0) console.warn(`Could not install ${peer.dir} (npm ci exited ${r.status ?? r.signal}).`);
+}
+
+/** The awlsim version `python` imports, or undefined (no such Python, no awlsim). */
+function awlsimVersion(python) {
+  const r = spawnSync(python, ['-c', 'from awlsim_loader.common import VERSION_STRING; print(VERSION_STRING)'], {
+    encoding: 'utf8',
+    timeout: 30_000,
+  });
+  return r.status === 0 ? r.stdout.trim() : undefined;
+}
+
+function installAwlsim() {
+  const venv = path.join(ROOT, VENV);
+  const python = path.join(venv, process.platform === 'win32' ? 'Scripts/python.exe' : 'bin/python');
+  const found = fs.existsSync(python) ? awlsimVersion(python) : undefined;
+  if (found === AWLSIM_VERSION) return;
+  const skip = 'test/symbols-awlsim.test.ts will skip';
+  const py3 = spawnSync('python3', ['--version'], { encoding: 'utf8', timeout: 30_000 });
+  if (py3.status !== 0) {
+    console.warn(`awlsim ${AWLSIM_VERSION} not installed: no python3 (${py3.error?.code ?? `exit ${py3.status}`}); ${skip}.`);
+    return;
+  }
+  console.log(`Installing awlsim ${AWLSIM_VERSION} into ${VENV} (${found ? `it has awlsim ${found}` : 'missing'})`);
+  fs.rmSync(venv, { recursive: true, force: true });
+  const run = (cmd, args, env) => spawnSync(cmd, args, { cwd: ROOT, stdio: 'inherit', env: { ...process.env, ...env } });
+  const made = run('python3', ['-m', 'venv', venv]);
+  // Pure Python (no Cython build: a few seconds); a short network timeout, so no PyPI fails fast.
+  const pip =
+    made.status === 0 &&
+    run(
+      python,
+      ['-m', 'pip', 'install', '-q', '--disable-pip-version-check', '--timeout', '20', '--retries', '1', `awlsim==${AWLSIM_VERSION}`],
+      { AWLSIM_CYTHON_BUILD: '0' },
+    );
+  if (!pip || pip.status !== 0 || awlsimVersion(python) !== AWLSIM_VERSION) {
+    fs.rmSync(venv, { recursive: true, force: true });
+    console.warn(`awlsim ${AWLSIM_VERSION} not installed (${made.status !== 0 ? 'python3 -m venv' : 'pip install'} failed); ${skip}.`);
   }
 }
+
+if (require.main === module) {
+  for (const name of process.argv.slice(2)) {
+    if (!SETS.includes(name)) throw new Error(`install-peers: unknown set "${name}" (${SETS.join(', ')})`);
+    if (name === 'awlsim') installAwlsim();
+    else installNpmPeer(NPM_PEERS[name]);
+  }
+}
+
+module.exports = { AWLSIM_VERSION };

@@ -2,7 +2,8 @@
  * Node-RED 4 in a child process with this package linked into its user
  * directory, for tests that drive the editor in a browser: a free port, the
  * local settings of `npm start` (demo/start.js) plus the caller's, `flow`
- * deployed. Resolves once the flows have started and the admin API answers.
+ * deployed. Resolves once the flows have started and the admin API answers
+ * (waitForNodeRed).
  */
 import { spawn, type ChildProcess } from 'node:child_process';
 import * as fs from 'node:fs';
@@ -22,6 +23,17 @@ export interface NodeRedProcess {
 }
 
 export async function startNodeRedProcess(flow: object[], extraSettings: object = {}): Promise<NodeRedProcess> {
+  // The port was free a moment before Node-RED binds it; another process may take it meanwhile: then a new port.
+  for (let attempt = 1; ; attempt++) {
+    try {
+      return await startOnce(flow, extraSettings);
+    } catch (err) {
+      if (!(err instanceof NodeRedPortTaken) || attempt === 3) throw err;
+    }
+  }
+}
+
+async function startOnce(flow: object[], extraSettings: object): Promise<NodeRedProcess> {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-editor-'));
   const port = await freePort();
   fs.mkdirSync(path.join(dir, 'node_modules', '@plcwire'), { recursive: true });
@@ -53,27 +65,70 @@ export async function startNodeRedProcess(flow: object[], extraSettings: object 
   };
   const url = `http://127.0.0.1:${port}/`;
   try {
-    await new Promise<void>((resolve, reject) => {
-      const deadline = Date.now() + 60_000;
-      const attempt = () => {
-        if (child.exitCode !== null) return reject(new Error(`Node-RED exited (${child.exitCode}):\n${output}`));
-        if (Date.now() > deadline) return reject(new Error(`Node-RED did not start within 60 s:\n${output}`));
-        if (!/Started flows/.test(output)) return void setTimeout(attempt, 100);
-        http
-          .get(`${url}flows`, (res) => {
-            res.resume();
-            if (res.statusCode === 200) resolve();
-            else setTimeout(attempt, 100);
-          })
-          .on('error', () => setTimeout(attempt, 100));
-      };
-      attempt();
-    });
+    await waitForNodeRed(child, `${url}flows`, () => output);
   } catch (err) {
     await stop();
     throw err;
   }
   return { url, stop };
+}
+
+/** Node-RED exited because another process had taken its port (red.js logs "port in use" and exits): a new port may do. */
+export class NodeRedPortTaken extends Error {}
+
+/**
+ * Resolves once Node-RED in `child` is ready for clients: it logged "Started
+ * flows" and `probe` (a URL of its admin API) answers 200. The log line alone
+ * is not enough: red.js opens its HTTP port only after the runtime's start
+ * resolves, so a request right after the line can be refused (seen on
+ * Node-RED 5 under load). Rejects with the log when the process exits or
+ * `ms` pass first, with a NodeRedPortTaken when it exited for want of its port.
+ */
+export async function waitForNodeRed(child: ChildProcess, probe: string, output: () => string, ms = 120_000): Promise<void> {
+  const deadline = Date.now() + ms;
+  // Exited, and its output read to the end (the last lines say why).
+  const exited = () =>
+    (child.exitCode !== null || child.signalCode !== null) &&
+    [child.stdout, child.stderr].every((s) => !s || s.readableEnded || s.destroyed);
+  const fail = (why: string) =>
+    exited() && /EADDRINUSE|port in use/i.test(output())
+      ? new NodeRedPortTaken(`Node-RED ${why}: its port was taken:\n${output()}`)
+      : new Error(`Node-RED ${why}:\n${output()}`);
+  // Wakes on the next chunk of output, the end of the process and its output, or the deadline, whichever comes first.
+  const next = () =>
+    new Promise<void>((resolve) => {
+      const done = () => {
+        clearTimeout(timer);
+        child.stdout?.off('data', done);
+        child.off('close', done);
+        resolve();
+      };
+      const timer = setTimeout(done, Math.max(0, deadline - Date.now()));
+      child.stdout?.on('data', done);
+      child.once('close', done);
+    });
+  while (!/Started flows/.test(output())) {
+    if (exited()) throw fail(`exited (${child.exitCode ?? child.signalCode}) before starting its flows`);
+    if (Date.now() > deadline) throw fail(`did not start its flows within ${ms} ms`);
+    await next();
+  }
+  let last = 'no answer yet';
+  for (;;) {
+    if (exited()) throw fail(`exited (${child.exitCode ?? child.signalCode}) before answering ${probe}`);
+    if (Date.now() > deadline) throw fail(`did not answer ${probe} within ${ms} ms (last: ${last})`);
+    const status = await new Promise<number | string>((resolve) => {
+      const req = http.get(probe, { timeout: 10_000 }, (res) => {
+        res.resume();
+        resolve(res.statusCode ?? 0);
+      });
+      req.on('timeout', () => req.destroy(new Error('no response within 10 s')));
+      req.on('error', (err: NodeJS.ErrnoException) => resolve(err.code ?? err.message));
+    });
+    if (status === 200) return;
+    last = String(status);
+    // Nothing announces the port opening: ask again shortly.
+    await new Promise((r) => setTimeout(r, 100));
+  }
 }
 
 /**
