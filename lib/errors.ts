@@ -12,6 +12,12 @@ export type PlcErrorCode =
   /** A DB/UDT source or a symbol table could not be compiled (syntax, unknown type, optimized block). */
   | 'INVALID_SOURCE'
   | 'WRITE_NOT_ALLOWED'
+  /**
+   * Two connections reach the same PLC (and share its one client) but disagree
+   * on settings they must share: readOnly, allow, control or the symbol
+   * sources. Each URL is valid on its own.
+   */
+  | 'SETTINGS_CONFLICT'
   // link state
   | 'NOT_CONNECTED'
   | 'CONNECTION_LOST'

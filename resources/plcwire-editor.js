@@ -458,9 +458,11 @@
             var resolved = r.find('.plcwire-tag-resolved');
             var members = r.find('.plcwire-tag-members');
             var res = results[String(input.val() || '').trim()];
+            var problem = r.find('.plcwire-tag-problem');
             input.removeClass('plcwire-invalid');
             type.removeClass('plcwire-invalid-text').text('').attr('title', '');
             resolved.text('').attr('title', '');
+            problem.text('').attr('title', '');
             members.hide().removeData('symbol');
             if (!res) return;
             if (res.ok) {
@@ -476,6 +478,8 @@
             } else {
               input.addClass('plcwire-invalid');
               type.addClass('plcwire-invalid-text').text(t('plcwire.editor.invalid')).attr('title', res.message);
+              // The reason in the row itself, not only on hover: the runtime's words without the address repeated.
+              problem.text(editor.shortProblem(res.message, String(input.val() || '').trim())).attr('title', res.message);
             }
           });
         },
@@ -523,11 +527,14 @@
       timer = setTimeout(validateAll, 300);
     }
 
+    editor.tagTableStyle();
+    // No `height: 'auto'`: with it the list never scrolls, and once oneditresize gives it a height its rows
+    // are drawn past that height, over the "add" button. Without it the list scrolls within the height the
+    // dialog leaves it (resizeTagTable), as Node-RED's own lists (switch, change) do.
     container.css({ 'min-height': '150px', 'min-width': '450px' }).editableList({
       addButton: t('plcwire.editor.addTag'),
       removable: true,
       sortable: true,
-      height: 'auto',
       addItem: function (row, index, data) {
         var line = $('<div class="plcwire-tag-row">').appendTo(row);
         $('<input type="text" class="plcwire-tag-name">')
@@ -542,13 +549,17 @@
           .on('input change', later);
         // Node-RED's completion widget (the one its msg and env fields use); it asks complete() as the user types.
         if ($.fn.autoComplete) address.autoComplete({ search: complete, minLength: 1 });
-        $('<span class="plcwire-tag-resolved">').appendTo(line);
-        $('<span class="plcwire-tag-type">').appendTo(line);
+        // The type, the absolute address a name stands for, or why the address is refused: a line of its own
+        // under the inputs, as wide as the row, so a long name's address is read in full.
+        var info = $('<div class="plcwire-tag-info">').appendTo(line);
+        $('<span class="plcwire-tag-type">').appendTo(info);
+        $('<span class="plcwire-tag-resolved">').appendTo(info);
+        $('<span class="plcwire-tag-problem">').appendTo(info);
         var members = $(
           '<button type="button" class="red-ui-button red-ui-button-small plcwire-tag-members"><i class="fa fa-sitemap"></i> </button>',
         )
           .hide()
-          .appendTo(line)
+          .insertBefore(info)
           .on('click', function () {
             addMembers(row);
           });
@@ -557,6 +568,7 @@
       },
       removeItem: later,
     });
+    container.closest('.red-ui-editableList').addClass('plcwire-tag-table');
     (tags || []).forEach(function (tag) {
       container.editableList('addItem', tag);
     });
@@ -688,12 +700,52 @@
     return table;
   };
 
-  /** Gives the tag table the dialog height the other rows leave. */
+  /**
+   * Gives the tag table the dialog height the other rows leave (oneditresize):
+   * the dialog's height less every other row of the form and what the tags
+   * row holds besides the list (its label, the CSV toolbar). The list keeps
+   * at least 150 px (on a very low window the dialog scrolls instead).
+   */
   editor.resizeTagTable = function (size) {
+    var list = $('#node-input-plcwire-tags');
+    var row = list.closest('.form-row');
+    if (!row.length) return;
     var height = size.height;
-    $('#dialog-form>div:not(.node-input-plcwire-tags-row)').each(function () {
+    row.siblings(':visible').each(function () {
       height -= $(this).outerHeight(true);
     });
-    $('#node-input-plcwire-tags').editableList('height', Math.max(150, height - 40));
+    var whole = list.closest('.red-ui-editableList');
+    height -= row.outerHeight(true) - whole.outerHeight(true);
+    list.editableList('height', Math.max(150, Math.floor(height)));
+  };
+
+  /**
+   * The runtime's objection to an address as a row shows it: without the
+   * "invalid address "…":" prefix that repeats what the row's input shows.
+   */
+  editor.shortProblem = function (message, address) {
+    var text = String(message == null ? '' : message);
+    var prefix = 'invalid address "' + address + '": ';
+    return text.indexOf(prefix) === 0 ? text.slice(prefix.length) : text;
+  };
+
+  /** The tag table's layout, added to the page once (shared by the read and write dialogs). */
+  editor.tagTableStyle = function () {
+    if (document.getElementById('plcwire-tag-table-style')) return;
+    var css = [
+      '.plcwire-tag-table .plcwire-tag-row { display: flex; flex-wrap: wrap; align-items: center; gap: 2px 6px; }',
+      '.plcwire-tag-table .plcwire-tag-row input.plcwire-tag-name { flex: 2 1 0; min-width: 60px; margin: 0; }',
+      '.plcwire-tag-table .plcwire-tag-row input.plcwire-tag-address { flex: 3 1 0; min-width: 120px; margin: 0; font-family: monospace; }',
+      '.plcwire-tag-table .plcwire-tag-row .plcwire-tag-members { flex: 0 0 auto; }',
+      '.plcwire-tag-table .plcwire-tag-info { flex: 1 0 100%; min-width: 0; display: flex; flex-wrap: wrap; gap: 0 8px; font-size: 0.85em;',
+      '  line-height: 1.4em; color: var(--red-ui-secondary-text-color); }',
+      '.plcwire-tag-table .plcwire-tag-info:has(span:not(:empty)) { min-height: 1.4em; }',
+      '.plcwire-tag-table .plcwire-tag-info .plcwire-tag-type { flex: 0 0 auto; overflow: visible; white-space: nowrap; }',
+      '.plcwire-tag-table .plcwire-tag-info .plcwire-tag-resolved { flex: 0 1 auto; font-family: monospace; white-space: nowrap; overflow: visible; }',
+      ".plcwire-tag-table .plcwire-tag-info .plcwire-tag-resolved:not(:empty)::before { content: '\\2192  '; font-family: sans-serif; }",
+      '.plcwire-tag-table .plcwire-tag-info .plcwire-tag-problem { flex: 1 1 0; min-width: 0; white-space: normal; overflow-wrap: anywhere; color: var(--red-ui-text-color-error); }',
+      '.plcwire-tag-table .plcwire-tag-info .plcwire-tag-problem:empty { display: none; }',
+    ].join('\n');
+    $('<style id="plcwire-tag-table-style">').text(css).appendTo(document.head);
   };
 })();

@@ -390,7 +390,7 @@ describe('nodes: tags by name (symbol sources in the connection node)', function
       helperNode('caught'),
     ]);
     const caught = await new Recorder(helper.getNode('caught')).next((m) => m.error.source.id === 'r3', 4000, "r3's refusal");
-    expect(caught.error.code).to.equal('INVALID_SOURCE');
+    expect(caught.error.code).to.equal('SETTINGS_CONFLICT');
     expect(caught.error.message).to.include('other symbol sources');
     await until(
       () => helper.getNode('r1').linkState === 'connected' && helper.getNode('r2').linkState === 'connected',

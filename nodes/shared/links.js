@@ -53,29 +53,61 @@ function safetyOf(endpoint) {
   return JSON.stringify(SAFETY.map((k) => endpoint[k] ?? null));
 }
 
+/** The URL without a user:password@ part: conflict messages reach logs and Catch nodes. */
+function withoutCredentials(url) {
+  return String(url).replace(/^([a-z0-9+.-]+:\/\/)[^/?#@]*@/i, '$1');
+}
+
+/** A setting as a conflict message shows it. */
+function shownSetting(value) {
+  if (value === undefined || value === null) return 'not set';
+  return Array.isArray(value) ? value.join(',') : String(value);
+}
+
+/** "control is true there, not set here; …": the write-safety settings of `here` that differ from `there`'s. */
+function safetyDifferences(there, here) {
+  return SAFETY.filter((k) => JSON.stringify(there[k] ?? null) !== JSON.stringify(here[k] ?? null))
+    .map((k) => `${k} is ${shownSetting(there[k])} there, ${shownSetting(here[k])} here`)
+    .join('; ');
+}
+
+/** Which way two connections' symbol sources differ (by their keys, '' for none). */
+function sourcesDifference(there, here) {
+  if (!here) return 'no symbol sources (it has some)';
+  if (!there) return 'symbol sources (it has none)';
+  return 'other symbol sources (or block numbers, or strictness)';
+}
+
+/** How a message names a connection node: its name and URL, or the URL alone. */
+function connectionName(owner, url) {
+  const name = owner && owner.name ? `"${owner.name}" ` : '';
+  return `${name}(${withoutCredentials(url)})`;
+}
+
 /**
  * Takes (or opens) the link for `url` on behalf of `owner`, with the symbols
  * `{ key, table?, strict }` its client resolves names with (key: what they
  * were compiled from, '' for none). Throws PlcError INVALID_URL for a bad
- * URL, or when another config node shares the endpoint with different
- * write-safety settings (read-only, allow-list); INVALID_SOURCE when it
- * shares it with other symbol sources (one client has one symbol table: a
- * name would otherwise mean what the first connection node's sources say).
+ * URL; SETTINGS_CONFLICT when another config node already holds the link to
+ * the same PLC with other write-safety settings (readOnly, allow, control) or
+ * other symbol sources: one client has one set of them, so a node would
+ * otherwise write (or resolve a name) under the other connection's rules.
  */
 function acquire(url, owner, symbols = { key: '' }) {
   const endpoint = plc.parseUrl(url);
   const key = plc.endpointKey(endpoint);
   let link = links.get(key);
+  const other = link && connectionName(link.owners.values().next().value, link.url);
   if (link && safetyOf(link.endpoint) !== safetyOf(endpoint)) {
     throw new plc.PlcError(
-      'INVALID_URL',
-      `${url} reaches the same PLC as ${link.url} but with other readOnly/allow/control settings; give both connections the same ones`,
+      'SETTINGS_CONFLICT',
+      `${withoutCredentials(url)} is a valid URL, but it reaches the same PLC as connection ${other}, whose link is already open, with other settings (${safetyDifferences(link.endpoint, endpoint)}); connections to one PLC share one link: give both the same readOnly, allow and control, or use one connection node`,
     );
   }
   if (link && link.symbolsKey !== symbols.key) {
     throw new plc.PlcError(
-      'INVALID_SOURCE',
-      `${url} reaches the same PLC as ${link.url} but with other symbol sources; give both connections the same sources, block numbers and strictness`,
+      'SETTINGS_CONFLICT',
+      `${withoutCredentials(url)} is a valid URL, but it reaches the same PLC as connection ${other}, whose link is already open, with ${sourcesDifference(link.symbolsKey, symbols.key)}; connections to one PLC share one link: give both the same sources, block numbers and strictness, or use one connection node`,
     );
   }
   if (!link) {

@@ -9,7 +9,8 @@
 /** @typedef {(key: string, params?: object) => string} Translate  RED._ of the node's module */
 
 /**
- * The link state: connecting, connected, retry in N s, closed, bad connection,
+ * The link state: connecting, connected, retry in N s, closed, bad connection
+ * (settings conflict: another connection node holds the PLC's link with other settings),
  * no connection. Connected with a notice of the connection (tags by name):
  * a data block whose length differs from its source's (`DB1 20≠24`: the
  * sources' length, then the PLC's), or sources that did not compile.
@@ -27,6 +28,9 @@ function linkStatus(t, status) {
     case 'closed':
       return { fill: 'grey', shape: 'ring', text: t('plcwire.status.closed') };
     case 'invalid':
+      // A valid URL another connection node to the same PLC disagrees with: not a bad connection of its own.
+      if (status.error && status.error.code === 'SETTINGS_CONFLICT')
+        return { fill: 'red', shape: 'dot', text: t('plcwire.status.settingsConflict') };
       return { fill: 'red', shape: 'dot', text: t('plcwire.status.badConfig') };
     case 'unconfigured':
     default:

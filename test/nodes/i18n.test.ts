@@ -46,6 +46,11 @@ function everyStatus(t: (key: string, params?: object) => string, type: string):
     })),
     { what: 'reconnecting 0.5 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 500 }), numbers: [1] },
     { what: 'reconnecting 30 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 30_000 }), numbers: [30] },
+    {
+      what: 'settings conflict',
+      status: status.linkStatus(t, { state: 'invalid', error: { code: 'SETTINGS_CONFLICT' } }),
+      numbers: [],
+    },
     { what: 'waiting', status: status.waitingStatus(t), numbers: [] },
     { what: 'source error', status: status.linkStatus(t, { state: 'connected', notice: { kind: 'sources' } }), numbers: [] },
     // The widest a layout status gets: the highest DB number and the longest lengths of a standard block.

@@ -34,7 +34,7 @@ function exampleFlow(sim: Sim, broker: TestBroker): object[] {
   const flow = JSON.parse(fs.readFileSync(EXAMPLE, 'utf8')) as any[];
   const conn = flow.find((n) => n.type === 'plcwire-connection');
   const brokerNode = flow.find((n) => n.type === 'mqtt-broker');
-  expect(conn.url).to.equal('s7://127.0.0.1:10102?rack=0&slot=1');
+  expect(conn.url).to.equal('s7://127.0.0.1:10102?rack=0&slot=1&control=true');
   expect([brokerNode.broker, brokerNode.port, brokerNode.clientid]).to.deep.equal(['127.0.0.1', '1883', GATEWAY]);
   conn.url = sim.url;
   brokerNode.port = String(broker.port);

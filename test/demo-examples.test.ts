@@ -1,0 +1,207 @@
+/**
+ * The examples beside the demo, as a new user meets them: `npm start` runs
+ * (demo/start.js: the plant, Node-RED, the demo flow), and each example is
+ * imported into that runtime on a tab of its own and deployed through the
+ * admin API (POST /flows, deployment type "nodes", the way the editor's
+ * Deploy does it), one after the other, each beside the demo and the
+ * examples before it. Every plcwire node of every example reaches a link
+ * that is up (no "bad connection", no "settings conflict"), every polling
+ * read delivers values (a recorder is wired behind it), and the control
+ * example reads the CPU in RUN. Statuses are heard as the editor hears them:
+ * on the runtime's comms socket. Only the ports change: the test's plant
+ * listens on free ports instead of 10102, 12000/12001 and 14001 (and MQTT
+ * on a port where no broker runs).
+ */
+import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+import { freePort } from './support/net';
+
+const ROOT = path.resolve(__dirname, '../..');
+/** Node-RED's own WebSocket library (the editor's comms use it), from Node-RED's dependencies. */
+const WebSocket = require(require.resolve('ws', { paths: [path.dirname(require.resolve('node-red/package.json', { paths: [ROOT] }))] }));
+const EXAMPLES = path.join(ROOT, 'examples');
+const { demoFlow, DEMO_URLS } = require(path.join(ROOT, 'demo/flows.js')) as { demoFlow(urls: object): any[]; DEMO_URLS: any };
+
+interface Demo {
+  editor: string;
+  stop(): Promise<void>;
+}
+
+const files = fs
+  .readdirSync(EXAMPLES)
+  .filter((f) => f.endsWith('.json'))
+  .sort();
+
+/** The connection settings two connection nodes to one PLC must share (links.js): URL, sources, block numbers, strictness. */
+function shared(n: any) {
+  return { url: n.url, symbolSources: n.symbolSources ?? [], dbNumbers: n.dbNumbers ?? [], strictSymbols: !!n.strictSymbols };
+}
+
+async function api(base: string, method: string, route: string, body?: unknown, headers: Record<string, string> = {}): Promise<any> {
+  const res = await fetch(`${base}${route}`, {
+    method,
+    headers: { 'content-type': 'application/json', 'Node-RED-API-Version': 'v2', ...headers },
+    body: body === undefined ? undefined : JSON.stringify(body),
+  });
+  const text = await res.text();
+  if (!res.ok) throw new Error(`${method} ${route}: ${res.status} ${text}`);
+  return text && /^[[{]/.test(text) ? JSON.parse(text) : text;
+}
+
+/** Waits for `check` (which throws while its condition does not hold) to pass, until `ms` have passed; then its last error. */
+async function eventually<T>(check: () => Promise<T>, ms: number, what: string): Promise<T> {
+  const deadline = Date.now() + ms;
+  for (;;) {
+    try {
+      return await check();
+    } catch (err) {
+      if (Date.now() > deadline) throw new Error(`${what} within ${ms} ms: ${(err as Error).message}`, { cause: err });
+      await new Promise((r) => setTimeout(r, 200));
+    }
+  }
+}
+
+describe('examples: each imported into the running `npm start` demo and deployed', function () {
+  this.timeout(240_000);
+  let demo: Demo;
+  let ports: { s7: number; fetch: number; write: number; freeport: number; mqtt: number };
+  let comms: any;
+  /** Every node status the runtime published, by node id, as the editor hears them (its comms socket, topic status/<id>). */
+  const statusOf: Record<string, { text?: string; fill?: string; shape?: string }[]> = {};
+
+  before(async () => {
+    const { startDemo } = require(path.join(ROOT, 'demo/start.js')) as { startDemo(o: object): Promise<Demo> };
+    const [port, s7, fetchPort, write, freeport, mqtt] = await Promise.all([
+      freePort(),
+      freePort(),
+      freePort(),
+      freePort(),
+      freePort(),
+      freePort(),
+    ]);
+    ports = { s7, fetch: fetchPort, write, freeport, mqtt };
+    demo = await startDemo({ port, plantPorts: { s7, fetch: fetchPort, write, freeport }, quiet: true, log: () => undefined });
+    comms = new WebSocket(`${demo.editor.replace(/^http/, 'ws')}comms`);
+    await new Promise((resolve, reject) => {
+      comms.once('open', resolve);
+      comms.once('error', reject);
+    });
+    comms.on('message', (data: Buffer) => {
+      const list = JSON.parse(data.toString());
+      for (const m of Array.isArray(list) ? list : [list]) {
+        const id = /^status\/(.+)$/.exec(m.topic ?? '')?.[1];
+        if (id) (statusOf[id] = statusOf[id] ?? []).push(m.data ?? {});
+      }
+    });
+    comms.send(JSON.stringify({ subscribe: 'status/#' }));
+  });
+  after(async () => {
+    comms?.close();
+    await demo?.stop();
+  });
+
+  it("every example's connection agrees with the demo's connection to the same PLC (ports, settings, sources)", () => {
+    const demoConns = demoFlow(DEMO_URLS).filter((n) => n.type === 'plcwire-connection');
+    for (const f of files) {
+      const flow = JSON.parse(fs.readFileSync(path.join(EXAMPLES, f), 'utf8'));
+      for (const conn of flow.filter((n: any) => n.type === 'plcwire-connection')) {
+        const scheme = conn.url.split(':')[0];
+        const theirs = demoConns.find((n) => n.url.split(':')[0] === scheme);
+        expect(theirs, `${f}: the demo has a ${scheme} connection`).to.not.equal(undefined);
+        expect(shared(conn), `${f}: ${conn.id}`).to.deep.equal(shared(theirs));
+      }
+    }
+  });
+
+  /** The example on a tab of its own, its ports the test plant's, with a recorder behind every polling read. */
+  function imported(f: string, i: number): { nodes: any[]; plcwire: string[]; polls: string[] } {
+    const flow = JSON.parse(fs.readFileSync(path.join(EXAMPLES, f), 'utf8')) as any[];
+    const tab = `ex${i}.tab`;
+    const port = (url: string) =>
+      url
+        .replace(':10102', `:${ports.s7}`)
+        .replace('fetchPort=12000', `fetchPort=${ports.fetch}`)
+        .replace('writePort=12001', `writePort=${ports.write}`)
+        .replace(':14001', `:${ports.freeport}`);
+    const configs = new Set(['plcwire-connection', 'mqtt-broker']);
+    const plcwire = flow.filter((n) => n.type.startsWith('plcwire-') && !configs.has(n.type)).map((n) => n.id);
+    const polls = flow.filter((n) => n.type === 'plcwire-read' && Number(n.interval) > 0).map((n) => n.id);
+    const nodes: any[] = [{ id: tab, type: 'tab', label: f }];
+    for (const n of flow) {
+      if (n.type === 'plcwire-connection') nodes.push({ ...n, url: port(n.url) });
+      // No broker where a user may run one: the MQTT nodes wait, the plcwire nodes must not.
+      else if (n.type === 'mqtt-broker') nodes.push({ ...n, port: String(ports.mqtt) });
+      else if (polls.includes(n.id)) nodes.push({ ...n, z: tab, wires: [[...(n.wires?.[0] ?? []), `${n.id}.probe`]] });
+      else nodes.push({ ...n, z: tab });
+    }
+    for (const [k, id] of polls.entries())
+      nodes.push({
+        id: `${id}.probe`,
+        type: 'function',
+        z: tab,
+        x: 900,
+        y: 100 + 40 * k,
+        func: `const all = global.get('plcwireValues') || {};\n(all[${JSON.stringify(id)}] = all[${JSON.stringify(id)}] || []).push(msg.payload);\nglobal.set('plcwireValues', all);\nreturn null;`,
+        outputs: 0,
+        wires: [],
+      });
+    return { nodes, plcwire, polls };
+  }
+
+  /** A global context value of the runtime, as the context sidebar reads it. */
+  async function globalContext(key: string): Promise<any> {
+    const res = await api(demo.editor, 'GET', `context/global/${key}`);
+    const stored = res?.memory ?? res;
+    if (!stored || stored.msg === undefined) return undefined;
+    return JSON.parse(stored.msg);
+  }
+
+  const up = (s: any) => s.fill === 'green' || (s.fill === 'yellow' && s.shape === 'dot');
+
+  for (const [i, f] of files.entries()) {
+    it(`"${f}": deploys beside the demo; every plcwire node's link is up, every poll delivers values`, async () => {
+      const { nodes, plcwire, polls } = imported(f, i);
+      const { flows, rev } = await api(demo.editor, 'GET', 'flows');
+      await api(demo.editor, 'POST', 'flows', { flows: [...flows, ...nodes], rev }, { 'Node-RED-Deployment-Type': 'nodes' });
+
+      const statuses = await eventually(
+        async () => {
+          const all = statusOf;
+          const notUp = plcwire.filter((id) => !(all[id] ?? []).some(up));
+          if (notUp.length)
+            throw new Error(
+              `heard ${Object.keys(all).length} nodes; not up: ${notUp.map((id) => `${id} ${JSON.stringify(all[id] ?? [])}`).join('; ')}`,
+            );
+          return all;
+        },
+        30_000,
+        'every plcwire node up',
+      );
+      for (const id of plcwire) {
+        const red = statuses[id]!.filter((s) => s.fill === 'red' && s.shape === 'dot');
+        expect(red, `${f}: ${id} never showed bad connection or settings conflict`).to.deep.equal([]);
+      }
+      await eventually(
+        async () => {
+          const values = (await globalContext('plcwireValues')) ?? {};
+          const silent = polls.filter((id) => !(values[id] ?? []).some((v: unknown) => v !== null && v !== undefined));
+          if (silent.length) throw new Error(`no value from ${silent.join(', ')}`);
+        },
+        30_000,
+        'a value from every poll',
+      );
+      if (f === 'S7 PLC control.json') {
+        await api(demo.editor, 'POST', 'inject/ctlex.inject.state');
+        await eventually(
+          async () => {
+            const s = statusOf['ctlex.control'] ?? [];
+            if (!s.some((x) => /RUN/.test(x.text ?? ''))) throw new Error(JSON.stringify(s));
+          },
+          20_000,
+          'the control node reads the CPU in RUN',
+        );
+      }
+    });
+  }
+});
