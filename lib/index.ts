@@ -41,6 +41,7 @@ export {
   valueChanged,
   ChangeFilter,
   PolledTable,
+  realsForPeople,
   writeRequest,
   LifeSignWatch,
   nextLifeSign,
