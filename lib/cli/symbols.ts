@@ -240,7 +240,7 @@ export function reportLayout(client: AnyClient, io: CliIo, strict: boolean): voi
  * service. Any other reason (a protection level, say) is named as the client
  * gives it.
  */
-export function layoutUnknownText(protocol: string, e: LayoutUnknownEvent): string {
+function layoutUnknownText(protocol: string, e: LayoutUnknownEvent): string {
   const blocks = e.checks.map((c) => blockName(c.block, c.db)).join(', ');
   const advice = `so a DB changed in the PLC's project (${blocks}) is not detected here; export the sources again after every change`;
   if (protocol === 'fetchwrite') return `FETCH/WRITE does not report the length of data blocks, ${advice}`;
