@@ -28,6 +28,7 @@ const NODES = [
   core('network/10-mqtt.js'),
   core('function/10-function.js'),
   core('common/90-comment.js'),
+  core('common/25-status.js'),
 ];
 const EXAMPLE = path.join(ROOT, 'examples/MQTT gateway - publish tags, guarded writes.json');
 const GATEWAY = 'plcwire-gateway-1';
@@ -178,6 +179,11 @@ describe('MQTT gateway example: the demo plant published to a broker, guarded wr
     // The write node can reach exactly the two members nothing in the plant computes, and the allow-list names exactly those.
     expect(writable).to.deep.equal({ run: lib.DEMO_TAGS.run, pcHeartbeat: lib.DEMO_TAGS.pcHeartbeat });
     expect(allowList(flow).sort()).to.deep.equal(Object.keys(writable).sort());
+    // What it reads again when the broker (re)connects is the read node's table.
+    const again: string = flow.find((n) => n.id === 'mqttex.again').func;
+    const listed = /const TAGS = \{([^}]*)\};/.exec(again)?.[1] ?? '';
+    expect(Object.fromEntries([...listed.matchAll(/(\w+): '([^']*)',/g)].map((m) => [m[1], m[2]]))).to.deep.equal(PUBLISHED);
+    expect(flow.find((n) => n.id === 'mqttex.brokerup').scope).to.deep.equal(['mqttex.pub']);
     expect(flow.find((n) => n.id === 'mqttex.sub').topic).to.equal(`plant/${PLC}/+/set`);
     expect(flow.find((n) => n.id === 'mqttex.group').env).to.deep.equal([{ name: 'PLC', value: PLC, type: 'str' }]);
   });
@@ -227,6 +233,46 @@ describe('MQTT gateway example: the demo plant published to a broker, guarded wr
     expect(status.payload).to.equal('online');
     // Reading wrote nothing.
     expect(written()).to.deep.equal([]);
+  });
+
+  it('leaves no stale value on the broker after an outage: what changed while it was away is published when it is back, though it does not change again', async () => {
+    await helper.load(NODES, exampleFlow(plant, broker));
+    const subscriber = await client();
+    await subscriber.mq.subscribeAsync(`plant/${PLC}/+`, { qos: 1 });
+    await subscriber.next((m) => m.topic === `plant/${PLC}/speed` && m.payload.value === 0, 6000, 'the motor standing');
+    const parts = plant.process.snapshot().parts;
+    await subscriber.next((m) => m.topic === `plant/${PLC}/parts` && m.payload.value === parts, 6000, 'the parts count');
+
+    await broker.stop();
+    await until(() => helper.getNode('mqttex.pub') && !broker.connected(GATEWAY), 6000, 'the gateway away');
+    // While the broker is away the motor starts and runs for 3 s; then the plant stands still again.
+    db()[RUN_BYTE] |= 1;
+    for (let i = 0; i < 30; i++) plant.process.step();
+    const held = plant.process.snapshot();
+    expect([held.running, held.speed, held.parts > parts]).to.deep.equal([true, 1450, true]);
+    // The gateway polls the new values twice (its publishes go nowhere): its changes filter has seen them.
+    let reads = 0;
+    const counted = () => reads++;
+    plant.memory.on('read', counted);
+    await until(() => reads >= 2, 6000, 'two polls while the broker is away');
+    plant.memory.off('read', counted);
+
+    await broker.start();
+    const expected = { run: true, running: true, speed: 1450, parts: held.parts, level: held.level };
+    for (const [tag, value] of Object.entries(expected))
+      await subscriber.next(
+        (m) => m.topic === `plant/${PLC}/${tag}` && m.payload.value === value,
+        10000,
+        `${tag} = ${value} after the outage`,
+      );
+    // What the broker keeps for a subscriber that comes later is current.
+    const late = await client();
+    await late.mq.subscribeAsync(`plant/${PLC}/+`, { qos: 1 });
+    for (const [tag, value] of Object.entries(expected)) {
+      const m = await late.next((x) => x.topic === `plant/${PLC}/${tag}`, 6000, `retained ${tag}`);
+      expect([m.retain, m.payload.value], tag).to.deep.equal([true, value]);
+    }
+    expect(plant.s7.connectionCount).to.equal(1);
   });
 
   it('starts the motor from MQTT and answers on the reply topic only after the PLC acknowledged; the plant runs and the gateway publishes it', async () => {
