@@ -16,6 +16,12 @@ import { helper, nodes, ROOT, until } from './support';
 
 const mqtt = require('mqtt');
 const lib = require(path.join(ROOT, 'dist/lib/index.js'));
+/** The plant's values as the read node sends them: REALs with the digits TIA shows (lib/values/float32.ts). */
+const shown = <T extends { level: number; temperature: number }>(v: T): T => ({
+  ...v,
+  level: lib.values.shortestFloat32(v.level),
+  temperature: lib.values.shortestFloat32(v.temperature),
+});
 
 const RED_PATH = require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red');
 const CORE = path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(RED_PATH)] }));
@@ -192,7 +198,7 @@ describe('MQTT gateway example: the demo plant published to a broker, guarded wr
     // The motor has run for 3 s: every member holds a value of its own.
     db()[RUN_BYTE] |= 1;
     for (let i = 0; i < 30; i++) plant.process.step();
-    const held = plant.process.snapshot();
+    const held = shown(plant.process.snapshot());
     expect([held.running, held.speed, held.parts > 0]).to.deep.equal([true, 1450, true]);
     const subscribers = await Promise.all(Array.from({ length: 10 }, () => client()));
     await Promise.all(subscribers.map((s) => s.mq.subscribeAsync(`plant/${PLC}/+`, { qos: 1 })));
@@ -215,7 +221,7 @@ describe('MQTT gateway example: the demo plant published to a broker, guarded wr
       }
     }
     // A change reaches every subscriber; the PLC still serves one connection.
-    const next = plant.process.step().level;
+    const next = lib.values.shortestFloat32(plant.process.step().level);
     expect(next).to.not.equal(held.level);
     for (const s of subscribers) await s.next((m) => m.topic === `plant/${PLC}/level` && m.payload.value === next, 6000, 'new level');
     expect(plant.s7.connectionCount).to.equal(1);
@@ -248,7 +254,7 @@ describe('MQTT gateway example: the demo plant published to a broker, guarded wr
     // While the broker is away the motor starts and runs for 3 s; then the plant stands still again.
     db()[RUN_BYTE] |= 1;
     for (let i = 0; i < 30; i++) plant.process.step();
-    const held = plant.process.snapshot();
+    const held = shown(plant.process.snapshot());
     expect([held.running, held.speed, held.parts > parts]).to.deep.equal([true, 1450, true]);
     // The gateway polls the new values twice (its publishes go nowhere): its changes filter has seen them.
     let reads = 0;
@@ -306,7 +312,7 @@ describe('MQTT gateway example: the demo plant published to a broker, guarded wr
 
   it('refuses what the plant computes, addresses and names outside the allow-list, and bad values with an error on the reply topic, writing nothing', async () => {
     for (let i = 0; i < 25; i++) plant.process.step();
-    const held = plant.process.snapshot();
+    const held = shown(plant.process.snapshot());
     const before = Buffer.from(db());
     await helper.load(NODES, exampleFlow(plant, broker));
     const requester = await client();
