@@ -21,6 +21,7 @@ import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCo
 import { headerError } from './constants';
 import { localTsapFor, remoteTsapFor } from './tsap';
 import type { PlcInfo } from './client';
+import { hex4 } from '../values/text';
 
 /** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
 export interface DoctorStep {
@@ -676,8 +677,4 @@ class FrameWaiter {
     this.socket.removeListener('data', this.onData);
     this.socket.removeListener('close', this.onClose);
   }
-}
-
-function hex4(n: number): string {
-  return n.toString(16).padStart(4, '0');
 }

@@ -12,6 +12,7 @@
  */
 import { ProtocolError } from '../../errors';
 import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
+import { hex4 } from '../../values/text';
 
 /** One SZL list as read (`readSzl`). Records are copies (they do not keep the frames alive). */
 export interface SzlList {
@@ -80,10 +81,6 @@ export function encodeSzl(list: SzlList, headerOnly = false): Buffer {
     });
   }
   return out;
-}
-
-function hex4(n: number): string {
-  return n.toString(16).padStart(4, '0');
 }
 
 function need(list: SzlList, min: number, what: string): void {
