@@ -42,10 +42,6 @@ export interface S7WriteItem extends S7Item {
   data: Buffer;
 }
 
-/** Names used by the S7 split notes. */
-export type ReadItem = S7Item;
-export type WriteItem = S7WriteItem;
-
 export interface SetupParams {
   maxAmqCalling: number;
   maxAmqCalled: number;
