@@ -55,7 +55,7 @@ export type WritePlan =
   { kind: 'direct'; at: ByteAddress; data: Buffer } | { kind: 'modify'; range: ByteRange; change: (buf: Buffer, offset: number) => void };
 
 /** Bytes of an area reachable by FETCH/WRITE. */
-export function areaBytes(org: Org, dbUnit: DbUnit): number {
+function areaBytes(org: Org, dbUnit: DbUnit): number {
   const r = ORG_RANGES[org]!;
   if (org === Org.DB) return dbUnit === 'word' ? 2 * (r.maxStart + 1) : 0x10000;
   if (org === Org.C || org === Org.T) return 2 * (r.maxStart + 1);
@@ -69,7 +69,7 @@ export function byteSpan(tag: Tag): [number, number] {
 }
 
 /** Bytes must start/end on this boundary for the area's unit. */
-export function granule(org: Org, dbUnit: DbUnit): number {
+function granule(org: Org, dbUnit: DbUnit): number {
   return (org === Org.DB && dbUnit === 'word') || org === Org.C || org === Org.T ? 2 : 1;
 }
 
