@@ -8,7 +8,7 @@ const { tagTable, writeRequest, errorInfo, tagFailure } = require('..');
  * with `msg.results` per tag. Failures go to done(err) naming the tag.
  */
 module.exports = function (RED) {
-  function PlcwriteWrite(config) {
+  function PlcwireWrite(config) {
     RED.nodes.createNode(this, config);
     const node = this;
     const table = tagTable(config.tags);
@@ -59,5 +59,5 @@ module.exports = function (RED) {
     });
   }
 
-  RED.nodes.registerType('plcwire-write', PlcwriteWrite);
+  RED.nodes.registerType('plcwire-write', PlcwireWrite);
 };

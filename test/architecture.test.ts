@@ -148,6 +148,13 @@ describe('architecture of lib/', () => {
     expect(bad).to.deep.equal([]);
   });
 
+  it('the planners are pure too: no Node or npm module, nothing of link/ at run time', () => {
+    const isPlanner = (file: string) => file.startsWith('lib/s7/plan/') || file === 'lib/fetchwrite/plan.ts';
+    expect([...GRAPH.keys()].filter(isPlanner)).to.include.members(['lib/s7/plan/index.ts', 'lib/fetchwrite/plan.ts']);
+    const bad = violations(isPlanner, (e) => e.to === undefined || (e.to.startsWith('lib/link/') && !e.typeOnly));
+    expect(bad).to.deep.equal([]);
+  });
+
   it('the shared link layer (lib/link/) imports nothing of a protocol, type imports included', () => {
     const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|fetchwrite|freeport)\//.test(to);
     const links = [...GRAPH.keys()].filter((f) => f.startsWith('lib/link/'));

@@ -24,6 +24,7 @@ import { UsageError, intFlag, stringFlag, withTimeout, type ParsedArgs } from '.
 import { EXIT, confirm, withClient, type CliIo } from './io';
 import { symbolOptions } from './symbols';
 import { toJson, valueToText } from './values';
+import { hex4 } from '../values/text';
 
 /** The S7 endpoint of the first positional; anything else is a usage error. */
 function s7Endpoint(rest: string[], what: string, args: ParsedArgs): S7Endpoint {
@@ -84,7 +85,7 @@ function hexWord(text: string, what: string): number {
 
 /** The lists this library decodes, by SZL ID (the extracts whose records it reads). */
 const SZL_DECODERS: ReadonlyMap<number, (l: SzlList) => unknown> = new Map<number, (l: SzlList) => unknown>([
-  [0x0000, (l) => decodeSzlIds(l).map((id) => `0x${id.toString(16).padStart(4, '0')}`)],
+  [0x0000, (l) => decodeSzlIds(l).map((id) => `0x${hex4(id)}`)],
   [0x0011, decodeModuleIdentification],
   [0x0111, decodeModuleIdentification],
   [0x001c, decodeComponentIdentification],
@@ -116,7 +117,7 @@ export async function szl(rest: string[], args: ParsedArgs, io: CliIo): Promise<
   const index = rest[2] === undefined ? 0 : hexWord(rest[2], 'SZL index');
   extra(rest, 3);
   const list = await run(endpoint, io, (c) => c.readSzl(id, index, { signal: io.signal }));
-  const hex = (n: number) => `0x${n.toString(16).padStart(4, '0')}`;
+  const hex = (n: number) => `0x${hex4(n)}`;
   const decoded = decodeSzl(list);
   const json = {
     id: hex(list.id),
@@ -138,7 +139,7 @@ export async function diag(rest: string[], args: ParsedArgs, io: CliIo): Promise
   extra(rest, 1);
   const max = args.flags.has('max') ? intFlag(args, 'max', 10, 1, 65535) : undefined;
   const entries = await run(endpoint, io, (c) => c.diagnosticBuffer({ signal: io.signal, ...(max !== undefined ? { max } : {}) }));
-  const hex = (n: number) => `0x${n.toString(16).padStart(4, '0')}`;
+  const hex = (n: number) => `0x${hex4(n)}`;
   const json = entries.map((e) => ({ ...e, eventId: hex(e.eventId) }));
   print(io, args, json, () =>
     json.map((e) => `${Number.isNaN(e.time.getTime()) ? '(no valid time)' : e.time.toISOString()}  ${e.eventId}  ${e.description}`),

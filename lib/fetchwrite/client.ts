@@ -24,15 +24,13 @@ import { PendingRequests } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { PlcValue, Protocol, Tag } from '../types';
 import { endpointName, type FetchWriteEndpoint } from '../url';
-import { decodeTag, encodeInto, validateValue, writeSpan } from '../values';
+import { decodeTag, validateValue } from '../values';
 import {
   HEADER,
   MAX_DATA,
   OpCode,
-  ORG_BY_AREA,
   ORG_RANGES,
   Org,
-  byteLength,
   checkResponse,
   decodeResponse,
   encodeRequest,
@@ -40,12 +38,19 @@ import {
   type FwResponse,
   type ResponseExpectation,
 } from './codec';
-
-/**
- * Tags of one area closer than this are fetched as one job: a CP answers a
- * job in milliseconds, while 1 KiB more data costs under a millisecond.
- */
-const MERGE_GAP = 1024;
+import {
+  byteSpan,
+  checkReach,
+  enclosingUnits,
+  mergeRanges,
+  planRead,
+  planWrite,
+  splitJobs,
+  wireUnits,
+  type ByteAddress,
+  type ByteRange,
+  type ReadPlan,
+} from './plan';
 
 class Channel {
   readonly pending = new PendingRequests<FwResponse>();
@@ -82,24 +87,6 @@ class FwSession {
   }
 }
 
-/** Where a job's bytes are: the area, its DB number (DB only) and the first byte. */
-interface ByteAddress {
-  org: Org;
-  dbNumber: number;
-  /** Bytes from the area's start (C/T: 2 per number). */
-  start: number;
-}
-
-/** A byte range of one ORG area, fetched or written as one or more jobs. */
-interface ByteRange extends ByteAddress {
-  length: number;
-}
-
-/** The bytes of merged tags, with the tags' indexes. */
-interface Range extends ByteRange {
-  tags: number[];
-}
-
 /** One FETCH or WRITE request: a range of bytes, with the data to write. */
 interface Job {
   op: OpCode.FetchRequest | OpCode.WriteRequest;
@@ -107,22 +94,15 @@ interface Job {
   data?: Buffer;
 }
 
-/** What a prepared tag list keeps (Driver.prepareRead): the tags that can be read, merged into fetch ranges. */
-interface FwPrepared {
-  /** Indexes of the tags a fetch cannot read (PA, the output modules). */
-  unreadable: number[];
-  ranges: Range[];
-}
-
-export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
+export class FetchWriteClient extends BaseClient<FwSession, Tag, ReadPlan> {
   readonly protocol: Protocol = 'fetchwrite';
   readonly endpoint: FetchWriteEndpoint;
   /** Jobs sent, for diagnostics and tests. */
   readonly stats = { fetches: 0, writes: 0 };
-  protected readonly driver: Driver<FwSession, Tag, FwPrepared> = {
+  protected readonly driver: Driver<FwSession, Tag, ReadPlan> = {
     syntax: { ...S7_TAG_SYNTAX, parse: (address) => this.parseTag(address) },
     openSession: (signal) => this.openSession(signal),
-    prepareRead: (tags) => this.prepareRead(tags),
+    prepareRead: (tags) => planRead(tags, this.endpoint.dbUnit),
     readTags: (session, tags, signal, prepared) => this.readTags(session, tags, signal, prepared),
     writeTags: (session, items, signal) => this.writeTags(session, items, signal),
     noBlockLength:
@@ -136,47 +116,11 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     this.endpoint = endpoint;
   }
 
-  /** S7 address syntax, limited to what FETCH/WRITE can reach (the ORG table: docs/protocols.md, "ORG areas and units"). */
+  /** S7 address syntax, limited to what FETCH/WRITE can reach (plan.ts, checkReach). */
   private parseTag(address: string): Tag {
     const tag = S7_TAG_SYNTAX.parse(address);
-    const org = ORG_BY_AREA[tag.area];
-    const range = ORG_RANGES[org]!;
-    if (org === Org.DB && (tag.dbNumber < 1 || tag.dbNumber > 255)) {
-      throw new AddressError(address, `DB${tag.dbNumber} cannot be reached by FETCH/WRITE (ORG 1 takes DB 1..255)`);
-    }
-    const [start, end] = this.byteSpan(tag);
-    const limit = this.areaBytes(org);
-    if (end > limit) {
-      const unit = org === Org.C || org === Org.T ? ` (${range.name} 0..${range.maxStart})` : ` (${range.name} bytes 0..${limit - 1})`;
-      throw new AddressError(address, `${start >= limit ? 'starts' : 'ends'} beyond what FETCH/WRITE reaches${unit}`);
-    }
+    checkReach(tag, this.endpoint.dbUnit);
     return tag;
-  }
-
-  /** Bytes of an area reachable by FETCH/WRITE. */
-  private areaBytes(org: Org): number {
-    const r = ORG_RANGES[org]!;
-    if (org === Org.DB) return this.endpoint.dbUnit === 'word' ? 2 * (r.maxStart + 1) : 0x10000;
-    if (org === Org.C || org === Org.T) return 2 * (r.maxStart + 1);
-    return r.maxStart + 1;
-  }
-
-  /** Where a tag lies, in bytes from the area start (C/T: 2 bytes per number). */
-  private byteSpan(tag: Tag): [number, number] {
-    if (tag.area === 'C' || tag.area === 'T') return [2 * tag.byteOffset, 2 * (tag.byteOffset + tag.count)];
-    return [tag.byteOffset, tag.byteOffset + tag.byteLength];
-  }
-
-  /** Bytes must start/end on this boundary for the area's unit. */
-  private granule(org: Org): number {
-    return (org === Org.DB && this.endpoint.dbUnit === 'word') || org === Org.C || org === Org.T ? 2 : 1;
-  }
-
-  /** The most bytes one job may carry: the ORG table's length range and the 64 KiB frame limit. */
-  private maxJobBytes(org: Org): number {
-    const r = ORG_RANGES[org]!;
-    const bytes = byteLength(org, r.maxLength, this.endpoint.dbUnit);
-    return Math.min(bytes, MAX_DATA - (MAX_DATA % 2));
   }
 
   private async openSession(signal: AbortSignal): Promise<FwSession> {
@@ -229,9 +173,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     if (session.lost) throw session.lost;
     const { org, dbNumber, start: startByte, length: bytes } = range;
     const channel = op === OpCode.FetchRequest ? session.fetch : session.write;
-    const wordUnits = this.granule(org) === 2;
-    const start = org === Org.C || org === Org.T ? startByte / 2 : wordUnits ? startByte / 2 : startByte;
-    const length = wordUnits ? bytes / 2 : bytes;
+    const { start, length } = wireUnits(range, this.endpoint.dbUnit);
     const frame = encodeRequest({ op, org, dbNumber: org === Org.DB ? dbNumber : 0, start, length, ...(data ? { data } : {}) });
     channel.expect = { op, dataBytes: op === OpCode.FetchRequest ? bytes : 0 };
     const what = `${op === OpCode.FetchRequest ? 'fetch' : 'write'} of ${ORG_RANGES[org]!.name}${org === Org.DB ? dbNumber : ''} ${startByte}+${bytes}`;
@@ -256,20 +198,11 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     return response.data;
   }
 
-  /** The fetch ranges of a tag list (they depend on the tags and the endpoint's DB unit only). */
-  private prepareRead(tags: readonly Tag[]): FwPrepared {
-    const unreadable: number[] = [];
-    const readable: number[] = [];
-    tags.forEach((tag, i) => (tag.area === 'PA' ? unreadable : readable).push(i));
-    const ranges = this.mergeRanges(readable.map((i) => tags[i]!)).map((r) => ({ ...r, tags: r.tags.map((k) => readable[k]!) }));
-    return { unreadable, ranges };
-  }
-
   private async readTags(
     session: FwSession,
     tags: readonly Tag[],
     signal?: AbortSignal,
-    prepared = this.prepareRead(tags),
+    prepared = planRead(tags, this.endpoint.dbUnit),
   ): Promise<TagResult<PlcValue>[]> {
     const results: TagResult<PlcValue>[] = new Array<TagResult<PlcValue>>(tags.length);
     const { unreadable, ranges } = prepared;
@@ -301,7 +234,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
   }
 
   private async readOne(session: FwSession, tag: Tag, signal?: AbortSignal): Promise<TagResult<PlcValue>> {
-    const [range] = this.mergeRanges([tag]);
+    const [range] = mergeRanges([tag], this.endpoint.dbUnit);
     try {
       const data = await this.fetchRange(session, range!, signal);
       return this.decode(tag, data, range!.start);
@@ -314,52 +247,20 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
 
   private decode(tag: Tag, data: Buffer, rangeStart: number): TagResult<PlcValue> {
     try {
-      return { ok: true, value: decodeTag(tag, data, this.byteSpan(tag)[0] - rangeStart) };
+      return { ok: true, value: decodeTag(tag, data, byteSpan(tag)[0] - rangeStart) };
     } catch (err) {
       return { ok: false, error: tagError(tag.address, toPlcError(err, 'PROTOCOL_ERROR')) };
     }
   }
 
-  /** Fetches a byte range, split into jobs the ORG's length range and the frame allow. */
+  /** Fetches a byte range, split into the jobs the ORG's length range and the frame allow (plan.ts, splitJobs). */
   private async fetchRange(session: FwSession, range: ByteRange, signal?: AbortSignal): Promise<Buffer> {
-    const { org, dbNumber, start, length } = range;
-    const max = this.maxJobBytes(org);
+    const jobs = splitJobs(range, this.endpoint.dbUnit);
     const op = OpCode.FetchRequest;
-    if (length <= max) return this.job(session, { op, range }, signal);
+    if (jobs.length === 1) return this.job(session, { op, range: jobs[0]! }, signal);
     const parts: Buffer[] = [];
-    for (let o = 0; o < length; o += max) {
-      parts.push(await this.job(session, { op, range: { org, dbNumber, start: start + o, length: Math.min(max, length - o) } }, signal));
-    }
+    for (const part of jobs) parts.push(await this.job(session, { op, range: part }, signal));
     return Buffer.concat(parts);
-  }
-
-  /** Sorts tags by area and offset, aligns to the area's unit, and merges ranges closer than a round trip is worth. */
-  private mergeRanges(tags: readonly Tag[]): Range[] {
-    const order = tags.map((_, i) => i);
-    const key = (t: Tag) => ORG_BY_AREA[t.area] * 0x10000 + t.dbNumber;
-    order.sort((a, b) => key(tags[a]!) - key(tags[b]!) || this.byteSpan(tags[a]!)[0] - this.byteSpan(tags[b]!)[0]);
-    const ranges: Range[] = [];
-    let current: Range | undefined;
-    for (const i of order) {
-      const t = tags[i]!;
-      const org = ORG_BY_AREA[t.area];
-      const g = this.granule(org);
-      const [s, e] = this.byteSpan(t);
-      const start = s - (s % g);
-      const end = e + ((g - (e % g)) % g);
-      if (current && current.org === org && current.dbNumber === t.dbNumber) {
-        const curEnd = current.start + current.length;
-        const newEnd = Math.max(curEnd, end);
-        if (start - curEnd <= MERGE_GAP && newEnd - current.start <= Math.max(this.maxJobBytes(org), current.length)) {
-          current.length = newEnd - current.start;
-          current.tags.push(i);
-          continue;
-        }
-      }
-      current = { org, dbNumber: t.dbNumber, start, length: end - start, tags: [i] };
-      ranges.push(current);
-    }
-    return ranges;
   }
 
   private async writeTags(
@@ -407,27 +308,9 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
   }
 
   private async writeOne(session: FwSession, tag: Tag, value: unknown, signal?: AbortSignal): Promise<void> {
-    const org = ORG_BY_AREA[tag.area];
-    const g = this.granule(org);
-    let start: number;
-    let data: Buffer;
-    if (tag.type === 'BOOL') {
-      start = tag.byteOffset;
-      data = Buffer.alloc(tag.byteLength);
-      // Read-modify-write: fetched below with the enclosing unit.
-      const range = { org, dbNumber: tag.dbNumber, start, length: data.length };
-      return this.readModifyWrite(session, range, (buf, offset) => encodeInto(tag, value, buf, offset), signal);
-    }
-    if (tag.area === 'C' || tag.area === 'T') {
-      const span = writeSpan(tag, value);
-      return this.writeRange(session, { org, dbNumber: tag.dbNumber, start: 2 * tag.byteOffset }, span.data, signal);
-    }
-    const span = writeSpan(tag, value);
-    start = tag.byteOffset + span.start;
-    data = span.data;
-    const at = { org, dbNumber: tag.dbNumber, start };
-    if (start % g === 0 && data.length % g === 0) return this.writeRange(session, at, data, signal);
-    return this.readModifyWrite(session, { ...at, length: data.length }, (buf, offset) => data.copy(buf, offset), signal);
+    const plan = planWrite(tag, value, this.endpoint.dbUnit);
+    if (plan.kind === 'direct') return this.writeRange(session, plan.at, plan.data, signal);
+    return this.readModifyWrite(session, plan.range, plan.change, signal);
   }
 
   /** Fetch the enclosing units, change them, write them back (serialised by the job queue; not atomic against the PLC program). */
@@ -437,26 +320,19 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
     change: (buf: Buffer, offset: number) => void,
     signal?: AbortSignal,
   ): Promise<void> {
-    const { org, dbNumber } = changed;
-    const g = this.granule(org);
-    const from = changed.start;
-    const to = from + changed.length;
-    const start = from - (from % g);
-    const end = to + ((g - (to % g)) % g);
-    const current = Buffer.from(await this.fetchRange(session, { org, dbNumber, start, length: end - start }, signal));
-    change(current, from - start);
-    await this.writeRange(session, { org, dbNumber, start }, current, signal);
+    const units = enclosingUnits(changed, this.endpoint.dbUnit);
+    const current = Buffer.from(await this.fetchRange(session, units, signal));
+    change(current, changed.start - units.start);
+    await this.writeRange(session, units, current, signal);
   }
 
-  private async writeRange(session: FwSession, { org, dbNumber, start }: ByteAddress, data: Buffer, signal?: AbortSignal): Promise<void> {
-    const max = this.maxJobBytes(org);
-    for (let o = 0; o < data.length; o += max) {
-      const part = data.subarray(o, o + max);
-      await this.job(
-        session,
-        { op: OpCode.WriteRequest, range: { org, dbNumber, start: start + o, length: part.length }, data: part },
-        signal,
-      );
+  private async writeRange(session: FwSession, at: ByteAddress, data: Buffer, signal?: AbortSignal): Promise<void> {
+    if (data.length === 0) return;
+    let o = 0;
+    for (const range of splitJobs({ ...at, length: data.length }, this.endpoint.dbUnit)) {
+      const part = data.subarray(o, o + range.length);
+      o += range.length;
+      await this.job(session, { op: OpCode.WriteRequest, range, data: part }, signal);
     }
   }
 }

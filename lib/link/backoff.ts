@@ -9,7 +9,7 @@ export interface BackoffOptions {
   jitter?: number;
 }
 
-export const DEFAULT_BACKOFF: Required<BackoffOptions> = Object.freeze({
+const DEFAULT_BACKOFF: Required<BackoffOptions> = Object.freeze({
   initialDelay: 500,
   maxDelay: 30_000,
   factor: 2,

@@ -14,7 +14,7 @@ import { ConnectionError, PlcError, toPlcError } from '../errors';
 export type Parity = 'none' | 'even' | 'odd';
 
 /** A line's parameters, as a freeport endpoint gives them. */
-export interface SerialLine {
+interface SerialLine {
   path: string;
   baudRate: number;
   parity: Parity;
@@ -31,7 +31,7 @@ export interface SerialOpenOptions extends SerialLine {
 }
 
 /** Default period of the device check: a vanished device is noticed within about this long. */
-export const DEVICE_CHECK_MS = 500;
+const DEVICE_CHECK_MS = 500;
 
 /**
  * Opens the port. Rejects with a PlcError: CONNECT_FAILED naming the path, or

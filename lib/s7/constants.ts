@@ -5,6 +5,7 @@
  */
 import { PlcError, type PlcErrorCode } from '../errors';
 import type { AreaName } from '../types';
+import { hex4 } from '../values/text';
 
 export const S7_PORT = 102;
 export const TPKT_VERSION = 3;
@@ -248,7 +249,7 @@ const HEADER_ERRORS: Readonly<Record<number, [PlcErrorCode, string]>> = Object.f
 /** A header error (class, code) as a typed PlcError with words. */
 export function headerError(errorClass: number, errorCode: number, context: string): PlcError {
   const key = (errorClass << 8) | errorCode;
-  const hex = `0x${key.toString(16).padStart(4, '0')}`;
+  const hex = `0x${hex4(key)}`;
   const known = HEADER_ERRORS[key];
   if (known) return new PlcError(known[0], `${context}: the PLC answered ${hex}: ${known[1]}`, { plcCode: key });
   const cls = ERROR_CLASSES[errorClass] ?? 'unknown error class';
@@ -379,7 +380,7 @@ export const SERVICE_ERRORS: Readonly<Record<number, readonly [PlcErrorCode, str
 
 /** A CPU service error as a typed PlcError: `${context}: the PLC answered 0xd401: the SZL ID is not available on this CPU`. */
 export function serviceError(code: number, context: string): PlcError {
-  const hex = `0x${code.toString(16).padStart(4, '0')}`;
+  const hex = `0x${hex4(code)}`;
   const known = SERVICE_ERRORS[code];
   if (known) return new PlcError(known[0], `${context}: the PLC answered ${hex}: ${known[1]}`, { plcCode: code });
   return headerError(code >> 8, code & 0xff, context);

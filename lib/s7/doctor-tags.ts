@@ -4,7 +4,7 @@
  * told apart (a missing DB, one shorter than the address needs, an
  * optimized one) with what to change.
  */
-import { PlcError, toPlcError } from '../errors';
+import { abortError, PlcError, toPlcError } from '../errors';
 import { formatAddress, S7_TAG_SYNTAX } from '../address';
 import type { SymbolTable } from '../symbols/model';
 import type { Tag } from '../types';
@@ -171,7 +171,7 @@ export class TagSteps {
         else resolve();
       };
       const onConnected = () => done();
-      const onAbort = () => done(new PlcError('ABORTED', 'aborted'));
+      const onAbort = () => done(abortError('waiting for the connection', this.c.signal));
       if (this.c.signal.aborted) return onAbort();
       client.on('connected', onConnected);
       this.c.signal.addEventListener('abort', onAbort, { once: true });

@@ -9,7 +9,7 @@
  */
 import { lookup } from 'node:dns/promises';
 import * as net from 'node:net';
-import { ConnectionError, PlcError, toPlcError } from '../errors';
+import { abortError, PlcError, toPlcError } from '../errors';
 import { FrameReader } from '../link/framer';
 import { openTcp } from '../link/tcp';
 import { S7_CPU_PRESETS, parseUrl, type S7CpuPreset, type S7Endpoint } from '../url';
@@ -21,6 +21,7 @@ import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCo
 import { headerError } from './constants';
 import { localTsapFor, remoteTsapFor } from './tsap';
 import type { PlcInfo } from './client';
+import { hex4 } from '../values/text';
 
 /** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
 export interface DoctorStep {
@@ -244,8 +245,7 @@ class Doctor {
   /** An error inside a step: an abort by the caller ends the walk, the deadline fails the step, anything else is `other`. */
   private failed(step: string, err: unknown, other: (e: PlcError) => never): never {
     if (err instanceof Stop) throw err;
-    if (this.options.signal?.aborted)
-      throw new PlcError('ABORTED', 'the connection doctor was aborted', { cause: this.options.signal.reason });
+    if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
     if (this.signal.aborted) {
       this.fail(
         step,
@@ -269,7 +269,7 @@ class Doctor {
       for (const a of addresses) await tags.check(a);
     } catch (err) {
       if (err instanceof Stop) return;
-      if (this.options.signal?.aborted) throw new PlcError('ABORTED', 'the connection doctor was aborted', { cause: err });
+      if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
       // The deadline ran out where no step caught it (between steps, or inside one's own retries): a failed step, not a rejection.
       if (this.signal.aborted) {
         const after = this.steps.at(-1)?.step;
@@ -336,7 +336,7 @@ class Doctor {
       };
       const onAbort = () => {
         done();
-        reject(new PlcError('ABORTED', 'aborted'));
+        reject(abortError('a lookup', this.signal));
       };
       const timer = setTimeout(() => {
         done();
@@ -663,7 +663,7 @@ class FrameWaiter {
         if (this.end) return (done(), resolve(this.end), true);
         return false;
       };
-      const onAbort = () => (done(), reject(new ConnectionError('ABORTED', 'aborted')));
+      const onAbort = () => (done(), reject(abortError('waiting for a frame', this.signal)));
       const timer = setTimeout(() => (done(), resolve({ kind: 'silent', ms })), ms);
       if (check()) return;
       if (this.signal.aborted) return onAbort();
@@ -676,8 +676,4 @@ class FrameWaiter {
     this.socket.removeListener('data', this.onData);
     this.socket.removeListener('close', this.onClose);
   }
-}
-
-function hex4(n: number): string {
-  return n.toString(16).padStart(4, '0');
 }

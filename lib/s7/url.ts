@@ -7,6 +7,7 @@ import type { UrlScheme } from '../link/driver';
 import { hostPart, portOf, requireHost, urlError, type UrlParams } from '../link/url-params';
 import type { SafetyOptions } from '../link/url-params';
 import { DEFAULT_MAX_ITEMS, MAX_ITEMS, S7_PORT } from './constants';
+import { hex4 } from '../values/text';
 
 export type S7ConnectionType = 'pg' | 'op' | 'basic';
 
@@ -44,10 +45,6 @@ const DEFAULTS = Object.freeze({
   maxItems: DEFAULT_MAX_ITEMS,
 });
 
-function hex4(n: number): string {
-  return n.toString(16).toUpperCase().padStart(4, '0');
-}
-
 export const S7_URLS: UrlScheme<S7Endpoint> = Object.freeze({
   protocol: 's7',
   schemes: { s7: ['rack', 'slot', 'localTsap', 'remoteTsap', 'type', 'pdu', 'timeout', 'maxItems', 'control'] },
@@ -79,8 +76,8 @@ export const S7_URLS: UrlScheme<S7Endpoint> = Object.freeze({
 
   format(e: S7Endpoint, q: URLSearchParams): string {
     if (e.localTsap !== undefined && e.remoteTsap !== undefined) {
-      q.set('localTsap', hex4(e.localTsap));
-      q.set('remoteTsap', hex4(e.remoteTsap));
+      q.set('localTsap', hex4(e.localTsap).toUpperCase());
+      q.set('remoteTsap', hex4(e.remoteTsap).toUpperCase());
     } else {
       q.set('rack', String(e.rack));
       q.set('slot', String(e.slot));

@@ -11,7 +11,8 @@ import { PlcError, SourceError } from '../errors';
 import type { DataTypeName, PlcScalar } from '../types';
 import { literalValue } from './literals';
 import { NameIndex } from './names';
-import { distance, parseBlockSource } from './source-parser';
+import { distance } from './distance';
+import { parseBlockSource } from './source-parser';
 import { readSymbolTable } from './symbol-files';
 import { blockRef, elementIndex, layoutBlocks, memberRef, type BlockLayout, type LayoutNode } from './layout';
 import type {
@@ -317,9 +318,10 @@ function numberBlocks(dbs: readonly DataBlockDecl[], facts: TableFacts, options:
   const known = new Set(dbs.flatMap((d) => [key(d.name), ...(d.number === undefined ? [] : [key(`DB${d.number}`)])]));
   for (const [k, g] of given)
     if (!known.has(k)) {
+      const limit = Math.max(1, Math.floor(k.length / 3));
       const near = dbs
-        .map((d) => ({ d, by: distance(k, key(d.name)) }))
-        .filter((c) => c.by <= Math.max(1, Math.floor(k.length / 3)))
+        .map((d) => ({ d, by: distance(k, key(d.name), limit) }))
+        .filter((c) => c.by <= limit)
         .sort((a, b) => a.by - b.by)[0];
       const list = dbs.map((d) => blockRef(d)).join(', ') || 'none';
       const hint = near ? `did you mean ${blockRef(near.d)}? DBs: ${list}` : `DBs: ${list}`;

@@ -37,6 +37,7 @@ import type {
   TypeDecl,
   TypeRef,
 } from './model';
+import { distance } from './distance';
 
 type StructRef = Extract<TypeRef, { kind: 'struct' }>;
 
@@ -143,20 +144,6 @@ function describe(t: Token): string {
     default:
       return t.text.length > 30 ? `${t.text.slice(0, 30)}…` : t.text;
   }
-}
-
-/** Edit distance, for "did you mean" (type and block names are short); two swapped neighbours count as one edit. */
-export function distance(a: string, b: string): number {
-  const rows: number[][] = [Array.from({ length: b.length + 1 }, (_, j) => j)];
-  for (let i = 1; i <= a.length; i++) {
-    const row = [i];
-    for (let j = 1; j <= b.length; j++) {
-      row[j] = Math.min(rows[i - 1]![j]! + 1, row[j - 1]! + 1, rows[i - 1]![j - 1]! + (a[i - 1] === b[j - 1] ? 0 : 1));
-      if (i > 1 && j > 1 && a[i - 1] === b[j - 2] && a[i - 2] === b[j - 1]) row[j] = Math.min(row[j]!, rows[i - 2]![j - 2]! + 1);
-    }
-    rows.push(row);
-  }
-  return rows[a.length]![b.length]!;
 }
 
 class Parser {
@@ -545,9 +532,10 @@ class Parser {
       throw this.error(t, `member ${member} has the type ${t.text}, which has no fixed place in a data block plcwire could read`);
     }
     if (isSystemTypeName(kw)) return { kind: 'named', name: t.text, at: this.pos(t) };
+    const limit = Math.max(1, Math.floor(kw.length / 3));
     const near = [...ELEMENTARY.keys()]
-      .map((n) => ({ n, d: distance(kw, n) }))
-      .filter((c) => c.d <= Math.max(1, Math.floor(kw.length / 3)))
+      .map((n) => ({ n, d: distance(kw, n, limit) }))
+      .filter((c) => c.d <= limit)
       .sort((a, b) => a.d - b.d)[0];
     const hint = near ? ` (did you mean ${near.n}?)` : ' (a UDT is written in quotes: "Name")';
     throw this.error(t, `unknown type ${t.text} for member ${member}${hint}`);

@@ -17,3 +17,8 @@ export function textOf(value: unknown): string {
   const members = Object.entries(value).map(([k, v]) => `${/^[A-Za-z_]\w*$/.test(k) ? k : JSON.stringify(k)}: ${textOf(v)}`);
   return members.length === 0 ? '{}' : `{ ${members.join(', ')} }`;
 }
+
+/** A 16-bit number as four lowercase hex digits, no prefix: 0x102 → `0102` (TSAPs, SZL ids, PLC codes in messages). */
+export function hex4(n: number): string {
+  return n.toString(16).padStart(4, '0');
+}

@@ -13,6 +13,7 @@ import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCo
 import { headerError, MAX_FRAME, REQUESTED_AMQ, TPDU_SIZE_CODE } from '../constants';
 import { localTsapFor, remoteTsapFor } from '../tsap';
 import { S7Session, type SessionWiring } from './session';
+import { hex4 } from '../../values/text';
 
 export interface OpenOptions extends Omit<SessionWiring, 'timeout'> {
   /** For the TCP connect; the supervisor aborts `signal` when the whole handshake takes longer. */
@@ -62,7 +63,7 @@ async function requestConnection(socket: net.Socket, next: FrameWaiter, e: S7End
   socket.write(encodeConnectionRequest({ sourceRef: 0x0001, callingTsap, calledTsap, tpduSize: TPDU_SIZE_CODE }));
   const cc = decodeCotp(await next());
   if (cc.type !== 'CC') {
-    const where = e.remoteTsap !== undefined ? `TSAP 0x${calledTsap.toString(16).padStart(4, '0')}` : `rack ${e.rack}, slot ${e.slot}`;
+    const where = e.remoteTsap !== undefined ? `TSAP 0x${hex4(calledTsap)}` : `rack ${e.rack}, slot ${e.slot}`;
     throw new ConnectionError(
       'CONNECT_FAILED',
       `${name} refused the connection (${where}): wrong rack/slot or TSAP, or the PLC's connection limit is reached`,

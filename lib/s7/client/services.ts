@@ -59,6 +59,7 @@ import {
   type Protection,
   type SzlList,
 } from '../codec/szl';
+import { hex4 } from '../../values/text';
 
 /** What `info()` gathers in one object. A field the CPU does not give is undefined. */
 export interface PlcInfo {
@@ -443,10 +444,6 @@ function checkBlockNumber(n: number): void {
 
 function checkWord(what: string, n: number): void {
   if (!Number.isInteger(n) || n < 0 || n > 0xffff) throw new PlcError('INVALID_VALUE', `${what} must be 0..0xFFFF, got ${String(n)}`);
-}
-
-function hex4(n: number): string {
-  return n.toString(16).padStart(4, '0');
 }
 
 /** A Date whose UTC fields are `d`'s local fields (to write local wall time). */

@@ -14,6 +14,7 @@
 import { ProtocolError } from '../../errors';
 import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import { SZL, type SzlList } from './szl';
+import { hex4 } from '../../values/text';
 
 const DIAGNOSTIC_ENTRY = 20;
 
@@ -69,7 +70,7 @@ export const EVENT_DESCRIPTIONS: Readonly<Record<number, string>> = Object.freez
 
 /** The description of an event ID, or "event 0x4711" when this library has none. */
 export function describeEvent(eventId: number): string {
-  return EVENT_DESCRIPTIONS[eventId] ?? `event 0x${eventId.toString(16).padStart(4, '0')}`;
+  return EVENT_DESCRIPTIONS[eventId] ?? `event 0x${hex4(eventId)}`;
 }
 
 /** Entries of a diagnostic buffer list, newest first as the CPU sends them. Throws ProtocolError on a record of the wrong size. */

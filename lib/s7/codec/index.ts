@@ -31,14 +31,23 @@ export {
   s7AnswerRef,
   scanReadAck,
   type ReadItemTable,
-  type ReadItem,
   type ReadResponseItem,
   type S7Item,
   type S7Message,
   type S7WriteItem,
   type SetupParams,
-  type WriteItem,
 } from './pdu';
+import type { S7Item, S7WriteItem } from './pdu';
+/**
+ * @deprecated The item of a Read Var job is `S7Item`; this second name stays
+ * only because `s7.ReadItem` was public (lib/index.ts exports this module as `s7`).
+ */
+export type ReadItem = S7Item;
+/**
+ * @deprecated The item of a Write Var job is `S7WriteItem`; this second name
+ * stays only because `s7.WriteItem` was public.
+ */
+export type WriteItem = S7WriteItem;
 export {
   decodePassword,
   decodeUserdata,

@@ -4,7 +4,7 @@
  * Buffer; decoders take one whole TPKT frame, return subarrays of it, and
  * throw only ProtocolError.
  */
-import { ProtocolError } from '../../errors';
+import { ProtocolError, ValueError } from '../../errors';
 import {
   COTP_DT_HEADER,
   CotpType,
@@ -41,10 +41,6 @@ export interface S7WriteItem extends S7Item {
   dataTransportSize: number;
   data: Buffer;
 }
-
-/** Names used by the S7 split notes. */
-export type ReadItem = S7Item;
-export type WriteItem = S7WriteItem;
 
 export interface SetupParams {
   maxAmqCalling: number;
@@ -268,7 +264,7 @@ export function encodeHeaderErrorAck(pduRef: number, error: number): Buffer {
 }
 
 function checkCount(n: number): void {
-  if (n > 255) throw new RangeError(`an S7 job carries at most 255 items, got ${n}`);
+  if (n > 255) throw new ValueError('item count', `an S7 job carries at most 255 items, got ${n}`);
 }
 
 // ---------------------------------------------------------------- decoders

@@ -10,8 +10,9 @@
  * The ID's high byte selects the extract: 0x00xx all records, 0x01xx one
  * record or group given by the index, 0x0Fxx the header only.
  */
-import { ProtocolError } from '../../errors';
+import { ProtocolError, ValueError } from '../../errors';
 import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
+import { hex4 } from '../../values/text';
 
 /** One SZL list as read (`readSzl`). Records are copies (they do not keep the frames alive). */
 export interface SzlList {
@@ -75,15 +76,11 @@ export function encodeSzl(list: SzlList, headerOnly = false): Buffer {
   if (!headerOnly) {
     list.records.forEach((r, i) => {
       if (r.length !== list.recordLength)
-        throw new RangeError(`SZL record ${i} has ${r.length} bytes, the list's records ${list.recordLength}`);
+        throw new ValueError(`SZL record ${i}`, `it has ${r.length} bytes, the list's records ${list.recordLength}`);
       r.copy(out, HEADER + i * list.recordLength);
     });
   }
   return out;
-}
-
-function hex4(n: number): string {
-  return n.toString(16).padStart(4, '0');
 }
 
 function need(list: SzlList, min: number, what: string): void {

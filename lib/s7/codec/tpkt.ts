@@ -1,5 +1,5 @@
 /** TPKT (RFC 1006 §6): version 3, reserved 0, 16-bit length of the whole packet. */
-import { ProtocolError } from '../../errors';
+import { ProtocolError, ValueError } from '../../errors';
 import type { FrameCheck } from '../../link/framer';
 import { COTP_DT_HEADER, TPKT_HEADER, TPKT_VERSION } from '../constants';
 
@@ -26,7 +26,7 @@ function bad(message: string): FrameCheck {
 /** A new frame of `payloadLength` bytes after the TPKT header, header filled in. Contents after byte 4 are not zeroed. */
 export function tpktFrame(payloadLength: number): Buffer {
   const length = TPKT_HEADER + payloadLength;
-  if (length > 0xffff) throw new RangeError(`TPKT packet of ${length} bytes exceeds 65535`);
+  if (length > 0xffff) throw new ValueError('TPKT packet', `${length} bytes exceed 65535`);
   const frame = Buffer.allocUnsafe(length);
   frame[0] = TPKT_VERSION;
   frame[1] = 0;

@@ -23,7 +23,7 @@
  * Data part: one item, return code (FF ok, 0A none), transport size
  * (09 octet string), length in bytes, data.
  */
-import { PlcError, ProtocolError } from '../../errors';
+import { PlcError, ProtocolError, ValueError } from '../../errors';
 import {
   DataTransportSize,
   FRAME_OVERHEAD,
@@ -82,7 +82,7 @@ export function encodeUserdata(pduRef: number, p: UserdataParams, data?: Buffer,
   const plen = paramLength(p);
   const empty = data === undefined;
   const dlen = 4 + (empty ? 0 : data.length);
-  if (dlen > 0xffff) throw new RangeError(`userdata of ${dlen} bytes does not fit an S7 PDU`);
+  if (dlen > 0xffff) throw new ValueError('userdata', `${dlen} bytes do not fit an S7 PDU`);
   const frame = s7Frame(Rosctr.UserData, pduRef, plen, dlen);
   let o = FRAME_OVERHEAD + S7_JOB_HEADER;
   frame[o] = 0x00;

@@ -5,8 +5,10 @@ import { planRead, type ReadPlan } from './read';
 /**
  * Remembers read plans by tag list: the same list (the same array, or the
  * same addresses in the same order) at the same PDU size and options (item
- * limit, merge) is not planned again. Bounded: the oldest plan goes when
- * `capacity` is reached.
+ * limit, merge) is not planned again. Bounded: when `capacity` plans are
+ * remembered by list, the next new one forgets them all and starts again
+ * (no age is tracked); a plan remembered by its array lives as long as the
+ * array does (a WeakMap).
  */
 export class ReadPlanCache {
   private readonly byArray = new WeakMap<readonly Tag[], ReadPlan>();

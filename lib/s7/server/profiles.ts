@@ -1,6 +1,7 @@
 /** CPU profiles and memory layouts of the S7 simulator. */
 import type { MemoryLayout } from '../../sim/memory';
 import { rackSlotOf } from '../tsap';
+import { hex4 } from '../../values/text';
 
 export type S7Profile = 's7-300' | 's7-400' | 's7-1200' | 's7-1500' | 's7-200' | 'logo';
 
@@ -90,8 +91,6 @@ const LOGO: CpuProfile = Object.freeze({
   s5CountersTimers: false,
 });
 
-const hex4 = (tsap: number) => `0x${tsap.toString(16).padStart(4, '0')}`;
-
 /**
  * Why the CPU refuses a connection request with these TSAPs, or undefined when
  * it accepts them. Rack/slot CPUs check a called TSAP of the rack/slot form
@@ -101,14 +100,15 @@ const hex4 = (tsap: number) => `0x${tsap.toString(16).padStart(4, '0')}`;
 export function tsapRefusal(profile: CpuProfile, callingTsap: number, calledTsap: number): string | undefined {
   const own = profile.tsaps;
   if (own) {
-    if ((calledTsap & own.called.mask) !== own.called.value) return `no connection configured for called TSAP ${hex4(calledTsap)}`;
-    if ((callingTsap & own.calling.mask) !== own.calling.value) return `calling TSAP ${hex4(callingTsap)} is not the configured partner's`;
+    if ((calledTsap & own.called.mask) !== own.called.value) return `no connection configured for called TSAP 0x${hex4(calledTsap)}`;
+    if ((callingTsap & own.calling.mask) !== own.calling.value)
+      return `calling TSAP 0x${hex4(callingTsap)} is not the configured partner's`;
     return undefined;
   }
   const at = rackSlotOf(calledTsap);
   if (!at) return undefined;
   const { rack, slot } = at;
-  if (rack !== 0 || !profile.slots.includes(slot)) return `no CPU at rack ${rack} slot ${slot} (called TSAP ${hex4(calledTsap)})`;
+  if (rack !== 0 || !profile.slots.includes(slot)) return `no CPU at rack ${rack} slot ${slot} (called TSAP 0x${hex4(calledTsap)})`;
   return undefined;
 }
 
