@@ -7,7 +7,7 @@ import { PlcError } from './errors';
 import { FetchWriteClient } from './fetchwrite/client';
 import { FreeportClient } from './freeport/client';
 import type { FreeportProfile } from './freeport/profile';
-import type { ClientOptions } from './link/client-base';
+import type { ClientOptions } from './client/base';
 import { S7Client } from './s7/client';
 import type { PlcClient } from './types';
 import { endpointName, parseUrl, type Endpoint } from './url';

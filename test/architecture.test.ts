@@ -151,7 +151,7 @@ describe('architecture of lib/', () => {
   it('the shared link layer (lib/link/) imports nothing of a protocol, type imports included', () => {
     const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|fetchwrite|freeport)\//.test(to);
     const links = [...GRAPH.keys()].filter((f) => f.startsWith('lib/link/'));
-    expect(links).to.include.members(['lib/link/serial.ts', 'lib/link/client-base.ts', 'lib/link/driver.ts']);
+    expect(links).to.include.members(['lib/link/serial.ts', 'lib/link/supervisor.ts', 'lib/link/driver.ts']);
     expect(
       violations(
         (f) => f.startsWith('lib/link/'),

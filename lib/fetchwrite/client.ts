@@ -16,7 +16,7 @@
 import type * as net from 'node:net';
 import { S7_TAG_SYNTAX } from '../address';
 import { AddressError, ConnectionError, isLinkError, PlcError, tagError, TimeoutError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
+import { BaseClient, endpointOptions, type ClientOptions } from '../client/base';
 import type { Driver } from '../link/driver';
 import { FrameReader } from '../link/framer';
 import { JobQueue } from '../link/jobs';

@@ -16,7 +16,7 @@ import * as net from 'node:net';
 import type { SerialPortStream } from '@serialport/stream';
 import { spanContains } from '../address/syntax';
 import { ConnectionError, isLinkError, PlcError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
+import { BaseClient, endpointOptions, type ClientOptions } from '../client/base';
 import type { Driver, TagSyntax } from '../link/driver';
 import { closeSerial, openSerial } from '../link/serial';
 import { openTcp } from '../link/tcp';

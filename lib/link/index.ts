@@ -1,5 +1,4 @@
 export * from './backoff';
-export * from './client-base';
 export * from './framer';
 export * from './jobs';
 export * from './pending';

@@ -18,7 +18,7 @@
  */
 import { S7_TAG_SYNTAX } from '../../address';
 import { ConnectionError, isLinkError, PlcError, type TagResult } from '../../errors';
-import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../link/client-base';
+import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
 import type { Driver, ReadValues } from '../../link/driver';
 import type { PlcValue, Protocol, RequestOptions, Tag } from '../../types';
 import { endpointName, type S7Endpoint } from '../../url';

@@ -7,11 +7,11 @@ import { decodeShape, expandWrite, resolveSymbol, unknownSymbol, type SymbolShap
 import type { LayoutCheck, LinkState, PlcClient, PlcData, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
 
 export type { PreparedRead } from '../types';
-import type { BackoffOptions } from './backoff';
-import type { Driver, DriverSession, DriverTag, ReadValues } from './driver';
-import { LinkSupervisor } from './supervisor';
+import type { BackoffOptions } from '../link/backoff';
+import type { Driver, DriverSession, DriverTag, ReadValues } from '../link/driver';
+import { LinkSupervisor } from '../link/supervisor';
 
-export type { Driver, DriverSession, DriverTag, ReadValues, TagSyntax } from './driver';
+export type { Driver, DriverSession, DriverTag, ReadValues, TagSyntax } from '../link/driver';
 
 export interface ClientOptions {
   /** For messages, e.g. "s7://127.0.0.1:102". */
