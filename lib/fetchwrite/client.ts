@@ -23,7 +23,7 @@ import { JobQueue } from '../link/jobs';
 import { PendingRequests } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { PlcValue, Protocol, Tag } from '../types';
-import { endpointName, type FetchWriteEndpoint } from '../url';
+import { FETCHWRITE_URLS, type FetchWriteEndpoint } from './url';
 import { decodeTag, encodeInto, validateValue, writeSpan } from '../values';
 import {
   HEADER,
@@ -132,7 +132,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, FwPrepared> {
   };
 
   constructor(endpoint: FetchWriteEndpoint, options: Partial<ClientOptions> = {}) {
-    super(endpointOptions(endpointName(endpoint), endpoint, options));
+    super(endpointOptions(FETCHWRITE_URLS.name(endpoint), endpoint, options));
     this.endpoint = endpoint;
   }
 
