@@ -17,11 +17,9 @@
  * docs/symbols.md). Unknown parameters are refused, so a typo never
  * silently falls back to a default.
  */
-import { FETCHWRITE_URLS, type FetchWriteEndpoint } from './fetchwrite/url';
-import { FREEPORT_URLS, type FreeportEndpoint } from './freeport/url';
+import { DRIVERS, driverOf, type Endpoint } from './drivers';
 import type { UrlScheme } from './link/driver';
 import { UrlParams, urlError, type SafetyOptions } from './link/url-params';
-import { S7_URLS, type S7Endpoint } from './s7/url';
 
 export type { S7ConnectionType, S7Endpoint } from './s7/url';
 export { S7_CPU_PRESETS, type S7CpuPreset, type S7CpuPresetParams } from './s7/presets';
@@ -30,32 +28,24 @@ export { FREEPORT_BAUD_RATES, type FreeportEndpoint, type FreeportLine, type Par
 
 export type { SafetyOptions } from './link/url-params';
 
-export type Endpoint = S7Endpoint | FetchWriteEndpoint | FreeportEndpoint;
+export type { Endpoint } from './drivers';
 
-/** Every driver's URLs, by protocol: adding a protocol is one entry here (and its endpoint in `Endpoint`). */
-const DRIVER_URLS: { readonly [P in Endpoint['protocol']]: UrlScheme<Extract<Endpoint, { protocol: P }>> } = {
-  s7: S7_URLS,
-  fetchwrite: FETCHWRITE_URLS,
-  freeport: FREEPORT_URLS,
-};
+/** Every driver's URLs, from the registry (lib/drivers.ts): a protocol registered there is parsed here. */
+const DRIVER_URLS: readonly UrlScheme<Endpoint>[] = Object.values(DRIVERS).map((d) => d.urls as UrlScheme<Endpoint>);
 
 /** The URL schemes, each with its driver's entry. */
 const SCHEMES: ReadonlyMap<string, UrlScheme<Endpoint>> = new Map(
-  Object.values(DRIVER_URLS).flatMap((entry) =>
-    Object.keys(entry.schemes).map((scheme) => [scheme, entry as UrlScheme<Endpoint>] as const),
-  ),
+  DRIVER_URLS.flatMap((entry) => Object.keys(entry.schemes).map((scheme) => [scheme, entry] as const)),
 );
 
 function urlsOf(e: Endpoint): UrlScheme<Endpoint> {
-  return DRIVER_URLS[e.protocol] as UrlScheme<Endpoint>;
+  return driverOf(e).urls;
 }
 
 /** What a URL that leaves a parameter out gets, for every protocol. */
-export const DEFAULTS = Object.freeze({
-  ...S7_URLS.defaults,
-  ...FETCHWRITE_URLS.defaults,
-  ...FREEPORT_URLS.defaults,
-}) as Readonly<typeof S7_URLS.defaults>; // the three drivers' defaults share one type (UrlScheme)
+export const DEFAULTS: Readonly<Record<string, number>> = Object.freeze(
+  DRIVER_URLS.reduce<Record<string, number>>((all, u) => ({ ...all, ...u.defaults }), {}),
+);
 
 const SAFETY_PARAMS = ['readOnly', 'allow', 'strictSymbols'];
 
