@@ -9,13 +9,17 @@ import type { BindingInterface } from '@serialport/bindings-interface';
 import type { ClientOptions } from './client/options';
 import { PlcError } from './errors';
 import { FetchWriteClient } from './fetchwrite/client';
+import { serveFetchWrite } from './fetchwrite/serve';
 import { FETCHWRITE_URLS } from './fetchwrite/url';
 import { FreeportClient } from './freeport/client';
 import type { FreeportProfile } from './freeport/profile';
+import { serveFreeport } from './freeport/serve';
 import { FREEPORT_URLS } from './freeport/url';
 import type { UrlScheme } from './link/driver';
 import { S7Client } from './s7/client';
+import { serveS7 } from './s7/serve';
 import { S7_URLS } from './s7/url';
+import type { Served, ServeFlags } from './sim/serve';
 import type { PlcClient, Protocol } from './types';
 
 /**
@@ -48,6 +52,8 @@ export interface DriverEntry<E extends { readonly protocol: Protocol }, C extend
   readonly noSymbols?: string;
   /** Its client can ask a data block's length, so strictSymbols can check a symbol table's layout against the PLC. */
   readonly blockLength: boolean;
+  /** `plcwire serve <protocol>`: starts its simulator from the command line's flags. */
+  serve(flags: ServeFlags): Promise<Served>;
 }
 
 /** The options every client takes: ConnectOptions without freeport's serial binding and frame profile. */
@@ -62,12 +68,13 @@ function entry<E extends { readonly protocol: Protocol }, C extends PlcClient>(e
 
 /** Every protocol, by name: adding a protocol is one line here (its entry from its own folder). */
 export const DRIVERS = Object.freeze({
-  s7: entry({ urls: S7_URLS, createClient: (e, o) => new S7Client(e, common(o)), symbols: true, blockLength: true }),
+  s7: entry({ urls: S7_URLS, createClient: (e, o) => new S7Client(e, common(o)), symbols: true, blockLength: true, serve: serveS7 }),
   fetchwrite: entry({
     urls: FETCHWRITE_URLS,
     createClient: (e, o) => new FetchWriteClient(e, common(o)),
     symbols: true,
     blockLength: false,
+    serve: serveFetchWrite,
   }),
   freeport: entry({
     urls: FREEPORT_URLS,
@@ -77,6 +84,7 @@ export const DRIVERS = Object.freeze({
     noSymbols:
       "freeport cannot read or write by symbol: it reaches only each station's data area (ST<station>,…), a few bytes its PLC program fills, not V memory (DB1) by offset; reach the S7-200 over s7:// (a CP 243-1) to use its V memory symbols",
     blockLength: false,
+    serve: serveFreeport,
   }),
 }) satisfies { readonly [P in Protocol]: DriverEntry<{ readonly protocol: P }, PlcClient> };
 
