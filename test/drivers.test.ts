@@ -103,8 +103,8 @@ describe('drivers: the protocol registry', () => {
     }
   });
 
-  it('connect.ts and url.ts name no protocol: they read the registry', () => {
-    for (const file of ['lib/connect.ts', 'lib/url.ts']) {
+  it('connect.ts, url.ts and the serve command name no protocol: they read the registry', () => {
+    for (const file of ['lib/connect.ts', 'lib/url.ts', 'lib/cli/serve.ts']) {
       const code = fs
         .readFileSync(path.join(ROOT, file), 'utf8')
         .replace(/\/\*[\s\S]*?\*\//g, '')
