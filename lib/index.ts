@@ -67,7 +67,7 @@ export {
   type DriverTag,
   type ReadValues,
   type TagSyntax,
-} from './link/client-base';
+} from './client/base';
 export type { BackoffOptions } from './link/backoff';
 export type { FrameCheck } from './link/framer';
 

@@ -17,81 +17,35 @@
  * docs/symbols.md). Unknown parameters are refused, so a typo never
  * silently falls back to a default.
  */
-import { FETCHWRITE_URLS, type FetchWriteEndpoint } from './fetchwrite/url';
-import { FREEPORT_URLS, type FreeportEndpoint } from './freeport/url';
+import { DRIVERS, driverOf, type Endpoint } from './drivers';
 import type { UrlScheme } from './link/driver';
 import { UrlParams, urlError, type SafetyOptions } from './link/url-params';
-import { MAX_ITEMS } from './s7/constants';
-import { S7_URLS, type S7Endpoint } from './s7/url';
 
 export type { S7ConnectionType, S7Endpoint } from './s7/url';
+export { S7_CPU_PRESETS, type S7CpuPreset, type S7CpuPresetParams } from './s7/presets';
 export type { FetchWriteEndpoint } from './fetchwrite/url';
 export { FREEPORT_BAUD_RATES, type FreeportEndpoint, type FreeportLine, type Parity } from './freeport/url';
 
 export type { SafetyOptions } from './link/url-params';
 
-export type Endpoint = S7Endpoint | FetchWriteEndpoint | FreeportEndpoint;
+export type { Endpoint } from './drivers';
 
-/** Every driver's URLs, by protocol: adding a protocol is one entry here (and its endpoint in `Endpoint`). */
-const DRIVER_URLS: { readonly [P in Endpoint['protocol']]: UrlScheme<Extract<Endpoint, { protocol: P }>> } = {
-  s7: S7_URLS,
-  fetchwrite: FETCHWRITE_URLS,
-  freeport: FREEPORT_URLS,
-};
+/** Every driver's URLs, from the registry (lib/drivers.ts): a protocol registered there is parsed here. */
+const DRIVER_URLS: readonly UrlScheme<Endpoint>[] = Object.values(DRIVERS).map((d) => d.urls as UrlScheme<Endpoint>);
 
 /** The URL schemes, each with its driver's entry. */
 const SCHEMES: ReadonlyMap<string, UrlScheme<Endpoint>> = new Map(
-  Object.values(DRIVER_URLS).flatMap((entry) =>
-    Object.keys(entry.schemes).map((scheme) => [scheme, entry as UrlScheme<Endpoint>] as const),
-  ),
+  DRIVER_URLS.flatMap((entry) => Object.keys(entry.schemes).map((scheme) => [scheme, entry] as const)),
 );
 
 function urlsOf(e: Endpoint): UrlScheme<Endpoint> {
-  return DRIVER_URLS[e.protocol] as UrlScheme<Endpoint>;
+  return driverOf(e).urls;
 }
 
 /** What a URL that leaves a parameter out gets, for every protocol. */
-export const DEFAULTS = Object.freeze({
-  ...S7_URLS.defaults,
-  ...FETCHWRITE_URLS.defaults,
-  ...FREEPORT_URLS.defaults,
-}) as Readonly<typeof S7_URLS.defaults>; // the three drivers' defaults share one type (UrlScheme)
-
-export type S7CpuPreset = 's7-1500' | 's7-1200' | 's7-400' | 's7-300' | 'logo' | 's7-200';
-
-/** What a CPU preset puts into an s7:// URL: where the CPU answers, and how many items per job it serves. */
-export interface S7CpuPresetParams {
-  rack?: number;
-  slot?: number;
-  localTsap?: number;
-  remoteTsap?: number;
-  /** Absent: DEFAULTS.maxItems (20). 255: as many as the PDU allows. */
-  maxItems?: number;
-}
-
-/**
- * URL parameters per CPU family (the Node-RED connection dialog's presets).
- * Items per job: Siemens S7-1200, S7-1500 and S7-400 CPUs limit a job by
- * the PDU size only (more than 20 items in one job work on an S7-1200 and an
- * S7-1500, frangoteam/FUXA#694; 36 written to an S7-1500 in one job,
- * S7NetPlus/s7netplus#380; S7-400 as well, S7NetPlus/s7netplus#157), so
- * their presets allow 255 and the PDU decides (19 at PDU 240, 39 at 480, 79
- * at 960). The S7-300 preset keeps the default 20: S7-300 compatible CPUs
- * (VIPA, frangoteam/FUXA#694) serve 20, and a Siemens S7-300 at PDU 240
- * carries 19 anyway. LOGO! and S7-200 negotiate PDU 240 (19 items).
- * TSAPs: an S7-200's CP 243-1 is called at 10.xx, its connection number in
- * the low byte (CP 243-1 manual, section 4.2.3; S7NetPlus TsapPair.cs uses
- * 10.00 / 10.01); a LOGO! at the pair set in LOGO!Soft Comfort, 01.00 / 02.00
- * by default (the simulator's s7-200 and logo profiles accept these).
- */
-export const S7_CPU_PRESETS: Readonly<Record<S7CpuPreset, Readonly<S7CpuPresetParams>>> = Object.freeze({
-  's7-1500': Object.freeze({ rack: 0, slot: 1, maxItems: MAX_ITEMS }),
-  's7-1200': Object.freeze({ rack: 0, slot: 1, maxItems: MAX_ITEMS }),
-  's7-400': Object.freeze({ rack: 0, slot: 3, maxItems: MAX_ITEMS }),
-  's7-300': Object.freeze({ rack: 0, slot: 2 }),
-  logo: Object.freeze({ localTsap: 0x0100, remoteTsap: 0x0200 }),
-  's7-200': Object.freeze({ localTsap: 0x1000, remoteTsap: 0x1001 }),
-});
+export const DEFAULTS: Readonly<Record<string, number>> = Object.freeze(
+  DRIVER_URLS.reduce<Record<string, number>>((all, u) => ({ ...all, ...u.defaults }), {}),
+);
 
 const SAFETY_PARAMS = ['readOnly', 'allow', 'strictSymbols'];
 

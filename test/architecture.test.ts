@@ -158,10 +158,31 @@ describe('architecture of lib/', () => {
   it('the shared link layer (lib/link/) imports nothing of a protocol, type imports included', () => {
     const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|fetchwrite|freeport)\//.test(to);
     const links = [...GRAPH.keys()].filter((f) => f.startsWith('lib/link/'));
-    expect(links).to.include.members(['lib/link/serial.ts', 'lib/link/client-base.ts', 'lib/link/driver.ts']);
+    expect(links).to.include.members(['lib/link/serial.ts', 'lib/link/supervisor.ts', 'lib/link/driver.ts']);
     expect(
       violations(
         (f) => f.startsWith('lib/link/'),
+        (e) => e.to !== undefined && protocol(e.to),
+      ),
+    ).to.deep.equal([]);
+  });
+
+  it('the link layer (lib/link/) imports nothing of the tag client (lib/client/) or of symbols (lib/symbols/), type imports included', () => {
+    const clientFiles = [...GRAPH.keys()].filter((f) => f.startsWith('lib/client/'));
+    expect(clientFiles).to.include.members(['lib/client/base.ts', 'lib/client/lists.ts', 'lib/client/symbols.ts']);
+    expect(
+      violations(
+        (f) => f.startsWith('lib/link/'),
+        (e) => e.to !== undefined && /^lib\/(client|symbols)\//.test(e.to),
+      ),
+    ).to.deep.equal([]);
+  });
+
+  it('the tag client (lib/client/) imports nothing of a protocol, type imports included', () => {
+    const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|fetchwrite|freeport)\//.test(to);
+    expect(
+      violations(
+        (f) => f.startsWith('lib/client/'),
         (e) => e.to !== undefined && protocol(e.to),
       ),
     ).to.deep.equal([]);

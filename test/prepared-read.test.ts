@@ -6,7 +6,7 @@ import { FetchWriteServer, type FetchWriteRequestEvent } from '../lib/fetchwrite
 import { FreeportBus } from '../lib/freeport/bus';
 import { FreeportClient } from '../lib/freeport/client';
 import type { FreeportRequest } from '../lib/freeport/codec';
-import type { PreparedRead } from '../lib/link/client-base';
+import type { PreparedRead } from '../lib/client/base';
 import { S7Client, type ItemLimitEvent } from '../lib/s7/client';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';

@@ -154,7 +154,7 @@ export function structValueFromText(
   target: string,
   text: string,
 ): { value: unknown } | undefined {
-  // Text that parses as an address is that address, as the client reads it (lib/link/client-base.ts).
+  // Text that parses as an address is that address, as the client reads it (lib/client/base.ts).
   if (!table || parses(target)) return undefined;
   const resolved = resolveSymbol(table, target, (address) => client.tag(address));
   if (!resolved?.shape) return undefined;

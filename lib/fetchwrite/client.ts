@@ -16,14 +16,14 @@
 import type * as net from 'node:net';
 import { S7_TAG_SYNTAX } from '../address';
 import { AddressError, ConnectionError, isLinkError, PlcError, tagError, TimeoutError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
+import { BaseClient, endpointOptions, type ClientOptions } from '../client/base';
 import type { Driver } from '../link/driver';
 import { FrameReader } from '../link/framer';
 import { JobQueue } from '../link/jobs';
 import { PendingRequests } from '../link/pending';
 import { openTcp } from '../link/tcp';
 import type { PlcValue, Protocol, Tag } from '../types';
-import { endpointName, type FetchWriteEndpoint } from '../url';
+import { FETCHWRITE_URLS, type FetchWriteEndpoint } from './url';
 import { decodeTag, validateValue } from '../values';
 import {
   HEADER,
@@ -112,7 +112,7 @@ export class FetchWriteClient extends BaseClient<FwSession, Tag, ReadPlan> {
   };
 
   constructor(endpoint: FetchWriteEndpoint, options: Partial<ClientOptions> = {}) {
-    super(endpointOptions(endpointName(endpoint), endpoint, options));
+    super(endpointOptions(FETCHWRITE_URLS.name(endpoint), endpoint, options));
     this.endpoint = endpoint;
   }
 

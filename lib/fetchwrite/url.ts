@@ -2,7 +2,7 @@
  * fetchwrite:// URLs: host, the two ports (or one for both) as parameters,
  * the unit DB addresses count in, timeout (lib/url.ts).
  */
-import { DEFAULT_TIMEOUT } from '../link/client-base';
+import { DEFAULT_TIMEOUT } from '../client/options';
 import type { UrlScheme } from '../link/driver';
 import { hostPart, requireHost, urlError, type UrlParams } from '../link/url-params';
 import type { SafetyOptions } from '../link/url-params';

@@ -16,7 +16,7 @@ import type { BindingInterface, BindingPortInterface } from '@serialport/binding
 import type { SerialPortStream } from '@serialport/stream';
 import { ConnectionError, PlcError } from '../errors';
 import { closeSerial, openSerial } from '../link/serial';
-import type { Parity } from '../url';
+import type { Parity } from './url';
 import { encodeReply, type FreeportRequest } from './codec';
 import { FreeportParser } from './parser';
 import { defineProfile, maxStation, type FreeportProfile } from './profile';

@@ -16,12 +16,12 @@ import * as net from 'node:net';
 import type { SerialPortStream } from '@serialport/stream';
 import { spanContains } from '../address/syntax';
 import { ConnectionError, isLinkError, PlcError, toPlcError, type TagResult } from '../errors';
-import { BaseClient, endpointOptions, type ClientOptions } from '../link/client-base';
+import { BaseClient, endpointOptions, type ClientOptions } from '../client/base';
 import type { Driver, TagSyntax } from '../link/driver';
 import { closeSerial, openSerial } from '../link/serial';
 import { openTcp } from '../link/tcp';
 import type { PlcValue } from '../types';
-import { endpointName, type FreeportEndpoint } from '../url';
+import { FREEPORT_URLS, type FreeportEndpoint } from './url';
 import { decodeTag, encodeInto, encodeTag } from '../values';
 import { parseFreeportAddress, type FreeportTag } from './address';
 import { readRequest, writeRequest, type FreeportReply } from './codec';
@@ -58,7 +58,7 @@ export class FreeportClient extends BaseClient<FreeportSession, FreeportTag, Fre
 
   constructor(endpoint: FreeportEndpoint, options: FreeportClientOptions = {}) {
     const { binding, profile, ...common } = options;
-    super(endpointOptions(endpointName(endpoint), endpoint, common));
+    super(endpointOptions(FREEPORT_URLS.name(endpoint), endpoint, common));
     this.endpoint = endpoint;
     this.profile = defineProfile(profile);
     this.binding = binding;

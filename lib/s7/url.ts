@@ -2,7 +2,7 @@
  * s7:// URLs: host, port 102, rack/slot or a TSAP pair, connection type,
  * PDU size, timeout, items per job, control of the CPU (lib/url.ts).
  */
-import { DEFAULT_TIMEOUT } from '../link/client-base';
+import { DEFAULT_TIMEOUT } from '../client/options';
 import type { UrlScheme } from '../link/driver';
 import { hostPart, portOf, requireHost, urlError, type UrlParams } from '../link/url-params';
 import type { SafetyOptions } from '../link/url-params';

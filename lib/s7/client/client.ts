@@ -18,10 +18,10 @@
  */
 import { S7_TAG_SYNTAX } from '../../address';
 import { ConnectionError, isLinkError, PlcError, type TagResult } from '../../errors';
-import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../link/client-base';
+import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
 import type { Driver, ReadValues } from '../../link/driver';
 import type { PlcValue, Protocol, RequestOptions, Tag } from '../../types';
-import { endpointName, type S7Endpoint } from '../../url';
+import { S7_URLS, type S7Endpoint } from '../url';
 import { DEFAULT_MAX_ITEMS } from '../constants';
 import { openS7Session } from './handshake';
 import type { S7Session, WireCounters } from './session';
@@ -108,7 +108,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   };
 
   constructor(endpoint: S7Endpoint, options: Partial<ClientOptions> = {}) {
-    super(endpointOptions(endpointName(endpoint), endpoint, options));
+    super(endpointOptions(S7_URLS.name(endpoint), endpoint, options));
     this.endpoint = endpoint;
     this.itemLimit = endpoint.maxItems ?? DEFAULT_MAX_ITEMS;
     this.planOptions = { maxItems: this.itemLimit };

@@ -8,7 +8,7 @@ import type * as net from 'node:net';
 import { abortError, ConnectionError, ProtocolError, toPlcError } from '../../errors';
 import { FrameReader } from '../../link/framer';
 import { openTcp } from '../../link/tcp';
-import type { S7Endpoint } from '../../url';
+import type { S7Endpoint } from '../url';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from '../codec';
 import { headerError, MAX_FRAME, REQUESTED_AMQ, TPDU_SIZE_CODE } from '../constants';
 import { localTsapFor, remoteTsapFor } from '../tsap';

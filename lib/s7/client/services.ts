@@ -9,7 +9,7 @@ import { PlcError, ProtocolError } from '../../errors';
 import { readDbBytes } from './db-read';
 import { linkError, type S7Session } from './session';
 import type { RequestOptions } from '../../types';
-import type { S7Endpoint } from '../../url';
+import type { S7Endpoint } from '../url';
 import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import {
   decodeBlockCounts,

@@ -1,97 +1,20 @@
 import { EventEmitter } from 'node:events';
 import type { Duplex } from 'node:stream';
 import { ConnectionError, PlcError, TagErrors, tagError, toPlcError, type TagResult } from '../errors';
-import { LayoutMonitor } from '../symbols/layout-check';
-import type { SymbolTable } from '../symbols/model';
-import { decodeShape, expandWrite, resolveSymbol, unknownSymbol, type SymbolShape } from '../symbols/resolve';
+import type { Driver, DriverSession, DriverTag, ReadValues } from '../link/driver';
+import { LinkSupervisor } from '../link/supervisor';
+import { expandWrite } from '../symbols/resolve';
 import type { LayoutCheck, LinkState, PlcClient, PlcData, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
+import { DEFAULT_TIMEOUT, type ClientOptions } from './options';
+import { ReadLists, recordBuilder, toResults, type ReadList } from './lists';
+import { ClientSymbols, shapeResults, shapeValues, type LayoutServices } from './symbols';
+import { TagCache } from './tag-cache';
+import { WriteGuard } from './write-guard';
 
 export type { PreparedRead } from '../types';
-import type { BackoffOptions } from './backoff';
-import type { Driver, DriverSession, DriverTag, ReadValues } from './driver';
-import { LinkSupervisor } from './supervisor';
-
-export type { Driver, DriverSession, DriverTag, ReadValues, TagSyntax } from './driver';
-
-export interface ClientOptions {
-  /** For messages, e.g. "s7://127.0.0.1:102". */
-  name: string;
-  /** Milliseconds, per request and for connecting. */
-  timeout?: number;
-  backoff?: BackoffOptions;
-  /** Jobs waiting at most before QUEUE_FULL. */
-  maxQueued?: number;
-  /** Injected for tests (backoff jitter). */
-  random?: () => number;
-  /** Refuse every write before anything is sent (code WRITE_NOT_ALLOWED). */
-  readOnly?: boolean;
-  /** Only writes inside these areas ("DB10", "M", "ST5") or addresses ("DB1.DBW2") are allowed. */
-  allow?: readonly string[];
-  /**
-   * A compiled symbol table (compileSymbols): tags may then be named as the
-   * sources name them, `"Tank".Level`, beside absolute addresses
-   * (docs/symbols.md, "Reading and writing by name").
-   */
-  symbols?: SymbolTable;
-  /**
-   * Refuse reads and writes by name (LAYOUT_MISMATCH) in a data block whose
-   * length in the PLC differs from what the sources declare, instead of
-   * returning values from shifted offsets (the URL's `strictSymbols=true`).
-   */
-  strictSymbols?: boolean;
-}
-
-export const DEFAULT_TIMEOUT = 5000;
-
-/** What every endpoint carries for its client: the request timeout and the write safety. */
-export interface EndpointOptions {
-  timeout: number;
-  readOnly?: boolean;
-  allow?: readonly string[];
-  strictSymbols?: boolean;
-}
-
-/** A client's options from its endpoint (`name` for messages), overridden by the caller's. */
-export function endpointOptions(name: string, endpoint: EndpointOptions, options: Partial<ClientOptions>): ClientOptions {
-  return {
-    name,
-    timeout: endpoint.timeout,
-    ...(endpoint.readOnly ? { readOnly: true } : {}),
-    ...(endpoint.allow ? { allow: endpoint.allow } : {}),
-    ...(endpoint.strictSymbols ? { strictSymbols: true } : {}),
-    ...options,
-  };
-}
-
-/** A parsed address list and what the driver prepared for it (behind a PreparedRead, or an array read() sees again). */
-interface ReadList<T, M> {
-  /** A copy of the list, to notice a caller that changed its array between polls. */
-  addresses: readonly string[];
-  tags: T[];
-  bad: { address: string; error: PlcError }[];
-  /** The driver's prepareRead(tags). */
-  prepared: M | undefined;
-  /** Reads of this list so far; from the second on, results are built by a compiled object literal. */
-  uses: number;
-  /** Undefined when no tag of the list is a symbol; else their DBs (the layout check) and the structs among them. */
-  symbols?: ListSymbols<T>;
-  values?: RecordBuilder | null;
-  results?: RecordBuilder | null;
-}
-
-type RecordBuilder = (read: readonly unknown[]) => Record<string, unknown>;
-
-/** What the client keeps of a tag resolved from a symbol: its data block (null outside DBs) and, for a struct, its shape. */
-interface SymbolUse<T> {
-  db: number | null;
-  shape: SymbolShape<T> | undefined;
-}
-
-interface ListSymbols<T> {
-  dbs: Set<number>;
-  /** Tags (by index) whose bytes are decoded into an object. */
-  shaped: { index: number; shape: SymbolShape<T> }[];
-}
+export type { Driver, DriverSession, DriverTag, ReadValues, TagSyntax } from '../link/driver';
+export { toResults } from './lists';
+export { endpointOptions, type ClientOptions } from './options';
 
 /**
  * Block infos the layout check asks at once: the S7 session queues beyond
@@ -101,49 +24,6 @@ interface ListSymbols<T> {
 const LAYOUT_PARALLEL = 4;
 
 const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) as ReadValues;
-
-/**
- * A function returning `{ "DB1,INT2": read[0], … }` for a polled list.
- * Adding hundreds of string keys to an object one by one turns it into a
- * hash table, slower to build and to read than this literal, which is built
- * in one step (the figure: bench/README.md, "Figures that used to be in comments"). Keys are JSON-quoted
- * address strings. Falls back to the loop (null) where code generation is
- * disabled or a key would be special in a literal.
- */
-function recordBuilder(prepared: ReadList<{ readonly address: string }, unknown>, kind: 'values' | 'results'): RecordBuilder | undefined {
-  let build = prepared[kind];
-  if (build !== undefined) return build ?? undefined;
-  if (++prepared.uses < 2) return undefined;
-  build = null;
-  const keys = prepared.tags.map((t) => t.address);
-  if (!keys.includes('__proto__')) {
-    try {
-      // eslint-disable-next-line @typescript-eslint/no-implied-eval -- keys are JSON-quoted (see above)
-      build = new Function('read', `return {${keys.map((k, i) => `${JSON.stringify(k)}: read[${i}]`).join(',\n')}};`) as RecordBuilder;
-    } catch {
-      build = null;
-    }
-  }
-  prepared[kind] = build;
-  return build ?? undefined;
-}
-
-/** Result objects from values and errors (a loop: `values` has holes where tags failed). */
-export function toResults(values: readonly PlcValue[], errors: readonly (PlcError | undefined)[] | undefined): TagResult<PlcValue>[] {
-  const results = new Array<TagResult<PlcValue>>(values.length);
-  for (let i = 0; i < values.length; i++) {
-    const error = errors?.[i];
-    results[i] = error ? { ok: false, error } : { ok: true, value: values[i]! };
-  }
-  return results;
-}
-
-function sameStrings(a: readonly string[], b: readonly string[]): boolean {
-  if (a.length !== b.length) return false;
-  for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) return false;
-  return true;
-}
-const MAX_CACHED_TAGS = 10_000;
 
 /**
  * What every driver's client shares: the supervisor (connect, reconnect,
@@ -161,31 +41,36 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   protected readonly timeout: number;
   protected readonly maxQueued: number | undefined;
   private readonly supervisor: LinkSupervisor<S>;
-  private readonly tags = new Map<string, T | PlcError>();
-  /** The lists behind arrays read() was given, by identity (see PreparedRead). */
-  private readonly lists = new WeakMap<readonly string[], ReadList<T, M>>();
-  private readonly readOnly: boolean;
-  private readonly allow: readonly string[] | undefined;
-  private allowed: { areas: Set<string>; tags: T[] } | undefined;
-  /** The symbol table (ClientOptions.symbols) and what its names resolved to (the tags of the parse cache). */
-  private readonly symbols: SymbolTable | undefined;
+  /** The parse cache (lib/client/tag-cache.ts). */
+  private readonly tags: TagCache<T>;
+  /** Prepared lists (lib/client/lists.ts). */
+  private readonly lists: ReadLists<T, M>;
+  /** Read-only and the allow-list (lib/client/write-guard.ts). */
+  private readonly guard: WriteGuard<T>;
+  /** The symbol table (ClientOptions.symbols), what its names resolved to and the layout check (lib/client/symbols.ts). */
+  private readonly symbols: ClientSymbols<T> | undefined;
+  /** ClientOptions.strictSymbols: names in a data block whose length differs from the sources' are refused. */
   private readonly strictSymbols: boolean;
-  private readonly symbolUses = new WeakMap<T, SymbolUse<T>>();
-  private layoutMonitor: LayoutMonitor | undefined;
 
   constructor(options: ClientOptions) {
     super();
     this.name = options.name;
     this.timeout = options.timeout ?? DEFAULT_TIMEOUT;
     this.maxQueued = options.maxQueued;
-    this.readOnly = options.readOnly ?? false;
-    this.allow = options.allow && options.allow.length > 0 ? options.allow : undefined;
-    this.symbols = options.symbols;
     this.strictSymbols = options.strictSymbols ?? false;
+    this.symbols = options.symbols ? new ClientSymbols<T>(options.symbols, this.strictSymbols, () => this.layoutServices()) : undefined;
+    this.tags = new TagCache<T>((address) => this.driver.syntax.parse(address), this.symbols);
+    this.lists = new ReadLists<T, M>(this.tags, (tags) => this.driver.prepareRead?.(tags));
+    this.guard = new WriteGuard<T>(
+      options.readOnly ?? false,
+      options.allow,
+      () => this.driver.syntax,
+      (address) => this.tag(address),
+    );
     // The supervisor's events are the client's; a new live session first starts its layout check.
     const events = {
       emit: (event: string, ...args: unknown[]) => {
-        if (event === 'connected') this.layout?.linkUp();
+        if (event === 'connected') this.symbols?.layout.linkUp();
         return this.emit(event, ...args);
       },
       listenerCount: (event: string) => this.listenerCount(event),
@@ -245,19 +130,19 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
 
   /** Starts and waits for the first connection; rejects with the first attempt's error and stops. */
   async connect(): Promise<this> {
-    this.checkAllowList();
+    this.guard.check();
     await this.supervisor.connectOnce();
     return this;
   }
 
   /** Starts and keeps (re)connecting in the background until close(); never rejects. */
   start(): void {
-    this.checkAllowList();
+    this.guard.check();
     this.supervisor.start();
   }
 
   close(): Promise<void> {
-    this.layoutMonitor?.stop();
+    this.symbols?.stop();
     return this.supervisor.close();
   }
 
@@ -269,7 +154,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
    * connected, and with the link's error when it drops during the check.
    */
   checkLayout(options: RequestOptions = {}): Promise<LayoutCheck[]> {
-    const layout = this.layout;
+    const layout = this.symbols?.layout;
     if (!layout) return Promise.resolve([]);
     try {
       this.liveSession();
@@ -279,13 +164,10 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     return layout.check(options.signal);
   }
 
-  /** The layout check of the symbol table's blocks (made at first use: the driver is a subclass field). */
-  private get layout(): LayoutMonitor | undefined {
-    if (!this.symbols) return undefined;
+  /** What the layout check of the symbol table's blocks asks of the driver (at its first use: the driver is a subclass field). */
+  private layoutServices(): LayoutServices {
     const { driver } = this;
-    return (this.layoutMonitor ??= new LayoutMonitor({
-      table: this.symbols,
-      strict: this.strictSymbols,
+    return {
       events: this,
       blockLength: driver.blockLength
         ? (db, signal) => {
@@ -296,12 +178,12 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
       dbNumbers: driver.dbNumbers ? (signal) => driver.dbNumbers!(this.liveSession(), signal) : undefined,
       unsupported: driver.noBlockLength ?? `${this.name}: the protocol has no service that tells the length of a data block`,
       parallel: () => LAYOUT_PARALLEL,
-    }));
+    };
   }
 
   /** Parses an address with this driver's syntax (cached); throws AddressError. */
   tag(address: string): T {
-    const cached = this.parseCached(address);
+    const cached = this.tags.get(address);
     if (cached instanceof PlcError) throw cached;
     return cached;
   }
@@ -317,7 +199,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     if (!Array.isArray(addresses) || !addresses.every((a) => typeof a === 'string')) {
       throw new PlcError('INVALID_ADDRESS', 'prepare() takes an array of address strings');
     }
-    let list: ReadList<T, M> | undefined = this.readList(addresses);
+    let list: ReadList<T, M> | undefined = this.lists.parse(addresses);
     const [bad] = list.bad;
     if (bad) throw bad.error;
     const closed = () => new PlcError('CLOSED', `a prepared read of ${this.name} was used after its close()`);
@@ -340,7 +222,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   read<V extends PlcData = PlcValue>(addresses: readonly string[], options?: RequestOptions): Promise<Record<string, V>> {
     let list: ReadList<T, M>;
     try {
-      list = this.listOf(addresses);
+      list = this.lists.of(addresses);
     } catch (err) {
       return Promise.reject(err);
     }
@@ -348,7 +230,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   }
 
   private async readOf(list: ReadList<T, M>, options?: RequestOptions): Promise<Record<string, PlcValue>> {
-    const prepared = list.symbols && this.layout?.gating ? await this.layoutGated(list, options?.signal) : list;
+    const prepared = list.symbols && this.symbols?.layout.gating ? await this.gated(list, options?.signal) : list;
     if (prepared.bad.length > 0) {
       const results = await this.readDetailedOf(prepared, options);
       throw new TagErrors(results);
@@ -399,7 +281,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   ): Promise<Record<string, TagResult<V>>> {
     let list: ReadList<T, M>;
     try {
-      list = this.listOf(addresses);
+      list = this.lists.of(addresses);
     } catch (err) {
       return Promise.reject(err);
     }
@@ -407,32 +289,16 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   }
 
   private async readDetailedOf(list: ReadList<T, M>, options: RequestOptions = {}): Promise<Record<string, TagResult<PlcValue>>> {
-    const prepared = list.symbols && this.layout?.gating ? await this.layoutGated(list, options.signal) : list;
+    const prepared = list.symbols && this.symbols?.layout.gating ? await this.gated(list, options.signal) : list;
     const session = this.liveSession();
     const read = prepared.tags.length > 0 ? await this.driver.readTags(session, prepared.tags, options.signal, prepared.prepared) : [];
     if (prepared.symbols && prepared.symbols.shaped.length > 0) shapeResults(prepared.symbols, prepared.tags, read);
     return this.byAddress(prepared, read);
   }
 
-  /**
-   * strictSymbols: waits for a layout check under way, then the list
-   * without the symbols of blocks that do not match (their LAYOUT_MISMATCH
-   * among the unparsable ones); the list itself when none is refused.
-   */
-  private async layoutGated(list: ReadList<T, M>, signal: AbortSignal | undefined): Promise<ReadList<T, M>> {
-    const layout = this.layout!;
-    await layout.settled(signal);
-    let kept: T[] | undefined;
-    const refused: { address: string; error: PlcError }[] = [];
-    list.tags.forEach((tag, i) => {
-      const refusal = layout.refusal(this.symbolUses.get(tag)?.db ?? null);
-      if (refusal) {
-        kept ??= list.tags.slice(0, i);
-        refused.push({ address: tag.address, error: tagError(tag.address, refusal) });
-      } else kept?.push(tag);
-    });
-    if (!kept) return list;
-    return this.listOfTags(list.addresses, kept, [...list.bad, ...refused]);
+  /** strictSymbols: the list without the names in blocks the layout check refused (lib/client/symbols.ts). */
+  private gated(list: ReadList<T, M>, signal: AbortSignal | undefined): Promise<ReadList<T, M>> {
+    return this.symbols!.gated(list, signal, (addresses, tags, bad) => this.lists.ofTags(addresses, tags, bad));
   }
 
   /** Results keyed by address: unparsable addresses first, then the tags read (a tag given twice: its last result). */
@@ -446,46 +312,6 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     return results;
   }
 
-  /**
-   * The list behind an array read() is given: polls that pass the same
-   * array again are recognised by identity (and checked element by element,
-   * in case the caller changed it), and get what a PreparedRead keeps.
-   */
-  private listOf(addresses: readonly string[]): ReadList<T, M> {
-    const known = this.lists.get(addresses);
-    if (known && sameStrings(known.addresses, addresses)) return known;
-    const list = this.readList(addresses);
-    this.lists.set(addresses, list);
-    return list;
-  }
-
-  /** Parses an address list and has the driver prepare its tags. */
-  private readList(addresses: readonly string[]): ReadList<T, M> {
-    const tags: T[] = [];
-    const bad: { address: string; error: PlcError }[] = [];
-    for (const address of addresses) {
-      const tag = this.parseCached(address);
-      if (tag instanceof PlcError) bad.push({ address, error: tag });
-      else tags.push(tag);
-    }
-    return this.listOfTags(addresses.slice(), tags, bad);
-  }
-
-  private listOfTags(addresses: readonly string[], tags: T[], bad: { address: string; error: PlcError }[]): ReadList<T, M> {
-    const prepared = tags.length > 0 ? this.driver.prepareRead?.(tags) : undefined;
-    const list: ReadList<T, M> = { addresses, tags, bad, prepared, uses: 0 };
-    if (this.symbols) {
-      tags.forEach((tag, index) => {
-        const use = this.symbolUses.get(tag);
-        if (!use) return;
-        const symbols = (list.symbols ??= { dbs: new Set(), shaped: [] });
-        if (use.db !== null) symbols.dbs.add(use.db);
-        if (use.shape) symbols.shaped.push({ index, shape: use.shape });
-      });
-    }
-    return list;
-  }
-
   async write(values: Readonly<Record<string, unknown>>, options?: RequestOptions): Promise<void> {
     const results = await this.writeDetailed(values, options);
     for (const key of Object.keys(results)) if (!results[key]!.ok) throw new TagErrors(results);
@@ -497,9 +323,10 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     }
     let session = this.liveSession();
     const keys = Object.keys(values);
-    const tags = keys.map((address) => this.parseCached(address));
-    const layout = this.layout;
-    if (layout?.gating && tags.some((t) => !(t instanceof PlcError) && this.symbolUses.has(t))) {
+    const tags = keys.map((address) => this.tags.get(address));
+    const symbols = this.symbols;
+    const layout = symbols?.layout;
+    if (layout?.gating && tags.some((t) => !(t instanceof PlcError) && symbols!.use(t) !== undefined)) {
       await layout.settled(options.signal);
       session = this.liveSession();
     }
@@ -510,7 +337,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     keys.forEach((address, k) => {
       const tag = tags[k]!;
       if (tag instanceof PlcError) return void (results[address] = { ok: false, error: tag });
-      const use = this.symbols ? this.symbolUses.get(tag) : undefined;
+      const use = symbols?.use(tag);
       let own: { tag: T; value: unknown }[];
       try {
         const refusal = use && layout?.refusal(use.db);
@@ -520,7 +347,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
         return void (results[address] = { ok: false, error: tagError(address, toPlcError(err, 'INVALID_VALUE')) });
       }
       for (const item of own) {
-        const refusal = this.writeRefusal(item.tag);
+        const refusal = this.guard.refusal(item.tag);
         if (refusal) return void (results[address] = { ok: false, error: tagError(address, refusal) });
       }
       written.push({ key: address, from: items.length, count: own.length });
@@ -539,109 +366,10 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     return results;
   }
 
-  private writeRefusal(tag: T): PlcError | undefined {
-    if (this.readOnly) {
-      return new PlcError('WRITE_NOT_ALLOWED', `write to "${tag.address}" refused: the connection is read-only`, { tag: tag.address });
-    }
-    if (!this.allow) return undefined;
-    this.allowed ??= this.compileAllowList(this.allow);
-    const { areas, tags } = this.allowed;
-    const { syntax } = this.driver;
-    if (areas.has(syntax.areaOf(tag)) || tags.some((outer) => syntax.contains(outer, tag))) return undefined;
-    return new PlcError(
-      'WRITE_NOT_ALLOWED',
-      `write to "${tag.address}" refused: not in the connection's write allow-list (${this.allow.join(', ')})`,
-      { tag: tag.address },
-    );
-  }
-
-  /** A bad allow-list entry is a configuration error: say so at start, not at the first write. */
-  private checkAllowList(): void {
-    if (this.allow) this.allowed ??= this.compileAllowList(this.allow);
-  }
-
-  private compileAllowList(entries: readonly string[]): { areas: Set<string>; tags: T[] } {
-    const areas = new Set<string>();
-    const tags: T[] = [];
-    for (const entry of entries) {
-      const area = this.driver.syntax.allowArea(entry.trim().toUpperCase().replace(/^%/, ''));
-      if (area !== undefined) areas.add(area);
-      else tags.push(this.tag(entry));
-    }
-    return { areas, tags };
-  }
-
   private liveSession(): S {
     const session = this.supervisor.session;
     if (session) return session;
     const why = this.state === 'closed' ? 'the client was closed' : `the link is ${this.state}`;
     throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (${why})`);
-  }
-
-  /**
-   * The tag of an address or, with a symbol table, of a name (cached: a
-   * symbol is resolved once). Absolute addresses come first: text that
-   * parses as an address is that address (`M1`, `DB1.DBW2`, with or without
-   * %), so a symbol table never changes what an address means; a symbol whose
-   * name reads as an address is written quoted, as TIA writes it (`"M1"`).
-   */
-  private parseCached(address: string): T | PlcError {
-    let tag = this.tags.get(address);
-    if (tag === undefined) {
-      try {
-        tag = this.driver.syntax.parse(address);
-      } catch (err) {
-        tag = toPlcError(err, 'INVALID_ADDRESS');
-        if (this.symbols && typeof address === 'string') tag = this.symbolTag(this.symbols, address, tag);
-      }
-      if (this.tags.size >= MAX_CACHED_TAGS) this.tags.clear();
-      this.tags.set(address, tag);
-    }
-    return tag;
-  }
-
-  private symbolTag(table: SymbolTable, name: string, asAddress: PlcError): T | PlcError {
-    try {
-      const resolved = resolveSymbol(table, name, (address) => this.driver.syntax.parse(address));
-      if (!resolved) return unknownSymbol(table, name, asAddress);
-      const { entry, tag, shape } = resolved;
-      this.symbolUses.set(tag, { db: entry.area === 'DB' ? entry.db : null, shape });
-      return tag;
-    } catch (err) {
-      return toPlcError(err, 'INVALID_ADDRESS');
-    }
-  }
-}
-
-/** Struct values from their bytes, in place (tags that failed keep their error); the errors, with any of decoding. */
-function shapeValues<T>(
-  symbols: ListSymbols<T>,
-  tags: readonly DriverTag[],
-  values: unknown[],
-  errors: (PlcError | undefined)[] | undefined,
-): (PlcError | undefined)[] | undefined {
-  for (const { index, shape } of symbols.shaped) {
-    if (errors?.[index]) continue;
-    try {
-      values[index] = decodeShape(shape, values[index] as PlcValue);
-    } catch (err) {
-      (errors ??= new Array<PlcError | undefined>(values.length))[index] = tagError(
-        tags[index]!.address,
-        toPlcError(err, 'PROTOCOL_ERROR'),
-      );
-    }
-  }
-  return errors;
-}
-
-function shapeResults<T>(symbols: ListSymbols<T>, tags: readonly DriverTag[], results: TagResult<PlcValue>[]): void {
-  for (const { index, shape } of symbols.shaped) {
-    const r = results[index]!;
-    if (!r.ok) continue;
-    try {
-      results[index] = { ok: true, value: decodeShape(shape, r.value) as PlcValue };
-    } catch (err) {
-      results[index] = { ok: false, error: tagError(tags[index]!.address, toPlcError(err, 'PROTOCOL_ERROR')) };
-    }
   }
 }

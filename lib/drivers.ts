@@ -1,0 +1,143 @@
+/**
+ * The protocols, one entry each: its URLs (schemes, parameters, defaults),
+ * how to make its client, and what it can do. lib/url.ts, createClient()
+ * and connect() read this registry and switch on no protocol: a new protocol
+ * is its own folder (docs/architecture.md, "How to add a protocol") and one
+ * line in DRIVERS.
+ */
+import type { BindingInterface } from '@serialport/bindings-interface';
+import type { ClientOptions } from './client/options';
+import { PlcError } from './errors';
+import { FetchWriteClient } from './fetchwrite/client';
+import { serveFetchWrite } from './fetchwrite/serve';
+import { FETCHWRITE_URLS } from './fetchwrite/url';
+import { FreeportClient } from './freeport/client';
+import type { FreeportProfile } from './freeport/profile';
+import { serveFreeport } from './freeport/serve';
+import { FREEPORT_URLS } from './freeport/url';
+import type { UrlScheme } from './link/driver';
+import { S7Client } from './s7/client';
+import { serveS7 } from './s7/serve';
+import { S7_URLS } from './s7/url';
+import type { Served, ServeFlags } from './sim/serve';
+import type { PlcClient, Protocol } from './types';
+
+/**
+ * `symbols` (a compiled SymbolTable) lets reads and writes name tags as the
+ * PLC's sources do, beside absolute addresses; `strictSymbols` (also the
+ * URL's `strictSymbols=true`) refuses names in a data block whose length in
+ * the PLC differs from the sources' (docs/symbols.md, "Reading and writing
+ * by name"). Freeport refuses `symbols`: it reaches a few bytes per station
+ * that the station's program fills, not V memory by offset.
+ */
+export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
+  /** Serial binding for freeport (tests inject `@serialport/binding-mock`). */
+  binding?: BindingInterface;
+  /** Freeport frame profile of your PLC program; unnamed fields keep the default profile's (docs/protocols.md, "S7-200 freeport"). */
+  profile?: Partial<FreeportProfile>;
+}
+
+/** One protocol in the registry. */
+export interface DriverEntry<E extends { readonly protocol: Protocol }, C extends PlcClient> {
+  /** Its URL schemes and parameters, parsed to its endpoint and formatted back (lib/url.ts). */
+  readonly urls: UrlScheme<E>;
+  /**
+   * Its client for an endpoint, not connected. `options` are the caller's;
+   * an entry passes on what its client takes.
+   */
+  createClient(endpoint: E, options: ConnectOptions): C;
+  /** Reads and writes by name (ConnectOptions.symbols); false: createClient refuses a symbol table (NOT_SUPPORTED). */
+  readonly symbols: boolean;
+  /** Why it has no symbols, after the endpoint's name in the refusal. */
+  readonly noSymbols?: string;
+  /** Its client can ask a data block's length, so strictSymbols can check a symbol table's layout against the PLC. */
+  readonly blockLength: boolean;
+  /** `plcwire serve <protocol>`: starts its simulator from the command line's flags. */
+  serve(flags: ServeFlags): Promise<Served>;
+}
+
+/** The options every client takes: ConnectOptions without freeport's serial binding and frame profile. */
+function common(options: ConnectOptions): Partial<ClientOptions> {
+  const { binding: _binding, profile: _profile, ...rest } = options;
+  return rest;
+}
+
+function entry<E extends { readonly protocol: Protocol }, C extends PlcClient>(e: DriverEntry<E, C>): DriverEntry<E, C> {
+  return Object.freeze(e);
+}
+
+/** Every protocol, by name: adding a protocol is one line here (its entry from its own folder). */
+export const DRIVERS = Object.freeze({
+  s7: entry({ urls: S7_URLS, createClient: (e, o) => new S7Client(e, common(o)), symbols: true, blockLength: true, serve: serveS7 }),
+  fetchwrite: entry({
+    urls: FETCHWRITE_URLS,
+    createClient: (e, o) => new FetchWriteClient(e, common(o)),
+    symbols: true,
+    blockLength: false,
+    serve: serveFetchWrite,
+  }),
+  freeport: entry({
+    urls: FREEPORT_URLS,
+    createClient: (e, { binding, profile, ...o }) =>
+      new FreeportClient(e, { ...o, ...(binding ? { binding } : {}), ...(profile ? { profile } : {}) }),
+    symbols: false,
+    noSymbols:
+      "freeport cannot read or write by symbol: it reaches only each station's data area (ST<station>,…), a few bytes its PLC program fills, not V memory (DB1) by offset; reach the S7-200 over s7:// (a CP 243-1) to use its V memory symbols",
+    blockLength: false,
+    serve: serveFreeport,
+  }),
+}) satisfies { readonly [P in Protocol]: DriverEntry<{ readonly protocol: P }, PlcClient> };
+
+type Drivers = typeof DRIVERS;
+
+/** Any protocol's endpoint: what parseUrl gives. */
+export type Endpoint = { [P in Protocol]: Drivers[P] extends DriverEntry<infer E, PlcClient> ? E : never }[Protocol];
+
+/** Any protocol's client: what createClient gives. */
+export type AnyClient = { [P in Protocol]: ReturnType<Drivers[P]['createClient']> }[Protocol];
+
+/**
+ * Each protocol's URL schemes, for the types (ClientFor): the same as the
+ * keys of its entry's `urls.schemes`, which test/drivers.test.ts holds equal.
+ */
+export const URL_SCHEMES = Object.freeze({
+  s7: ['s7'],
+  fetchwrite: ['fetchwrite'],
+  freeport: ['freeport', 'freeport+tcp'],
+} as const) satisfies {
+  readonly [P in Protocol]: readonly string[];
+};
+type SchemesOf<P extends Protocol> = (typeof URL_SCHEMES)[P][number];
+
+/**
+ * The client a URL (or endpoint) gets, by its scheme: `s7://…` an S7Client
+ * (whose services, info(), szl(), blocks…, are then there to call without a
+ * cast), `fetchwrite://…` a FetchWriteClient, `freeport://…` and
+ * `freeport+tcp://…` a FreeportClient; a string whose scheme TypeScript
+ * cannot see, any of them (AnyClient). Derived from the registry: an
+ * endpoint's protocol, or the schemes each entry's URLs declare.
+ */
+export type ClientFor<U extends string | Endpoint> = U extends Endpoint
+  ? ReturnType<Drivers[U['protocol']]['createClient']>
+  : { [P in Protocol]: U extends `${SchemesOf<P>}://${string}` ? ReturnType<Drivers[P]['createClient']> : never }[Protocol] extends infer C
+    ? [C] extends [never]
+      ? AnyClient
+      : C
+    : never;
+
+/** The registry's entry of an endpoint's protocol. */
+export function driverOf(endpoint: Endpoint): DriverEntry<Endpoint, AnyClient> {
+  return DRIVERS[endpoint.protocol] as DriverEntry<Endpoint, AnyClient>;
+}
+
+/** The client of an endpoint, by its protocol's entry; a symbol table given to a protocol without symbols is refused (NOT_SUPPORTED). */
+export function createDriverClient(endpoint: Endpoint, options: ConnectOptions): AnyClient {
+  const driver = driverOf(endpoint);
+  if (options.symbols && !driver.symbols) {
+    throw new PlcError(
+      'NOT_SUPPORTED',
+      `${driver.urls.name(endpoint)}: ${driver.noSymbols ?? 'this protocol cannot read or write by symbol'}`,
+    );
+  }
+  return driver.createClient(endpoint, options);
+}

@@ -1,0 +1,52 @@
+/** `plcwire serve s7`: the S7 simulator from the command line (lib/sim/serve.ts). */
+import type { MemoryLayout } from '../sim/memory';
+import { servedBlocks, urlHost, type Served, type ServeFlags } from '../sim/serve';
+import { S7Server, type S7Profile } from './server';
+
+const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
+
+/** The URL query that reaches each profile's CPU: rack/slot, or the TSAP pair a TSAP-addressed CPU accepts. */
+const REACH: Readonly<Record<S7Profile, { query: string; addresses: string }>> = Object.freeze({
+  's7-300': { query: 'rack=0&slot=2', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-400': { query: 'rack=0&slot=2', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-1200': { query: 'rack=0&slot=1', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-1500': { query: 'rack=0&slot=1', addresses: 'DB1,INT0 MW10 M0.1' },
+  's7-200': { query: 'localTsap=1000&remoteTsap=1001', addresses: 'VW0 VB10 M0.1' },
+  logo: { query: 'localTsap=0100&remoteTsap=0200', addresses: 'VW0 V1024.0' },
+});
+
+export async function serveS7(flags: ServeFlags): Promise<Served> {
+  const { host, say } = flags;
+  const profile = (flags.string('profile') ?? 's7-1500').toLowerCase() as S7Profile;
+  if (!PROFILES.includes(profile)) throw flags.usage(`--profile must be one of ${PROFILES.join(', ')}`);
+  // Without --layout the profile's own memory (DB1 only for s7-200 and logo).
+  const layout = loadLayout(flags, flags.string('layout'));
+  // --source: the data blocks of DB sources, at their declared lengths with their start values.
+  const symbols = flags.source();
+  // --max-items: serve at most N items per job, as snap7's server (20) and the devices built on it.
+  const maxItems = flags.has('max-items') ? flags.int('max-items', 20, 1, 255) : undefined;
+  const server = new S7Server({
+    host,
+    port: flags.int('port', 102, 0, 65535),
+    profile,
+    ...(layout ? { layout } : {}),
+    ...(symbols ? { symbols } : {}),
+    ...(maxItems !== undefined ? { maxItems } : {}),
+  });
+  const port = await flags.listen(() => server.listen(), 'port');
+  say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
+  const url = `s7://${urlHost(host)}:${port}?${REACH[profile].query}`;
+  if (symbols) for (const line of servedBlocks(symbols)) say(line);
+  say(`try: plcwire read "${url}" ${symbols ? flags.tryByName(symbols) : REACH[profile].addresses}`);
+  return { close: () => server.close() };
+}
+
+function loadLayout(flags: ServeFlags, file: string | undefined): MemoryLayout | undefined {
+  if (file === undefined) return undefined;
+  const text = flags.readFile(file).toString('utf8');
+  try {
+    return JSON.parse(text) as MemoryLayout;
+  } catch (err) {
+    throw flags.usage(`--layout ${file} is not JSON: ${(err as Error).message}`);
+  }
+}

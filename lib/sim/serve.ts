@@ -1,0 +1,47 @@
+/**
+ * What `plcwire serve <protocol>` asks of a protocol's simulator: the CLI
+ * hands each registry entry (lib/drivers.ts) its flags through this contract,
+ * so a protocol's folder starts its own simulator without importing the CLI.
+ */
+import type { SymbolTable } from '../symbols/model';
+
+/** The command line of `plcwire serve`, as a protocol's serve function reads it. */
+export interface ServeFlags {
+  /** --host, 127.0.0.1 by default. */
+  readonly host: string;
+  /** True when the flag was given. */
+  has(flag: string): boolean;
+  /** A flag's text; undefined when absent. */
+  string(flag: string): string | undefined;
+  /** A whole-number flag within min..max; `fallback` when absent; a usage error otherwise. */
+  int(flag: string, fallback: number, min: number, max: number): number;
+  /** The data blocks of the --source files (with --db), compiled; undefined without --source. */
+  source(): SymbolTable | undefined;
+  /** True when --source was given (also when it names no file). */
+  hasSource(): boolean;
+  /** The read command that reads the first member of the sources by name. */
+  tryByName(table: SymbolTable): string;
+  /** An error the CLI reports as a usage error (exit code 2). */
+  usage(message: string): Error;
+  /** A file named on the command line (--layout); a missing one is the CLI's "no such file" error. */
+  readFile(file: string): Buffer;
+  /** Runs `start` (a server's listen); a bind error in words naming `flag`. */
+  listen<R>(start: () => Promise<R>, flag: string): Promise<R>;
+  /** Prints a line. */
+  say(line: string): void;
+}
+
+/** What a started simulator leaves the CLI: how to stop it. */
+export interface Served {
+  close(): Promise<void>;
+}
+
+/** A host as it stands in a URL: an IPv6 address in brackets. */
+export function urlHost(host: string): string {
+  return host.includes(':') ? `[${host}]` : host;
+}
+
+/** The data blocks built from --source, one line each: what a client's block info will report. */
+export function servedBlocks(table: SymbolTable): string[] {
+  return table.blocks.map((b) => `serving DB${b.db} "${b.name}" of ${b.length} bytes (${b.file})`);
+}
