@@ -266,9 +266,10 @@ describe('prepared reads (client.prepare) on FETCH/WRITE', function () {
   it('merges the fetch ranges once for 50 reads and reads what read() reads', async () => {
     await client.connect();
     let merges = 0;
-    const self = client as unknown as { mergeRanges: (...a: unknown[]) => unknown };
-    const merge = self.mergeRanges.bind(client);
-    self.mergeRanges = (...a) => {
+    // The range merging is the driver's prepareRead (lib/fetchwrite/plan.ts planRead): count its calls.
+    const driver = (client as unknown as { driver: { prepareRead: (...a: unknown[]) => unknown } }).driver;
+    const merge = driver.prepareRead.bind(driver);
+    driver.prepareRead = (...a) => {
       merges++;
       return merge(...a);
     };
