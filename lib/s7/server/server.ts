@@ -9,7 +9,6 @@ import * as net from 'node:net';
 import { FrameReader } from '../../link/framer';
 import { PlcMemory } from '../../sim/memory';
 import { memoryFromSymbols } from '../../symbols/memory';
-import type { SymbolTable } from '../../symbols/model';
 import { ProtocolError } from '../../errors';
 import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, HeaderError, MAX_FRAME, MIN_PDU_SIZE, Rosctr, S7Function, tpduBytes } from '../constants';
 import { jobItemCount, s7Rosctr } from '../codec/pdu';
@@ -19,78 +18,12 @@ import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from '../codec';
 import { firstItems } from './items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './jobs';
-import {
-  IDENTITIES,
-  PROFILES,
-  toMemoryLayout,
-  tsapRefusal,
-  type CpuIdentity,
-  type CpuProfile,
-  type S7Layout,
-  type S7Profile,
-} from './profiles';
+import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuProfile } from './profiles';
+import type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
 
 export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './profiles';
 export { STOP_CAUSES, type SimulatorMode, type StopCause } from './services';
-
-export interface S7ServerOptions {
-  /** Default 127.0.0.1: a simulator is not exposed to the network unless asked. */
-  host?: string;
-  /** Default 102; 0 picks a free port. */
-  port?: number;
-  /** Default 's7-1500'. */
-  profile?: S7Profile | CpuProfile;
-  memory?: PlcMemory;
-  /** Memory layout when no `memory` is given (MemoryLayout or the JSON form `{ dbs, areas }`). */
-  layout?: S7Layout;
-  /**
-   * Compiled DB sources (compileSymbols): the data blocks served are theirs,
-   * at their declared lengths and holding their start values (lib/symbols/memory.ts),
-   * instead of the layout's; the other areas stay the layout's (or the profile's).
-   */
-  symbols?: SymbolTable;
-  /**
-   * Serve at most this many items per job, as snap7's server (20) and the
-   * devices built on it: a longer job is served for its first N items and
-   * answered as if those were all (items.ts). Default: no limit but
-   * the PDU's, as Siemens CPUs.
-   */
-  maxItems?: number;
-  /** What the CPU says about itself (order code, firmware, names …); the profile's defaults (S7-1500's for a custom CpuProfile) for what is not given. */
-  identity?: Partial<CpuIdentity>;
-}
-
-/** Fault injection; every field can be changed at any time. */
-export interface S7Faults {
-  /** Answer every Read/Write Var with header error 0x8104, as an S7-1200/1500 without PUT/GET access. */
-  accessDenied: boolean;
-  /** Data blocks that answer "object does not exist" (0x0A) although they are in memory. */
-  missingDb: number | readonly number[] | undefined;
-  /** Delay each job by this many ms; at most the negotiated AmQ jobs of a connection are served at once (a CPU's latency model). */
-  latencyMs: number;
-  /** Refuse new connections (COTP disconnect request instead of a confirm). */
-  refuseConnections: boolean;
-  /** Stop answering jobs (connections stay open): a hung CPU. */
-  silent: boolean;
-  /** Drop every client connection now (a CPU restart or a pulled cable, as the clients see it). */
-  dropConnections(): void;
-}
-
-export interface S7RequestEvent {
-  /** Read/Write Var, or a system service: userdata (SZL, clock, blocks, password) or a control job (stop, start, upload). */
-  kind: 'read' | 'write' | 'userdata' | 'control';
-  pduRef: number;
-  /** Number of items in the job (0 for system services). */
-  items: number;
-  /** Bytes of the request frame on the wire. */
-  bytes: number;
-}
-
-/** Why a connection was refused or dropped ('refused' event). */
-export interface S7RefusedEvent {
-  reason: 'connection-limit' | 'refuse-fault' | 'wrong-tsap' | 'protocol-error';
-  message: string;
-}
+export type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
 
 /** The CPU's COTP source reference. */
 const CPU_REF = 0x0001;
