@@ -1,7 +1,7 @@
 'use strict';
 const { acquire, release, plc } = require('./shared/links');
 const { settleWithin } = require('./shared/user');
-const symbols = require('./shared/symbols');
+const symbols = require('../dist/lib/flows/symbol-config');
 
 /**
  * plcwire-connection (config): properties `url`, and for tags by name
