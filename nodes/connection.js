@@ -1,7 +1,11 @@
 'use strict';
-const { acquire, release, plc } = require('./shared/links');
+const plc = require('..');
+const { ClientPool, withoutCredentials } = require('../dist/lib/flows/client-pool');
 const { settleWithin } = require('./shared/user');
 const symbols = require('../dist/lib/flows/symbol-config');
+
+/** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
+const pool = new ClientPool();
 
 /**
  * plcwire-connection (config): properties `url`, and for tags by name
@@ -12,11 +16,6 @@ const symbols = require('../dist/lib/flows/symbol-config');
  * users' Catch nodes through `this.users` (the runtime's convention for config
  * nodes).
  */
-/** The URL without a user:password@ part. */
-function withoutCredentials(url) {
-  return url.replace(/^([a-z0-9+.-]+:\/\/)[^/?#@]*@/i, '$1');
-}
-
 module.exports = function (RED) {
   function PlcwireConnection(config) {
     RED.nodes.createNode(this, config);
@@ -106,7 +105,7 @@ module.exports = function (RED) {
 
     function open() {
       try {
-        link = acquire(node.url, node, symbolsOf);
+        link = pool.acquire(node.url, node, symbolsOf);
       } catch (err) {
         // Each user reports this to its own Catch nodes once the flows have started (see problemReport).
         node.problem = err;
@@ -129,7 +128,7 @@ module.exports = function (RED) {
       held.off('link-error', reportError);
       held.off('layout-mismatch', onMismatch);
       held.off('layout-ok', onLayoutOk);
-      return release(held, node);
+      return pool.release(held, node);
     }
 
     /**

@@ -1,6 +1,6 @@
 'use strict';
-const { attach, settleWithin, noConnectionError } = require('./shared/user');
-const { plc } = require('./shared/links');
+const { attach, settleWithin, liveClient } = require('./shared/user');
+const plc = require('..');
 const { cpuStatus, entriesStatus, failedStatus } = require('./shared/status');
 const { configuredAction, actionOf, DiagnosticsCursor, plainEntry, plainState, isoOrNull } = require('../dist/lib/flows/control');
 
@@ -69,10 +69,7 @@ module.exports = function (RED) {
       let client;
       try {
         action = actionOf(msg, configured);
-        if (!connection) throw noConnectionError(RED);
-        if (connection.problem) throw connection.problem;
-        client = connection.client;
-        if (!client) throw noConnectionError(RED);
+        client = liveClient(RED, connection);
         if (!(client instanceof plc.S7Client)) {
           throw new plc.PlcError(
             'NOT_SUPPORTED',

@@ -1,5 +1,5 @@
 'use strict';
-const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
+const { attach, settleWithin, liveClient, warnDuplicateNames } = require('./shared/user');
 const { tagTable, tagsOfMessage, outcomes, tagFailure, ChangeFilter, PolledTable, PlcError, isLinkError } = require('..');
 const { tagErrorsStatus } = require('./shared/status');
 
@@ -74,20 +74,12 @@ module.exports = function (RED) {
     // it), so every read of the table passes the same array.
     const table = new PolledTable(tags);
 
-    function liveClient() {
-      if (!connection) throw noConnectionError(RED);
-      if (connection.problem) throw connection.problem;
-      const client = connection.client;
-      if (!client) throw noConnectionError(RED);
-      return client;
-    }
-
     /**
      * Reads the table: { values } by address when every tag succeeded,
      * else { list } of per-tag outcomes. A failure of the whole read rejects.
      */
     async function readTable() {
-      const client = liveClient();
+      const client = liveClient(RED, connection);
       try {
         return { values: await client.read(table.addresses) };
       } catch (err) {
@@ -97,7 +89,7 @@ module.exports = function (RED) {
     }
 
     async function readList(list) {
-      const results = await liveClient().readDetailed(uniqueAddresses(list));
+      const results = await liveClient(RED, connection).readDetailed(uniqueAddresses(list));
       return { list: outcomes(list, results) };
     }
 
