@@ -135,13 +135,20 @@ describe('flows: read messages', () => {
   it('per-tag output on the input message: copies for all but the last, which is the input itself', () => {
     const { m, sent, send } = setup('per-tag');
     const input: FlowMessage = { _msgid: 'in', extra: { a: 1 } };
-    m.sendOutcomes(send, mixed, input);
-    expect(sent).to.have.length(3);
-    expect(sent[2]).to.equal(input);
+    m.sendOutcomes(send, mixed.slice(0, 2), input);
+    expect(sent).to.have.length(2);
+    expect(sent[1]).to.equal(input);
     expect(sent[0]).to.not.equal(input);
     expect(sent[0]).to.deep.include({ topic: 'speed', payload: null, quality: 'bad', errors: { speed: error }, _msgid: 'in' });
     expect(sent[0]!.extra).to.not.equal(input.extra);
     expect(sent[1]).to.not.have.property('errors');
+  });
+
+  it('per-tag output of outcomes: two rows of one address get their own copies of the value, as from values', () => {
+    const { m, sent, send } = setup('per-tag');
+    m.sendOutcomes(send, mixed);
+    expect(sent[2]!.payload).to.deep.equal([1, 2]);
+    expect(sent[2]!.payload).to.not.equal(sent[1]!.payload);
   });
 
   it('changes output: only what changed, from values or outcomes alike; on-demand lists are sent whole', () => {

@@ -142,9 +142,14 @@ export class ReadMessages {
     }
     const out = mode === 'changes' ? this.changes.filter(list) : list;
     const id = base || out.length < 2 ? undefined : this.runtime.newId();
+    const seen = new Set<string>();
     out.forEach((o, i) => {
       const on = base ? (i === out.length - 1 ? base : this.runtime.clone(base)) : undefined;
-      send(tagMessage(o.name, o.address, o.ok ? o.value : undefined, o.ok ? undefined : o.error, on, id));
+      const msg = tagMessage(o.name, o.address, o.ok ? o.value : undefined, o.ok ? undefined : o.error, on, id);
+      // Rows of one address carry one value object: each later row's message gets its own copy, as in sendGood.
+      const repeated = seen.has(o.address);
+      seen.add(o.address);
+      send(repeated && o.ok ? this.runtime.clone(msg) : msg);
     });
   }
 }
