@@ -206,21 +206,22 @@ module.exports = function (RED) {
     }
     const compiledSources = symbols.compileCached(symbolConfig(body));
     let symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
-    // The client's own resolution of names, when there is a table and a URL: a protocol may refuse symbols (freeport).
-    let named;
-    if (compiledSources.table && body.url) {
+    // A protocol may refuse symbols (freeport): then names are no tags of this connection.
+    let table = compiledSources.table;
+    if (table && body.url) {
       try {
-        named = plc.createClient(String(body.url), { symbols: compiledSources.table });
+        plc
+          .createClient(String(body.url), { symbols: table })
+          .close()
+          .catch(() => undefined);
       } catch (err) {
         symbolAnswer = { ok: false, errors: [{ code: err.code, message: err.message }] };
+        table = undefined;
       }
     }
     const results = {};
-    for (const address of addresses) {
-      results[address] = symbols.resolveAddress(address, parser.parse, compiledSources.table, named && ((a) => named.tag(a)));
-    }
+    for (const address of addresses) results[address] = symbols.resolveAddress(address, parser.parse, table);
     parser.done();
-    if (named) named.close().catch(() => undefined);
     res.json({ url: { ok: true }, symbols: symbolAnswer, results });
   });
 

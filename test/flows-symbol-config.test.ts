@@ -1,6 +1,6 @@
 /** The connection node's symbol configuration, without Node-RED: sources from the flow, the key, compile, describe, resolve. */
 import { expect } from 'chai';
-import { parseAddress } from '../lib';
+import { createClient, parseAddress } from '../lib';
 import { compile, compileCached, describe as describeSymbols, resolveAddress, symbolsKey } from '../lib/flows/symbol-config';
 
 const TANK_DB = `DATA_BLOCK "Tank"
@@ -95,9 +95,18 @@ describe('flows: symbol configuration', () => {
       .that.matches(/^unknown symbol "Tank"\.Levl; did you mean "Tank"\.Level\?/);
     const none = resolveAddress('Tank.Level', parseAddress, undefined);
     expect(none).to.include({ ok: false, code: 'INVALID_ADDRESS' });
-    const refused = resolveAddress('"Tank".Level', parseAddress, table, () => {
-      throw Object.assign(new Error('no names here'), { code: 'NOT_SUPPORTED' });
-    });
-    expect(refused).to.deep.equal({ ok: false, code: 'NOT_SUPPORTED', message: 'no names here' });
+    // A whole DB by its name, as a client reads it (the editor called it unknown).
+    expect(resolveAddress('"Tank"', parseAddress, table)).to.deep.include({ ok: true, symbol: '"Tank"', kind: 'struct' });
+    // The client's words for an unknown name: what is wrong with the text as an address too.
+    const client = createClient('s7://127.0.0.1', { symbols: table! });
+    const said = (() => {
+      try {
+        client.tag('Tank.Nope');
+      } catch (err) {
+        return (err as Error).message;
+      }
+    })();
+    expect(resolveAddress('Tank.Nope', parseAddress, table)).to.deep.equal({ ok: false, code: 'INVALID_ADDRESS', message: said });
+    expect(said).to.match(/^unknown symbol Tank\.Nope; "Tank" has no such member/);
   });
 });

@@ -7,7 +7,9 @@
  * triangle). No Node-RED and no sockets.
  */
 import { createHash } from 'node:crypto';
+import type { DriverTag } from '../link/driver';
 import { compileSymbols } from '../symbols';
+import { addressOrSymbol } from '../symbols/resolve';
 import type { BlockSummary, SymbolEntry, SymbolSource, SymbolTable } from '../symbols';
 
 /** Compile errors given to the editor and written to the log at most. */
@@ -168,44 +170,25 @@ export type AddressAnswer =
   | { ok: false; code: string; message: string };
 
 /**
- * A tag row's address, as the client will take it (docs/symbols.md, "Reading
- * and writing by name": text that parses as an absolute address is that
- * address; anything else is looked up in the table). `parse` is the
- * protocol's address parser, `named` the parser of a client given the table
- * (its reach checks and its words for an unknown name), undefined without a
- * URL. An absolute address → { ok, type, count }; a name → { ok, symbol,
+ * A tag row's address, as the client will take it: by addressOrSymbol, the
+ * client's own rule and words (docs/symbols.md, "Addresses first"). `parse`
+ * is the protocol's address parser (the URL's client, with its reach
+ * checks). An absolute address → { ok, type, count }; a name → { ok, symbol,
  * address, type, kind } (the entry's own name, absolute address and IEC
  * type); neither → { ok: false, code, message }.
  */
 export function resolveAddress(
   address: string,
-  parse: (address: string) => { type: string; count: number },
+  parse: (address: string) => DriverTag & { type: string; count: number },
   table: SymbolTable | undefined,
-  named?: (address: string) => unknown,
 ): AddressAnswer {
-  let asAddress: { code?: string; message: string };
   try {
-    const tag = parse(address);
-    return { ok: true, type: tag.type, count: tag.count };
+    const { tag, symbol } = addressOrSymbol(address, parse, table);
+    if (!symbol) return { ok: true, type: tag.type, count: tag.count };
+    const { entry } = symbol;
+    return { ok: true, symbol: entry.name, address: entry.address, type: entry.type, kind: entry.kind };
   } catch (err) {
-    asAddress = err as { code?: string; message: string };
+    const e = err as { code?: string; message: string };
+    return { ok: false, code: e.code || 'INVALID_ADDRESS', message: e.message };
   }
-  const failed = (err: { code?: string; message: string }): AddressAnswer => ({
-    ok: false,
-    code: err.code || 'INVALID_ADDRESS',
-    message: err.message,
-  });
-  if (!table) return failed(asAddress);
-  if (named) {
-    try {
-      named(address);
-    } catch (err) {
-      return failed(err as { code?: string; message: string });
-    }
-  }
-  const entry = table.lookup(address);
-  if (entry) return { ok: true, symbol: entry.name, address: entry.address, type: entry.type, kind: entry.kind };
-  const close = table.suggest(address);
-  const hint = close.length > 0 ? `; did you mean ${close.join(', ')}?` : '';
-  return { ok: false, code: 'INVALID_ADDRESS', message: `unknown symbol ${address}${hint} (nor an address: ${asAddress.message})` };
 }

@@ -3,7 +3,7 @@ import type { Duplex } from 'node:stream';
 import { ConnectionError, PlcError, TagErrors, tagError, toPlcError, type TagResult } from '../errors';
 import { LayoutMonitor } from '../symbols/layout-check';
 import type { SymbolTable } from '../symbols/model';
-import { decodeShape, expandWrite, resolveSymbol, unknownSymbol, type SymbolShape } from '../symbols/resolve';
+import { addressOrSymbol, decodeShape, expandWrite, type SymbolShape } from '../symbols/resolve';
 import type { LayoutCheck, LinkState, PlcClient, PlcData, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
 
 export type { PreparedRead } from '../types';
@@ -580,7 +580,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
 
   /**
    * The tag of an address or, with a symbol table, of a name (cached: a
-   * symbol is resolved once). Absolute addresses come first: text that
+   * symbol is resolved once), by addressOrSymbol. Absolute addresses come first: text that
    * parses as an address is that address (`M1`, `DB1.DBW2`, with or without
    * %), so a symbol table never changes what an address means; a symbol whose
    * name reads as an address is written quoted, as TIA writes it (`"M1"`).
@@ -589,27 +589,16 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     let tag = this.tags.get(address);
     if (tag === undefined) {
       try {
-        tag = this.driver.syntax.parse(address);
+        const { tag: found, symbol } = addressOrSymbol(address, (a) => this.driver.syntax.parse(a), this.symbols);
+        if (symbol) this.symbolUses.set(found, { db: symbol.entry.area === 'DB' ? symbol.entry.db : null, shape: symbol.shape });
+        tag = found;
       } catch (err) {
         tag = toPlcError(err, 'INVALID_ADDRESS');
-        if (this.symbols && typeof address === 'string') tag = this.symbolTag(this.symbols, address, tag);
       }
       if (this.tags.size >= MAX_CACHED_TAGS) this.tags.clear();
       this.tags.set(address, tag);
     }
     return tag;
-  }
-
-  private symbolTag(table: SymbolTable, name: string, asAddress: PlcError): T | PlcError {
-    try {
-      const resolved = resolveSymbol(table, name, (address) => this.driver.syntax.parse(address));
-      if (!resolved) return unknownSymbol(table, name, asAddress);
-      const { entry, tag, shape } = resolved;
-      this.symbolUses.set(tag, { db: entry.area === 'DB' ? entry.db : null, shape });
-      return tag;
-    } catch (err) {
-      return toPlcError(err, 'INVALID_ADDRESS');
-    }
   }
 }
 
