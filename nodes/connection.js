@@ -251,6 +251,20 @@ module.exports = function (RED) {
     res.json({ url, tags, problems });
   });
 
+  /** Rows the editor may ask to export at most (a tag table of a node is far smaller). */
+  const MAX_EXPORT_ROWS = 100000;
+
+  /**
+   * CSV export for the tag table: POST { tags: [{ name, address }] } → { csv },
+   * written by the library's tagsToCsv, the form the import above reads back.
+   */
+  RED.httpAdmin.post('/plcwire/csv/export', canRead, function (req, res) {
+    const body = req.body || {};
+    const rows = Array.isArray(body.tags) ? body.tags.slice(0, MAX_EXPORT_ROWS) : [];
+    const tags = rows.map((t) => ({ name: String((t && t.name) ?? ''), address: String((t && t.address) ?? '') }));
+    res.json({ csv: plc.tagsToCsv(tags) });
+  });
+
   /** URL ⇄ fields for the edit dialog, with the library's own parser and formatter. */
   RED.httpAdmin.post('/plcwire/url', canRead, function (req, res) {
     const body = req.body || {};
