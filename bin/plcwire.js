@@ -15,8 +15,10 @@ for (const name of ['SIGINT', 'SIGTERM']) {
 
 // A reader that went away (`plcwire symbols … | head`, a closed `watch` pipe) is an end, not a crash:
 // stop as on Ctrl-C, closing PLC connections, and say nothing more on a stream nobody reads.
+let readerGone = false;
 process.stdout.on('error', (err) => {
   if (err.code !== 'EPIPE') throw err;
+  readerGone = true;
   process.exitCode = 0;
   controller.abort();
   setTimeout(() => process.exit(0), 2000).unref();
@@ -27,7 +29,9 @@ main(process.argv.slice(2), {
   stderr: process.stderr,
   stdin: process.stdin,
   signal: controller.signal,
-}).then((code) => {
+}).then((result) => {
+  // The reader left (not Ctrl-C): the command did all anyone asked of it.
+  const code = readerGone ? 0 : result;
   process.exitCode = code;
   // Everything is closed by now; do not let a stray handle keep a script waiting.
   setTimeout(() => process.exit(code), 2000).unref();

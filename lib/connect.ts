@@ -10,7 +10,7 @@ import type { FreeportProfile } from './freeport/profile';
 import type { ClientOptions } from './link/client-base';
 import { S7Client } from './s7/client';
 import type { PlcClient } from './types';
-import { endpointName, parseUrl, type Endpoint } from './url';
+import { endpointName, parseUrl, type Endpoint, type FetchWriteEndpoint, type FreeportEndpoint, type S7Endpoint } from './url';
 
 /**
  * `symbols` (a compiled SymbolTable) lets reads and writes name tags as the
@@ -29,7 +29,23 @@ export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
 
 export type AnyClient = S7Client | FetchWriteClient | FreeportClient;
 
+/**
+ * The client a URL (or endpoint) gets, by its scheme: `s7://…` an S7Client
+ * (whose services, info(), szl(), blocks…, are then there to call without a
+ * cast), `fetchwrite://…` a FetchWriteClient, `freeport://…` and
+ * `freeport+tcp://…` a FreeportClient; a string whose scheme TypeScript
+ * cannot see, any of them (AnyClient).
+ */
+export type ClientFor<U extends string | Endpoint> = U extends `s7://${string}` | S7Endpoint
+  ? S7Client
+  : U extends `fetchwrite://${string}` | FetchWriteEndpoint
+    ? FetchWriteClient
+    : U extends `freeport://${string}` | `freeport+tcp://${string}` | FreeportEndpoint
+      ? FreeportClient
+      : AnyClient;
+
 /** Creates the client for a URL (or parsed endpoint) without connecting: call `connect()` or `start()` on it. */
+export function createClient<U extends string | Endpoint>(url: U, options?: ConnectOptions): ClientFor<U>;
 export function createClient(url: string | Endpoint, options: ConnectOptions = {}): AnyClient {
   const endpoint = typeof url === 'string' ? parseUrl(url) : url;
   const { binding, profile, ...common } = options;
@@ -54,8 +70,9 @@ export function createClient(url: string | Endpoint, options: ConnectOptions = {
  * first attempt's error (a ConnectionError, TimeoutError or PlcError) and
  * leaves nothing open. After that the client reconnects by itself if the link drops.
  */
+export async function connect<U extends string | Endpoint>(url: U, options?: ConnectOptions): Promise<ClientFor<U> & PlcClient>;
 export async function connect(url: string | Endpoint, options: ConnectOptions = {}): Promise<AnyClient & PlcClient> {
-  const client = createClient(url, options);
+  const client: AnyClient = createClient(url, options);
   await client.connect();
   return client;
 }

@@ -66,10 +66,28 @@ export class PlcError extends Error {
   }
 }
 
+/**
+ * An address or tag name inside a message, quoted once: in double quotes
+ * (`"DB1.DBW"`, `"Tank.Level"`), or as written when it is a name in TIA's
+ * quotes (`"Tank".Level`, not `""Tank".Level"`). Other text with a double
+ * quote (an odd one, or at an end beside a space) is written as a JSON
+ * string (`"\""`), so that where it starts and ends stays clear.
+ */
+export function quoteTag(text: string): string {
+  if (!text.includes('"')) return `"${text}"`;
+  const balanced = text.split('"').length % 2 === 1;
+  return balanced && text.trim() === text && text !== '' ? text : JSON.stringify(text);
+}
+
 /** A malformed address. Thrown by the parsers before anything is sent. */
 export class AddressError extends PlcError {
-  constructor(address: string, problem: string) {
-    super('INVALID_ADDRESS', `invalid address "${address}": ${problem}`, { tag: address });
+  /** What is wrong with the address, without the address and the hint. */
+  readonly problem: string;
+
+  /** `hint`: what to do, after the problem (`; …`). */
+  constructor(address: string, problem: string, hint?: string) {
+    super('INVALID_ADDRESS', `invalid address ${quoteTag(address)}: ${problem}${hint ? `; ${hint}` : ''}`, { tag: address });
+    this.problem = problem;
   }
 }
 
@@ -93,7 +111,7 @@ export class SourceError extends PlcError {
 /** A value that does not fit its tag's type. Thrown before anything is sent. */
 export class ValueError extends PlcError {
   constructor(tag: string, problem: string) {
-    super('INVALID_VALUE', `invalid value for "${tag}": ${problem}`, { tag });
+    super('INVALID_VALUE', `invalid value for ${quoteTag(tag)}: ${problem}`, { tag });
   }
 }
 

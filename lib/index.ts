@@ -5,7 +5,7 @@
  *   const plc = await connect('s7://192.168.0.2?rack=0&slot=1');
  *   await plc.read(['DB1,INT2', 'DB1.DBD4:REAL', 'M0.1']);
  */
-export { connect, createClient, type AnyClient, type ConnectOptions } from './connect';
+export { connect, createClient, type AnyClient, type ClientFor, type ConnectOptions } from './connect';
 export * from './errors';
 export * from './types';
 export * from './url';
@@ -41,6 +41,7 @@ export {
   valueChanged,
   ChangeFilter,
   PolledTable,
+  realsForPeople,
   writeRequest,
   LifeSignWatch,
   nextLifeSign,

@@ -1,6 +1,6 @@
 'use strict';
 const { attach, settleWithin, liveClient, warnDuplicateNames } = require('./shared/user');
-const { tagTable, tagsOfMessage, outcomes, tagFailure, ChangeFilter, PolledTable, PlcError, isLinkError } = require('..');
+const { tagTable, tagsOfMessage, outcomes, tagFailure, ChangeFilter, PolledTable, PlcError, isLinkError, realsForPeople } = require('..');
 const { ReadQueue } = require('../dist/lib/flows/read-queue');
 const { ReadMessages, readOutput } = require('../dist/lib/flows/read-messages');
 const { tagErrorsStatus } = require('./shared/status');
@@ -60,16 +60,49 @@ module.exports = function (RED) {
     async function readTable() {
       const client = liveClient(RED, connection);
       try {
-        return { values: await client.read(table.addresses) };
+        return { values: realsShown(client, await client.read(table.addresses)) };
       } catch (err) {
-        if (err && err.code === 'TAG_ERRORS' && err.results) return { list: outcomes(tags, err.results) };
+        if (err && err.code === 'TAG_ERRORS' && err.results) return { list: outcomesShown(client, outcomes(tags, err.results)) };
         throw err;
       }
     }
 
     async function readList(list) {
-      const results = await liveClient(RED, connection).readDetailed(uniqueAddresses(list));
-      return { list: outcomes(list, results) };
+      const client = liveClient(RED, connection);
+      const results = await client.readDetailed(uniqueAddresses(list));
+      return { list: outcomesShown(client, outcomes(list, results)) };
+    }
+
+    // REAL values in messages with the digits TIA shows (40.4, not 40.400001525878906): how to show each
+    // address is found once per client (a new connection config makes a new one) and address.
+    const shows = new WeakMap();
+    function showOf(client, address) {
+      let byAddress = shows.get(client);
+      if (!byAddress) shows.set(client, (byAddress = new Map()));
+      if (!byAddress.has(address)) {
+        let convert;
+        try {
+          convert = realsForPeople(client, connection ? connection.symbols : undefined, address);
+        } catch {
+          convert = undefined; // an address the client refuses: its read failed already
+        }
+        byAddress.set(address, convert);
+      }
+      return byAddress.get(address);
+    }
+    function realsShown(client, values) {
+      for (const address of table.addresses) {
+        const convert = showOf(client, address);
+        if (convert) values[address] = convert(values[address]);
+      }
+      return values;
+    }
+    function outcomesShown(client, list) {
+      for (const o of list) {
+        const convert = o.ok ? showOf(client, o.address) : undefined;
+        if (convert) o.value = convert(o.value);
+      }
+      return list;
     }
 
     /**

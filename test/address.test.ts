@@ -1,5 +1,5 @@
 import { expect } from 'chai';
-import { AddressError } from '../lib/errors';
+import { AddressError, ValueError } from '../lib/errors';
 import { formatAddress, parseAddress, parseTypeSpec } from '../lib/address';
 
 type Expect = [
@@ -247,6 +247,28 @@ describe('address parser: accepted addresses', () => {
       expect(Object.isFrozen(t)).to.equal(true);
     });
   }
+});
+
+describe('address errors quote the address once', () => {
+  it('a TIA name in its own quotes is shown as written, not quoted again', () => {
+    expect(rejection('"Plant".Level').message).to.match(/^invalid address "Plant"\.Level: not an S7 address/);
+    expect(rejection('DB1.DBW').message).to.match(/^invalid address "DB1\.DBW": /);
+    expect(rejection('"').message).to.match(/^invalid address "\\"": /);
+    expect(new ValueError('"Plant".Level', 'too big').message).to.equal('invalid value for "Plant".Level: too big');
+    expect(new ValueError('DB1,INT2', 'too big').message).to.equal('invalid value for "DB1,INT2": too big');
+  });
+
+  it('a tag name where only addresses are known says so, and that the sources are given to the connection', () => {
+    for (const name of ['"Plant".Level', 'Plant.Level', 'Tank', 'Motor.Speed', '"Motor 1".Speed', 'Tank.Set[2]']) {
+      const e = rejection(name);
+      expect(e.code).to.equal('INVALID_ADDRESS');
+      expect(e.message, name).to.match(/; it looks like a tag name: .*DB sources or symbol table.*given to the connection as its symbols$/);
+    }
+    expect(rejection('"Plant".Level').message).to.match(/^invalid address "Plant"\.Level: not an S7 address \(e\.g\. [^)]*\); it looks/);
+    // Not a name: no hint.
+    for (const address of ['DB1.DBW', '12', 'DB1,FOO2', 'Q?'])
+      expect(rejection(address).message, address).to.not.match(/looks like a tag name/);
+  });
 });
 
 describe('address parser: rejected addresses', () => {

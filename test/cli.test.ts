@@ -217,6 +217,45 @@ describe('plcwire CLI', function () {
     });
   });
 
+  describe('as a new user meets it', () => {
+    it('prints a REAL with the digits TIA shows (40.4, not 40.400001525878906), in text and --json; LREAL as JavaScript prints it', async () => {
+      const db1 = server.memory.area('DB', 1)!;
+      db1.writeFloatBE(40.4, 4);
+      db1.writeFloatBE(0.1, 30);
+      db1.writeFloatBE(1e-7, 34);
+      db1.writeDoubleBE(0.1, 40);
+      db1.writeFloatBE(40.4, 48);
+      db1.writeFloatBE(-3.3, 52);
+      const tags = ['DB1.DBD4:REAL', 'DB1,REAL30', 'DB1,REAL34', 'DB1.DBB40:LREAL', 'DB1,REAL48.2'];
+      const text = await cli(['read', url, ...tags]);
+      expect(text.code, text.err).to.equal(0);
+      expect(text.out).to.equal(
+        'DB1.DBD4:REAL = 40.4\nDB1,REAL30 = 0.1\nDB1,REAL34 = 1e-7\nDB1.DBB40:LREAL = 0.1\nDB1,REAL48.2 = [40.4, -3.3]\n',
+      );
+      const json = await cli(['read', url, ...tags, '--json']);
+      expect(json.out).to.equal(
+        '{"DB1.DBD4:REAL":40.4,"DB1,REAL30":0.1,"DB1,REAL34":1e-7,"DB1.DBB40:LREAL":0.1,"DB1,REAL48.2":[40.4,-3.3]}\n',
+      );
+      // An LREAL holding the float32 nearest 40.4 is that number, not 40.4.
+      db1.writeDoubleBE(Math.fround(40.4), 40);
+      expect((await cli(['read', url, 'DB1.DBB40:LREAL'])).out).to.equal('DB1.DBB40:LREAL = 40.400001525878906\n');
+    });
+
+    it('a tag name without --symbols: the address error says it looks like one, and a second line names --symbols (exit 2, nothing sent)', async () => {
+      const r = await cli(['read', url, '"Plant".Level']);
+      expect(r.code).to.equal(EXIT.USAGE);
+      const lines = r.err.trimEnd().split('\n');
+      expect(lines).to.have.length(2);
+      expect(lines[0]).to.match(/^plcwire: invalid address "Plant"\.Level: not an S7 address .*; it looks like a tag name: /);
+      expect(lines[0]).to.not.include('""');
+      expect(lines[1]).to.equal('plcwire: give them with --symbols (and --db for TIA blocks), e.g. --symbols Plant.db --db Plant=1');
+      expect(requests).to.equal(0);
+      const plain = await cli(['read', url, 'Tank.Level']);
+      expect(plain.err).to.match(/^plcwire: invalid address "Tank\.Level": .*looks like a tag name/);
+      expect(plain.err).to.include('--symbols Tank.db --db Tank=1');
+    });
+  });
+
   describe('toJson', () => {
     it('writes bigints (in arrays too) as bare digits and everything else as JSON.stringify does', () => {
       expect(toJson({ a: [1n, -(2n ** 63n)], b: 2n ** 64n - 1n })).to.equal('{"a":[1,-9223372036854775808],"b":18446744073709551615}');
@@ -390,7 +429,7 @@ describe('plcwire CLI', function () {
       } finally {
         w.child.kill('SIGINT');
       }
-      expect(await w.exit).to.equal(0);
+      expect(await w.exit).to.equal(EXIT.INTERRUPTED);
       const lines = w
         .output()
         .out.trim()
@@ -434,11 +473,57 @@ describe('plcwire CLI', function () {
         } finally {
           w.child.kill('SIGINT');
         }
-        expect(await w.exit).to.equal(0);
+        expect(await w.exit).to.equal(EXIT.INTERRUPTED);
         const first = parseExactJson(w.output().out.split('\n')[0]!) as { time: string; values: unknown };
         expect(first.time).to.match(/^\d{4}-\d\d-\d\dT/);
         expect(first.values).to.deep.equal(expected);
       });
+    });
+
+    it('watch exits 130 on Ctrl-C (SIGINT) and on SIGTERM, as the exit-code table says', async () => {
+      for (const signal of ['SIGINT', 'SIGTERM'] as const) {
+        const w = run(['watch', url, 'DB1,INT2', '--interval', '50']);
+        await until(() => w.output().out.includes('DB1,INT2 = 1234\n'), 10000, 'the first line');
+        w.child.kill(signal);
+        expect(await w.exit, `${signal}: ${w.output().err}`).to.equal(EXIT.INTERRUPTED);
+      }
+    });
+
+    it("<command> --help, -h and help <command> print that command's usage, options and an example (exit 0)", async () => {
+      const ways = [
+        ['read', '--help'],
+        ['read', '-h'],
+        ['help', 'read'],
+        ['read', 's7://h', '--help', '--nope'],
+      ];
+      const outs = await Promise.all(
+        ways.map(async (args) => {
+          const r = run(args);
+          return { code: await r.exit, ...r.output() };
+        }),
+      );
+      for (const o of outs) {
+        expect(o.code, o.err).to.equal(0);
+        expect(o.out).to.equal(outs[0]!.out);
+      }
+      const read = outs[0]!.out;
+      expect(read).to.match(/^usage: plcwire read <url> <address\|symbol>\.\.\./);
+      expect(read)
+        .to.match(/^ {2}--symbols file /m)
+        .and.match(/^ {2}--json /m)
+        .and.match(/^example:\n {2}plcwire read "s7:\/\//m);
+      expect(read, "only read's usage").to.not.match(/plcwire (write|serve|watch) /);
+      for (const command of ['write', 'watch', 'symbols', 'info', 'szl', 'diag', 'clock', 'blocks', 'cpu', 'doctor', 'serve', 'demo']) {
+        const r = await cli([command, '--help']);
+        expect(r.code, command).to.equal(0);
+        expect(r.out, command)
+          .to.match(new RegExp(`^usage: plcwire ${command}\\b`))
+          .and.match(/\nexample:\n {2}plcwire /);
+      }
+      const global = await cli(['--help']);
+      expect(global.out)
+        .to.match(/^usage:\n {2}plcwire read /)
+        .and.match(/plcwire serve s7 /);
     });
 
     it('prints usage and exits 2 without a command', async () => {
@@ -473,7 +558,7 @@ describe('plcwire system commands (the installed binary against the simulator)',
 
   afterEach(() => server.close());
 
-  it('info --json gives identity, state in lower case and the clock in ISO 8601', async () => {
+  it('info --json gives identity, the state as the library and TIA spell it (RUN, STOP) and the clock in ISO 8601', async () => {
     const url = await start('s7-1500');
     const r = await plcwire(['info', url, '--json']);
     expect(r.code, r.err).to.equal(0);
@@ -485,7 +570,7 @@ describe('plcwire system commands (the installed binary against the simulator)',
       serialNumber: 'S V-PW0000042019',
       asName: 'PLCWIRE-SIM',
       moduleName: 'PLC_1',
-      state: 'run',
+      state: 'RUN',
       pduSize: 960,
     });
     expect(info.clock).to.match(/^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z$/);
@@ -494,7 +579,7 @@ describe('plcwire system commands (the installed binary against the simulator)',
     const text = await plcwire(['info', url]);
     expect(text.out)
       .to.match(/^orderCode: 6ES7 516-3AN02-0AB0$/m)
-      .and.match(/^state: stop$/m);
+      .and.match(/^state: STOP$/m);
   });
 
   it('szl --json gives the records as hex and the decoded form; a list the CPU lacks exits 1, a bad ID 2', async () => {
@@ -588,7 +673,7 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect(server.state).to.equal('RUN');
     r = await plcwire(['cpu', `${url}&control=true`, 'stop', '--yes', '--json']);
     expect(r.code, r.err).to.equal(0);
-    expect(JSON.parse(r.out)).to.deep.equal({ state: 'stop' });
+    expect(JSON.parse(r.out)).to.deep.equal({ state: 'STOP' });
     expect(server.state).to.equal('STOP');
     r = await plcwire(['cpu', `${url}&control=true`, 'cold-start', '--yes']);
     expect(r.out.trim()).to.equal('the CPU is in RUN');

@@ -8,13 +8,16 @@
  * that is up (no "bad connection", no "settings conflict"), every polling
  * read delivers values (a recorder is wired behind it), and the control
  * example reads the CPU in RUN. Statuses are heard as the editor hears them:
- * on the runtime's comms socket. Only the ports change: the test's plant
- * listens on free ports instead of 10102, 12000/12001 and 14001 (and MQTT
- * on a port where no broker runs).
+ * on the runtime's comms socket. The MQTT gateway example gets a broker
+ * (aedes, as Mosquitto would be on 127.0.0.1:1883): a subscriber receives
+ * the plant's values from it, and a guarded write through it starts and stops
+ * the plant's motor. Only the ports change: the test's plant listens on free
+ * ports instead of 10102, 12000/12001 and 14001, the broker instead of 1883.
  */
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
+import { TestBroker } from './support/mqtt-broker';
 import { freePort } from './support/net';
 
 const ROOT = path.resolve(__dirname, '../..');
@@ -22,9 +25,13 @@ const ROOT = path.resolve(__dirname, '../..');
 const WebSocket = require(require.resolve('ws', { paths: [path.dirname(require.resolve('node-red/package.json', { paths: [ROOT] }))] }));
 const EXAMPLES = path.join(ROOT, 'examples');
 const { demoFlow, DEMO_URLS } = require(path.join(ROOT, 'demo/flows.js')) as { demoFlow(urls: object): any[]; DEMO_URLS: any };
+const mqtt = require('mqtt');
+const MQTT_EXAMPLE = 'MQTT gateway - publish tags, guarded writes.json';
 
 interface Demo {
   editor: string;
+  /** The demo's plant (lib/plant), in this process: its memory is the S7-1200's. */
+  plant: any;
   stop(): Promise<void>;
 }
 
@@ -65,6 +72,7 @@ async function eventually<T>(check: () => Promise<T>, ms: number, what: string):
 describe('examples: each imported into the running `npm start` demo and deployed', function () {
   this.timeout(240_000);
   let demo: Demo;
+  let broker: TestBroker;
   let ports: { s7: number; fetch: number; write: number; freeport: number; mqtt: number };
   let comms: any;
   /** Every node status the runtime published, by node id, as the editor hears them (its comms socket, topic status/<id>). */
@@ -72,15 +80,10 @@ describe('examples: each imported into the running `npm start` demo and deployed
 
   before(async () => {
     const { startDemo } = require(path.join(ROOT, 'demo/start.js')) as { startDemo(o: object): Promise<Demo> };
-    const [port, s7, fetchPort, write, freeport, mqtt] = await Promise.all([
-      freePort(),
-      freePort(),
-      freePort(),
-      freePort(),
-      freePort(),
-      freePort(),
-    ]);
-    ports = { s7, fetch: fetchPort, write, freeport, mqtt };
+    const [port, s7, fetchPort, write, freeport] = await Promise.all([freePort(), freePort(), freePort(), freePort(), freePort()]);
+    broker = new TestBroker();
+    await broker.start();
+    ports = { s7, fetch: fetchPort, write, freeport, mqtt: broker.port };
     demo = await startDemo({ port, plantPorts: { s7, fetch: fetchPort, write, freeport }, quiet: true, log: () => undefined });
     comms = new WebSocket(`${demo.editor.replace(/^http/, 'ws')}comms`);
     await new Promise((resolve, reject) => {
@@ -99,6 +102,7 @@ describe('examples: each imported into the running `npm start` demo and deployed
   after(async () => {
     comms?.close();
     await demo?.stop();
+    await broker?.stop();
   });
 
   it("every example's connection agrees with the demo's connection to the same PLC (ports, settings, sources)", () => {
@@ -130,7 +134,6 @@ describe('examples: each imported into the running `npm start` demo and deployed
     const nodes: any[] = [{ id: tab, type: 'tab', label: f }];
     for (const n of flow) {
       if (n.type === 'plcwire-connection') nodes.push({ ...n, url: port(n.url) });
-      // No broker where a user may run one: the MQTT nodes wait, the plcwire nodes must not.
       else if (n.type === 'mqtt-broker') nodes.push({ ...n, port: String(ports.mqtt) });
       else if (polls.includes(n.id)) nodes.push({ ...n, z: tab, wires: [[...(n.wires?.[0] ?? []), `${n.id}.probe`]] });
       else nodes.push({ ...n, z: tab });
@@ -155,6 +158,64 @@ describe('examples: each imported into the running `npm start` demo and deployed
     const stored = res?.memory ?? res;
     if (!stored || stored.msg === undefined) return undefined;
     return JSON.parse(stored.msg);
+  }
+
+  /**
+   * The MQTT gateway beside the demo, as a consumer on another machine meets it: every tag of the plant on
+   * plant/tank/<tag> with the plant's values, and a write through the allow-list that starts the plant's motor
+   * (and one more that stops it again), while a member the plant computes is refused.
+   */
+  async function mqttGateway(): Promise<void> {
+    const db = (): Buffer => demo.plant.memory.area('DB', 1);
+    const latest: Record<string, any> = {};
+    const results: Record<string, any> = {};
+    const consumer = await mqtt.connectAsync(broker.url, { reconnectPeriod: 100, connectTimeout: 5000 });
+    try {
+      consumer.on('message', (topic: string, payload: Buffer) => {
+        const body = JSON.parse(payload.toString());
+        const tag = /^plant\/tank\/([^/]+)$/.exec(topic)?.[1];
+        if (tag) latest[tag] = body;
+        if (/^plant\/tank\/[^/]+\/set\/result$/.test(topic)) results[body.id] = body;
+      });
+      await consumer.subscribeAsync('plant/tank/#', { qos: 1 });
+      const tags = ['level', 'temperature', 'heater', 'run', 'running', 'speed', 'parts'];
+      await eventually(
+        async () => {
+          const missing = tags.filter((t) => latest[t]?.quality !== 'good');
+          if (missing.length) throw new Error(`not yet: ${missing.join(', ')} (${JSON.stringify(latest)})`);
+        },
+        30_000,
+        'every plant tag published on plant/tank/<tag>',
+      );
+      // The plant's values, by name: the motor stands (nothing has started it), so its members hold still.
+      expect(db()[4]! & 1, 'the demo starts with the motor stopped').to.equal(0);
+      expect(latest.level).to.include({ address: '"Plant".Level' });
+      expect(latest.level.value).to.be.within(0, 100);
+      expect(latest.temperature.value).to.be.within(19.9, 60);
+      expect([latest.run.value, latest.running.value, latest.speed.value]).to.deep.equal([false, false, 0]);
+      expect(latest.parts.value).to.equal(db().readInt32BE(8));
+      // A member the plant computes is refused, and the level goes on as the plant makes it.
+      await consumer.publishAsync('plant/tank/level/set', JSON.stringify({ value: 0, id: 'level' }), { qos: 1 });
+      await eventually(async () => expect(results.level?.error?.code).to.equal('NOT_WRITABLE'), 15_000, 'the level write refused');
+      // The run command through the allow-list: acknowledged by the PLC, the plant's motor turns, the gateway publishes it.
+      await consumer.publishAsync('plant/tank/run/set', JSON.stringify({ value: true, id: 'start' }), { qos: 1 });
+      await eventually(async () => expect(results.start).to.deep.include({ ok: true, tag: 'run' }), 15_000, 'the start acknowledged');
+      expect(db()[4]! & 1, '"Plant".MotorRun in the PLC').to.equal(1);
+      await eventually(
+        async () => expect([latest.running.value, latest.speed.value > 0]).to.deep.equal([true, true]),
+        15_000,
+        'the motor turning, published',
+      );
+      await consumer.publishAsync('plant/tank/run/set', JSON.stringify({ value: false, id: 'stop' }), { qos: 1 });
+      await eventually(async () => expect(results.stop).to.deep.include({ ok: true, tag: 'run' }), 15_000, 'the stop acknowledged');
+      await eventually(
+        async () => expect([latest.running.value, latest.speed.value]).to.deep.equal([false, 0]),
+        15_000,
+        'the motor standing again, published',
+      );
+    } finally {
+      await consumer.endAsync(true);
+    }
   }
 
   const up = (s: any) => s.fill === 'green' || (s.fill === 'yellow' && s.shape === 'dot');
@@ -191,6 +252,7 @@ describe('examples: each imported into the running `npm start` demo and deployed
         30_000,
         'a value from every poll',
       );
+      if (f === MQTT_EXAMPLE) await mqttGateway();
       if (f === 'S7 PLC control.json') {
         await api(demo.editor, 'POST', 'inject/ctlex.inject.state');
         await eventually(

@@ -747,17 +747,59 @@ describe('symbols layout: system types (lib/symbols/system-types.ts)', () => {
   });
 
   it('refuses a system type whose standard layout it does not know by name, as a member and as an instance DB', () => {
-    const member = refusal([db('T', [m('t', named('IEC_TIMER', at(3, 9)))])]);
+    const member = refusal([db('T', [m('t', named('IEC_DCOUNTER', at(3, 9)))])]);
     expect(member.message).to.match(
-      /^hand\.db:3:9: "T"\.t is of type IEC_TIMER, a system type whose layout .* does not know \(it knows TCON_IP_v4/,
+      /^hand\.db:3:9: "T"\.t is of type IEC_DCOUNTER, a system type whose layout .* does not know \(it knows TCON_IP_v4/,
     );
-    const instance = refusal([db('T1', named('TON_TIME'), { at: at(1, 1, 'T1.db') })]);
+    const instance = refusal([db('T1', named('TONR_TIME'), { at: at(1, 1, 'T1.db') })]);
     expect(instance.message).to.match(
-      /^T1\.db:1:1: DB "T1" is an instance of TON_TIME, a system type whose layout .*read the block by absolute address/,
+      /^T1\.db:1:1: DB "T1" is an instance of TONR_TIME, a system type whose layout .*read the block by absolute address/,
     );
     // A name that is no system type keeps the refusal of an unknown UDT.
     expect(refusal([db('X', named('NoSuchType'))]).message).to.match(
       /DB "X" is an instance of "NoSuchType", which is not a UDT of the sources/,
     );
+  });
+
+  it('lays out IEC timers (16 bytes, the reserve after the bits) and INT counters (6 bytes) inside a DB, and what follows them', () => {
+    const table = compiled(
+      [
+        db('Line', [
+          m('Start', el('BOOL')),
+          m('Delay', named('IEC_TIMER')),
+          m('Off', named('TOF_TIME')),
+          m('Count', named('IEC_COUNTER')),
+          m('After', el('BYTE')),
+        ]),
+        db('T1', named('TON_TIME')),
+      ],
+      { db: { Line: 5, T1: 6 } },
+    );
+    const address = (name: string) => table.lookup(name)?.address;
+    expect(['"Line".Delay.ST', '"Line".Delay.PT', '"Line".Delay.ET'].map(address)).to.deep.equal([
+      'DB5.DBD2:TIME',
+      'DB5.DBD6:TIME',
+      'DB5.DBD10:TIME',
+    ]);
+    expect(['"Line".Delay.RU', '"Line".Delay.IN', '"Line".Delay.Q'].map(address)).to.deep.equal([
+      'DB5.DBX14.0',
+      'DB5.DBX14.1',
+      'DB5.DBX14.2',
+    ]);
+    // The next timer starts 16 bytes after the first, not at the word after its bits (16).
+    expect(address('"Line".Off.PT')).to.equal('DB5.DBD22:TIME');
+    expect(['"Line".Count.CU', '"Line".Count.QD', '"Line".Count.PV', '"Line".Count.CV'].map(address)).to.deep.equal([
+      'DB5.DBX34.0',
+      'DB5.DBX34.5',
+      'DB5.DBW36:INT',
+      'DB5.DBW38:INT',
+    ]);
+    expect(address('"Line".After')).to.equal('DB5.DBB40');
+    expect(table.lookup('"Line".Delay')).to.include({ size: 16 });
+    expect(table.blocks.map((b) => [b.name, b.length])).to.deep.equal([
+      ['Line', 42],
+      ['T1', 16],
+    ]);
+    expect(table.lookup('"T1".Q')?.address).to.equal('DB6.DBX12.2');
   });
 });

@@ -125,11 +125,35 @@ export function parseAddress(address: string): Tag {
   for (const syntax of SYNTAXES) {
     if (!syntax.family.test(body)) continue;
     const m = syntax.pattern?.exec(body);
-    if (!m || !syntax.build) throw new AddressError(address, syntax.expected(body));
+    if (!m || !syntax.build) throw new AddressError(address, syntax.expected(body), looksLikeName(text, true) ? NAME_HINT : undefined);
     if (m[0].length < body.length) throw new AddressError(address, `unexpected "${body.slice(m[0].length)}" after "${m[0]}"`);
     return syntax.build(address, m, override);
   }
-  throw new AddressError(address, 'not an S7 address (e.g. DB1,INT2, DB1.DBW2, MW4, I0.1, VW10, T3)');
+  throw new AddressError(
+    address,
+    'not an S7 address (e.g. DB1,INT2, DB1.DBW2, MW4, I0.1, VW10, T3)',
+    looksLikeName(text) ? NAME_HINT : undefined,
+  );
+}
+
+/**
+ * What to do about a tag name given where only addresses are known: the
+ * same words serve the library (connect(url, { symbols })), the command line
+ * (--symbols) and Node-RED (the connection node's Symbol sources).
+ */
+export const NAME_HINT =
+  'it looks like a tag name: names are read through the DB sources or symbol table that declare them (exported from TIA Portal or STEP 7), given to the connection as its symbols';
+
+/** `"Tank".Level`, `Tank.Motor.Speed`, `Tank.Set[2]`, `Tank`: a name as TIA writes it, quoted parts or plain. */
+const NAME = /^(?:"[^"]+"|[A-Za-z_]\w*)(?:\.(?:"[^"]+"|[A-Za-z_]\w*)|\[\s*-?\d+(?:\s*,\s*-?\d+)*\s*\])*$/;
+
+/**
+ * `family`: the text starts as an address family does (T for timers, M for
+ * markers, DB…): a name only when quoted or when it starts with four
+ * letters (`Tank`, `Motor.Speed`), which no address does (DBX, PIW: three).
+ */
+function looksLikeName(text: string, family = false): boolean {
+  return NAME.test(text) && (!family || text.includes('"') || /^[A-Za-z_]{4}/.test(text));
 }
 
 function dbNumber(digits: string, address: string): number {

@@ -4,14 +4,17 @@
  * code a script can switch on (see EXIT and the README's CLI reference).
  */
 import { createClient, type AnyClient } from '../connect';
-import { PlcError, TagErrors } from '../errors';
+import { NAME_HINT } from '../address/parse';
+import { AddressError, PlcError, TagErrors } from '../errors';
 import type { SymbolTable } from '../symbols/model';
 import type { PlcData } from '../types';
 import { validateValue, type TagShape } from '../values';
 import { endpointName, isLoopback, parseUrl, type Endpoint } from '../url';
 import { parseArgs, UsageError, intFlag, withTimeout, type ParsedArgs } from './args';
+import { commandHelp } from './help';
 import { EXIT, confirm, exitCode, fail, withClient, type CliIo } from './io';
 import { serve, SERVE_FLAGS } from './serve';
+import { realsForPeople } from '../flows/reals';
 import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { textOf, toJson, valueFromText, type TypedTag } from './values';
@@ -33,7 +36,7 @@ const USAGE = `usage:
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
   plcwire demo
-options: --debug prints stack traces; --help prints this text.
+options: --debug prints stack traces; --help (-h) prints this text, plcwire <command> --help that command's.
 symbols: names as TIA writes them ('"Tank".Motor.Speed', Tank.Motor.Speed); a STRUCT reads as an object
       and is written as JSON ('"Tank".Motor={"Speed":1.5}'); --db numbers the blocks of TIA sources;
       a DB whose length in the PLC differs from the sources' is a warning, --strict-symbols refuses its names.
@@ -46,13 +49,29 @@ const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'strict-symbols'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
   let args: ParsedArgs;
+  // -h is --help (before a `--`, after which everything is a positional).
+  const end = argv.indexOf('--');
+  const words = argv.map((a, i) => (a === '-h' && (end < 0 || i < end) ? '--help' : a));
   try {
-    args = parseArgs(argv, VALUE_FLAGS, BOOL_FLAGS);
+    args = parseArgs(words, VALUE_FLAGS, BOOL_FLAGS);
   } catch (err) {
+    // `plcwire read --help` prints read's help even beside an option read does not know.
+    const command = words.find((w) => !w.startsWith('-'));
+    if (words.includes('--help') && command !== undefined && commandHelp(command)) {
+      io.stdout.write(`${commandHelp(command)}\n`);
+      return EXIT.OK;
+    }
     return fail(io, err, false);
   }
   const debug = args.flags.has('debug');
   const [command, ...rest] = args.positionals;
+  // `plcwire read --help`, `plcwire help read`: that command's usage, options and an example.
+  const asked = command === 'help' ? rest[0] : args.flags.has('help') ? command : undefined;
+  const help = asked === undefined ? undefined : commandHelp(asked);
+  if (help !== undefined) {
+    io.stdout.write(`${help}\n`);
+    return EXIT.OK;
+  }
   if (args.flags.has('help') || command === undefined || command === 'help') {
     io.stdout.write(`${USAGE}\n`);
     return command === undefined && !args.flags.has('help') ? EXIT.USAGE : EXIT.OK;
@@ -124,9 +143,30 @@ function targetClient(
     if (err instanceof PlcError && err.code === 'NOT_SUPPORTED') throw new UsageError(err.message);
     throw err;
   }
-  for (const target of targets) client.tag(target);
+  for (const target of targets) {
+    try {
+      client.tag(target);
+    } catch (err) {
+      throw table ? err : withSymbolsHint(err, target);
+    }
+  }
   if (table) reportLayout(client, io, options.strictSymbols === true);
   return { client, table };
+}
+
+/**
+ * A tag name given without --symbols: the library's error says it looks like
+ * one; a second line says which options give the sources.
+ */
+function withSymbolsHint(err: unknown, target: string): unknown {
+  if (!(err instanceof AddressError) || !err.message.endsWith(NAME_HINT)) return err;
+  const block = /^"([^"]+)"|^([A-Za-z_]\w*)/.exec(target);
+  const name = block?.[1] ?? block?.[2] ?? 'Tank';
+  return new AddressError(
+    target,
+    err.problem,
+    `${NAME_HINT}\nplcwire: give them with --symbols (and --db for TIA blocks), e.g. --symbols ${name}.db --db ${name}=1`,
+  );
 }
 
 /**
@@ -150,7 +190,7 @@ async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number
   const errors: PlcError[] = [];
   for (const address of addresses) {
     const r = results[address]!;
-    if (r.ok) values[address] = r.value;
+    if (r.ok) values[address] = show(client, table, address, r.value);
     else {
       values[address] = null;
       errors.push(r.error);
@@ -222,7 +262,7 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   const { endpoint, addresses } = endpointArg(rest, 'watch');
   const interval = intFlag(args, 'interval', 1000, 10, 3_600_000);
   const json = args.flags.has('json');
-  const { client } = targetClient(endpoint, addresses, args, io); // bad addresses and unknown names fail here, before connecting
+  const { client, table } = targetClient(endpoint, addresses, args, io); // bad addresses and unknown names fail here, before connecting
   const last = new Map<string, string>();
   const report = (line: string) => io.stderr.write(`plcwire: ${line}\n`);
   client.on('connected', () => report(`connected to ${endpointName(endpoint)}`));
@@ -241,10 +281,11 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
           const changed: Record<string, unknown> = {};
           for (const a of addresses) {
             const r = results[a]!;
-            const text = r.ok ? textOf(r.value) : `error: ${r.error.message}`;
+            const value = r.ok ? show(client, table, a, r.value) : undefined;
+            const text = r.ok ? textOf(value) : `error: ${r.error.message}`;
             if (last.get(a) === text) continue;
             last.set(a, text);
-            if (r.ok) changed[a] = r.value;
+            if (r.ok) changed[a] = value;
             // A tag's error names it already (tagError); an error that does not is prefixed with the target.
             else report(r.error.tag === a ? r.error.message : `${a}: ${r.error.message}`);
           }
@@ -261,7 +302,14 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   } finally {
     await client.close();
   }
-  return EXIT.OK;
+  // It runs until stopped: Ctrl-C (or SIGTERM) is how it ends, and the exit code says so.
+  return io.signal.aborted ? EXIT.INTERRUPTED : EXIT.OK;
+}
+
+/** A value read as read and watch print it (text and --json): a REAL with the digits TIA shows (lib/flows/reals.ts). */
+function show(client: AnyClient, table: SymbolTable | undefined, target: string, value: unknown): unknown {
+  const convert = realsForPeople(client, table, target);
+  return convert ? convert(value) : value;
 }
 
 function delay(ms: number, signal: AbortSignal): Promise<void> {

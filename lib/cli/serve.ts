@@ -1,5 +1,4 @@
 /** `plcwire serve <protocol>`: run a simulator until Ctrl-C. */
-import { readFileSync } from 'node:fs';
 import { FetchWriteServer } from '../fetchwrite/server';
 import { FreeportBus } from '../freeport/bus';
 import { S7Server, type S7Profile } from '../s7/server';
@@ -7,6 +6,7 @@ import type { MemoryLayout } from '../sim/memory';
 import type { SymbolTable } from '../symbols/model';
 import { FREEPORT_BAUD_RATES } from '../url';
 import { UsageError, intFlag, listFlag, stringFlag, type ParsedArgs } from './args';
+import { readInputFile } from './files';
 import { EXIT, untilInterrupted, type CliIo } from './io';
 import { symbolsFlag } from './symbols';
 
@@ -149,10 +149,11 @@ async function listen<R>(start: () => Promise<R>, flag: string): Promise<R> {
 
 function loadLayout(file: string | undefined): MemoryLayout | undefined {
   if (file === undefined) return undefined;
+  const text = readInputFile(file).toString('utf8');
   try {
-    return JSON.parse(readFileSync(file, 'utf8')) as MemoryLayout;
+    return JSON.parse(text) as MemoryLayout;
   } catch (err) {
-    throw new UsageError(`cannot read layout ${file}: ${(err as Error).message}`);
+    throw new UsageError(`--layout ${file} is not JSON: ${(err as Error).message}`);
   }
 }
 

@@ -5,7 +5,6 @@
  * with --source; --db numbers the blocks of TIA sources, which do not carry
  * their numbers.
  */
-import { readFileSync } from 'node:fs';
 import { parseAddress } from '../address';
 import type { AnyClient, ConnectOptions } from '../connect';
 import { ValueError } from '../errors';
@@ -14,6 +13,7 @@ import type { SymbolEntry, SymbolSource, SymbolTable } from '../symbols/model';
 import { expandWrite, resolveSymbol, type SymbolShape } from '../symbols/resolve';
 import type { LayoutMismatchEvent, LayoutUnknownEvent } from '../types';
 import { UsageError, listFlag, type ParsedArgs } from './args';
+import { readInputFile } from './files';
 import { EXIT, type CliIo } from './io';
 import { toJson, valueFromText } from './values';
 
@@ -52,12 +52,8 @@ function dbNumbers(args: ParsedArgs): Record<string, number> {
 }
 
 function readSource(file: string): SymbolSource {
-  try {
-    // Bytes: the readers tell UTF-8 from UTF-16 by the byte order mark, and .xlsx is binary.
-    return { name: file, content: readFileSync(file) };
-  } catch (err) {
-    throw new UsageError(`cannot read ${file}: ${(err as NodeJS.ErrnoException).code ?? (err as Error).message}`);
-  }
+  // Bytes: the readers tell UTF-8 from UTF-16 by the byte order mark, and .xlsx is binary.
+  return { name: file, content: readInputFile(file) };
 }
 
 /**
@@ -232,7 +228,24 @@ export function reportLayout(client: AnyClient, io: CliIo, strict: boolean): voi
     io.stderr.write(`warning: ${finding}: ${consequence}; recompile the sources or download the block\n`);
   });
   client.on('layoutUnknown', (e: LayoutUnknownEvent) => {
-    const blocks = e.checks.map((c) => blockName(c.block, c.db)).join(', ');
-    io.stderr.write(`note: the length of ${blocks} could not be checked against the sources: ${e.error.message}\n`);
+    io.stderr.write(`note: ${layoutUnknownText(client.protocol, e)}\n`);
   });
+}
+
+/**
+ * The note for a PLC that cannot tell its blocks' lengths, in a user's words:
+ * what it means (a changed DB is not detected) and what to do (export the
+ * sources again after every change). An S7-1200/1500 answers block info
+ * "function not implemented" (NOT_SUPPORTED); FETCH/WRITE has no such
+ * service. Any other reason (a protection level, say) is named as the client
+ * gives it.
+ */
+function layoutUnknownText(protocol: string, e: LayoutUnknownEvent): string {
+  const blocks = e.checks.map((c) => blockName(c.block, c.db)).join(', ');
+  const advice = `so a DB changed in the PLC's project (${blocks}) is not detected here; export the sources again after every change`;
+  if (protocol === 'fetchwrite') return `FETCH/WRITE does not report the length of data blocks, ${advice}`;
+  if (e.error.code === 'NOT_SUPPORTED') {
+    return `this CPU does not report the length of its data blocks (S7-1200 and S7-1500 do not), ${advice.replace("the PLC's project", 'TIA Portal')}`;
+  }
+  return `the length of ${blocks} could not be checked against the sources (${e.error.message}); names are read at the offsets of the sources`;
 }

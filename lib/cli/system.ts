@@ -65,7 +65,8 @@ export async function info(rest: string[], args: ParsedArgs, io: CliIo): Promise
   const endpoint = s7Endpoint(rest, 'info', args);
   extra(rest, 1);
   const i = await run(endpoint, io, (c) => c.info({ signal: io.signal }));
-  const json = { ...i, state: i.state?.toLowerCase() };
+  // The state as the library and the PLC say it (RUN, STOP), as TIA Portal shows it.
+  const json = { ...i };
   print(io, args, json, () =>
     Object.entries(json)
       .filter(([, v]) => v !== undefined)
@@ -204,7 +205,7 @@ export async function cpu(rest: string[], args: ParsedArgs, io: CliIo): Promise<
     await c[method]({ signal: io.signal });
     return c.cpuState({ signal: io.signal });
   });
-  print(io, args, { state: state.mode.toLowerCase() }, () => [`the CPU is in ${state.mode}`]);
+  print(io, args, { state: state.mode }, () => [`the CPU is in ${state.mode}`]);
   return EXIT.OK;
 }
 

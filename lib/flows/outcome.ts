@@ -3,7 +3,7 @@
  * (Error objects do not survive message cloning), and the one error that
  * names every failed tag of a read or write.
  */
-import { PlcError, type PlcErrorCode, type TagResult } from '../errors';
+import { PlcError, quoteTag, type PlcErrorCode, type TagResult } from '../errors';
 import type { TagRow } from '../tags/table';
 
 /** An error as it travels on a message. */
@@ -33,7 +33,7 @@ export function outcomes(tags: readonly TagRow[], results: Readonly<Record<strin
   return tags.map(({ name, address }): TagOutcome => {
     const r = results[address];
     if (r && r.ok) return { name, address, ok: true, value: r.value };
-    const error = r ? r.error : new Error(`no result for "${address}"`);
+    const error = r ? r.error : new Error(`no result for ${quoteTag(address)}`);
     return { name, address, ok: false, error: errorInfo(error, address) };
   });
 }
@@ -45,7 +45,7 @@ export function outcomes(tags: readonly TagRow[], results: Readonly<Record<strin
  */
 export function tagFailure(verb: 'read' | 'write', failed: readonly TagFailure[]): PlcError {
   const { name, error } = failed[0]!;
-  const label = name === error.address ? `"${name}"` : `"${name}" (${error.address})`;
+  const label = name === error.address ? quoteTag(name) : `${quoteTag(name)} (${error.address})`;
   const more = failed.length > 1 ? ` (+${failed.length - 1})` : '';
   return new PlcError(error.code as PlcErrorCode, `${verb} ${label}: ${error.message}${more}`, { tag: name });
 }

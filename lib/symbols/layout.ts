@@ -26,7 +26,7 @@ import { SourceError } from '../errors';
 import type { DataTypeName } from '../types';
 import { elementByteLength } from '../values/types-table';
 import type { BlockDecl, DataBlockDecl, MemberDecl, SourcePosition, TypeDecl, TypeRef } from './model';
-import { isSystemDecl, isSystemTypeName, KNOWN_LAYOUTS, systemAlias, systemStructure } from './system-types';
+import { isSystemDecl, isSystemTypeName, KNOWN_LAYOUTS, systemAlias, systemStructure, systemStructureBytes } from './system-types';
 
 /** Bytes a data block with standard access can hold: 64 KB (S7-300/400 and S7-1200/1500 with standard access); the last byte, 65535, is the last our addresses reach. */
 const MAX_BLOCK_BYTES = 65536;
@@ -271,7 +271,11 @@ class Engine {
     }
     this.open.push(udt);
     try {
-      return this.struct(udt.body.members, typeRef(udt), pos, where, decl, decl?.at ?? udt.at, udt);
+      const placed = this.struct(udt.body.members, typeRef(udt), pos, where, decl, decl?.at ?? udt.at, udt);
+      // A system structure the CPU keeps larger than its members (an IEC timer's reserve after its bits).
+      const bytes = systemStructureBytes(udt);
+      if (bytes === undefined || bytes <= placed.node.size) return placed;
+      return { node: { ...placed.node, size: bytes }, next: (placed.node.byte + bytes) * 8 };
     } finally {
       this.open.pop();
     }

@@ -13,7 +13,7 @@
  * and writing by name").
  */
 import { parseAddress } from '../address';
-import { PlcError, ValueError, toPlcError } from '../errors';
+import { AddressError, PlcError, ValueError, toPlcError } from '../errors';
 import type { DriverTag } from '../link/driver';
 import type { PlcData, PlcStruct, PlcValue, Tag } from '../types';
 import { tagDecoder, validateValue, type TagDecoder } from '../values';
@@ -94,7 +94,10 @@ function unknownSymbol(table: SymbolTable, name: string, asAddress: PlcError): P
     // A table without suggestions still names the symbol.
   }
   const parent = suggestions.length === 0 ? knownParent(table, name) : undefined;
-  if (!quoted && suggestions.length === 0 && !parent) return asAddress;
+  // The sources were given: the address parser's hint to give them does not apply.
+  const problem = asAddress instanceof AddressError ? asAddress.problem : asAddress.message;
+  if (!quoted && suggestions.length === 0 && !parent)
+    return asAddress instanceof AddressError ? new AddressError(name, problem) : asAddress;
   const hint =
     suggestions.length > 0
       ? `; did you mean ${orList(suggestions)}?`
@@ -102,7 +105,7 @@ function unknownSymbol(table: SymbolTable, name: string, asAddress: PlcError): P
         ? `; ${parent.name} has no such member${membersOf(parent)}`
         : '; the sources declare no such name';
   // An unquoted name may have been meant as an address: say what is wrong with it as one too.
-  const address = quoted ? '' : ` (nor an address: ${asAddress.message.replace(/^invalid address "[^"]*": /, '')})`;
+  const address = quoted ? '' : ` (nor an address: ${problem})`;
   return new PlcError('INVALID_ADDRESS', `unknown symbol ${name}${hint}${address}`, { tag: name, cause: asAddress });
 }
 

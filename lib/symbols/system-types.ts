@@ -65,6 +65,21 @@ const ALIASES: Readonly<Record<string, DataTypeName>> = {
 type Member = readonly [name: string, type: string];
 
 /**
+ * The data of an IEC timer (TP, TON, TOF; TIA names it IEC_TIMER or after the
+ * instruction, TON_TIME …): start time, preset, elapsed time, then the
+ * running, input and output bits in byte 12; 16 bytes with the reserve after
+ * the bits (SYSTEM_BYTES).
+ */
+const IEC_TIMER_MEMBERS: readonly Member[] = [
+  ['ST', 'Time'],
+  ['PT', 'Time'],
+  ['ET', 'Time'],
+  ['RU', 'Bool'],
+  ['IN', 'Bool'],
+  ['Q', 'Bool'],
+];
+
+/**
  * System structures by name, their members in order. A type is an
  * elementary type (`Byte`, `UInt`), an alias above, another structure here,
  * or `Array[lo..hi] of T`.
@@ -101,6 +116,21 @@ const STRUCTURES: Readonly<Record<string, readonly Member[]>> = {
     ['next_staddr', 'Array[1..6] of Byte'],
     ['spare', 'Word'],
   ],
+  IEC_TIMER: IEC_TIMER_MEMBERS,
+  TON_TIME: IEC_TIMER_MEMBERS,
+  TOF_TIME: IEC_TIMER_MEMBERS,
+  TP_TIME: IEC_TIMER_MEMBERS,
+  /** The data of an IEC counter with INT values (CTU, CTD, CTUD on INT): six bits, a pad byte, PV and CV: 6 bytes. */
+  IEC_COUNTER: [
+    ['CU', 'Bool'],
+    ['CD', 'Bool'],
+    ['R', 'Bool'],
+    ['LD', 'Bool'],
+    ['QU', 'Bool'],
+    ['QD', 'Bool'],
+    ['PV', 'Int'],
+    ['CV', 'Int'],
+  ],
   /** The UDP partner's address for TUSEND/TURCV on the S7-1200: 8 bytes. */
   TADDR_PARAM: [
     ['REM_IP_ADDR', 'Array[1..4] of USInt'],
@@ -110,16 +140,26 @@ const STRUCTURES: Readonly<Record<string, readonly Member[]>> = {
 };
 
 /**
+ * Structures that occupy more than their members: the CPU keeps a reserve
+ * after them (an IEC timer's bits take byte 12; Siemens gives the whole as
+ * 16 bytes). What the ordinary rules make of the members is extended to this.
+ */
+const SYSTEM_BYTES: Readonly<Record<string, number>> = { IEC_TIMER: 16, TON_TIME: 16, TOF_TIME: 16, TP_TIME: 16 };
+
+/** The bytes a system structure occupies when more than its members take (IEC_TIMER: 16), or undefined. */
+export function systemStructureBytes(decl: TypeDecl): number | undefined {
+  return isSystemDecl(decl) ? SYSTEM_BYTES[decl.name.toUpperCase()] : undefined;
+}
+
+/**
  * Names TIA writes unquoted for system types and system function blocks
- * whose layout in a standard block is not in the table: IEC timers and
- * counters keep members of their own beside the documented ones, and their
- * instances are laid out by the CPU, not from a source. Refused by name.
+ * whose layout in a standard block is not in the table: no public source
+ * gives their offsets (the LTIME timers, the counters of other widths,
+ * TONR with its reset, the edge detectors). Refused by name.
  */
 const WITHOUT_LAYOUT = new Set(
   [
-    'IEC_TIMER',
     'IEC_LTIMER',
-    'IEC_COUNTER',
     'IEC_SCOUNTER',
     'IEC_DCOUNTER',
     'IEC_LCOUNTER',
@@ -131,9 +171,6 @@ const WITHOUT_LAYOUT = new Set(
     'TOF',
     'TP',
     'TONR',
-    'TON_TIME',
-    'TOF_TIME',
-    'TP_TIME',
     'TONR_TIME',
     'TON_LTIME',
     'TOF_LTIME',
@@ -175,6 +212,11 @@ export const KNOWN_LAYOUTS: readonly string[] = [
   'TCON_Param',
   'TADDR_Param',
   'IP_V4',
+  'IEC_TIMER',
+  'TON_TIME',
+  'TOF_TIME',
+  'TP_TIME',
+  'IEC_COUNTER',
   'HW_ANY, HW_IO … (WORD)',
   'CONN_OUC …',
 ];
@@ -219,6 +261,11 @@ const SPELLING: Readonly<Record<string, string>> = {
   TCON_IP_V4: 'TCON_IP_v4',
   TCON_PARAM: 'TCON_Param',
   TADDR_PARAM: 'TADDR_Param',
+  IEC_TIMER: 'IEC_TIMER',
+  IEC_COUNTER: 'IEC_COUNTER',
+  TON_TIME: 'TON_TIME',
+  TOF_TIME: 'TOF_TIME',
+  TP_TIME: 'TP_TIME',
 };
 
 const ELEMENTARY: Readonly<Record<string, DataTypeName>> = {
@@ -227,6 +274,8 @@ const ELEMENTARY: Readonly<Record<string, DataTypeName>> = {
   WORD: 'WORD',
   USINT: 'USINT',
   UINT: 'UINT',
+  INT: 'INT',
+  TIME: 'TIME',
 };
 
 function member(name: string, type: string, at: SourcePosition): MemberDecl {

@@ -204,3 +204,4 @@ export function writeSpan(tag: TagShape, value: unknown): { start: number; data:
 export function validateValue(tag: TagShape, value: unknown): void {
   encodeTag(tag, value);
 }
+export { shortestFloat32 } from './float32';

@@ -227,10 +227,10 @@ describe('nodes: plcwire-control', function () {
     ]);
     const caught = new Recorder(helper.getNode('caught'));
     const msg = await caught.next();
-    expect(msg.error.code).to.equal('INVALID_URL');
+    expect(msg.error.code).to.equal('SETTINGS_CONFLICT');
     expect(msg.error.message).to.include('control');
     helper.getNode('b').receive({});
-    expect((await caught.next()).error.code).to.equal('INVALID_URL');
+    expect((await caught.next()).error.code).to.equal('SETTINGS_CONFLICT');
     expect(server.state).to.equal('RUN');
   });
 });

@@ -8,6 +8,7 @@
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
+import { shortestFloat32 } from '../../lib/values/float32';
 import { ALL_NODES, helper, Recorder, ROOT, until } from './support';
 
 const lib = require(path.join(ROOT, 'dist/lib/index.js'));
@@ -54,6 +55,9 @@ describe('nodes: the tags-by-name example against the demo plant', function () {
     plant.process.stop();
     for (let i = 0; i < 25; i++) plant.process.step();
     const held = plant.process.snapshot();
+    // The read node sends a REAL with the digits TIA shows: the shortest decimal of the same float32.
+    const level = shortestFloat32(Math.fround(held.level));
+    const temperature = shortestFloat32(Math.fround(held.temperature));
     await helper.load(ALL_NODES, runnable(flow, plant.urls.s7));
     const snapshot = new Recorder(helper.getNode('s7name.debug.demand'));
     const acknowledged = new Recorder(helper.getNode('s7name.debug.write'));
@@ -66,19 +70,19 @@ describe('nodes: the tags-by-name example against the demo plant', function () {
       const msg = await polled.next(undefined, 8000, 'the first poll');
       first[msg.topic] = msg.payload;
     }
-    expect(first).to.deep.equal({ level: held.level, temperature: held.temperature, running: false, speed: 0, parts: held.parts });
+    expect(first).to.deep.equal({ level, temperature, running: false, speed: 0, parts: held.parts });
 
     helper.getNode('s7name.read.demand').receive({ payload: Date.now() });
     const read = await snapshot.next(undefined, 8000, 'the snapshot');
     expect(read.payload).to.deep.include({
-      level: held.level,
+      level,
       run: false,
       running: false,
       heater: held.heater,
       speed: 0,
       parts: held.parts,
       plcHeartbeat: held.heartbeat,
-      temperature: held.temperature,
+      temperature,
     });
     expect(read.quality).to.deep.equal(Object.fromEntries(Object.keys(read.payload).map((k) => [k, 'good'])));
 

@@ -132,6 +132,28 @@ describe('nodes: read messages downstream', function () {
     expect(seen.arrived.find((a) => a.msg === changed)!.payload).to.equal('[1,20,3]');
   });
 
+  it('a REAL is sent with the digits TIA shows (40.4, not 40.400001525878906), whole table or beside a failing tag', async () => {
+    // 40.4 as float32 is 0x4221999A: the two words of DB1.DBD20.
+    const bits = Buffer.alloc(4);
+    bits.writeFloatBE(40.4);
+    sim.set(10, bits.readInt16BE(0));
+    sim.set(11, bits.readInt16BE(2));
+    const tags = [
+      { name: 'level', address: 'DB1.DBD20:REAL' },
+      { name: 'word', address: sim.addr(4) },
+    ];
+    await helper.load(ALL_NODES, flow(sim, { output: 'object', tags }));
+    const rec = new Recorder(helper.getNode('out'));
+    const good = await rec.next();
+    expect(good.payload).to.deep.equal({ level: 40.4, word: 5 });
+    await helper.unload();
+    await helper.load(ALL_NODES, flow(sim, { output: 'per-tag', tags: [...tags, { name: 'gone', address: sim.missing }] }));
+    const rec2 = new Recorder(helper.getNode('out'));
+    const level = await rec2.next((m) => m.topic === 'level');
+    expect(level.payload).to.equal(40.4);
+    expect(String(level.payload)).to.equal('40.4');
+  });
+
   it('sends its status when it changes, not on every poll', async () => {
     const watcher = { id: 'watcher', type: 'status', ...at, scope: ['read'], wires: [['statuses']] };
     await helper.load(

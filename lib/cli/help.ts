@@ -1,0 +1,97 @@
+/**
+ * `plcwire <command> --help` (or `-h`, or `plcwire help <command>`): the
+ * command's usage, what its options do, and an example to copy. The global
+ * usage (main.ts) lists every command.
+ */
+
+const URL_NOTE = 'url: s7://host?rack=0&slot=1, fetchwrite://host?fetchPort=2000&writePort=2001, freeport:///dev/ttyUSB0?baud=9600';
+const SYMBOL_OPTIONS = `  --symbols file     DB/UDT sources or a symbol table that declare the names (repeatable)
+  --db NAME=N        the number of a TIA data block, which its source does not carry (repeatable)
+  --strict-symbols   refuse names in a DB whose length in the PLC differs from the sources'`;
+
+const HELP: Readonly<Record<string, string>> = {
+  read: `usage: plcwire read <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
+Reads each tag once and prints "address = value" (REAL with the digits TIA shows).
+${SYMBOL_OPTIONS}
+  --json             one JSON object keyed by the tags as given (64-bit integers as exact digits)
+  --timeout ms       how long to wait for the PLC
+${URL_NOTE}
+example:
+  plcwire read "s7://192.168.0.1?rack=0&slot=1" DB1.DBW2:INT MW4 '"Plant".Level' --symbols Plant.db --db Plant=1`,
+  write: `usage: plcwire write <url> <address|symbol>=<value>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--yes] [--json] [--timeout ms]
+Writes each value, checked against its tag's type before anything is sent; prints "address = value ok".
+values: true/false/1/0 for BOOL, decimal or 0x hex numbers, ISO 8601 dates, text as is,
+  arrays as a JSON array or comma-separated, a STRUCT by name as JSON ('"Tank".Motor={"Speed":2.5}')
+${SYMBOL_OPTIONS}
+  --yes              write to a PLC that is not on this machine without asking (needed in scripts)
+  --json             one JSON object: "ok" or the error per tag
+  --timeout ms       how long to wait for the PLC
+${URL_NOTE}
+example:
+  plcwire write "s7://192.168.0.1?rack=0&slot=1" DB1.DBW2:INT=42 '"Plant".MotorRun=true' --symbols Plant.db --db Plant=1 --yes`,
+  watch: `usage: plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--json]
+Polls until Ctrl-C (exit code 130) and prints a line per changed value, all values first; reconnects by itself.
+${SYMBOL_OPTIONS}
+  --interval ms      time between polls (default 1000)
+  --json             one JSON object per line: { "time": ISO 8601, "values": { tag: value } }
+${URL_NOTE}
+example:
+  plcwire watch "s7://192.168.0.1?rack=0&slot=1" '"Plant".Level' MW4 --symbols Plant.db --db Plant=1 --interval 500`,
+  symbols: `usage: plcwire symbols <file>... [--db NAME=N]... [--json | --csv]
+Prints what DB/UDT sources (.db, .udt, .awl) and symbol tables (.sdf, .asc, .seq, .xlsx, .csv) compile to:
+name, address, type, byte and bit of every member; a source that does not compile as file:line:column.
+  --db NAME=N        the number of a TIA data block, which its source does not carry (repeatable)
+  --json             an array of { name, type, db, byte, bit, address }
+  --csv              RFC 4180 with a header row
+example:
+  plcwire symbols Plant.db --db Plant=1`,
+  info: `usage: plcwire info <url> [--json]
+Prints the CPU's identity, its state (RUN, STOP, ...), protection, PDU size, parallel jobs and clock (S7 only).
+example:
+  plcwire info "s7://192.168.0.1?rack=0&slot=1" --json`,
+  szl: `usage: plcwire szl <url> <id> [index] [--json]
+Reads one SZL list; ID and index in hex as the manuals write them (0x0011, 0011, W#16#0011).
+example:
+  plcwire szl "s7://192.168.0.1?rack=0&slot=1" 0x0424 --json`,
+  diag: `usage: plcwire diag <url> [--max N] [--json]
+Prints the diagnostic buffer, newest first.
+  --max N            the N most recent entries
+example:
+  plcwire diag "s7://192.168.0.1?rack=0&slot=1" --max 10`,
+  clock: `usage: plcwire clock <url> [--set now|<ISO time>] [--yes] [--json]
+Prints the PLC's clock; --set sets it (the URL needs control=true, and --yes in scripts or for a remote PLC).
+example:
+  plcwire clock "s7://192.168.0.1?rack=0&slot=1&control=true" --set now --yes`,
+  blocks: `usage: plcwire blocks <url> [TYPE [NUMBER]] [--json]
+Without a type: the count per type; with a type (OB, FB, FC, DB, SDB, SFC, SFB) its numbers; with a number its
+block info. S7-1200/1500 have no block functions over S7comm.
+example:
+  plcwire blocks "s7://192.168.0.10?rack=0&slot=2" DB 10 --json`,
+  cpu: `usage: plcwire cpu <url> stop|start|cold-start [--yes] [--json]
+Changes the CPU's mode and prints the state after. The URL needs control=true; --yes in scripts or for a
+PLC that is not on this machine.
+example:
+  plcwire cpu "s7://192.168.0.10?rack=0&slot=2&control=true" stop --yes`,
+  doctor: `usage: plcwire doctor <url> [address...] [--json] [--timeout ms]
+Walks the connection step by step and stops at the first failure with the fix in words.
+  --timeout ms       the deadline of the whole walk (default 20000)
+example:
+  plcwire doctor "s7://192.168.0.1?rack=0&slot=1" DB1.DBW0`,
+  serve: `usage: plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo]
+                   [--layout file.json] [--max-items N] [--source Tank.db... --db Tank=1...]
+       plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
+       plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
+Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reaches it.
+  --source file      serve the data blocks of these DB sources, at their declared lengths with their start values
+example:
+  plcwire serve s7 --port 10102 --profile s7-1200 --source Plant.db --db Plant=1`,
+  demo: `usage: plcwire demo
+Runs all three simulators with a running process (no Node-RED) until Ctrl-C and prints try: lines.
+example:
+  plcwire demo`,
+};
+
+/** The help of `command`, or undefined when there is no such command. */
+export function commandHelp(command: string): string | undefined {
+  return Object.prototype.hasOwnProperty.call(HELP, command) ? HELP[command] : undefined;
+}
