@@ -43,6 +43,10 @@ function attach(RED, node, connectionId, onStatus) {
     get client() {
       return config.client;
     },
+    /** The connection's compiled symbol table, or undefined (no sources, or they did not compile). */
+    get symbols() {
+      return config.symbols;
+    },
     /** Why requests cannot be made (bad URL, no link), as an Error with a code, or undefined. */
     get problem() {
       return config.problem;
