@@ -1,7 +1,11 @@
 'use strict';
-const { acquire, release, plc } = require('./shared/links');
+const plc = require('..');
+const { ClientPool, withoutCredentials } = require('../dist/lib/flows/client-pool');
 const { settleWithin } = require('./shared/user');
-const symbols = require('./shared/symbols');
+const symbols = require('../dist/lib/flows/symbol-config');
+
+/** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
+const pool = new ClientPool();
 
 /**
  * plcwire-connection (config): properties `url`, and for tags by name
@@ -12,11 +16,6 @@ const symbols = require('./shared/symbols');
  * users' Catch nodes through `this.users` (the runtime's convention for config
  * nodes).
  */
-/** The URL without a user:password@ part. */
-function withoutCredentials(url) {
-  return url.replace(/^([a-z0-9+.-]+:\/\/)[^/?#@]*@/i, '$1');
-}
-
 module.exports = function (RED) {
   function PlcwireConnection(config) {
     RED.nodes.createNode(this, config);
@@ -106,7 +105,7 @@ module.exports = function (RED) {
 
     function open() {
       try {
-        link = acquire(node.url, node, symbolsOf);
+        link = pool.acquire(node.url, node, symbolsOf);
       } catch (err) {
         // Each user reports this to its own Catch nodes once the flows have started (see problemReport).
         node.problem = err;
@@ -129,7 +128,7 @@ module.exports = function (RED) {
       held.off('link-error', reportError);
       held.off('layout-mismatch', onMismatch);
       held.off('layout-ok', onLayoutOk);
-      return release(held, node);
+      return pool.release(held, node);
     }
 
     /**
@@ -207,21 +206,22 @@ module.exports = function (RED) {
     }
     const compiledSources = symbols.compileCached(symbolConfig(body));
     let symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
-    // The client's own resolution of names, when there is a table and a URL: a protocol may refuse symbols (freeport).
-    let named;
-    if (compiledSources.table && body.url) {
+    // A protocol may refuse symbols (freeport): then names are no tags of this connection.
+    let table = compiledSources.table;
+    if (table && body.url) {
       try {
-        named = plc.createClient(String(body.url), { symbols: compiledSources.table });
+        plc
+          .createClient(String(body.url), { symbols: table })
+          .close()
+          .catch(() => undefined);
       } catch (err) {
         symbolAnswer = { ok: false, errors: [{ code: err.code, message: err.message }] };
+        table = undefined;
       }
     }
     const results = {};
-    for (const address of addresses) {
-      results[address] = symbols.resolveAddress(address, parser.parse, compiledSources.table, named && ((a) => named.tag(a)));
-    }
+    for (const address of addresses) results[address] = symbols.resolveAddress(address, parser.parse, table);
     parser.done();
-    if (named) named.close().catch(() => undefined);
     res.json({ url: { ok: true }, symbols: symbolAnswer, results });
   });
 
@@ -249,6 +249,20 @@ module.exports = function (RED) {
     const { tags, problems } = plc.tagsFromCsv(String(body.text || ''), parser.parse);
     parser.done();
     res.json({ url, tags, problems });
+  });
+
+  /** Rows the editor may ask to export at most (a tag table of a node is far smaller). */
+  const MAX_EXPORT_ROWS = 100000;
+
+  /**
+   * CSV export for the tag table: POST { tags: [{ name, address }] } → { csv },
+   * written by the library's tagsToCsv, the form the import above reads back.
+   */
+  RED.httpAdmin.post('/plcwire/csv/export', canRead, function (req, res) {
+    const body = req.body || {};
+    const rows = Array.isArray(body.tags) ? body.tags.slice(0, MAX_EXPORT_ROWS) : [];
+    const tags = rows.map((t) => ({ name: String((t && t.name) ?? ''), address: String((t && t.address) ?? '') }));
+    res.json({ csv: plc.tagsToCsv(tags) });
   });
 
   /** URL ⇄ fields for the edit dialog, with the library's own parser and formatter. */

@@ -1,8 +1,8 @@
 'use strict';
-const { attach, settleWithin, noConnectionError } = require('./shared/user');
-const { plc } = require('./shared/links');
+const { attach, settleWithin, liveClient } = require('./shared/user');
+const plc = require('..');
 const { cpuStatus, entriesStatus, failedStatus } = require('./shared/status');
-const { ACTIONS, actionOf, DiagnosticsCursor, plainEntry, plainState, isoOrNull } = require('./shared/control');
+const { configuredAction, actionOf, DiagnosticsCursor, plainEntry, plainState, isoOrNull } = require('../dist/lib/flows/control');
 
 /**
  * plcwire-control: the S7 system services on input: identity (`info`), CPU
@@ -17,7 +17,7 @@ module.exports = function (RED) {
   function PlcwireControl(config) {
     RED.nodes.createNode(this, config);
     const node = this;
-    const configured = ACTIONS.includes(config.action) ? config.action : 'info';
+    const configured = configuredAction(config.action);
     const newOnly = config.newOnly === true || config.newOnly === 'true';
     const cursor = new DiagnosticsCursor();
     let closing = false;
@@ -69,10 +69,7 @@ module.exports = function (RED) {
       let client;
       try {
         action = actionOf(msg, configured);
-        if (!connection) throw noConnectionError(RED);
-        if (connection.problem) throw connection.problem;
-        client = connection.client;
-        if (!client) throw noConnectionError(RED);
+        client = liveClient(RED, connection);
         if (!(client instanceof plc.S7Client)) {
           throw new plc.PlcError(
             'NOT_SUPPORTED',

@@ -1,5 +1,5 @@
 'use strict';
-const { attach, settleWithin, noConnectionError, warnDuplicateNames } = require('./shared/user');
+const { attach, settleWithin, liveClient, warnDuplicateNames } = require('./shared/user');
 const { tagTable, writeRequest, errorInfo, tagFailure } = require('..');
 
 /**
@@ -18,18 +18,13 @@ module.exports = function (RED) {
     const connection = attach(RED, node, config.connection);
 
     node.on('input', function (msg, send, done) {
+      let client;
       let request;
       try {
-        if (!connection) throw noConnectionError(RED);
-        if (connection.problem) throw connection.problem;
+        client = liveClient(RED, connection);
         request = writeRequest(table, msg);
       } catch (err) {
         done(err);
-        return;
-      }
-      const client = connection.client;
-      if (!client) {
-        done(noConnectionError(RED));
         return;
       }
       client

@@ -366,23 +366,21 @@
     });
   }
 
-  function csvField(text) {
-    text = String(text == null ? '' : text);
-    return /[",;\t\r\n]|^\s|\s$/.test(text) ? '"' + text.replace(/"/g, '""') + '"' : text;
+  /** Asks the runtime for the table as CSV (the library's tagsToCsv, the form the importer reads back). */
+  function exportCsv(tags, callback) {
+    $.ajax({
+      url: 'plcwire/csv/export',
+      type: 'POST',
+      contentType: 'application/json',
+      data: JSON.stringify({ tags: tags }),
+      success: function (res) {
+        callback(String((res && res.csv) || ''));
+      },
+      error: function (xhr) {
+        RED.notify(String((xhr && xhr.statusText) || 'error'), 'error');
+      },
+    });
   }
-
-  /** The table as CSV, in the form the importer reads back (lib/tags/table.ts, tagsToCsv). */
-  editor.tagsToCsv = function (tags) {
-    return (
-      ['name,address']
-        .concat(
-          tags.map(function (t) {
-            return csvField(t.name) + ',' + csvField(t.address);
-          }),
-        )
-        .join('\r\n') + '\r\n'
-    );
-  };
 
   /**
    * The tag table of the read and write dialogs: an editableList of name/address
@@ -646,16 +644,18 @@
       reader.readAsText(f);
     });
     exportButton.on('click', function () {
-      var blob = new Blob([editor.tagsToCsv(api.value())], { type: 'text/csv' });
-      var a = document.createElement('a');
-      a.href = URL.createObjectURL(blob);
-      a.download = 'plcwire-tags.csv';
-      document.body.appendChild(a);
-      a.click();
-      setTimeout(function () {
-        URL.revokeObjectURL(a.href);
-        a.remove();
-      }, 0);
+      exportCsv(api.value(), function (csv) {
+        var blob = new Blob([csv], { type: 'text/csv' });
+        var a = document.createElement('a');
+        a.href = URL.createObjectURL(blob);
+        a.download = 'plcwire-tags.csv';
+        document.body.appendChild(a);
+        a.click();
+        setTimeout(function () {
+          URL.revokeObjectURL(a.href);
+          a.remove();
+        }, 0);
+      });
     });
 
     var api = {

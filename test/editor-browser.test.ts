@@ -318,6 +318,26 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
         })),
       );
 
+    it('exports the rows of the dialog as CSV written by the runtime: a visible button, a download the import reads back', async () => {
+      const { context, page, errors } = await openEditor();
+      try {
+        await editTags(page, 'read-ok');
+        const shown = (await rows(page)).map(({ name, address }) => ({ name, address }));
+        expect(shown.length).to.be.greaterThan(0);
+        const button = page.locator('.plcwire-tags-toolbar button:has(i.fa-download)');
+        await button.waitFor({ state: 'visible' });
+        const [download] = await Promise.all([page.waitForEvent('download'), button.click()]);
+        expect(download.suggestedFilename()).to.equal('plcwire-tags.csv');
+        const csv = fs.readFileSync(await download.path(), 'utf8');
+        expect(csv).to.equal(lib.tagsToCsv(shown));
+        expect(lib.tagsFromCsv(csv).tags).to.deep.equal(shown);
+        await closeDialog(page, 'cancel');
+        expect(errors).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    });
+
     it('imports CSV with a type column, appending or replacing as chosen, and flags names used twice', async () => {
       const { context, page, errors } = await openEditor();
       try {

@@ -167,6 +167,25 @@ describe('nodes: tags by name (symbol sources in the connection node)', function
     expect(msg.addresses).to.deep.equal({ level: '"Tank".Level', motor: 'Tank.Motor', raw: 'DB1.DBW4:INT' });
   });
 
+  it('a REAL member of a struct read by name has the digits TIA shows, as a REAL read alone has', async () => {
+    plc.db().writeFloatBE(40.4, 0);
+    plc.db().writeFloatBE(40.4, 6);
+    await helper.load(ALL_NODES, [
+      TAB,
+      conn(plc.url),
+      readNode([
+        { name: 'level', address: '"Tank".Level' },
+        { name: 'motor', address: 'Tank.Motor' },
+      ]),
+      helperNode('out'),
+    ]);
+    await until(() => helper.getNode('read').linkState === 'connected', 4000, 'read node connected');
+    const out = new Recorder(helper.getNode('out'));
+    helper.getNode('read').receive({});
+    const msg = await out.next();
+    expect(msg.payload).to.deep.equal({ level: 40.4, motor: { Speed: 40.4, Run: false } });
+  });
+
   it('writes by name, from the tag table and as a key of msg.payload, then sends msg.results', async () => {
     await helper.load(ALL_NODES, [
       TAB,

@@ -8,7 +8,7 @@ import { PlcError, tagError, toPlcError, type TagResult } from '../errors';
 import type { DriverTag } from '../link/driver';
 import { LayoutMonitor, type LayoutMonitorOptions } from '../symbols/layout-check';
 import type { SymbolTable } from '../symbols/model';
-import { decodeShape, resolveSymbol, unknownSymbol, type SymbolShape } from '../symbols/resolve';
+import { decodeShape, type ResolvedSymbol, type SymbolShape } from '../symbols/resolve';
 import type { PlcValue } from '../types';
 
 /** What the client keeps of a tag resolved from a symbol: its data block (null outside DBs) and, for a struct, its shape. */
@@ -54,18 +54,9 @@ export class ClientSymbols<T extends DriverTag> {
     this.monitor?.stop();
   }
 
-  /** The tag a name resolves to, remembered as a symbol's; its error when it names nothing (`asAddress`: why it is no address). */
-  tag(name: string, asAddress: PlcError, parse: (address: string) => T): T | PlcError {
-    const { table } = this;
-    try {
-      const resolved = resolveSymbol(table, name, parse);
-      if (!resolved) return unknownSymbol(table, name, asAddress);
-      const { entry, tag, shape } = resolved;
-      this.uses.set(tag, { db: entry.area === 'DB' ? entry.db : null, shape });
-      return tag;
-    } catch (err) {
-      return toPlcError(err, 'INVALID_ADDRESS');
-    }
+  /** Remembers a tag resolved from a name (addressOrSymbol) as that symbol's: its data block and struct shape. */
+  remember({ entry, tag, shape }: ResolvedSymbol<T>): void {
+    this.uses.set(tag, { db: entry.area === 'DB' ? entry.db : null, shape });
   }
 
   /** What a tag resolved from a name is; undefined for an absolute address. */

@@ -1,5 +1,6 @@
 /** The parse cache of a client: each address (or name) parsed once, to its tag or its error. */
 import { PlcError, toPlcError } from '../errors';
+import { addressOrSymbol } from '../symbols/resolve';
 import type { DriverTag } from '../link/driver';
 import type { ClientSymbols } from './symbols';
 
@@ -19,7 +20,7 @@ export class TagCache<T extends DriverTag> {
 
   /**
    * The tag of an address or, with a symbol table, of a name (cached: a
-   * symbol is resolved once). Absolute addresses come first: text that
+   * symbol is resolved once), by addressOrSymbol. Absolute addresses come first: text that
    * parses as an address is that address (`M1`, `DB1.DBW2`, with or without
    * %), so a symbol table never changes what an address means; a symbol whose
    * name reads as an address is written quoted, as TIA writes it (`"M1"`).
@@ -28,10 +29,11 @@ export class TagCache<T extends DriverTag> {
     let tag = this.tags.get(address);
     if (tag === undefined) {
       try {
-        tag = this.parse(address);
+        const { tag: found, symbol } = addressOrSymbol(address, this.parse, this.symbols?.table);
+        if (symbol) this.symbols?.remember(symbol);
+        tag = found;
       } catch (err) {
         tag = toPlcError(err, 'INVALID_ADDRESS');
-        if (this.symbols && typeof address === 'string') tag = this.symbols.tag(address, tag, this.parse);
       }
       if (this.tags.size >= MAX_CACHED_TAGS) this.tags.clear();
       this.tags.set(address, tag);

@@ -13,7 +13,7 @@
  * and writing by name").
  */
 import { parseAddress } from '../address';
-import { AddressError, PlcError, ValueError } from '../errors';
+import { AddressError, PlcError, ValueError, toPlcError } from '../errors';
 import type { DriverTag } from '../link/driver';
 import type { PlcData, PlcStruct, PlcValue, Tag } from '../types';
 import { tagDecoder, validateValue, type TagDecoder } from '../values';
@@ -47,8 +47,45 @@ export interface ResolvedSymbol<T> {
   readonly shape?: SymbolShape<T>;
 }
 
-/** A name the table does not know: INVALID_ADDRESS naming it and the closest names the table has. */
-export function unknownSymbol(table: SymbolTable, name: string, asAddress: PlcError): PlcError {
+/** What a tag's text stands for: the driver's tag, and the table's entry when the text is a name. */
+export interface AddressOrSymbol<T> {
+  readonly tag: T;
+  readonly symbol?: ResolvedSymbol<T>;
+}
+
+/**
+ * The rule "addresses first" (docs/symbols.md), written once for the client,
+ * the editor and the doctor: text that `parse` (the driver's address parser)
+ * reads is that address, so a symbol table never changes what an address
+ * means; anything else is a name, looked up in `table`. Throws a PlcError:
+ * the address error when there is no table, the unknown-name error
+ * (unknownSymbol: the name and the closest names) for a name the table
+ * lacks, and the driver's reach error for an entry it cannot reach.
+ */
+export function addressOrSymbol<T extends DriverTag>(
+  text: string,
+  parse: (address: string) => T,
+  table: SymbolTable | undefined,
+): AddressOrSymbol<T> {
+  let asAddress: PlcError;
+  try {
+    return { tag: parse(text) };
+  } catch (err) {
+    asAddress = toPlcError(err, 'INVALID_ADDRESS');
+  }
+  if (!table || typeof text !== 'string') throw asAddress;
+  let symbol: ResolvedSymbol<T> | undefined;
+  try {
+    symbol = resolveSymbol(table, text, parse);
+  } catch (err) {
+    throw toPlcError(err, 'INVALID_ADDRESS');
+  }
+  if (!symbol) throw unknownSymbol(table, text, asAddress);
+  return { tag: symbol.tag, symbol };
+}
+
+/** A name the table does not know (see addressOrSymbol): INVALID_ADDRESS naming it and the closest names the table has. */
+function unknownSymbol(table: SymbolTable, name: string, asAddress: PlcError): PlcError {
   const quoted = name.includes('"');
   let suggestions: string[] = [];
   try {

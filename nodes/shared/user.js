@@ -1,7 +1,7 @@
 'use strict';
 /** What the read, write and heartbeat nodes share: attaching to a connection and settling close in time. */
 const { linkStatus } = require('./status');
-const { plc } = require('./links');
+const plc = require('../..');
 
 /** Close handlers must call done within a few seconds whatever happens (the runtime gives up at 15 s). */
 const CLOSE_DEADLINE_MS = 2000;
@@ -43,6 +43,10 @@ function attach(RED, node, connectionId, onStatus) {
     get client() {
       return config.client;
     },
+    /** The connection's compiled symbol table, or undefined (no sources, or they did not compile). */
+    get symbols() {
+      return config.symbols;
+    },
     /** Why requests cannot be made (bad URL, no link), as an Error with a code, or undefined. */
     get problem() {
       return config.problem;
@@ -80,4 +84,18 @@ function noConnectionError(RED) {
   return err;
 }
 
-module.exports = { attach, settleWithin, noConnectionError, warnDuplicateNames, CLOSE_DEADLINE_MS };
+/**
+ * The client of a node's connection (the attachment attach() returned), ready
+ * for a request, or the error the node reports instead: NOT_CONNECTED when no
+ * connection is configured or its link is closed, the connection's own
+ * problem (a bad URL, a settings conflict) when it could not be opened.
+ */
+function liveClient(RED, connection) {
+  if (!connection) throw noConnectionError(RED);
+  if (connection.problem) throw connection.problem;
+  const client = connection.client;
+  if (!client) throw noConnectionError(RED);
+  return client;
+}
+
+module.exports = { attach, settleWithin, liveClient, warnDuplicateNames, CLOSE_DEADLINE_MS };

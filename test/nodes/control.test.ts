@@ -8,9 +8,9 @@ import { expect } from 'chai';
 import { loadCatalogs, withCatalog } from './catalogs';
 import { fetchWriteSim } from './sims';
 import { ALL_NODES, helper, nodes, Recorder, until } from './support';
+import { DiagnosticsCursor, actionOf } from '../../lib/flows/control';
 
 const lib = require('../../lib/index');
-const { DiagnosticsCursor, actionOf } = require('../../../nodes/shared/control.js');
 
 const ISO = /^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z$/;
 

@@ -1,0 +1,182 @@
+/**
+ * One PLC client per endpoint (endpointKey of the URL), shared by every
+ * owner that names it: in Node-RED, every connection config node for one
+ * PLC. Owners share a client only when they agree on what it may do to the
+ * PLC (the write-safety settings readOnly, allow, control) and on the symbol
+ * sources it resolves names with; otherwise the later one is refused with
+ * SETTINGS_CONFLICT, since one client has one set of them and a node would
+ * write (or resolve a name) under the other owner's rules.
+ */
+import { EventEmitter } from 'node:events';
+import { createClient, type AnyClient, type ConnectOptions } from '../connect';
+import { PlcError } from '../errors';
+import type { SymbolTable } from '../symbols';
+import { endpointKey, endpointName, parseUrl, type Endpoint } from '../url';
+
+/** Parameters that change what a client may do to the PLC: two owners must agree on them to share a client. */
+const SAFETY = ['readOnly', 'allow', 'control'] as const;
+
+/** What a pooled link's client must do (an AnyClient; tests may give a stand-in). */
+export interface PoolClient extends Pick<EventEmitter, 'on'> {
+  start(): void;
+  close(): Promise<void>;
+}
+
+/** The symbols a link's client resolves names with: `key` what they were compiled from ('' for none). */
+export interface PoolSymbols {
+  key: string;
+  table?: SymbolTable;
+  strict?: boolean;
+}
+
+/** How the link is doing, as its owners show it. */
+export interface LinkStatus {
+  state: string;
+  delay?: number;
+  error?: unknown;
+}
+
+/** Who holds a link: anything with an optional name (a connection node). */
+export interface PoolOwner {
+  name?: string;
+}
+
+/**
+ * One open client and its owners. Events: 'status' (LinkStatus), 'link-error'
+ * (the client's errors, which never throw), 'layout-mismatch' and 'layout-ok'
+ * (the symbol table's layout check on each connect, docs/symbols.md, "Stale layouts").
+ */
+export class PooledLink<C extends PoolClient = AnyClient> extends EventEmitter {
+  readonly name: string;
+  readonly owners = new Set<PoolOwner>();
+  status: LinkStatus = { state: 'connecting' };
+
+  constructor(
+    private readonly pool: ClientPool<C>,
+    readonly key: string,
+    readonly url: string,
+    readonly endpoint: Endpoint,
+    readonly symbolsKey: string,
+    readonly client: C,
+  ) {
+    super();
+    this.name = endpointName(endpoint);
+    client.on('state', (state: string) => {
+      if (state !== 'reconnecting' && state !== 'idle') this.update({ state });
+    });
+    client.on('reconnecting', ({ delay, error }: { delay: number; error: unknown }) =>
+      this.update({ state: 'reconnecting', delay, error }),
+    );
+    // A listener on 'error' keeps an error event from ever throwing; errors reach users via 'status'.
+    client.on('error', (error: unknown) => this.emit('link-error', error));
+    client.on('layoutMismatch', (event: unknown) => this.emit('layout-mismatch', event));
+    client.on('layoutOk', (event: unknown) => this.emit('layout-ok', event));
+    client.start();
+  }
+
+  private update(status: LinkStatus): void {
+    this.status = status;
+    this.emit('status', status);
+  }
+
+  /** Closes the client (the pool forgets the link). Always resolves. */
+  close(): Promise<void> {
+    this.pool.forget(this);
+    return this.client.close().catch(() => undefined);
+  }
+}
+
+/** The client for an endpoint with the pool's symbols; the default opens the library's own. */
+type ClientFactory<C> = (endpoint: Endpoint, options: ConnectOptions) => C;
+
+const safetyOf = (endpoint: Endpoint): string => JSON.stringify(SAFETY.map((k) => settingOf(endpoint, k) ?? null));
+
+function settingOf(endpoint: Endpoint, key: (typeof SAFETY)[number]): unknown {
+  return (endpoint as unknown as Record<string, unknown>)[key];
+}
+
+/** The URL without a user:password@ part: conflict messages reach logs and Catch nodes. */
+export function withoutCredentials(url: string): string {
+  return String(url).replace(/^([a-z0-9+.-]+:\/\/)[^/?#@]*@/i, '$1');
+}
+
+/** A setting as a conflict message shows it. */
+function shownSetting(value: unknown): string {
+  if (value === undefined || value === null) return 'not set';
+  return Array.isArray(value) ? value.join(',') : String(value as string | number | boolean);
+}
+
+/** "control is true there, not set here; …": the write-safety settings of `here` that differ from `there`'s. */
+function safetyDifferences(there: Endpoint, here: Endpoint): string {
+  return SAFETY.filter((k) => JSON.stringify(settingOf(there, k) ?? null) !== JSON.stringify(settingOf(here, k) ?? null))
+    .map((k) => `${k} is ${shownSetting(settingOf(there, k))} there, ${shownSetting(settingOf(here, k))} here`)
+    .join('; ');
+}
+
+/** Which way two owners' symbol sources differ (by their keys, '' for none). */
+function sourcesDifference(there: string, here: string): string {
+  if (!here) return 'no symbol sources (it has some)';
+  if (!there) return 'symbol sources (it has none)';
+  return 'other symbol sources (or block numbers, or strictness)';
+}
+
+/** How a message names a connection: its name and URL, or the URL alone. */
+function connectionName(owner: PoolOwner | undefined, url: string): string {
+  const name = owner && owner.name ? `"${owner.name}" ` : '';
+  return `${name}(${withoutCredentials(url)})`;
+}
+
+export class ClientPool<C extends PoolClient = AnyClient> {
+  private readonly links = new Map<string, PooledLink<C>>();
+
+  constructor(private readonly create: ClientFactory<C> = createClient as unknown as ClientFactory<C>) {}
+
+  /**
+   * Takes (or opens) the link for `url` on behalf of `owner`, with the symbols
+   * its client resolves names with. Throws PlcError INVALID_URL for a bad URL;
+   * SETTINGS_CONFLICT when another owner already holds the link to the same
+   * PLC with other write-safety settings (readOnly, allow, control) or other
+   * symbol sources.
+   */
+  acquire(url: string, owner: PoolOwner, symbols: PoolSymbols = { key: '' }): PooledLink<C> {
+    const endpoint = parseUrl(url);
+    const key = endpointKey(endpoint);
+    let link = this.links.get(key);
+    const other = link && connectionName(link.owners.values().next().value, link.url);
+    if (link && safetyOf(link.endpoint) !== safetyOf(endpoint)) {
+      throw new PlcError(
+        'SETTINGS_CONFLICT',
+        `${withoutCredentials(url)} is a valid URL, but it reaches the same PLC as connection ${other}, whose link is already open, with other settings (${safetyDifferences(link.endpoint, endpoint)}); connections to one PLC share one link: give both the same readOnly, allow and control, or use one connection node`,
+      );
+    }
+    if (link && link.symbolsKey !== symbols.key) {
+      throw new PlcError(
+        'SETTINGS_CONFLICT',
+        `${withoutCredentials(url)} is a valid URL, but it reaches the same PLC as connection ${other}, whose link is already open, with ${sourcesDifference(link.symbolsKey, symbols.key)}; connections to one PLC share one link: give both the same sources, block numbers and strictness, or use one connection node`,
+      );
+    }
+    if (!link) {
+      const client = this.create(endpoint, symbols.table ? { symbols: symbols.table, strictSymbols: !!symbols.strict } : {});
+      link = new PooledLink(this, key, url, endpoint, symbols.key, client);
+      this.links.set(key, link);
+    }
+    link.owners.add(owner);
+    return link;
+  }
+
+  /** Gives the link back; the last owner closes it. Always resolves. */
+  release(link: PooledLink<C>, owner: PoolOwner): Promise<void> {
+    link.owners.delete(owner);
+    return link.owners.size === 0 ? link.close() : Promise.resolve();
+  }
+
+  /** How many links are open. */
+  get size(): number {
+    return this.links.size;
+  }
+
+  /** Drops a closing link (only PooledLink.close calls this). */
+  forget(link: PooledLink<C>): void {
+    if (this.links.get(link.key) === link) this.links.delete(link.key);
+  }
+}
