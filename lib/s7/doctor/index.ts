@@ -9,20 +9,20 @@
  */
 import { lookup } from 'node:dns/promises';
 import * as net from 'node:net';
-import { abortError, PlcError, toPlcError } from '../errors';
-import { FrameReader } from '../link/framer';
-import { openTcp } from '../link/tcp';
-import { parseUrl, type S7Endpoint } from '../url';
-import { S7_CPU_PRESETS, type S7CpuPreset } from './presets';
-import { valueToText } from '../values/text';
-import { S7Client } from './client';
-import { TagSteps, type Family, type StepContext } from './doctor-tags';
-import type { SymbolTable } from '../symbols/model';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from './codec';
-import { headerError } from './constants';
-import { localTsapFor, remoteTsapFor } from './tsap';
-import type { PlcInfo } from './client';
-import { hex4 } from '../values/text';
+import { abortError, PlcError, toPlcError } from '../../errors';
+import { FrameReader } from '../../link/framer';
+import { openTcp } from '../../link/tcp';
+import { parseUrl, type S7Endpoint } from '../../url';
+import { S7_CPU_PRESETS, type S7CpuPreset } from '../presets';
+import { valueToText } from '../../values/text';
+import { S7Client } from '../client';
+import { TagSteps, type Family, type StepContext } from './tags';
+import type { SymbolTable } from '../../symbols/model';
+import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from '../codec';
+import { headerError } from '../constants';
+import { localTsapFor, remoteTsapFor } from '../tsap';
+import type { PlcInfo } from '../client';
+import { hex4 } from '../../values/text';
 
 /** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
 export interface DoctorStep {
@@ -216,7 +216,7 @@ class Doctor {
     return Math.max(1, Math.min(e.timeout, this.deadline - Date.now()));
   }
 
-  /** What the tag steps (doctor-tags.ts) use of this walk. */
+  /** What the tag steps (tags.ts) use of this walk. */
   private context(): StepContext {
     return {
       client: this.client!,

@@ -1,15 +1,15 @@
 /**
- * The connection doctor's last steps (lib/s7/doctor.ts): each given address
+ * The connection doctor's last steps (lib/s7/doctor/index.ts): each given address
  * is read once over the doctor's client, and a DB address that fails is
  * told apart (a missing DB, one shorter than the address needs, an
  * optimized one) with what to change.
  */
-import { abortError, PlcError, toPlcError } from '../errors';
-import { formatAddress, S7_TAG_SYNTAX } from '../address';
-import type { SymbolTable } from '../symbols/model';
-import type { Tag } from '../types';
-import { textOf } from '../values/text';
-import type { S7Client } from './client';
+import { abortError, PlcError, toPlcError } from '../../errors';
+import { formatAddress, S7_TAG_SYNTAX } from '../../address';
+import type { SymbolTable } from '../../symbols/model';
+import type { Tag } from '../../types';
+import { textOf } from '../../values/text';
+import type { S7Client } from '../client';
 
 export type Family = 'S7-300' | 'S7-400' | 'S7-1200' | 'S7-1500' | 'S7-200' | 'LOGO!';
 
