@@ -10,8 +10,7 @@ import type { SymbolTable } from '../../symbols/model';
 import type { Tag } from '../../types';
 import { textOf } from '../../values/text';
 import type { S7Client } from '../client';
-
-export type Family = 'S7-300' | 'S7-400' | 'S7-1200' | 'S7-1500' | 'S7-200' | 'LOGO!';
+import type { Family } from './families';
 
 /** What the steps need of the doctor's walk: its client, its abort, and how a step passes or ends the walk. */
 export interface StepContext {
