@@ -1,6 +1,6 @@
 /**
  * The S7 system commands: info, szl, diag, clock, blocks, cpu (the S7Client
- * services) and doctor (lib/s7/doctor.ts). Control (cpu, clock --set) is
+ * services) and doctor (lib/s7/doctor/). Control (cpu, clock --set) is
  * refused before connecting unless the URL says control=true, and needs
  * --yes from a script or for a PLC that is not this machine.
  */

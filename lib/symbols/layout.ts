@@ -26,7 +26,12 @@ import { SourceError } from '../errors';
 import type { DataTypeName } from '../types';
 import { elementByteLength } from '../values/types-table';
 import type { BlockDecl, DataBlockDecl, MemberDecl, SourcePosition, TypeDecl, TypeRef } from './model';
-import { isSystemDecl, isSystemTypeName, KNOWN_LAYOUTS, systemAlias, systemStructure, systemStructureBytes } from './system-types';
+import { isSystemTypeName, KNOWN_LAYOUTS, systemAlias, systemStructure, systemStructureBytes } from './system-types';
+import { TIA_SPELLING, blockRef, child, elementIndex, typeRef, whereText, type Where } from './layout-names';
+import type { ArrayNode, BlockLayout, ElementaryNode, LayoutNode, LayoutOptions, StructNode } from './layout-nodes';
+
+export { blockRef, elementIndex, memberRef } from './layout-names';
+export type { BlockLayout, LayoutNode } from './layout-nodes';
 
 /** Bytes a data block with standard access can hold: 64 KB (S7-300/400 and S7-1200/1500 with standard access); the last byte, 65535, is the last our addresses reach. */
 const MAX_BLOCK_BYTES = 65536;
@@ -43,138 +48,10 @@ function tooLong(at: SourcePosition, where: Where): SourceError {
   );
 }
 
-/** How TIA Portal spells each type in its editors and sources (`Bool`, `DInt`, `Time_Of_Day`). */
-const TIA_SPELLING: Readonly<Record<DataTypeName, string>> = Object.freeze({
-  BOOL: 'Bool',
-  BYTE: 'Byte',
-  WORD: 'Word',
-  DWORD: 'DWord',
-  LWORD: 'LWord',
-  SINT: 'SInt',
-  USINT: 'USInt',
-  INT: 'Int',
-  UINT: 'UInt',
-  DINT: 'DInt',
-  UDINT: 'UDInt',
-  LINT: 'LInt',
-  ULINT: 'ULInt',
-  REAL: 'Real',
-  LREAL: 'LReal',
-  CHAR: 'Char',
-  WCHAR: 'WChar',
-  STRING: 'String',
-  WSTRING: 'WString',
-  S5TIME: 'S5Time',
-  TIME: 'Time',
-  LTIME: 'LTime',
-  DATE: 'Date',
-  TIME_OF_DAY: 'Time_Of_Day',
-  DATE_AND_TIME: 'Date_And_Time',
-  DTL: 'DTL',
-  COUNTER: 'Counter',
-  TIMER: 'Timer',
-});
-
 /** Types that take one byte and may start on any byte. */
 const BYTE_TYPES: ReadonlySet<DataTypeName> = new Set<DataTypeName>(['BYTE', 'CHAR', 'SINT', 'USINT']);
 /** Parameter types of STEP 7 blocks: a timer or counter number, not data a DB holds. */
 const NOT_IN_A_DB: ReadonlySet<DataTypeName> = new Set<DataTypeName>(['TIMER', 'COUNTER']);
-
-interface Placed {
-  /** Byte offset from the start of the block. */
-  readonly byte: number;
-  /** 0–7 for BOOL and a BOOL array (its first bit); null otherwise. */
-  readonly bit: number | null;
-  /** Bytes covered from `byte` (a BOOL: 1; a BOOL array: the bytes its bits touch; a struct: its even length). */
-  readonly size: number;
-  /** The type as TIA shows it: `Int`, `String[20]`, `Array[1..10] of Bool`, `"Motor"`, `Struct`. */
-  readonly typeText: string;
-  /** The member's declaration; undefined for array elements and the block itself. */
-  readonly decl?: MemberDecl;
-  readonly at: SourcePosition;
-}
-
-interface ElementaryNode extends Placed {
-  readonly kind: 'elementary';
-  readonly dataType: DataTypeName;
-  readonly stringLength: number;
-}
-
-export interface ArrayNode extends Placed {
-  readonly kind: 'array';
-  readonly dims: readonly { readonly low: number; readonly high: number }[];
-  /** The elements, last index fastest. */
-  readonly elements: readonly LayoutNode[];
-  /** Elements of an elementary type: the type and its string length. */
-  readonly elementType?: { readonly dataType: DataTypeName; readonly stringLength: number };
-  /** True when the elements lie as one `TYPE[count]` address reads them: elementary, one after the other with no gap. */
-  readonly contiguous: boolean;
-}
-
-interface StructNode extends Placed {
-  readonly kind: 'struct';
-  readonly members: readonly { readonly name: string; readonly node: LayoutNode }[];
-  /** The UDT it is an instance of (its declared name), when it is one. */
-  readonly typeName?: string;
-  /** The UDT's declaration, when it is an instance of one (its members' start values apply to every instance). */
-  readonly typeDecl?: TypeDecl;
-}
-
-export type LayoutNode = ElementaryNode | ArrayNode | StructNode;
-
-/** A data block laid out. */
-export interface BlockLayout {
-  readonly decl: DataBlockDecl;
-  /** The block's body, at byte 0. */
-  readonly root: StructNode;
-  /** Bytes of the block (even). */
-  readonly length: number;
-  /** The UDT the block is an instance of, as TIA writes it (`"Motor"`, `UDT 5`). */
-  readonly instanceOf?: string;
-}
-
-export interface LayoutOptions {
-  /** UDT numbers by symbol (lower case), from a symbol table: a `"Motor"` reference finds `TYPE UDT 5` through the row `Motor  UDT5`. */
-  readonly typeNumbers?: ReadonlyMap<string, number>;
-}
-
-// ---------------------------------------------------------------- names as TIA writes them
-
-/** A name needs no quotes when it is a plain identifier (letters, umlauts included, digits, `_`), as names.ts reads them. */
-const PLAIN_NAME = /^[\p{L}_][\p{L}\p{M}\p{N}_]*$/u;
-
-/** A block as TIA writes it: `"Tank"`; a STEP 7 DB without symbol as STEP 7 does: `DB10`. */
-export function blockRef(decl: { readonly name: string; readonly number?: number }): string {
-  return decl.number !== undefined && decl.name.toUpperCase() === `DB${decl.number}` ? `DB${decl.number}` : `"${decl.name}"`;
-}
-
-/** A member as TIA writes it after the dot: `Speed`, or quoted when not a plain identifier: `"Speed.Set"`. */
-export function memberRef(name: string): string {
-  return PLAIN_NAME.test(name) ? name : `"${name}"`;
-}
-
-/** A UDT as TIA writes it: `"Motor"`; a STEP 7 UDT without symbol: `UDT 5`. */
-function typeRef(decl: TypeDecl): string {
-  if (isSystemDecl(decl)) return decl.name;
-  return decl.number !== undefined && decl.name.toUpperCase() === `UDT${decl.number}` ? `UDT ${decl.number}` : `"${decl.name}"`;
-}
-
-/** Where a member is, for messages: built only when a message needs it. */
-interface Where {
-  readonly parent?: Where;
-  /** `"Tank"`, `.Speed`, `[3]`. */
-  readonly segment: string;
-}
-
-function whereText(where: Where): string {
-  let text = '';
-  for (let w: Where | undefined = where; w; w = w.parent) text = w.segment + text;
-  return text;
-}
-
-function child(where: Where, name: string): Where {
-  return { parent: where, segment: `.${memberRef(name)}` };
-}
 
 // ---------------------------------------------------------------- the engine
 
@@ -186,18 +63,6 @@ function nextByte(bits: number): number {
 /** Rounds a bit position up to the next even byte (word limit). */
 function nextWord(bits: number): number {
   return Math.ceil(bits / 16) * 16;
-}
-
-/** The indices of element `k` of an array (last index fastest), as TIA writes them: `3`, `1,2`. */
-export function elementIndex(dims: ArrayNode['dims'], k: number): string {
-  const indices: number[] = new Array<number>(dims.length);
-  let rest = k;
-  for (let d = dims.length - 1; d >= 0; d--) {
-    const span = dims[d]!.high - dims[d]!.low + 1;
-    indices[d] = dims[d]!.low + (rest % span);
-    rest = Math.floor(rest / span);
-  }
-  return indices.join(',');
 }
 
 class Engine {

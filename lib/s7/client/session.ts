@@ -10,7 +10,7 @@ import { Fifo } from '../../link/fifo';
 import type { FrameReader } from '../../link/framer';
 import { decodeS7, s7AnswerRef, type S7Message } from '../codec';
 import { cotpTpduType, disconnectReason } from '../codec/cotp';
-import { setPduRef } from '../codec/pdu';
+import { setPduRef } from '../codec/pdu-decode';
 import { CotpType } from '../constants';
 
 /** The counters a session adds to (the client's S7Stats, cumulative over reconnects). */

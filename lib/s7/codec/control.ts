@@ -14,7 +14,8 @@
  */
 import { ProtocolError } from '../../errors';
 import { ControlFunction, FRAME_OVERHEAD, Rosctr, S7_ACK_HEADER, S7_JOB_HEADER, S7_PROTOCOL_ID } from '../constants';
-import { decodeS7, s7Frame } from './pdu';
+import { s7Frame } from './pdu';
+import { decodeS7 } from './pdu-decode';
 
 const P_PROGRAM = Buffer.from('P_PROGRAM', 'latin1');
 /** PI argument of a cold start. */

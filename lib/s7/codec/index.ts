@@ -19,7 +19,6 @@ export {
   dataLengthBytes,
   dataLengthField,
   dataPartLength,
-  decodeS7,
   encodeErrorAck,
   encodeReadRequest,
   encodeReadResponse,
@@ -28,15 +27,13 @@ export {
   encodeWriteRequest,
   encodeWriteResponse,
   readRequestPduSize,
-  s7AnswerRef,
-  scanReadAck,
-  type ReadItemTable,
   type ReadResponseItem,
   type S7Item,
   type S7Message,
   type S7WriteItem,
   type SetupParams,
 } from './pdu';
+export { decodeS7, s7AnswerRef, scanReadAck, type ReadItemTable } from './pdu-decode';
 import type { S7Item, S7WriteItem } from './pdu';
 /**
  * @deprecated The item of a Read Var job is `S7Item`; this second name stays

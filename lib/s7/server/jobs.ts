@@ -7,7 +7,8 @@
 import { ProtocolError } from '../../errors';
 import type { PlcMemory } from '../../sim/memory';
 import type { AreaName } from '../../types';
-import { dataLengthBytes, dataLengthField, encodeHeaderErrorAck, s7Frame, s7PduRef, s7Rosctr } from '../codec/pdu';
+import { dataLengthBytes, dataLengthField, encodeHeaderErrorAck, s7Frame } from '../codec/pdu';
+import { s7PduRef, s7Rosctr } from '../codec/pdu-decode';
 import {
   COTP_DT_HEADER,
   CotpType,

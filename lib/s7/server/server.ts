@@ -11,7 +11,7 @@ import { PlcMemory } from '../../sim/memory';
 import { memoryFromSymbols } from '../../symbols/memory';
 import { ProtocolError } from '../../errors';
 import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, HeaderError, MAX_FRAME, MIN_PDU_SIZE, Rosctr, S7Function, tpduBytes } from '../constants';
-import { jobItemCount, s7Rosctr } from '../codec/pdu';
+import { jobItemCount, s7Rosctr } from '../codec/pdu-decode';
 import { isControlJob } from '../codec/control';
 import type { DiagnosticEntry } from '../codec/diagnostics';
 import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './services';

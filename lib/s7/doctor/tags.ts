@@ -1,17 +1,16 @@
 /**
- * The connection doctor's last steps (lib/s7/doctor.ts): each given address
+ * The connection doctor's last steps (lib/s7/doctor/index.ts): each given address
  * is read once over the doctor's client, and a DB address that fails is
  * told apart (a missing DB, one shorter than the address needs, an
  * optimized one) with what to change.
  */
-import { abortError, PlcError, toPlcError } from '../errors';
-import { formatAddress, S7_TAG_SYNTAX } from '../address';
-import type { SymbolTable } from '../symbols/model';
-import type { Tag } from '../types';
-import { textOf } from '../values/text';
-import type { S7Client } from './client';
-
-export type Family = 'S7-300' | 'S7-400' | 'S7-1200' | 'S7-1500' | 'S7-200' | 'LOGO!';
+import { abortError, PlcError, toPlcError } from '../../errors';
+import { formatAddress, S7_TAG_SYNTAX } from '../../address';
+import type { SymbolTable } from '../../symbols/model';
+import type { Tag } from '../../types';
+import { textOf } from '../../values/text';
+import type { S7Client } from '../client';
+import type { Family } from './families';
 
 /** What the steps need of the doctor's walk: its client, its abort, and how a step passes or ends the walk. */
 export interface StepContext {

@@ -1,0 +1,340 @@
+/**
+ * The connection doctor: walks an S7 connection step by step (name, TCP,
+ * COTP, setup communication, identity, protection, PUT/GET, then each given
+ * address) and stops at the first failure with what to change, in words.
+ * The handshake steps run on a raw socket with the codec (handshake.ts); the
+ * steps after it use an S7Client, the address and name steps in tags.ts. What
+ * a step says to change is in hints.ts, the CPU families and their usual
+ * addressing in families.ts. Every socket is closed on every path, and the
+ * whole walk has one deadline.
+ */
+import { lookup } from 'node:dns/promises';
+import * as net from 'node:net';
+import { abortError, PlcError, toPlcError } from '../../errors';
+import { openTcp } from '../../link/tcp';
+import { parseUrl, type S7Endpoint } from '../../url';
+import { valueToText } from '../../values/text';
+import { S7Client } from '../client';
+import { TagSteps, type StepContext } from './tags';
+import type { SymbolTable } from '../../symbols/model';
+import type { PlcInfo } from '../client';
+import { familyOf, type Family } from './families';
+import { Handshake, type HandshakeContext } from './handshake';
+import { HINT } from './hints';
+
+export { familyOf } from './families';
+
+/** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
+export interface DoctorStep {
+  step: string;
+  ok: boolean;
+  detail: string;
+  hint?: string;
+}
+
+export interface DoctorReport {
+  /** Every step passed. */
+  ok: boolean;
+  steps: DoctorStep[];
+}
+
+export interface DiagnoseOptions {
+  /** The deadline of the whole walk in ms (default 20 s); each network step also keeps the URL's timeout. */
+  timeout?: number;
+  /** Aborting rejects with ABORTED once every socket is closed. */
+  signal?: AbortSignal;
+  /** Called with each step as soon as it is known. */
+  onStep?: (step: DoctorStep) => void;
+  /**
+   * A compiled symbol table (compileSymbols), as connect(url, { symbols })
+   * takes it: each given text that is not an S7 address is then a name,
+   * resolved as a read resolves it and read at its address; an unknown name
+   * is a failed step with the closest names the table has.
+   */
+  symbols?: SymbolTable;
+  /** Names in a DB whose length in the PLC differs from the sources' are refused, as with ClientOptions.strictSymbols. */
+  strictSymbols?: boolean;
+}
+
+const DEFAULT_DEADLINE = 20_000;
+/** Header errors by which an S7-1200/1500 refuses Read Var without PUT/GET (SERVICE_ERRORS, HEADER_ERRORS). */
+const PUT_GET_REFUSALS = [0x8104, 0x8304];
+const PASSWORD_NEEDED = 0xd241;
+
+/**
+ * Diagnoses the connection to an S7 PLC. Resolves a report whose steps end
+ * at the first failure (every step up to it passed); rejects only with
+ * ABORTED when `options.signal` aborts. Nothing is written to the PLC.
+ */
+export async function diagnose(url: string, addresses: readonly string[] = [], options: DiagnoseOptions = {}): Promise<DoctorReport> {
+  const doctor = new Doctor(options);
+  try {
+    await doctor.run(url, addresses);
+  } finally {
+    await doctor.dispose();
+  }
+  return doctor.report();
+}
+
+/** Thrown inside the walk to end it at a failed step. */
+class Stop extends Error {}
+
+class Doctor {
+  private readonly steps: DoctorStep[] = [];
+  private readonly ctl = new AbortController();
+  private readonly deadline: number;
+  private readonly timer: NodeJS.Timeout;
+  private readonly sockets = new Set<net.Socket>();
+  private client: S7Client | undefined;
+  private readonly onUserAbort = () => this.ctl.abort();
+
+  constructor(private readonly options: DiagnoseOptions) {
+    const ms = options.timeout ?? DEFAULT_DEADLINE;
+    if (!Number.isFinite(ms) || ms <= 0)
+      throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
+    this.deadline = Date.now() + ms;
+    this.timer = setTimeout(() => this.ctl.abort(), ms);
+    if (options.signal?.aborted) this.ctl.abort();
+    else options.signal?.addEventListener('abort', this.onUserAbort, { once: true });
+  }
+
+  report(): DoctorReport {
+    return { ok: this.steps.length > 0 && this.steps.every((s) => s.ok), steps: this.steps };
+  }
+
+  async dispose(): Promise<void> {
+    clearTimeout(this.timer);
+    this.options.signal?.removeEventListener('abort', this.onUserAbort);
+    for (const s of this.sockets) s.destroy();
+    this.sockets.clear();
+    await this.client?.close();
+  }
+
+  private get signal(): AbortSignal {
+    return this.ctl.signal;
+  }
+
+  /** Per network step: the URL's timeout, cut to what is left of the deadline. */
+  private stepTimeout(e: S7Endpoint): number {
+    return Math.max(1, Math.min(e.timeout, this.deadline - Date.now()));
+  }
+
+  /** What the tag steps (tags.ts) use of this walk. */
+  private context(): StepContext {
+    return {
+      client: this.client!,
+      signal: this.signal,
+      pass: (step, detail, hint) => this.pass(step, detail, hint),
+      fail: (step, detail, hint) => this.fail(step, detail, hint),
+      failed: (step, err, other) => this.failed(step, err, other),
+    };
+  }
+
+  /** What the handshake steps (handshake.ts) use of this walk. */
+  private handshakeContext(): HandshakeContext {
+    return {
+      signal: this.signal,
+      pass: (step, detail, hint) => this.pass(step, detail, hint),
+      fail: (step, detail, hint) => this.fail(step, detail, hint),
+      failed: (step, err, other) => this.failed(step, err, other),
+      stepTimeout: (e) => this.stepTimeout(e),
+      tcp: (e, address) => this.tcp(e, address),
+    };
+  }
+
+  private record(step: DoctorStep): void {
+    const s: DoctorStep = { step: step.step, ok: step.ok, detail: step.detail };
+    if (step.hint !== undefined) s.hint = step.hint;
+    this.steps.push(s);
+    this.options.onStep?.(s);
+  }
+
+  private pass(step: string, detail: string, hint?: string): void {
+    this.record({ step, ok: true, detail, ...(hint !== undefined ? { hint } : {}) });
+  }
+
+  private fail(step: string, detail: string, hint?: string): never {
+    this.record({ step, ok: false, detail, ...(hint !== undefined ? { hint } : {}) });
+    throw new Stop();
+  }
+
+  /** An error inside a step: an abort by the caller ends the walk, the deadline fails the step, anything else is `other`. */
+  private failed(step: string, err: unknown, other: (e: PlcError) => never): never {
+    if (err instanceof Stop) throw err;
+    if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
+    if (this.signal.aborted) {
+      this.fail(step, `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms`, HINT.deadline);
+    }
+    return other(toPlcError(err, 'CONNECT_FAILED'));
+  }
+
+  async run(url: string, addresses: readonly string[]): Promise<void> {
+    try {
+      const e = this.url(url);
+      const address = await this.resolve(e);
+      await new Handshake(this.handshakeContext()).run(e, address);
+      const info = await this.identity(e);
+      this.protection(info);
+      const family = info.family;
+      await this.putGet(family);
+      const tags = new TagSteps(this.context(), family, this.options.symbols);
+      for (const a of addresses) await tags.check(a);
+    } catch (err) {
+      if (err instanceof Stop) return;
+      if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
+      // The deadline ran out where no step caught it (between steps, or inside one's own retries): a failed step, not a rejection.
+      if (this.signal.aborted) {
+        const after = this.steps.at(-1)?.step;
+        this.record({
+          step: 'deadline',
+          ok: false,
+          detail: `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms${after ? ` (after the ${after} step)` : ''}`,
+          hint: HINT.deadline,
+        });
+        return;
+      }
+      throw err;
+    }
+  }
+
+  // ---------------------------------------------------------------- steps
+
+  private url(url: string): S7Endpoint {
+    let e;
+    try {
+      e = parseUrl(url);
+    } catch (err) {
+      this.fail('url', (err as Error).message, HINT.url);
+    }
+    if (e.protocol !== 's7') this.fail('url', `the doctor checks S7 connections; this URL is ${e.protocol}`, HINT.notS7);
+    return e;
+  }
+
+  private async resolve(e: S7Endpoint): Promise<string> {
+    const host = e.host.replace(/^\[|\]$/g, '');
+    if (net.isIP(host)) {
+      this.pass('resolve', `${host} is an IP address`);
+      return host;
+    }
+    try {
+      const { address } = await this.race(lookup(host), e);
+      this.pass('resolve', `${host} resolves to ${address}`);
+      return address;
+    } catch (err) {
+      return this.failed('resolve', err, (p) => {
+        const code = (p.cause as NodeJS.ErrnoException | undefined)?.code ?? (err as NodeJS.ErrnoException).code;
+        if (code === 'EAI_AGAIN') this.fail('resolve', `"${host}" could not be looked up (EAI_AGAIN): no DNS server answered`, HINT.noDns);
+        this.fail('resolve', `"${host}" does not resolve${code ? ` (${code})` : ''}`, HINT.unknownHost);
+      });
+    }
+  }
+
+  /** A promise that cannot be aborted (a DNS lookup), raced with the deadline and the caller's abort. */
+  private race<T>(p: Promise<T>, e: S7Endpoint): Promise<T> {
+    return new Promise<T>((resolve, reject) => {
+      const ms = this.stepTimeout(e);
+      const done = () => {
+        clearTimeout(timer);
+        this.signal.removeEventListener('abort', onAbort);
+      };
+      const onAbort = () => {
+        done();
+        reject(abortError('a lookup', this.signal));
+      };
+      const timer = setTimeout(() => {
+        done();
+        reject(new PlcError('TIMEOUT', `no answer within ${ms} ms`));
+      }, ms);
+      if (this.signal.aborted) return onAbort();
+      this.signal.addEventListener('abort', onAbort, { once: true });
+      p.then(
+        (v) => (done(), resolve(v)),
+        (err: unknown) => (done(), reject(err)),
+      );
+    });
+  }
+
+  private async tcp(e: S7Endpoint, address: string): Promise<net.Socket> {
+    const socket = await openTcp({ host: address, port: e.port, timeout: this.stepTimeout(e), signal: this.signal, keepAliveMs: 0 });
+    this.sockets.add(socket);
+    socket.on('error', () => undefined);
+    socket.once('close', () => this.sockets.delete(socket));
+    return socket;
+  }
+
+  private async identity(e: S7Endpoint): Promise<PlcInfo & { family: Family | undefined }> {
+    const { symbols, strictSymbols } = this.options;
+    const client = new S7Client(
+      { ...e, timeout: this.stepTimeout(e) },
+      symbols ? { symbols, ...(strictSymbols ? { strictSymbols } : {}) } : {},
+    );
+    this.client = client;
+    client.on('error', () => undefined);
+    const onAbort = () => void client.close();
+    this.signal.addEventListener('abort', onAbort, { once: true });
+    try {
+      await client.connect();
+      const info = await client.info({ signal: this.signal });
+      const family = familyOf(info);
+      const who = [info.moduleTypeName, info.orderCode && `(${info.orderCode})`, info.firmware && `firmware ${info.firmware}`]
+        .filter(Boolean)
+        .join(' ');
+      const names = [
+        info.asName && `station "${info.asName}"`,
+        info.moduleName && `module "${info.moduleName}"`,
+        info.serialNumber && `serial ${info.serialNumber}`,
+      ]
+        .filter(Boolean)
+        .join(', ');
+      const state = info.state ? `in ${info.state}` : 'state not reported';
+      const detail = `${who || 'the CPU does not say what it is (no identity lists)'}${names ? `; ${names}` : ''}; ${state}${family ? `; family ${family}` : ''}`;
+      const hint = info.state === 'STOP' ? HINT.inStop : undefined;
+      this.pass('identity', detail, hint);
+      return { ...info, family };
+    } catch (err) {
+      return this.failed('identity', err, (p) => this.fail('identity', p.message, HINT.noIdentity));
+    } finally {
+      this.signal.removeEventListener('abort', onAbort);
+    }
+  }
+
+  private protection(info: PlcInfo & { family: Family | undefined }): void {
+    const p = info.protection;
+    const modern = info.family === 'S7-1200' || info.family === 'S7-1500';
+    if (!p) return this.pass('protection', 'the CPU does not report its protection level (SZL 0x0232)');
+    if (p.level <= 1)
+      return this.pass('protection', `level ${p.level}: no protection${p.keySwitch ? ` (mode selector ${p.keySwitch})` : ''}`);
+    if (p.level === 2) {
+      return this.pass(
+        'protection',
+        `level 2: write protection${p.keySwitch ? ` (mode selector ${p.keySwitch})` : ''}: reads work; writes, stop/start and setting the clock need the password`,
+        HINT.writeProtected(modern),
+      );
+    }
+    this.fail(
+      'protection',
+      `level ${p.level}: read/write protection: the CPU refuses reads of its data without the password`,
+      HINT.readProtected(modern),
+    );
+  }
+
+  private async putGet(family: Family | undefined): Promise<void> {
+    const client = this.client!;
+    const probe = 'MB0';
+    try {
+      const r = (await client.readDetailed([probe], { signal: this.signal }))[probe]!;
+      const needs = family === 'S7-1200' || family === 'S7-1500' ? '' : family ? `; an ${family} needs no setting for it` : '';
+      if (r.ok) return this.pass('putget', `the CPU serves Read Var (PUT/GET${needs}): ${probe} = ${valueToText(r.value)}`);
+      const e = r.error;
+      if (e.plcCode !== undefined && PUT_GET_REFUSALS.includes(e.plcCode)) {
+        this.fail('putget', `the CPU refuses Read Var as a whole: ${e.message}`, HINT.putGet);
+      }
+      if (e.plcCode === PASSWORD_NEEDED) this.fail('putget', `the CPU refuses Read Var: ${e.message}`, HINT.password);
+      if (e.code === 'CONNECTION_LOST' || e.code === 'TIMEOUT' || e.code === 'NOT_CONNECTED') this.fail('putget', e.message);
+      // An answer per item (MB0 out of range on a CPU without flags) still means Read Var is served.
+      this.pass('putget', `the CPU serves Read Var (PUT/GET${needs}); ${probe}: ${e.message}`);
+    } catch (err) {
+      return this.failed('putget', err, (p) => this.fail('putget', p.message));
+    }
+  }
+}
