@@ -2,6 +2,7 @@
 import { DRIVERS } from '../drivers';
 import type { ServeFlags } from '../sim/serve';
 import type { SymbolTable } from '../symbols/model';
+import { orList } from '../values/text';
 import { UsageError, intFlag, listFlag, stringFlag, type ParsedArgs } from './args';
 import { readInputFile } from './files';
 import { EXIT, untilInterrupted, type CliIo } from './io';
@@ -71,9 +72,4 @@ async function listen<R>(start: () => Promise<R>, flag: string): Promise<R> {
     if (e.code === 'EADDRINUSE') throw new UsageError(`that port is already in use: choose another with --${flag}`);
     throw err;
   }
-}
-
-/** "s7, fetchwrite or freeport" */
-function orList(names: readonly string[]): string {
-  return names.length > 1 ? `${names.slice(0, -1).join(', ')} or ${names.at(-1)}` : names.join('');
 }

@@ -1,5 +1,6 @@
 /** `plcwire serve fetchwrite`: the FETCH/WRITE simulator from the command line (lib/sim/serve.ts). */
-import { servedBlocks, urlHost, type Served, type ServeFlags } from '../sim/serve';
+import { hostPart } from '../link/url-params';
+import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
 import { FetchWriteServer } from './server';
 
 export async function serveFetchWrite(flags: ServeFlags): Promise<Served> {
@@ -18,6 +19,6 @@ export async function serveFetchWrite(flags: ServeFlags): Promise<Served> {
     ports.fetchPort === ports.writePort ? `port=${ports.fetchPort}` : `fetchPort=${ports.fetchPort}&writePort=${ports.writePort}`;
   say(`FETCH/WRITE simulator listening on ${host}: fetch ${ports.fetchPort}, write ${ports.writePort}`);
   if (symbols) for (const line of servedBlocks(symbols)) say(line);
-  say(`try: plcwire read "fetchwrite://${urlHost(host)}?${query}" ${symbols ? flags.tryByName(symbols) : 'DB1,INT0 MB0'}`);
+  say(`try: plcwire read "fetchwrite://${hostPart(host)}?${query}" ${symbols ? flags.tryByName(symbols) : 'DB1,INT0 MB0'}`);
   return { close: () => server.close() };
 }

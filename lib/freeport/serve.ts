@@ -1,5 +1,6 @@
 /** `plcwire serve freeport`: freeport stations on a serial port or a TCP port (lib/sim/serve.ts). */
-import { urlHost, type Served, type ServeFlags } from '../sim/serve';
+import { hostPart } from '../link/url-params';
+import { type Served, type ServeFlags } from '../sim/serve';
 import { FreeportBus } from './bus';
 import { FREEPORT_BAUD_RATES } from './url';
 
@@ -18,7 +19,7 @@ export async function serveFreeport(flags: ServeFlags): Promise<Served> {
   } else if (flags.has('tcp')) {
     const port = await flags.listen(() => bus.listenTcp({ host, port: flags.int('tcp', 4001, 0, 65535) }), 'tcp');
     say(`freeport stations ${stations.join(', ')} answering on tcp ${host}:${port}`);
-    say(`try: plcwire read "freeport+tcp://${urlHost(host)}:${port}" ST${stations[0]},DWORD0`);
+    say(`try: plcwire read "freeport+tcp://${hostPart(host)}:${port}" ST${stations[0]},DWORD0`);
   } else {
     throw flags.usage('serve freeport needs --path <serial device> or --tcp <port>');
   }

@@ -10,6 +10,7 @@
  */
 import { FetchWriteServer } from '../fetchwrite/server';
 import { FreeportBus } from '../freeport/bus';
+import { hostPart } from '../link/url-params';
 import { S7Server } from '../s7/server';
 import type { PlcMemory } from '../sim/memory';
 import { compileSymbols } from '../symbols';
@@ -70,7 +71,7 @@ export async function startPlant(options: { host?: string; ports?: Partial<Plant
     const fpPort = await freeport.listenTcp({ host, port: want.freeport });
     process.start();
     const ports = { s7: s7Port, fetch: fw.fetchPort, write: fw.writePort, freeport: fpPort };
-    const h = host.includes(':') ? `[${host}]` : host;
+    const h = hostPart(host);
     return {
       memory,
       symbols,

@@ -1,6 +1,7 @@
 /** `plcwire serve s7`: the S7 simulator from the command line (lib/sim/serve.ts). */
+import { hostPart } from '../link/url-params';
 import type { MemoryLayout } from '../sim/memory';
-import { servedBlocks, urlHost, type Served, type ServeFlags } from '../sim/serve';
+import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
 import { S7Server, type S7Profile } from './server';
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
@@ -35,7 +36,7 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   });
   const port = await flags.listen(() => server.listen(), 'port');
   say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
-  const url = `s7://${urlHost(host)}:${port}?${REACH[profile].query}`;
+  const url = `s7://${hostPart(host)}:${port}?${REACH[profile].query}`;
   if (symbols) for (const line of servedBlocks(symbols)) say(line);
   say(`try: plcwire read "${url}" ${symbols ? flags.tryByName(symbols) : REACH[profile].addresses}`);
   return { close: () => server.close() };

@@ -36,11 +36,6 @@ export interface Served {
   close(): Promise<void>;
 }
 
-/** A host as it stands in a URL: an IPv6 address in brackets. */
-export function urlHost(host: string): string {
-  return host.includes(':') ? `[${host}]` : host;
-}
-
 /** The data blocks built from --source, one line each: what a client's block info will report. */
 export function servedBlocks(table: SymbolTable): string[] {
   return table.blocks.map((b) => `serving DB${b.db} "${b.name}" of ${b.length} bytes (${b.file})`);

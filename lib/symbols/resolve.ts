@@ -17,6 +17,7 @@ import { AddressError, PlcError, ValueError, toPlcError } from '../errors';
 import type { DriverTag } from '../link/driver';
 import type { PlcData, PlcStruct, PlcValue, Tag } from '../types';
 import { tagDecoder, validateValue, type TagDecoder } from '../values';
+import { orList } from '../values/text';
 import type { SymbolEntry, SymbolTable } from './model';
 import { canonicalName, splitSymbol } from './names';
 
@@ -136,10 +137,6 @@ function membersOf(entry: Pick<SymbolEntry, 'name' | 'children'>): string {
   if (children.length === 0) return '';
   const names = children.slice(0, 8).map((c) => c.slice(entry.name.length).replace(/^\./, ''));
   return ` (its members: ${names.join(', ')}${children.length > 8 ? `, … ${children.length - 8} more` : ''})`;
-}
-
-function orList(names: readonly string[]): string {
-  return names.length > 1 ? `${names.slice(0, -1).join(', ')} or ${names.at(-1)!}` : names[0]!;
 }
 
 /**

@@ -22,3 +22,8 @@ export function textOf(value: unknown): string {
 export function hex4(n: number): string {
   return n.toString(16).padStart(4, '0');
 }
+
+/** Names as a list in words: `a`, `a or b`, `a, b or c`. */
+export function orList(names: readonly string[]): string {
+  return names.length > 1 ? `${names.slice(0, -1).join(', ')} or ${names.at(-1)!}` : names.join('');
+}
