@@ -23,7 +23,6 @@ module.exports = function (RED) {
     node.name = config.name;
     node.url = String(config.url || '').trim();
     node.users = {};
-    node.linkStatus = { state: 'connecting' };
     node.problem = undefined;
     const compiled = symbols.compile(config);
     /** The compiled symbol table, or undefined (no sources, or they did not compile). */
@@ -35,9 +34,22 @@ module.exports = function (RED) {
     const mismatches = new Map();
     let link;
     let lastError = '';
-    let linkState = node.linkStatus;
 
     Object.defineProperty(node, 'client', { get: () => link && link.client });
+
+    /**
+     * The link's status as the users show it, read when asked: the state is the
+     * client's supervisor's (LinkSupervisor.state, lib/link/supervisor.ts, the
+     * one source of a link's state, through the pooled link's status), never a
+     * copy kept here; 'invalid' when the link could not be opened.
+     */
+    Object.defineProperty(node, 'linkStatus', { enumerable: true, get: () => shown(current()) });
+
+    /** The link's own status: invalid (node.problem), the pooled link's, or connecting before it is opened. */
+    function current() {
+      if (node.problem) return { state: 'invalid', error: node.problem };
+      return link ? link.status : { state: 'connecting' };
+    }
 
     /** The link's status with what the users show instead of "connected": a layout mismatch, or sources that did not compile. */
     function shown(status) {
@@ -48,11 +60,11 @@ module.exports = function (RED) {
       return status;
     }
 
-    function broadcast(status) {
-      linkState = status;
-      node.linkStatus = shown(status);
+    /** Tells every user the link's status (after it or what it shows changed). */
+    function broadcast() {
+      const status = node.linkStatus;
       if (status.state === 'connected') lastError = '';
-      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(node.linkStatus);
+      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
     }
 
     function onMismatch(event) {
@@ -61,13 +73,13 @@ module.exports = function (RED) {
       mismatches.set(event.db, event);
       const key = event.actual === null ? 'plcwire-connection.errors.layoutMissing' : 'plcwire-connection.errors.layoutMismatch';
       node.warn(RED._(key, { block: event.block, db: event.db, declared: event.declared, actual: event.actual }));
-      broadcast(linkState);
+      broadcast();
     }
 
     function onLayoutOk() {
       if (mismatches.size === 0) return;
       mismatches.clear();
-      broadcast(linkState);
+      broadcast();
     }
 
     if (node.symbolProblems.length > 0) {
@@ -100,7 +112,7 @@ module.exports = function (RED) {
     const onStatus = (status) => {
       // A mismatch is the PLC's answer on one connection: the client checks again on the next.
       if (status.state !== 'connected') mismatches.clear();
-      broadcast(status);
+      broadcast();
     };
 
     function open() {
@@ -109,7 +121,7 @@ module.exports = function (RED) {
       } catch (err) {
         // Each user reports this to its own Catch nodes once the flows have started (see problemReport).
         node.problem = err;
-        broadcast({ state: 'invalid', error: err });
+        broadcast();
         return;
       }
       node.problem = undefined;
@@ -117,7 +129,7 @@ module.exports = function (RED) {
       link.on('link-error', reportError);
       link.on('layout-mismatch', onMismatch);
       link.on('layout-ok', onLayoutOk);
-      broadcast(link.status);
+      broadcast();
     }
 
     function shut() {

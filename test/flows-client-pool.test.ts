@@ -3,11 +3,14 @@ import { expect } from 'chai';
 import { EventEmitter } from 'node:events';
 import type { ConnectOptions } from '../lib/connect';
 import { ClientPool, withoutCredentials, type LinkStatus } from '../lib/flows/client-pool';
+import type { LinkState } from '../lib/types';
 import type { Endpoint } from '../lib/url';
 
+/** A stand-in client: like a real one, its `state` is what its last 'state' event said. */
 class FakeClient extends EventEmitter {
   started = 0;
   closed = 0;
+  state: LinkState = 'idle';
   constructor(
     readonly endpoint: Endpoint,
     readonly options: ConnectOptions,
@@ -20,6 +23,10 @@ class FakeClient extends EventEmitter {
   close(): Promise<void> {
     this.closed++;
     return Promise.reject(new Error('closing fails too'));
+  }
+  override emit(event: string | symbol, ...args: unknown[]): boolean {
+    if (event === 'state') this.state = args[0] as LinkState;
+    return super.emit(event, ...args);
   }
 }
 

@@ -11,6 +11,7 @@ import { EventEmitter } from 'node:events';
 import { createClient, type AnyClient, type ConnectOptions } from '../connect';
 import { PlcError } from '../errors';
 import type { SymbolTable } from '../symbols';
+import type { LinkState } from '../types';
 import { endpointKey, endpointName, parseUrl, type Endpoint } from '../url';
 
 /** Parameters that change what a client may do to the PLC: two owners must agree on them to share a client. */
@@ -18,6 +19,8 @@ const SAFETY = ['readOnly', 'allow', 'control'] as const;
 
 /** What a pooled link's client must do (an AnyClient; tests may give a stand-in). */
 export interface PoolClient extends Pick<EventEmitter, 'on'> {
+  /** The link's state: the client's supervisor's (LinkSupervisor.state), the one source of it. */
+  readonly state: LinkState;
   start(): void;
   close(): Promise<void>;
 }
@@ -49,7 +52,8 @@ export interface PoolOwner {
 export class PooledLink<C extends PoolClient = AnyClient> extends EventEmitter {
   readonly name: string;
   readonly owners = new Set<PoolOwner>();
-  status: LinkStatus = { state: 'connecting' };
+  /** The delay and error of the retry the client announced last; cleared by every state change. */
+  private retry: { delay: number; error: unknown } | undefined;
 
   constructor(
     private readonly pool: ClientPool<C>,
@@ -62,11 +66,14 @@ export class PooledLink<C extends PoolClient = AnyClient> extends EventEmitter {
     super();
     this.name = endpointName(endpoint);
     client.on('state', (state: string) => {
-      if (state !== 'reconnecting' && state !== 'idle') this.update({ state });
+      this.retry = undefined;
+      // 'reconnecting' is told by the event that follows, with its delay.
+      if (state !== 'reconnecting' && state !== 'idle') this.emit('status', this.status);
     });
-    client.on('reconnecting', ({ delay, error }: { delay: number; error: unknown }) =>
-      this.update({ state: 'reconnecting', delay, error }),
-    );
+    client.on('reconnecting', ({ delay, error }: { delay: number; error: unknown }) => {
+      this.retry = { delay, error };
+      this.emit('status', this.status);
+    });
     // A listener on 'error' keeps an error event from ever throwing; errors reach users via 'status'.
     client.on('error', (error: unknown) => this.emit('link-error', error));
     client.on('layoutMismatch', (event: unknown) => this.emit('layout-mismatch', event));
@@ -74,9 +81,16 @@ export class PooledLink<C extends PoolClient = AnyClient> extends EventEmitter {
     client.start();
   }
 
-  private update(status: LinkStatus): void {
-    this.status = status;
-    this.emit('status', status);
+  /**
+   * How the link is doing, read from the client's state (its supervisor's,
+   * LinkSupervisor.state in lib/link/supervisor.ts: the one source of a
+   * link's state; nothing here keeps a copy of it), with the announced
+   * retry's delay and error while reconnecting. 'idle' (not yet started) shows as 'connecting'.
+   */
+  get status(): LinkStatus {
+    const state = this.client.state;
+    if (state === 'reconnecting' && this.retry) return { state, ...this.retry };
+    return { state: state === 'idle' ? 'connecting' : state };
   }
 
   /** Closes the client (the pool forgets the link). Always resolves. */

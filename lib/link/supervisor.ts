@@ -38,6 +38,11 @@ export class LinkSupervisor<S extends DriverSession> {
 
   constructor(private readonly options: SupervisorOptions<S>) {}
 
+  /**
+   * The link's state: the one source of it. The client's `state`, the pooled
+   * link's `status` (lib/flows/client-pool.ts), the connection node's
+   * `linkStatus` and a node's `linkState` (nodes/) read it; none keeps a copy.
+   */
   get state(): LinkState {
     return this.current;
   }

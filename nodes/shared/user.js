@@ -25,8 +25,10 @@ function attach(RED, node, connectionId, onStatus) {
     show({ state: 'unconfigured' });
     return undefined;
   }
+  // The link's state, read from the connection when asked: it is the client's supervisor's
+  // (LinkSupervisor.state, lib/link/supervisor.ts, the one source of it), never a copy kept here.
+  Object.defineProperty(node, 'linkState', { configurable: true, enumerable: true, get: () => config.linkStatus.state });
   node.onLinkStatus = (status) => {
-    node.linkState = status.state;
     if (!onStatus || onStatus(status) !== false) show(status);
   };
   config.register(node);
