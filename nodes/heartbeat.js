@@ -1,5 +1,5 @@
 'use strict';
-const { attach, settleWithin } = require('./shared/user');
+const { attach, settleWithin, liveClient } = require('./shared/user');
 const { LifeSignWatch, nextLifeSign, isLinkError } = require('..');
 const { linkStatus, sentStatus, aliveStatus, lostStatus, waitingStatus } = require('./shared/status');
 
@@ -82,8 +82,15 @@ module.exports = function (RED) {
     function tick() {
       timer = undefined;
       const started = Date.now();
-      const client = connection && !connection.problem ? connection.client : undefined;
-      const work = client && node.linkState === 'connected' ? exchange(client) : Promise.resolve();
+      // While the link is up: the client by the check every node uses (liveClient); what it throws goes where exchange's errors go.
+      let work = Promise.resolve();
+      if (node.linkState === 'connected') {
+        try {
+          work = exchange(liveClient(RED, connection));
+        } catch (err) {
+          work = Promise.reject(err);
+        }
+      }
       work
         .catch((err) => {
           if (!closing && !isLinkError(err)) problem(err);
