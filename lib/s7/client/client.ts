@@ -27,7 +27,7 @@ import { openS7Session } from './handshake';
 import type { S7Session, WireCounters } from './session';
 import { compileRead, executeRead, tagError, type CollectedRead, type CompiledRead } from './read';
 import { writeJob } from './write';
-import { maxReadItems, planRead, planWrite, ReadPlanCache, type PlanOptions, type ReadPlan } from '../plan';
+import { maxReadItems, planRead, planWrite, PlanStore, type PlanOptions, type ReadPlan } from '../plan';
 import type { BlockCounts, BlockInfo, UploadedBlock } from '../codec/blocks';
 import type { BlockType } from '../constants';
 import type { DiagnosticEntry } from '../codec/diagnostics';
@@ -60,8 +60,8 @@ export interface ItemLimitEvent {
   was: number;
 }
 
-/** Counters start at 0; plansMade is the plan cache's own count. */
-function newStats(plans: ReadPlanCache): S7Stats {
+/** Counters start at 0; plansMade is the plan store's own count. */
+function newStats(plans: { readonly misses: number }): S7Stats {
   return {
     pdusSent: 0,
     bytesSent: 0,
@@ -75,10 +75,11 @@ function newStats(plans: ReadPlanCache): S7Stats {
 }
 
 /**
- * What a prepared tag list keeps (Driver.prepareRead): its merged plan and
- * the plan's request frames, for the PDU size and item limit the plan was
- * made for. A read at another PDU size (a reconnect to another CPU) or after
- * the item limit was learnt plans again.
+ * What a prepared tag list keeps (Driver.prepareRead): a reference to its
+ * merged plan with the plan's request frames, owned by the client's plan
+ * store, for the PDU size and item limit the plan was made for. A read at
+ * another PDU size (a reconnect to another CPU) or after the item limit was
+ * learnt takes the store's entry for those instead.
  */
 interface S7Prepared {
   compiled: CompiledRead | undefined;
@@ -87,10 +88,13 @@ interface S7Prepared {
 export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   readonly protocol: Protocol = 's7';
   readonly endpoint: S7Endpoint;
-  private readonly plans = new ReadPlanCache();
+  /**
+   * The one owner of this client's merged read plans, each with its request
+   * frames (a list in a new array with the same addresses finds both); a
+   * prepared list holds a reference to its entry (S7Prepared).
+   */
+  private readonly plans = new PlanStore<CompiledRead>(64, compileRead, (c) => c.plan);
   readonly stats: S7Stats = newStats(this.plans);
-  /** Each cached plan's request frames, for a list that finds its plan in the cache (the same addresses in a new array). */
-  private readonly compiledPlans = new WeakMap<ReadPlan, CompiledRead>();
   /** Items per job: the URL's maxItems or 20, lowered when the PLC serves fewer (learnItemLimit). */
   private itemLimit: number;
   private planOptions: PlanOptions;
@@ -143,7 +147,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
       addresses.map((a) => this.tag(a)),
       pduSize,
       this.planOptions,
-    );
+    ).plan;
   }
 
   /** A session wired to this client: its counters are the client's stats, its loss goes to the supervisor. */
@@ -337,21 +341,15 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
   }
 
   /**
-   * A prepared list's plan and frames, made again (found in the plan cache,
-   * or planned) when the PDU size or the item limit differs from the one
-   * they were made for. Re-planning replaces them; a poll still in flight
-   * keeps the ones it started with.
+   * A prepared list's plan and frames: the plan store's entry it refers to,
+   * looked up again (found, or planned) when the PDU size or the item limit
+   * differs from the one they were made for. The new reference replaces the
+   * old; a poll still in flight keeps the one it started with.
    */
   private preparedPlan(pduSize: number, tags: readonly Tag[], prepared: S7Prepared): CompiledRead {
     const known = prepared.compiled;
     if (known && known.plan.pduSize === pduSize && known.plan.maxItems === maxReadItems(pduSize, this.itemLimit)) return known;
-    const fresh = this.plans.get(tags, pduSize, this.planOptions);
-    let c = this.compiledPlans.get(fresh);
-    if (!c) {
-      c = compileRead(fresh, tags);
-      this.compiledPlans.set(fresh, c);
-    }
-    return (prepared.compiled = c);
+    return (prepared.compiled = this.plans.get(tags, pduSize, this.planOptions));
   }
 
   /** The PLC served only `served` items of a job: jobs carry at most that many from now on. */

@@ -1,7 +1,7 @@
 /**
  * The S7 request planner (pure): which Read Var / Write Var items go into
  * which PDU at the negotiated PDU size. Sizes and limits in limits.ts, read
- * planning in read.ts (its drafts in draft*.ts), the plan cache in cache.ts,
+ * planning in read.ts (its drafts in draft*.ts), the plan store and cache in cache.ts,
  * write planning in write.ts. The lower bound (bound.ts) is for tests and
  * the benchmark and is not re-exported here.
  */
@@ -23,3 +23,5 @@ export const { planRead, tagData } = read;
 export const { planWrite } = write;
 export const ReadPlanCache = cache.ReadPlanCache;
 export type ReadPlanCache = cache.ReadPlanCache;
+export const PlanStore = cache.PlanStore;
+export type PlanStore<E> = cache.PlanStore<E>;
