@@ -8,7 +8,11 @@
 //   nr5:     Node 22 and Node-RED 5
 //   awlsim:  awlsim AWLSIM_VERSION, pure Python, in the venv test/interop/.venv,
 //            for the layout comparison of test/symbols-awlsim.test.ts
-// Usage: node test/support/install-peers.js interop [nr5] [awlsim]
+//   s7commplus: the s7commplus package S7COMMPLUS_VERSION (PyPI, MIT, pure
+//            Python with the cryptography wheel), in a venv of its own,
+//            test/interop/.venv-s7commplus, so awlsim's venv is never touched:
+//            the independent S7CommPlus client and server of test/interop/s7commplus/
+// Usage: node test/support/install-peers.js interop [nr5] [awlsim] [s7commplus]
 // Already installed: does nothing (no network). A peer that cannot be installed
 // (no network, no python3) is not fatal: the rest still runs, and the tests that
 // need it fail or skip saying so.
@@ -19,6 +23,8 @@ const path = require('node:path');
 const ROOT = path.resolve(__dirname, '../..');
 /** The awlsim whose layout differences test/symbols-awlsim.test.ts knows. */
 const AWLSIM_VERSION = '0.77.1';
+/** The s7commplus whose client and server emulator test/interop/s7commplus/ drives. */
+const S7COMMPLUS_VERSION = '0.3.0';
 
 const PYTHON_PEERS = {
   awlsim: {
@@ -30,6 +36,15 @@ const PYTHON_PEERS = {
     // Pure Python (no Cython build: a few seconds).
     env: { AWLSIM_CYTHON_BUILD: '0' },
     skip: 'test/symbols-awlsim.test.ts will skip',
+  },
+  s7commplus: {
+    name: 's7commplus',
+    version: S7COMMPLUS_VERSION,
+    pip: 's7commplus',
+    venv: 'test/interop/.venv-s7commplus',
+    // Importing the package proves its dependency (cryptography) loads too.
+    probe: 'import importlib.metadata as m, s7commplus; print(m.version("s7commplus"))',
+    skip: 'the S7CommPlus interop tests (test/interop/s7commplus-*.test.js) will skip',
   },
 };
 
@@ -108,4 +123,4 @@ if (require.main === module) {
   }
 }
 
-module.exports = { AWLSIM_VERSION };
+module.exports = { AWLSIM_VERSION, S7COMMPLUS_VERSION };
