@@ -155,7 +155,7 @@ describe('install-peers: s7commplus, the independent S7CommPlus peer', function 
     const r = install(dir, ['s7commplus'], { ...process.env, PATH: emptyBin }, closedPort);
     expect(r.status, r.stderr).to.equal(0);
     expect(r.stderr).to.include(
-      `s7commplus ${S7COMMPLUS_VERSION} not installed: no python3 (ENOENT); the S7CommPlus interop tests (test/interop/s7commplus-*.test.js) will skip.`,
+      `s7commplus ${S7COMMPLUS_VERSION} not installed: no python3 (ENOENT); the tests against the s7commplus peer (test/support/s7commplus-peer.ts) will skip.`,
     );
     expect(fs.existsSync(venv)).to.equal(false);
   });

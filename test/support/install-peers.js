@@ -44,7 +44,7 @@ const PYTHON_PEERS = {
     venv: 'test/interop/.venv-s7commplus',
     // Importing the package proves its dependency (cryptography) loads too.
     probe: 'import importlib.metadata as m, s7commplus; print(m.version("s7commplus"))',
-    skip: 'the S7CommPlus interop tests (test/interop/s7commplus-*.test.js) will skip',
+    skip: 'the tests against the s7commplus peer (test/support/s7commplus-peer.ts) will skip',
   },
 };
 
