@@ -196,6 +196,19 @@ describe('s7commplus peer harness: its client against its own server', function 
       expect((await server.read(7, 0, 1)).toString('hex')).to.equal('00');
     });
 
+    it('negotiates TLS 1.3 by default, and TLS 1.2 with a server that refuses 1.3', async () => {
+      const capped = await startS7CommPlusServer(python, { dbs: DBS, tls: 'self-signed', tlsMaxVersion: '1.2' });
+      servers.push(capped);
+      const [v13] = await s7CommPlusClientOk(python, [{ op: 'connect', port: server.port, tls: true, fingerprint: server.fingerprint! }]);
+      const [v12, data] = await s7CommPlusClientOk(python, [
+        { op: 'connect', port: capped.port, tls: true, fingerprint: capped.fingerprint! },
+        { op: 'db_read', db: 1, offset: 0, size: 4 },
+      ]);
+      expect(v13).to.deep.include({ tlsVersion: 'TLSv1.3' });
+      expect(v12).to.deep.include({ tlsVersion: 'TLSv1.2', protocolVersion: 2 });
+      expect(data).to.equal('42f6e979');
+    });
+
     it('serves a certificate and key given by path', async () => {
       const byPath = await startS7CommPlusServer(python, {
         dbs: DBS,

@@ -121,8 +121,10 @@ export interface PeerDb {
 
 export interface PeerServerOptions {
   readonly dbs?: readonly PeerDb[];
-  /** TLS after InitSSL: a certificate and key (PEM paths), or one the script makes. Without it, plain V1. */
+  /** TLS after InitSSL: a certificate and key (PEM paths), or one the script makes (RSA 2048). Without it, plain V1. */
   readonly tls?: { readonly cert: string; readonly key: string } | 'self-signed';
+  /** The highest TLS version the server accepts: '1.2' makes it refuse TLS 1.3, as some S7-1500 firmware is reported to. */
+  readonly tlsMaxVersion?: '1.2' | '1.3';
   /** The protocol version the emulator announces: 1 without TLS, 2 with it by default. */
   readonly version?: number;
   /** The emulator drops a connection whose request frame is longer (PLCSIM Advanced's behaviour past about 1 kB). */
@@ -273,7 +275,14 @@ export async function startS7CommPlusServer(python: string, options: PeerServerO
     port: options.port ?? 0,
     ...(options.version !== undefined ? { version: options.version } : {}),
     ...(options.maxRequestBytes !== undefined ? { maxRequestBytes: options.maxRequestBytes } : {}),
-    ...(options.tls ? { tls: options.tls === 'self-signed' ? { selfSigned: tmp } : options.tls } : {}),
+    ...(options.tls
+      ? {
+          tls: {
+            ...(options.tls === 'self-signed' ? { selfSigned: tmp } : options.tls),
+            ...(options.tlsMaxVersion ? { maxVersion: options.tlsMaxVersion } : {}),
+          },
+        }
+      : {}),
     dbs: (options.dbs ?? []).map((db) => ({
       number: db.number,
       size: db.size ?? 1024,

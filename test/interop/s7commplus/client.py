@@ -24,7 +24,8 @@ Operations ({"op": NAME, ...}):
   connect          host, port (102), tls (false), fingerprint (SHA-256 hex of
                    the server's certificate to pin), ca (PEM path), password,
                    connectionType ("hmi", "es", "pg"), timeoutMs
-                   -> {protocolVersion, tls, fingerprint, sessionId}
+                   -> {protocolVersion, tls, tlsVersion ("TLSv1.3", ...),
+                   fingerprint, sessionId, protectionLevel}
   list_datablocks  -> [{name, number, rid, ...}]
   browse           -> the client's browse(): [{name, access_sequence, data_type,
                    offsets...}] (bytes as hex)
@@ -98,11 +99,15 @@ class Runner:
             connection_type=op.get("connectionType"),
         )
         pin = c.peer_certificate_fingerprint()
+        # The package keeps its TLS object private; its version is what was negotiated.
+        tls_object = getattr(c._connection, "_ssl_object", None)
         return {
             "protocolVersion": int(c.protocol_version),
             "tls": bool(c.tls_active),
+            "tlsVersion": tls_object.version() if tls_object is not None else None,
             "fingerprint": pin.hex() if pin else None,
             "sessionId": c.session_id,
+            "protectionLevel": c.protection_level,
         }
 
     def op_list_datablocks(self, op):

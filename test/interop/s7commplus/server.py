@@ -15,7 +15,10 @@ CONFIG_JSON (all keys optional):
    "version": 1 | 2 (the S7CommPlus protocol version it announces; 2 with TLS),
    "tls": {"cert": "cert.pem", "key": "key.pem"}    TLS after InitSSL with that
         | {"selfSigned": "DIR"}                     certificate, or with one made
-                                                    here and written into DIR
+                                                    here (RSA 2048) and written
+                                                    into DIR; either may add
+                                                    "maxVersion": "1.2" to refuse
+                                                    TLS 1.3, as some PLCs do
    "maxRequestBytes": n   (it drops a connection whose request is longer, as
                            PLCSIM Advanced does past about 1 kB),
    "dbs": [{"number": 1, "size": 16,
@@ -74,17 +77,20 @@ class ReportingServer(Server):
 
 
 def self_signed(directory):
-    """A fresh EC P-256 key and a self-signed certificate for it, written as PEM into directory.
+    """A fresh RSA 2048 key and a self-signed certificate for it, written as PEM into directory.
+
+    RSA because the TLS 1.2 suites S7 PLCs and the s7commplus client use
+    (ECDHE-RSA, RSA key exchange) authenticate with an RSA key.
 
     It names localhost, 127.0.0.1 and ::1, so a client that checks the name
     against the certificate given as CA accepts it on the loopback.
     """
     from cryptography import x509
     from cryptography.hazmat.primitives import hashes, serialization
-    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.hazmat.primitives.asymmetric import rsa
     from cryptography.x509.oid import NameOID
 
-    key = ec.generate_private_key(ec.SECP256R1())
+    key = rsa.generate_private_key(public_exponent=65537, key_size=2048)
     name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "s7commplus peer")])
     now = datetime.datetime.now(datetime.timezone.utc)
     cert = (
@@ -151,6 +157,11 @@ def build(config):
             cert_path, key_path = tls["cert"], tls["key"]
     host = config.get("host", "127.0.0.1")
     server.start(host=host, port=int(config.get("port", 0)), use_tls=bool(tls), tls_cert=cert_path, tls_key=key_path)
+    if tls and tls.get("maxVersion") == "1.2":
+        # The context is made by start(); each connection wraps it after InitSSL.
+        server._ssl_context.maximum_version = ssl.TLSVersion.TLSv1_2
+    elif tls and tls.get("maxVersion") not in (None, "1.3"):
+        raise ValueError(f"maxVersion must be 1.2 or 1.3, not {tls['maxVersion']!r}")
     port = server._server_socket.getsockname()[1]
     return server, {
         "event": "listening",
