@@ -3,7 +3,9 @@
  * runners in test/interop/s7commplus/) proven on the peer alone: its client
  * against its server emulator, plain V1 and V2 over TLS, for what the
  * S7CommPlus tests of our client and simulator lean on: connect (TLS pinned
- * by fingerprint or by the certificate as CA), list the DBs, read and write
+ * by fingerprint or by the certificate as CA; TLS 1.3, and 1.2 where the
+ * server refuses 1.3; certificates made by lib/s7plus/transport/cert.ts
+ * accepted by this independent TLS stack), list the DBs, read and write
  * by address (each write reported by the server), the CPU state, and the
  * harness's own failures (a bad configuration, a refused pin, no server, a
  * notification that never comes), with no process left afterwards.
@@ -14,7 +16,9 @@
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as net from 'node:net';
+import * as os from 'node:os';
 import * as path from 'node:path';
+import { generateCertificate } from '../lib/s7plus/transport/cert';
 import {
   liveS7CommPlusPeers,
   openS7CommPlusClient,
@@ -222,6 +226,58 @@ describe('s7commplus peer harness: its client against its own server', function 
       ]);
       expect(session).to.deep.include({ protocolVersion: 2, tls: true });
       expect(data).to.equal('42f6e979');
+    });
+  });
+
+  describe('certificates made by lib/s7plus/transport/cert.ts, checked by an independent TLS stack', () => {
+    let dir = '';
+    before(function () {
+      if (!python) return;
+      dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-s7cp-cert-'));
+    });
+    after(() => {
+      if (dir) fs.rmSync(dir, { recursive: true, force: true });
+    });
+    const write = (name: string, text: string) => {
+      fs.writeFileSync(path.join(dir, name), text);
+      return path.join(dir, name);
+    };
+
+    for (const version of ['1.3', '1.2'] as const) {
+      it(`a self-signed one, served by the emulator and pinned by its fingerprint, over TLS ${version}`, async () => {
+        const cert = await generateCertificate();
+        const server = await startS7CommPlusServer(python, {
+          dbs: DBS,
+          tls: { cert: write(`self-${version}.pem`, cert.cert), key: write(`self-${version}-key.pem`, cert.key) },
+          tlsMaxVersion: version,
+        });
+        servers.push(server);
+        expect(server.fingerprint).to.equal(cert.fingerprint.toLowerCase());
+        const [session, data] = await s7CommPlusClientOk(python, [
+          { op: 'connect', port: server.port, tls: true, fingerprint: cert.fingerprint },
+          { op: 'db_read', db: 1, offset: 0, size: 4 },
+        ]);
+        expect(session).to.deep.include({ tls: true, tlsVersion: `TLSv${version}`, fingerprint: cert.fingerprint.toLowerCase() });
+        expect(data).to.equal('42f6e979');
+      });
+    }
+
+    it('one signed by a CA of ours, accepted by the client given that CA (ca=), refused by a client given another CA', async () => {
+      const ca = await generateCertificate({ ca: true, commonName: 'plcwire test CA' });
+      const otherCa = await generateCertificate({ ca: true, commonName: 'another CA' });
+      const leaf = await generateCertificate({ issuer: ca, commonName: 'PLC_1' });
+      const server = await startS7CommPlusServer(python, {
+        dbs: DBS,
+        tls: { cert: write('leaf.pem', leaf.cert), key: write('leaf-key.pem', leaf.key) },
+      });
+      servers.push(server);
+      const [session] = await s7CommPlusClientOk(python, [{ op: 'connect', port: server.port, tls: true, ca: write('ca.pem', ca.cert) }]);
+      expect(session).to.deep.include({ tls: true, fingerprint: leaf.fingerprint.toLowerCase() });
+      const refused = await runS7CommPlusClient(python, [
+        { op: 'connect', port: server.port, tls: true, ca: write('other.pem', otherCa.cert) },
+      ]);
+      expect(refused.ok).to.equal(false);
+      if (!refused.ok) expect(refused.error.message).to.match(/certificate verify failed|unable to get local issuer/i);
     });
   });
 
