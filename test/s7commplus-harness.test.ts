@@ -130,6 +130,27 @@ describe('s7commplus peer harness: its client against its own server', function 
         expect((await server.read(7, 0, 4)).toString('hex')).to.equal('00a1b200');
       });
 
+      it('reports each connection, its requests and its DeleteObject, and the close of its socket', async () => {
+        const before = server.events.length;
+        await s7CommPlusClientOk(python, [connect(), { op: 'db_read', db: 1, offset: 0, size: 2 }, { op: 'disconnect' }]);
+        await server.waitForNoClients();
+        const events = server.events.slice(before);
+        const kinds = events.map((e) => e.event);
+        expect(kinds[0]).to.equal('connected');
+        expect(kinds.at(-1)).to.equal('disconnected');
+        const functions = events.flatMap((e) => (e.event === 'request' ? [e.function] : []));
+        // InitSSL 0x05B3, CreateObject 0x04CA, the session setup write and the read (SetMultiVariables 0x0542,
+        // GetMultiVariables 0x054C), DeleteObject 0x04D4; the client may read the protection level in between.
+        expect(functions[0]).to.equal(0x05b3);
+        expect(functions[1]).to.equal(0x04ca);
+        expect(functions).to.include.members([0x0542, 0x054c]);
+        expect(functions.at(-1)).to.equal(0x04d4);
+        expect(kinds.filter((k) => k === 'deleteObject')).to.have.length(1);
+        const sizes = events.flatMap((e) => (e.event === 'request' ? [e.bytes] : []));
+        expect(Math.min(...sizes)).to.be.greaterThan(14);
+        expect(server.openClients()).to.deep.equal([]);
+      });
+
       it('reports the CPU state the server is set to', async () => {
         const states: unknown[] = [];
         for (const state of ['STOP', 'RUN'] as const) {

@@ -148,16 +148,27 @@ interface ServerLine {
   [key: string]: unknown;
 }
 
+/** What the server reports as it happens (see server.py's docstring). */
+export type PeerEvent =
+  | { readonly event: 'connected' | 'disconnected'; readonly peer: string }
+  | { readonly event: 'request'; readonly peer: string | null; readonly function: number | null; readonly bytes: number }
+  | { readonly event: 'deleteObject'; readonly peer: string | null; readonly session: number }
+  | ({ readonly event: 'write' } & PeerWrite);
+
+const EVENTS = new Set(['connected', 'disconnected', 'request', 'deleteObject', 'write']);
+
 export class S7CommPlusPeerServer {
   /** Every write received so far, in order. */
   readonly writes: PeerWrite[] = [];
+  /** Every event so far, in order: connections, requests, DeleteObjects, writes. */
+  readonly events: PeerEvent[] = [];
   port = 0;
   host = '127.0.0.1';
   /** SHA-256 of the DER certificate, lower-case hex; null without TLS. */
   fingerprint: string | null = null;
   /** The certificate's PEM path; null without TLS. */
   certPath: string | null = null;
-  private readonly waiters: { match: (w: PeerWrite) => boolean; resolve: (w: PeerWrite) => void }[] = [];
+  private readonly waiters: { match: (e: PeerEvent) => boolean; resolve: (e: PeerEvent) => void }[] = [];
   private readonly replies: { resolve: (l: ServerLine) => void; reject: (e: Error) => void }[] = [];
   private readonly output: { stderr: () => string };
   private exited = false;
@@ -180,17 +191,28 @@ export class S7CommPlusPeerServer {
         first = false;
         return msg.event === 'listening' ? onListening(msg) : onFail(new Error(`s7commplus server.py: ${String(msg.message ?? line)}`));
       }
-      if (msg.event === 'write') {
-        const w: PeerWrite = {
-          db: msg.db as number | null,
-          offset: msg.offset as number | null,
-          size: msg.size as number | null,
-          data: Buffer.from(msg.data as string, 'hex'),
-          ok: msg.ok as boolean,
-        };
-        this.writes.push(w);
-        const i = this.waiters.findIndex((x) => x.match(w));
-        if (i >= 0) this.waiters.splice(i, 1)[0].resolve(w);
+      if (EVENTS.has(msg.event)) {
+        let e: PeerEvent;
+        if (msg.event === 'write') {
+          const w: PeerWrite = {
+            db: msg.db as number | null,
+            offset: msg.offset as number | null,
+            size: msg.size as number | null,
+            data: Buffer.from(msg.data as string, 'hex'),
+            ok: msg.ok as boolean,
+          };
+          this.writes.push(w);
+          e = { event: 'write', ...w };
+        } else {
+          e = msg as unknown as PeerEvent;
+        }
+        this.events.push(e);
+        for (let i = 0; i < this.waiters.length; i++) {
+          if (this.waiters[i]!.match(e)) {
+            this.waiters.splice(i, 1)[0]!.resolve(e);
+            break;
+          }
+        }
         return;
       }
       const reply = this.replies.shift();
@@ -204,24 +226,55 @@ export class S7CommPlusPeerServer {
     });
   }
 
-  /** The first write that satisfies `match` (one already received counts), or rejects after `ms`. */
-  waitForWrite(match: (w: PeerWrite) => boolean = () => true, ms = 10_000): Promise<PeerWrite> {
-    const done = this.writes.find(match);
-    if (done) return Promise.resolve(done);
+  /** The first event that satisfies `match` (one already reported counts), or rejects after `ms`. */
+  waitForEvent<E extends PeerEvent = PeerEvent>(match: (e: PeerEvent) => boolean, ms = 10_000, what = 'matching event'): Promise<E> {
+    const done = this.events.find(match);
+    if (done) return Promise.resolve(done as E);
     return new Promise((resolve, reject) => {
       const entry = {
         match,
-        resolve: (w: PeerWrite) => {
+        resolve: (e: PeerEvent) => {
           clearTimeout(timer);
-          resolve(w);
+          resolve(e as E);
         },
       };
       const timer = setTimeout(() => {
         this.waiters.splice(this.waiters.indexOf(entry), 1);
-        reject(new Error(`no matching write reached the s7commplus server within ${ms} ms (got ${this.writes.length})`));
+        reject(new Error(`no ${what} from the s7commplus server within ${ms} ms (${this.events.length} events so far)`));
       }, ms);
       this.waiters.push(entry);
     });
+  }
+
+  /** The first write that satisfies `match` (one already received counts), or rejects after `ms`. */
+  async waitForWrite(match: (w: PeerWrite) => boolean = () => true, ms = 10_000): Promise<PeerWrite> {
+    const e = await this.waitForEvent((x) => x.event === 'write' && match(x), ms, 'matching write');
+    const { event: _event, ...w } = e as { event: 'write' } & PeerWrite;
+    return w;
+  }
+
+  /** Resolves once every client connection the server accepted has closed its socket; rejects after `ms`. */
+  async waitForNoClients(ms = 10_000): Promise<void> {
+    const deadline = Date.now() + ms;
+    for (;;) {
+      const open = this.openClients();
+      if (open.length === 0) return;
+      await this.waitForEvent(
+        (e) => e.event === 'disconnected' && e.peer === open[0],
+        Math.max(1, deadline - Date.now()),
+        `close of ${open[0]}`,
+      );
+    }
+  }
+
+  /** The peers ("host:port") connected now. */
+  openClients(): string[] {
+    const open = new Set<string>();
+    for (const e of this.events) {
+      if (e.event === 'connected') open.add(e.peer);
+      else if (e.event === 'disconnected') open.delete(e.peer);
+    }
+    return [...open];
   }
 
   private command(cmd: object, ms = 10_000): Promise<ServerLine> {

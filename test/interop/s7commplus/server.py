@@ -29,8 +29,14 @@ stdout, one JSON object a line:
   first  {"event": "listening", "host", "port", "tls", "version",
           "fingerprint": SHA-256 of the DER certificate (hex) or null,
           "cert": path of the certificate PEM or null}
-  then   {"event": "write", "db", "offset", "size", "data": hex, "ok": bool}
-         for each DB item a client writes (ok false: refused, nothing written)
+  then, as they happen:
+         {"event": "connected", "peer": "host:port"} and {"event": "disconnected",
+          "peer"} for each client connection (disconnected once its socket is closed),
+         {"event": "request", "peer", "function": the function code, "bytes": the
+          frame's length from its header to its trailer, after TLS} for each request,
+         {"event": "deleteObject", "peer", "session"} for each DeleteObject (a clean close),
+         {"event": "write", "db", "offset", "size", "data": hex, "ok": bool}
+          for each DB item a client writes (ok false: refused, nothing written),
          and one reply per command.
 stdin, one JSON command a line:
   {"cmd": "cpu", "state": "RUN" | "STOP"}      -> {"event": "cpu", "state"}
@@ -47,6 +53,7 @@ import ipaddress
 import json
 import os
 import ssl
+import struct
 import sys
 import threading
 
@@ -54,6 +61,7 @@ from s7commplus import CPUState, Server
 from s7commplus.protocol import ProtocolVersion
 
 _out_lock = threading.Lock()
+_client = threading.local()
 
 
 def emit(obj):
@@ -64,7 +72,25 @@ def emit(obj):
 
 
 class ReportingServer(Server):
-    """The emulator, reporting every DB item write a client sends it."""
+    """The emulator, reporting connections, requests, DeleteObjects and DB item writes."""
+
+    def _handle_client(self, client_sock, address):
+        peer = f"{address[0]}:{address[1]}"
+        _client.peer = peer  # each client has its own thread
+        emit({"event": "connected", "peer": peer})
+        try:
+            super()._handle_client(client_sock, address)
+        finally:
+            emit({"event": "disconnected", "peer": peer})
+
+    def _process_request(self, data, session_id, integrity_id_read=0, integrity_id_write=0):
+        function = struct.unpack_from(">H", data, 7)[0] if len(data) >= 9 else None
+        emit({"event": "request", "peer": getattr(_client, "peer", None), "function": function, "bytes": len(data)})
+        return super()._process_request(data, session_id, integrity_id_read, integrity_id_write)
+
+    def _handle_delete_object(self, seq_num, session_id):
+        emit({"event": "deleteObject", "peer": getattr(_client, "peer", None), "session": session_id})
+        return super()._handle_delete_object(seq_num, session_id)
 
     def _write_item(self, item, data):
         ok = super()._write_item(item, data)
