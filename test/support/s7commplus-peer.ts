@@ -395,6 +395,7 @@ export type PeerOp =
   | { op: 'read_tags'; names: readonly string[] }
   | { op: 'write_tag'; name: string; value: string }
   | { op: 'write_tags'; values: Readonly<Record<string, string>> }
+  | { op: 'write_values'; values: Readonly<Record<string, unknown>> }
   | { op: 'db_read'; db: number; offset: number; size: number }
   | { op: 'db_write'; db: number; offset: number; data: string }
   | { op: 'subscribe'; items: readonly string[]; cycleMs?: number }

@@ -29,9 +29,12 @@ Operations ({"op": NAME, ...}):
   list_datablocks  -> [{name, number, rid, ...}]
   browse           -> the client's browse(): [{name, access_sequence, data_type,
                    offsets...}] (bytes as hex)
-  read_tags        names: [...] -> [{name, ok, value (hex), type, error}]
+  read_tags        names: [...] -> [{name, ok, value (hex), decoded (the package's
+                   own decoding: number, bool, text; dates and times as text), type, error}]
   write_tag        name, value (hex) -> null
   write_tags       values: {name: hex} -> [{name, ok, error}]
+  write_values     values: {name: a JSON value}, encoded by the package for the
+                   tag's type -> [{name, ok, error}]
   db_read          db, offset, size -> hex
   db_write         db, offset, data (hex) -> null
   get_cpu_state    -> "RUN" | "STOP" | "UNKNOWN"
@@ -69,6 +72,16 @@ def hexify(value):
     if value is None or isinstance(value, (bool, int, float, str)):
         return value
     return str(value)
+
+
+def decoded(tag, raw):
+    """The package's decoding of a tag's bytes, JSON-friendly; None where it has none."""
+    if raw is None:
+        return None
+    try:
+        return hexify(tag.decode_value(raw))
+    except Exception:
+        return None
 
 
 def error_of(e):
@@ -123,11 +136,16 @@ class Runner:
                 "name": r.tag.name,
                 "ok": r.error is None,
                 "value": r.value.hex() if r.value is not None else None,
+                "decoded": decoded(r.tag, r.value),
                 "type": getattr(r.tag.softdatatype, "name", str(r.tag.softdatatype)),
                 "error": error_of(r.error) if r.error is not None else None,
             }
             for r in results
         ]
+
+    def op_write_values(self, op):
+        values = {name: self.client.resolve_tag(name).encode_value(v) for name, v in op["values"].items()}
+        return self.op_write_tags({"values": {name: raw.hex() for name, raw in values.items()}})
 
     def op_write_tag(self, op):
         self.client.write_tag(op["name"], bytes.fromhex(op["value"]))
