@@ -119,7 +119,7 @@ describe('architecture of lib/', () => {
     expect(main).to.include.members(['lib/cli/io.ts', 'lib/cli/args.ts', 'lib/cli/demo.ts', 'lib/connect.ts']);
     const server = GRAPH.get('lib/s7/server/server.ts')!;
     expect(server.find((e) => e.to === 'lib/s7/server/profiles.ts' && !e.typeOnly)).to.not.equal(undefined);
-    expect(GRAPH.get('lib/s7/codec/tpkt.ts')!.find((e) => e.to === 'lib/link/framer.ts')?.typeOnly).to.equal(true);
+    expect(GRAPH.get('lib/iso/tpkt.ts')!.find((e) => e.to === 'lib/link/framer.ts')?.typeOnly).to.equal(true);
     expect(GRAPH.size).to.be.greaterThan(50);
   });
 

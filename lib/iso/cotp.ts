@@ -1,6 +1,6 @@
 /** COTP (ISO 8073 class 0, as used by RFC 1006): CR, CC, DR, DC, DT, ER TPDUs. */
-import { ProtocolError } from '../../errors';
-import { CotpParam, CotpType, TPKT_HEADER } from '../constants';
+import { ProtocolError } from '../errors';
+import { CotpParam, CotpType, TPKT_HEADER } from './constants';
 import { assertTpkt, tpktFrame } from './tpkt';
 
 export interface CotpConnection {
