@@ -25,7 +25,7 @@ export type CotpParamOrder = 'tsap-first' | 'size-first';
  * calls the TSAP "SIMATIC-ROOT-HMI", 16 ASCII bytes: s7commplus (MIT),
  * s7commplus/protocol.py, S7COMMPLUS_REMOTE_TSAP).
  */
-type CotpTsap = number | Uint8Array;
+export type CotpTsap = number | Uint8Array;
 
 /** What a connection request carries: a CotpConnection whose TSAPs may also be byte strings. */
 export interface CotpRequest extends Omit<CotpConnection, 'destinationRef' | 'callingTsap' | 'calledTsap'> {
