@@ -61,7 +61,7 @@ function describeRefusal(r: IsoRefusal): string {
 }
 
 /** A COTP connection request: the driver's TSAPs and TPDU size. */
-interface IsoConnectionRequest {
+export interface IsoConnectionRequest {
   /** Names the peer in errors ("s7://10.0.0.2:102"). */
   name: string;
   callingTsap: CotpTsap;
