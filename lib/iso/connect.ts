@@ -76,7 +76,7 @@ export interface IsoConnectionRequest {
 }
 
 /** What the peer confirmed. */
-interface IsoConfirm {
+export interface IsoConfirm {
   /** The decoded CC: the peer's reference (`sourceRef`), the TSAPs and TPDU size code as it echoed them (-1, 0 when absent). */
   confirm: CotpConnection;
   /** The TPDU size in bytes the CC names (0 when it names none or an invalid code). */
@@ -88,7 +88,7 @@ interface IsoConfirm {
  * the peer confirmed; rejects with an IsoConnectError for any other answer, or
  * ABORTED (frames' own error) when the signal aborts. Leaves the socket open.
  */
-async function requestIsoConnection(socket: net.Socket, frames: IsoFrames, r: IsoConnectionRequest): Promise<IsoConfirm> {
+export async function requestIsoConnection(socket: net.Socket, frames: IsoFrames, r: IsoConnectionRequest): Promise<IsoConfirm> {
   socket.write(
     encodeConnectionRequest({
       sourceRef: r.sourceRef ?? 0x0001,

@@ -89,7 +89,7 @@ async function requestConnection(e: S7Endpoint, o: OpenOptions): Promise<IsoConn
 }
 
 /** How a PLC answered setup communication: what it granted, or what came instead. */
-type SetupAnswer =
+export type SetupAnswer =
   | { kind: 'granted'; pduSize: number; maxJobs: number }
   /** An ack with a header error: class and code (headerError puts them in words). */
   | { kind: 'refused'; errorClass: number; errorCode: number }
@@ -105,7 +105,7 @@ type SetupAnswer =
  * `ms`: how long to wait for the answer (none: until the signal of `frames`).
  * Throws ProtocolError for an answer that is not an S7 PDU, ABORTED on abort.
  */
-async function exchangeSetup(socket: net.Socket, frames: IsoFrames, pduSize: number, ms?: number): Promise<SetupAnswer> {
+export async function exchangeSetup(socket: net.Socket, frames: IsoFrames, pduSize: number, ms?: number): Promise<SetupAnswer> {
   socket.write(encodeSetupCommunication(0, { maxAmqCalling: REQUESTED_AMQ, maxAmqCalled: REQUESTED_AMQ, pduSize }));
   const answer = await frames.next(ms);
   if (answer.kind !== 'frame') return answer;
