@@ -674,7 +674,7 @@ describe('symbols layout: golden tables from source files', () => {
       if (process.env.UPDATE_GOLDEN === '1') fs.writeFileSync(expected, goldenText(table));
       expect(goldenText(table)).to.equal(fs.readFileSync(expected, 'utf8'));
       for (const e of table.entries) {
-        const tag = parseAddress(e.address);
+        const tag = parseAddress(e.address!);
         expect([tag.dbNumber, tag.byteOffset, tag.bitOffset, tag.byteLength], e.name).to.deep.equal([e.db, e.byte, e.bit ?? 0, e.size]);
         if (e.kind === 'elementary') expect([tag.type, tag.stringLength], e.name).to.deep.equal([e.dataType, e.stringLength]);
         expect(table.lookup(e.name), e.name).to.equal(e);

@@ -76,14 +76,14 @@ export function symbolsFlag(args: ParsedArgs, flag: 'symbols' | 'source'): Symbo
   return loadSymbols(files, args);
 }
 
-/** One row of `plcwire symbols --json`. */
+/** One row of `plcwire symbols --json`: byte, bit and address null for a member of an optimized block. */
 interface SymbolRow {
   name: string;
   type: string;
   db: number | null;
-  byte: number;
+  byte: number | null;
   bit: number | null;
-  address: string;
+  address: string | null;
 }
 
 function rowOf(e: SymbolEntry): SymbolRow {
@@ -119,7 +119,13 @@ export function symbols(rest: string[], args: ParsedArgs, io: CliIo): number {
     const lines = [fields.join(','), ...rows.map((r) => fields.map((f) => csvField(r[f] === null ? '' : String(r[f]))).join(','))];
     io.stdout.write(lines.map((l) => `${l}\r\n`).join(''));
   } else {
-    const cells = rows.map((r) => [r.name, r.address, r.type, String(r.byte), r.bit === null ? '' : String(r.bit)]);
+    const cells = rows.map((r) => [
+      r.name,
+      r.address ?? '',
+      r.type,
+      r.byte === null ? '' : String(r.byte),
+      r.bit === null ? '' : String(r.bit),
+    ]);
     for (const line of alignedTable([['name', 'address', 'type', 'byte', 'bit'], ...cells])) io.stdout.write(`${line}\n`);
   }
   return EXIT.OK;
