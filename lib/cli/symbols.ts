@@ -1,6 +1,7 @@
 /**
  * Tags by name on the command line: `plcwire symbols` lists what DB sources
- * and symbol tables compile to (name, address, type, byte, bit); read, write
+ * and symbol tables compile to (name, address, type, byte, bit; the members
+ * of an optimized block without byte, bit and address); read, write
  * and watch take them with --symbols, `serve` builds its data blocks from them
  * with --source; --db numbers the blocks of TIA sources, which do not carry
  * their numbers.
@@ -111,7 +112,14 @@ export function symbols(rest: string[], args: ParsedArgs, io: CliIo): number {
   if (rest.length === 0)
     throw new UsageError('symbols needs one or more DB sources or symbol tables (.db, .udt, .sdf, .asc, .seq, .xlsx, .csv)');
   if (args.flags.has('json') && args.flags.has('csv')) throw new UsageError('give --json or --csv, not both');
-  const rows = loadSymbols(rest, args).entries.map(rowOf);
+  const table = loadSymbols(rest, args);
+  // Said once per block, on stderr: stdout stays the table a script reads.
+  for (const b of table.blocks.filter((block) => block.optimized))
+    io.stderr.write(
+      `note: ${blockName(b.name, b.db)} has optimized access: its members have no byte, bit or address; ` +
+        'they are read and written by name over s7plus:// (S7CommPlus), not over s7:// or fetchwrite://\n',
+    );
+  const rows = table.entries.map(rowOf);
   if (args.flags.has('json')) {
     io.stdout.write(`${toJson(rows)}\n`);
   } else if (args.flags.has('csv')) {
