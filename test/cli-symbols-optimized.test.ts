@@ -4,11 +4,12 @@
  * child processes. Fixture: test/fixtures/symbols/optimized/.
  */
 import { expect } from 'chai';
-import { spawn } from 'node:child_process';
+import { spawn, type ChildProcess } from 'node:child_process';
 import { once } from 'node:events';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { EXIT } from '../lib/cli/io';
+import { until } from './support/wait';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
 import { compileSymbols } from '../lib/symbols';
 
@@ -16,15 +17,22 @@ const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
 const FIXTURES = path.resolve(__dirname, '../../test/fixtures/symbols/optimized');
 const NUMBERS = ['--db', 'Tank=1', '--db', 'Recipe=2', '--db', 'Line=3'];
 
-/** The real bin in a child process in the fixtures' folder; exit code and output. */
-async function done(args: string[]): Promise<{ code: number; out: string; err: string }> {
+/** The real bin in a child process in the fixtures' folder: the child, its output so far, its exit code. */
+function run(args: string[]): { child: ChildProcess; output: () => { out: string; err: string }; exit: Promise<number> } {
   const child = spawn(process.execPath, [BIN, ...args], { cwd: FIXTURES, stdio: ['ignore', 'pipe', 'pipe'] });
   let out = '';
   let err = '';
-  child.stdout.on('data', (d: Buffer) => (out += d.toString()));
-  child.stderr.on('data', (d: Buffer) => (err += d.toString()));
-  const [code] = (await once(child, 'exit')) as [number];
-  return { code, out, err };
+  child.stdout!.on('data', (d: Buffer) => (out += d.toString()));
+  child.stderr!.on('data', (d: Buffer) => (err += d.toString()));
+  const exit = once(child, 'exit').then(([code]) => code as number);
+  return { child, output: () => ({ out, err }), exit };
+}
+
+/** Runs to the end: exit code and output. */
+async function done(args: string[]): Promise<{ code: number; out: string; err: string }> {
+  const r = run(args);
+  const code = await r.exit;
+  return { code, ...r.output() };
 }
 
 /** The note `symbols` writes on stderr for an optimized block. */
@@ -101,6 +109,23 @@ describe('plcwire symbols: optimized blocks (the installed binary)', function ()
       expect(requests.filter((q) => q.kind === 'read' || q.kind === 'write')).to.deep.equal([]);
     } finally {
       await server.close();
+    }
+  });
+
+  it('serve s7 --source says it does not serve an optimized block by address, and its try: line names a member it serves', async () => {
+    const srv = run(['serve', 's7', '--port', '0', '--source', 'tia-optimized.db', ...NUMBERS]);
+    try {
+      await until(() => /^try: /m.test(srv.output().out), 10000, 'serve prints how to reach it');
+      const lines = srv.output().out.split('\n');
+      expect(lines.filter((l) => /serving DB/.test(l))).to.deep.equal([
+        'not serving DB2 "Recipe" by address: it has optimized access, its members are read by name over s7plus:// (tia-optimized.db)',
+        'not serving DB3 "Line" by address: it has optimized access, its members are read by name over s7plus:// (tia-optimized.db)',
+        'serving DB1 "Tank" of 10 bytes (tia-optimized.db)',
+      ]);
+      expect(lines.find((l) => l.startsWith('try: '))).to.match(/ '"Tank"\.Level'$/);
+    } finally {
+      srv.child.kill('SIGINT');
+      expect(await srv.exit).to.equal(EXIT.OK);
     }
   });
 });
