@@ -49,9 +49,13 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
   return EXIT.OK;
 }
 
-/** The read command for the first elementary member of the sources, by name: `--symbols Tank.db --db Tank=1 '"Tank".Level'`. */
+/**
+ * The read command for the first elementary member of the sources that a
+ * read by address reaches (not one of an optimized block), by name:
+ * `--symbols Tank.db --db Tank=1 '"Tank".Level'`.
+ */
 function tryByName(table: SymbolTable, args: ParsedArgs): string {
-  const first = table.entries.find((e) => e.kind === 'elementary' && e.db !== null);
+  const first = table.entries.find((e) => e.kind === 'elementary' && e.db !== null && e.address !== null);
   const files = listFlag(args, 'source').map((f) => `--symbols ${shellWord(f)}`);
   const dbs = listFlag(args, 'db').map((d) => `--db ${shellWord(d)}`);
   return [...files, ...dbs, ...(first ? [shellWord(first.name)] : [])].join(' ');

@@ -36,7 +36,15 @@ export interface Served {
   close(): Promise<void>;
 }
 
-/** The data blocks built from --source, one line each: what a client's block info will report. */
+/**
+ * The data blocks built from --source, one line each: what a client's block
+ * info will report. A block with optimized access has no standard-access
+ * image to serve by address (lib/symbols/memory.ts): its line says so.
+ */
 export function servedBlocks(table: SymbolTable): string[] {
-  return table.blocks.map((b) => `serving DB${b.db} "${b.name}" of ${b.length} bytes (${b.file})`);
+  return table.blocks.map((b) =>
+    b.length === null
+      ? `not serving DB${b.db} "${b.name}" by address: it has optimized access, its members are read by name over s7plus:// (${b.file})`
+      : `serving DB${b.db} "${b.name}" of ${b.length} bytes (${b.file})`,
+  );
 }
