@@ -9,9 +9,31 @@
 import { expect } from 'chai';
 import fc from 'fast-check';
 import { PlcError, ProtocolError } from '../lib/errors';
-import { DataType, PValueFlag } from '../lib/s7plus/constants';
+import fs from 'node:fs';
+import path from 'node:path';
+import {
+  DataType,
+  ElementId,
+  FunctionCode,
+  Ids,
+  Opcode,
+  ProtocolVersion,
+  PValueFlag,
+  READ_FUNCTIONS,
+  ServiceResult,
+  SoftDataType,
+} from '../lib/s7plus/constants';
 import { encodeFrames, S7pFrameReader } from '../lib/s7plus/codec/frame';
-import { decodePValue, encodePValue, skipPValue, type PValue } from '../lib/s7plus/codec/pvalue';
+import {
+  decodePValue,
+  encodePValue,
+  skipPValue,
+  type BlobValue,
+  type PValue,
+  type SparseEntry,
+  type StructMember,
+  type StructValue,
+} from '../lib/s7plus/codec/pvalue';
 import {
   decodeSVlq32,
   decodeSVlq64,
@@ -310,6 +332,21 @@ describe('S7CommPlus codec', () => {
       });
     }
 
+    it('encodes a struct built from its parts: a blob member, a sparse-array member', () => {
+      const blob: BlobValue = { rootId: 1, data: hex('ff00') };
+      const sparse: SparseEntry[] = [{ key: 3, value: true }];
+      const members: StructMember[] = [
+        { key: 10, value: { flags: 0, type: DataType.Blob, value: blob } },
+        { key: 11, value: { flags: PValueFlag.SparseArray, type: DataType.Bool, value: sparse } },
+      ];
+      const struct: StructValue = { id: 0x1234, members };
+      const bytes = encodePValue({ flags: 0, type: DataType.Struct, value: struct });
+      expect(bytes.toString('hex')).to.equal(
+        '0017' + '00001234' + '0a' + '0014' + '01' + '02' + 'ff00' + '0b' + '4001' + '03' + '01' + '00' + '00',
+      );
+      expect(decodePValue(bytes, 0).value.value).to.deep.equal(struct);
+    });
+
     it('keeps flag bits it does not know', () => {
       const p = decodePValue(hex('0104 05'), 0).value;
       expect(p).to.deep.equal({ flags: 1, type: DataType.UDInt, value: 5 });
@@ -368,5 +405,62 @@ describe('S7CommPlus codec', () => {
         { numRuns: 5000 },
       );
     });
+  });
+});
+
+describe('S7CommPlus constants against s7commplus protocol.py (test/fixtures/s7plus/s7commplus-tables.json)', () => {
+  const tables = (
+    JSON.parse(fs.readFileSync(path.join(__dirname, '..', '..', 'test', 'fixtures', 's7plus', 's7commplus-tables.json'), 'utf8')) as {
+      tables: Record<string, Record<string, number> | number[]>;
+    }
+  ).tables;
+  const norm = (name: string) => name.replace(/_/g, '').toLowerCase();
+  const byName = (ours: Record<string, number>) => new Map(Object.entries(ours).map(([k, v]) => [norm(k), v]));
+
+  for (const [theirs, ours] of [
+    ['Opcode', Opcode],
+    ['FunctionCode', FunctionCode],
+    ['DataType', DataType],
+    ['SoftDataType', SoftDataType],
+    ['ProtocolVersion', ProtocolVersion],
+  ] as const) {
+    it(`${theirs}: every name of theirs is ours, with the same value`, () => {
+      const mine = byName(ours);
+      for (const [name, value] of Object.entries(tables[theirs] as Record<string, number>))
+        expect(mine.get(norm(name)), name).to.equal(value);
+      expect(mine.size).to.equal(Object.keys(tables[theirs]!).length);
+    });
+  }
+
+  it('ElementID: the same ids', () => {
+    expect(Object.values(ElementId).sort()).to.deep.equal(Object.values(tables.ElementID as Record<string, number>).sort());
+  });
+
+  it('Ids: every id we share by name has their value (at least 60 of them)', () => {
+    const theirs = new Map(
+      ['ObjectId', 'Ids', 'LegitimationId'].flatMap((t) =>
+        Object.entries(tables[t] as Record<string, number>).map(([k, v]) => [norm(k), v] as const),
+      ),
+    );
+    let shared = 0;
+    for (const [name, value] of Object.entries(Ids)) {
+      const v = theirs.get(norm(name));
+      if (v === undefined) continue;
+      shared++;
+      expect(value, name).to.equal(v);
+    }
+    expect(shared).to.be.at.least(60);
+  });
+
+  it('ServiceResult: each code of ours is one of theirs (but -12, from their server.py)', () => {
+    const theirs = new Set(Object.values(tables.ServiceResult as Record<string, number>));
+    for (const [name, v] of Object.entries(ServiceResult)) if (name !== 'NoSuchObject') expect(theirs.has(v), name).to.equal(true);
+  });
+
+  it('READ_FUNCTIONS: the functions that count on the read integrity id', () => {
+    expect([...READ_FUNCTIONS].sort()).to.deep.equal([...(tables.READ_FUNCTION_CODES as number[])].sort());
+    // The golden frames: explores count 4, 33, 34 on the read counter; the subscription create 0x12 and the write 6 on the write one.
+    expect(READ_FUNCTIONS.has(FunctionCode.Explore)).to.equal(true);
+    expect(READ_FUNCTIONS.has(FunctionCode.CreateObject) || READ_FUNCTIONS.has(FunctionCode.SetVarSubStreamed)).to.equal(false);
   });
 });

@@ -11,7 +11,7 @@ import { expect } from 'chai';
 import fs from 'node:fs';
 import path from 'node:path';
 import { ProtocolError } from '../lib/errors';
-import { DataType, FunctionCode, Ids, serviceResultCode } from '../lib/s7plus/constants';
+import { DataType, FunctionCode, Ids, ITEM_ERROR_UNRESOLVED, serviceResultCode } from '../lib/s7plus/constants';
 import {
   decodeExploreRequest,
   decodeExploreResponse,
@@ -23,7 +23,7 @@ import {
 } from '../lib/s7plus/codec/explore';
 import { encodeFrames, S7pFrameReader } from '../lib/s7plus/codec/frame';
 import { peekMessage } from '../lib/s7plus/codec/header';
-import { attributeOf, childrenOf, decodeObject, encodeObject } from '../lib/s7plus/codec/object';
+import { attributeOf, childrenOf, decodeObject, encodeObject, type PMember } from '../lib/s7plus/codec/object';
 import {
   decodeCreateObjectRequest,
   decodeCreateObjectResponse,
@@ -56,6 +56,7 @@ import {
   resolveClassicBlob,
   sessionSetupRequest,
   writeRequest,
+  type SetTargets,
 } from '../lib/s7plus/codec/variables';
 
 const FIXTURES = path.join(__dirname, '..', '..', 'test', 'fixtures', 's7plus');
@@ -146,7 +147,8 @@ describe('S7CommPlus messages', () => {
       expect(encodeFrames(2, encodeSetMultiVariablesRequest(req)).toString('hex')).to.equal(frame.toString('hex'));
       const back = decodeSetMultiVariablesRequest(dataOf(frame), V1);
       expect(isSessionSetup(back.body)).to.equal(true);
-      expect(back.body.targets).to.deep.equal({ kind: 'attributes', inObjectId: 0x3a1, ids: [306] });
+      const targets: SetTargets = { kind: 'attributes', inObjectId: 0x3a1, ids: [Ids.ServerSessionVersion] };
+      expect(back.body.targets).to.deep.equal(targets);
     });
   });
 
@@ -232,7 +234,8 @@ describe('S7CommPlus messages', () => {
       const { value, length } = decodeObject(Buffer.concat([bytes, hex('ff')]));
       expect(length).to.equal(bytes.length);
       expect(value.members.map((m) => m.kind)).to.deep.equal(['relation', 'list', 'list', 'object']);
-      expect(value.members[0]).to.deep.equal({ kind: 'relation', id: 2588, target: 8 });
+      const relation: PMember = { kind: 'relation', id: 2588, target: 8 };
+      expect(value.members[0]).to.deep.equal(relation);
       expect(encodeObject(value).equals(bytes)).to.equal(true);
     });
 
@@ -259,7 +262,7 @@ describe('S7CommPlus messages', () => {
     it("decodes s7commplus's server's read answer: item 1 a blob, item 2 error 0x8104", () => {
       const res = decodeGetMultiVariablesResponse(PY.read_response!, V1);
       expect([...res.body.values]).to.deep.equal([[1, blobValue(hex('01020304'))]]);
-      expect([...res.body.errors]).to.deep.equal([[2, 0x8104n]]);
+      expect([...res.body.errors]).to.deep.equal([[2, ITEM_ERROR_UNRESOLVED]]);
       const ours = encodeGetMultiVariablesResponse(res);
       // s7commplus's V1 server adds a zero legacy integrity id; ours sends one only where the session has them.
       expect(Buffer.concat([ours, hex('00')]).equals(PY.read_response!)).to.equal(true);

@@ -128,7 +128,6 @@ export const DataType = {
   Struct: 0x17,
   S7String: 0x19,
 } as const;
-export type DataTypeCode = (typeof DataType)[keyof typeof DataType];
 
 /**
  * The flags byte in front of the datatype of a PValue. Array: count, then the
@@ -344,12 +343,3 @@ export const NotificationRecord = {
   Value: 0x92,
   ValueVlq: 0x9b,
 } as const;
-
-/** The COTP called TSAPs of the client roles. s7commplus (MIT), protocol.py. */
-export const RemoteTsap = {
-  hmi: 'SIMATIC-ROOT-HMI',
-  es: 'SIMATIC-ROOT-ES',
-  pg: 'SIMATIC-ROOT-PG',
-} as const;
-/** The calling TSAP of an S7CommPlus client. s7commplus (MIT), protocol.py S7COMMPLUS_LOCAL_TSAP. */
-export const LOCAL_TSAP = 0x0600;

@@ -13,9 +13,9 @@
 import { ProtocolError } from '../../errors';
 import { ProtocolVersion, S7P_PROTOCOL_ID } from '../constants';
 
-export const FRAME_HEADER = 4;
+const FRAME_HEADER = 4;
 /** The most data one PDU can announce. */
-export const MAX_PDU_DATA = 0xffff;
+const MAX_PDU_DATA = 0xffff;
 
 /** One message: its frame version and the data of its PDUs joined. */
 export interface S7pMessage {
@@ -53,6 +53,11 @@ const EMPTY = Buffer.alloc(0);
 /** Joins PDUs into messages; bytes may arrive cut anywhere. */
 export class S7pFrameReader {
   private pending: Buffer = EMPTY;
+  /** Chunks not yet joined to `pending`: they are joined only once the frame waited for is complete. */
+  private later: Buffer[] = [];
+  private laterBytes = 0;
+  /** The bytes `pending` must hold before the next frame can be cut. */
+  private need = FRAME_HEADER;
   private parts: Buffer[] = [];
   private size = 0;
   private version = -1;
@@ -66,11 +71,13 @@ export class S7pFrameReader {
 
   /** Bytes held: buffered input and the PDUs of an unfinished message. */
   get buffered(): number {
-    return this.pending.length + this.size;
+    return this.pending.length + this.laterBytes + this.size;
   }
 
   private fail(message: string): never {
     this.pending = EMPTY;
+    this.later = [];
+    this.laterBytes = 0;
     this.parts = [];
     this.size = 0;
     this.version = -1;
@@ -78,14 +85,25 @@ export class S7pFrameReader {
   }
 
   push(chunk: Buffer): S7pMessage[] {
-    let buf = this.pending.length === 0 ? chunk : Buffer.concat([this.pending, chunk]);
+    if (this.pending.length + this.laterBytes + chunk.length < this.need) {
+      this.later.push(Buffer.from(chunk));
+      this.laterBytes += chunk.length;
+      return [];
+    }
+    let buf = this.pending.length === 0 && this.later.length === 0 ? chunk : Buffer.concat([this.pending, ...this.later, chunk]);
+    this.later = [];
+    this.laterBytes = 0;
+    this.need = FRAME_HEADER;
     const out: S7pMessage[] = [];
     while (buf.length >= FRAME_HEADER) {
       if (buf[0] !== S7P_PROTOCOL_ID) this.fail(`frame starts with 0x${buf[0]!.toString(16).padStart(2, '0')}, not 0x72`);
       const version = buf[1]!;
       const length = buf.readUInt16BE(2);
       if (version === ProtocolVersion.SystemEvent) {
-        if (buf.length < FRAME_HEADER + length) break;
+        if (buf.length < FRAME_HEADER + length) {
+          this.need = FRAME_HEADER + length;
+          break;
+        }
         out.push({ version, data: Buffer.from(buf.subarray(FRAME_HEADER, FRAME_HEADER + length)) });
         buf = buf.subarray(FRAME_HEADER + length);
         continue;
@@ -103,7 +121,10 @@ export class S7pFrameReader {
       }
       if (this.size + length > this.maxMessage) this.fail(`message longer than ${this.maxMessage} bytes`);
       if (this.parts.length >= this.maxPdus) this.fail(`message of more than ${this.maxPdus} PDUs`);
-      if (buf.length < FRAME_HEADER + length) break;
+      if (buf.length < FRAME_HEADER + length) {
+        this.need = FRAME_HEADER + length;
+        break;
+      }
       this.parts.push(Buffer.from(buf.subarray(FRAME_HEADER, FRAME_HEADER + length)));
       this.size += length;
       this.version = version;

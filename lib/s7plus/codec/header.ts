@@ -19,8 +19,7 @@ import { DataType, Ids, Opcode } from '../constants';
 import { Reader, Writer } from './bytes';
 import { readPValue, scalar, writePValue, type PValue } from './pvalue';
 
-export const REQUEST_HEADER = 14;
-export const RESPONSE_HEADER = 10;
+const RESPONSE_HEADER = 10;
 
 export interface RequestHeader {
   functionCode: number;
