@@ -308,6 +308,22 @@ describe('S7CommPlus messages', () => {
     });
   });
 
+  it("reads the integrity id s7commplus's V2 server appends after each answer's body (read 5, write 9)", () => {
+    const read = decodeGetMultiVariablesResponse(PY.read_response_v2!, V2);
+    expect(read.integrityId).to.equal(5);
+    expect(read.body.values.get(1)).to.deep.equal(blobValue(hex('01020304')));
+    expect(encodeGetMultiVariablesResponse(read).equals(PY.read_response_v2!)).to.equal(true);
+    const write = decodeSetMultiVariablesResponse(PY.write_response_v2!, V2);
+    expect(write.integrityId).to.equal(9);
+    expect(encodeSetMultiVariablesResponse(write).equals(PY.write_response_v2!)).to.equal(true);
+    const explore = decodeExploreResponse(PY.cpu_state_response_v2!, V2);
+    expect([explore.integrityId, cpuStateOf(explore.body.objects)]).to.deep.equal([5, 'RUN']);
+    expect(encodeExploreResponse(explore).equals(PY.cpu_state_response_v2!)).to.equal(true);
+    const del = decodeDeleteObjectResponse(PY.delete_object_response_v2!, V2);
+    expect(del.integrityId).to.equal(9);
+    expect(encodeDeleteObjectResponse(del).equals(PY.delete_object_response_v2!)).to.equal(true);
+  });
+
   it('the frame reader hands every golden frame (with a trailer added) back whole', () => {
     const reader = new S7pFrameReader();
     const frames = Object.values(GOLDEN);
