@@ -152,6 +152,13 @@ describe('S7CommPlus messages', () => {
     });
   });
 
+  it('writes the session setup of a frame-version-1 session with the V1 qualifier, as s7commplus', () => {
+    const req = sessionSetupRequest(3, 0x3a1, { flags: 0, type: DataType.UDInt, value: 1 }, true);
+    const python =
+      '72020038310000054200000003000003a134000003a1010182320100040100000004e88969001200000000896a001300896b0004000000000000000072020000';
+    expect(encodeFrames(2, encodeSetMultiVariablesRequest(req)).toString('hex')).to.equal(python);
+  });
+
   describe('Explore', () => {
     for (const name of ['explore_device_tree_req', 'explore_asroot_req', 'explore_pair_req']) {
       it(`decodes the golden ${name} and re-encodes it byte for byte`, () => {
@@ -285,6 +292,26 @@ describe('S7CommPlus messages', () => {
       expect(decodeSetMultiVariablesResponse(failed, V2).body.errors.get(1)).to.equal(0x8104n);
     });
 
+    it("encodes and decodes the frame-version-1 ObjectQualifier (fixed KeyQualifier, no end) as s7commplus's V1 read and write", () => {
+      const v1 = { parentRid: 0, compositionAid: 0, keyQualifier: 0, v1: true };
+      const read = { ...readRequest(5, 0x3a1, [classicBlobAddress(1, 0, 4)]) };
+      read.body = { ...read.body, qualifier: v1 };
+      const pyRead = '0000000001070088d0b88001049376030004000004e88969001200000000896a001300896b00040000000000000000';
+      expect(encodeGetMultiVariablesRequest(read).subarray(14).toString('hex')).to.equal(pyRead);
+      expect(
+        decodeGetMultiVariablesRequest(encodeGetMultiVariablesRequest(read), { integrity: false, v1: true }).body.qualifier,
+      ).to.deep.equal(v1);
+      const write = writeRequest(6, 0x3a1, [classicBlobAddress(1, 2, 2)], [blobValue(hex('1234'))]);
+      write.body = { ...write.body, qualifier: v1 };
+      const pyWrite = '0000000001070088d0b880010493760302020100140002123400000004e88969001200000000896a001300896b00040000000000000000';
+      expect(encodeSetMultiVariablesRequest(write).subarray(14).toString('hex')).to.equal(pyWrite);
+      expect(
+        decodeSetMultiVariablesRequest(encodeSetMultiVariablesRequest(write), { integrity: false, v1: true }).body.values,
+      ).to.have.length(1);
+      // Read as the V2 form, the V1 bytes do not fit.
+      expect(() => decodeGetMultiVariablesRequest(encodeGetMultiVariablesRequest(read), V1)).to.throw(ProtocolError);
+    });
+
     it('refuses inconsistent requests and answers with ProtocolError', () => {
       const bad = Buffer.from(PY.read_request!);
       bad[14 + 5] = 0x0d; // field count 13 for 14 fields
@@ -300,6 +327,11 @@ describe('S7CommPlus messages', () => {
         /answer to function 0x054c is function 0x0542/,
       );
       throwsProtocol(() => decodeGetMultiVariablesRequest(PY.read_response!, V1), /expected a request \(0x31\), found opcode 0x32/);
+      // s7commplus's server answers a function it does not serve with function Error (server.py _build_error_response).
+      throwsProtocol(
+        () => decodeGetMultiVariablesResponse(hex('32000004b10000000500 8931 00000000'), V1),
+        /answered function 0x054c with an Error \(function 0x04b1\)/,
+      );
     });
 
     it('peeks opcode, function and sequence to route an answer', () => {

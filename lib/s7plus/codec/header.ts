@@ -15,7 +15,7 @@
  * server.py _process_request; golden frames (the kq/IntegrityId bytes).
  */
 import { ProtocolError } from '../../errors';
-import { DataType, Ids, Opcode } from '../constants';
+import { DataType, FunctionCode, Ids, Opcode } from '../constants';
 import { Reader, Writer } from './bytes';
 import { readPValue, scalar, writePValue, type PValue } from './pvalue';
 
@@ -52,6 +52,8 @@ export interface Response<T> {
 /** Whether the decoders expect an integrity id (a session of frame version 2 or up, after its setup). */
 export interface DecodeOptions {
   integrity: boolean;
+  /** A session of frame version 1: its ObjectQualifiers have the V1 form (see ObjectQualifier). */
+  v1?: boolean;
 }
 
 export function writeRequestHeader(w: Writer, h: RequestHeader): void {
@@ -99,8 +101,13 @@ export function readResponseHeader(r: Reader, fn?: number): ResponseHeader {
   r.u16('reserved');
   const h: ResponseHeader = { functionCode, sequence: r.u16('sequence number'), transportFlags: r.u8('transport flags') };
   if (opcode !== Opcode.Response) h.opcode = opcode;
-  if (fn !== undefined && functionCode !== fn)
+  if (fn !== undefined && functionCode !== fn) {
+    if (functionCode === FunctionCode.Error || functionCode === FunctionCode.Error2)
+      throw new ProtocolError(
+        `S7CommPlus: the PLC answered function ${functionName(fn)} with an Error (function ${functionName(functionCode)})`,
+      );
     throw new ProtocolError(`S7CommPlus: the answer to function ${functionName(fn)} is function ${functionName(functionCode)}`);
+  }
   return h;
 }
 
@@ -142,13 +149,14 @@ export function writeResponseTail(w: Writer, fill: number, integrityId: number |
  * requests: struct id 1256 (UInt32), then ParentRID (RID), CompositionAID
  * (AID) and KeyQualifier (UDInt) as (UVLQ key, PValue), ending at key 0.
  * Source: s7commplus (MIT), codec.py encode_object_qualifier; golden frames
- * (the symbolic write). The frame-version-1 form (a fixed 4-byte KeyQualifier,
- * no end) is not supported.
+ * (the symbolic write). In a session of frame version 1 the KeyQualifier's
+ * value is a fixed UInt32 and no key 0 follows (`v1`; codec.py, protocol_version V1).
  */
 export interface ObjectQualifier {
   parentRid: number;
   compositionAid: number;
   keyQualifier: number;
+  v1?: boolean;
 }
 
 export function writeObjectQualifier(w: Writer, q: ObjectQualifier): void {
@@ -158,19 +166,26 @@ export function writeObjectQualifier(w: Writer, q: ObjectQualifier): void {
     [Ids.CompositionAID, scalar(DataType.AID, q.compositionAid)],
     [Ids.KeyQualifier, scalar(DataType.UDInt, q.keyQualifier)],
   ];
+  if (q.v1) members.pop();
   for (const [key, value] of members) {
     w.uvlq32(key);
     writePValue(w, value);
   }
-  w.uvlq32(0);
+  if (q.v1) w.uvlq32(Ids.KeyQualifier).u8(0).u8(DataType.UDInt).u32(q.keyQualifier);
+  else w.uvlq32(0);
 }
 
-export function readObjectQualifier(r: Reader): ObjectQualifier {
+/** `v1`: the frame-version-1 form, which ends after the KeyQualifier's fixed UInt32. */
+export function readObjectQualifier(r: Reader, v1 = false): ObjectQualifier {
   const at = r.offset;
   const id = r.u32('ObjectQualifier');
   if (id !== Ids.ObjectQualifier) throw new ProtocolError(`S7CommPlus: expected the ObjectQualifier (1256) at offset ${at}, found ${id}`);
   const q: ObjectQualifier = { parentRid: 0, compositionAid: 0, keyQualifier: 0 };
   for (let key = r.uvlq32(); key !== 0; key = r.uvlq32()) {
+    if (v1 && key === Ids.KeyQualifier) {
+      r.bytes(2, 'KeyQualifier type');
+      return { ...q, keyQualifier: r.u32('KeyQualifier'), v1: true };
+    }
     const v = readPValue(r).value;
     const n = typeof v === 'number' ? v : 0;
     if (key === Ids.ParentRID) q.parentRid = n;

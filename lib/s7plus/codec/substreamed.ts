@@ -69,7 +69,7 @@ export function decodeSubStreamedRequest(data: Buffer, opts: DecodeOptions): Req
   const body: SubStreamedRequest = {
     inObjectId: r.u32('InObjectId'),
     address: readPValue(r),
-    qualifier: readObjectQualifier(r),
+    qualifier: readObjectQualifier(r, opts.v1),
     sequenceField: r.u16('sequence field'),
   };
   if (set) body.value = readPValue(r);

@@ -116,7 +116,7 @@ export function decodeGetMultiVariablesRequest(data: Buffer, opts: DecodeOptions
   const header = readRequestHeader(r, FunctionCode.GetMultiVariables);
   const linkId = r.u32('LinkId');
   const addresses = readAddresses(r);
-  const qualifier = readObjectQualifier(r);
+  const qualifier = readObjectQualifier(r, opts.v1);
   const integrityId = readIntegrity(r, opts);
   readFill(r, 4);
   r.done('GetMultiVariables request');
@@ -230,7 +230,7 @@ export function decodeSetMultiVariablesRequest(data: Buffer, opts: DecodeOptions
     values.push(readPValue(r));
   }
   if (values.length !== expected) throw new ProtocolError(`S7CommPlus: ${values.length} values for ${expected} items`);
-  const qualifier = readObjectQualifier(r);
+  const qualifier = readObjectQualifier(r, opts.v1);
   const integrityId = readIntegrity(r, opts);
   readFill(r, 4);
   r.done('SetMultiVariables request');
@@ -252,16 +252,22 @@ export function writeRequest(
 
 /**
  * The session setup: ServerSessionVersion written back to the session, with
- * no integrity id, in a frame of version 2 whatever the session's version.
+ * no integrity id, in a frame of version 2 whatever the session's version
+ * (`v1`: a session of frame version 1, whose qualifier has the V1 form).
  * s7commplus (MIT), connection.py _build_session_setup_frame.
  */
-export function sessionSetupRequest(sequence: number, sessionId: number, serverSessionVersion: PValue): Request<SetMultiVariablesRequest> {
+export function sessionSetupRequest(
+  sequence: number,
+  sessionId: number,
+  serverSessionVersion: PValue,
+  v1 = false,
+): Request<SetMultiVariablesRequest> {
   return {
     header: { functionCode: FunctionCode.SetMultiVariables, sequence, sessionId, transportFlags: TransportFlags.Normal },
     body: {
       targets: { kind: 'attributes', inObjectId: sessionId, ids: [Ids.ServerSessionVersion] },
       values: [serverSessionVersion],
-      qualifier: NO_QUALIFIER,
+      qualifier: v1 ? { ...NO_QUALIFIER, v1 } : NO_QUALIFIER,
     },
   };
 }
