@@ -199,6 +199,27 @@ describe('S7CommPlus messages', () => {
       expect(cpuStateOf([])).to.equal('UNKNOWN');
     });
 
+    it('decodes the theCPUexecUnit answers of a PLCSIM Advanced CPU 1511 (RUN, RUN, STOP) and re-encodes them byte for byte', () => {
+      const bodies = (
+        JSON.parse(fs.readFileSync(path.join(FIXTURES, 'plcsim-cpu-exec-unit.json'), 'utf8')) as { bodies: Record<string, string> }
+      ).bodies;
+      const header = hex('32000004bb 0000 0007 34');
+      const states = Object.entries(bodies).map(([name, body]) => {
+        const data = Buffer.concat([header, hex(body)]);
+        const res = decodeExploreResponse(data, V2);
+        expect(res.body.preamble?.toString('hex'), name).to.equal('0000003005');
+        expect(
+          res.body.objects.map((o) => [o.relationId, o.classId]),
+          name,
+        ).to.deep.equal([[Ids.NativeTheCpuExecUnitRID, Ids.ClassCpuExecUnit]]);
+        expect(attributeOf(res.body.objects[0]!, Ids.ObjectVariableTypeName)?.value).to.equal('CPU exec unit_1');
+        expect(res.body.objects[0]!.members.filter((m) => m.kind === 'relation')).to.have.length(1);
+        expect(encodeExploreResponse(res).equals(data), name).to.equal(true);
+        return cpuStateOf(res.body.objects);
+      });
+      expect(states).to.deep.equal(['RUN', 'RUN', 'STOP']);
+    });
+
     it('reads the CPU state from the cycle attributes 0x1F80/0x1F81 when the struct is absent (1/7 RUN, 0/0 STOP)', () => {
       const obj = (a: number, b: number) =>
         decodeObject(

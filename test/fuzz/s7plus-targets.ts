@@ -38,11 +38,14 @@ import type { FuzzTarget } from './engine';
 
 function fixtureFrames(): Buffer[] {
   const dir = path.join(__dirname, '..', '..', '..', 'test', 'fixtures', 's7plus');
-  return ['golden-tia.json', 's7commplus-frames.json'].flatMap((f) =>
-    Object.values((JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8')) as { frames: Record<string, string> }).frames).map((h) =>
-      Buffer.from(h, 'hex'),
-    ),
+  const read = (f: string) =>
+    JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8')) as { frames?: Record<string, string>; bodies?: Record<string, string> };
+  const frames = ['golden-tia.json', 's7commplus-frames.json'].flatMap((f) =>
+    Object.values(read(f).frames!).map((h) => Buffer.from(h, 'hex')),
   );
+  // PLCSIM's Explore answers, behind a response header.
+  const plcsim = Object.values(read('plcsim-cpu-exec-unit.json').bodies!).map((h) => Buffer.from('32000004bb0000000734' + h, 'hex'));
+  return [...frames, ...plcsim];
 }
 
 /** Message data: a whole frame's header and trailer taken off, bare message data as it is. */
@@ -50,14 +53,18 @@ function messages(frames: Buffer[]): Buffer[] {
   return frames.map((f) => (f[0] === 0x72 ? f.subarray(4, 4 + f.readUInt16BE(2)) : f));
 }
 
-/** Both ways a decoder is called: with and without integrity ids. */
-function both(decode: (b: Buffer, o: { integrity: boolean }) => unknown): (b: Buffer) => void {
+/** The ways a decoder is called: without integrity ids, with them, and for a session of frame version 1. */
+function both(decode: (b: Buffer, o: { integrity: boolean; v1?: boolean }) => unknown): (b: Buffer) => void {
   return (b) => {
     try {
       decode(b, { integrity: false });
     } finally {
-      // Runs also when the first call threw; an error of the second replaces the first's.
-      decode(b, { integrity: true });
+      // Run also when the first call threw; an error of a later one replaces the first's.
+      try {
+        decode(b, { integrity: true });
+      } finally {
+        decode(b, { integrity: false, v1: true });
+      }
     }
   };
 }

@@ -2,6 +2,7 @@
  * The object tree of S7CommPlus (CreateObject bodies, Explore answers):
  *
  *     A1 <RelationId:4> <ClassId:VLQ> <ClassFlags:VLQ> <AttributeId:VLQ>   start of object
+ *        [<AttributeIdFlags:VLQ>, when AttributeId is not 0]
  *     A3 <AttributeId:VLQ> <PValue>                                        attribute
  *     A4 <RelationId:VLQ> <target:4>                                       relation
  *     AB <blocks> / AC <blocks>                                            type-info lists
@@ -12,7 +13,10 @@
  * length 0; they are kept as their raw bytes (the browse reads them). Members
  * keep their order so that an object re-encodes byte for byte. Source:
  * s7commplus (MIT), typeinfo.py parse_object / parse_vartype_list and
- * alarm.py (relations); golden frames (the subscription create).
+ * alarm.py (relations); golden frames (the subscription create); the
+ * AttributeIdFlags: PLCSIM Advanced's theCPUexecUnit (`a1 00000034 9103 30
+ * 9259 06`, test/fixtures/s7plus/plcsim-cpu-exec-unit.json), where the
+ * Wireshark S7CommPlus dissector's layout (facts only) reads one more VLQ.
  */
 import { ProtocolError } from '../../errors';
 import { ElementId } from '../constants';
@@ -31,6 +35,8 @@ export interface PObject {
   classId: number;
   classFlags: number;
   attributeId: number;
+  /** Present on the wire only when attributeId is not 0. */
+  attributeIdFlags?: number;
   members: PMember[];
 }
 
@@ -55,6 +61,7 @@ function readObjectAt(r: Reader, depth: number): PObject {
     attributeId: r.uvlq32(),
     members: [],
   };
+  if (obj.attributeId !== 0) obj.attributeIdFlags = r.uvlq32();
   for (;;) {
     const el = r.peek();
     if (el === undefined) throw new ProtocolError(`S7CommPlus: object starting at offset ${at} has no terminator (0xa2)`);
@@ -100,6 +107,7 @@ export function readObjects(r: Reader): PObject[] {
 
 export function writeObject(w: Writer, obj: PObject): void {
   w.u8(ElementId.StartOfObject).u32(obj.relationId).uvlq32(obj.classId).uvlq32(obj.classFlags).uvlq32(obj.attributeId);
+  if (obj.attributeId !== 0) w.uvlq32(obj.attributeIdFlags ?? 0);
   for (const m of obj.members) {
     switch (m.kind) {
       case 'attribute':
