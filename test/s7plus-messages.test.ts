@@ -68,6 +68,10 @@ const load = (name: string): Record<string, Buffer> =>
   );
 const PY = load('s7commplus-frames.json');
 const GOLDEN = load('golden-tia.json');
+const PLCSIM = JSON.parse(fs.readFileSync(path.join(FIXTURES, 'plcsim-cpu-exec-unit.json'), 'utf8')) as {
+  bodies: Record<string, string>;
+  type_info_time: { body: string };
+};
 const hex = (s: string) => Buffer.from(s.replace(/\s+/g, ''), 'hex');
 /** The data of a frame (header and trailer off). */
 const dataOf = (frame: Buffer): Buffer => frame.subarray(4, 4 + frame.readUInt16BE(2));
@@ -200,9 +204,7 @@ describe('S7CommPlus messages', () => {
     });
 
     it('decodes the theCPUexecUnit answers of a PLCSIM Advanced CPU 1511 (RUN, RUN, STOP) and re-encodes them byte for byte', () => {
-      const bodies = (
-        JSON.parse(fs.readFileSync(path.join(FIXTURES, 'plcsim-cpu-exec-unit.json'), 'utf8')) as { bodies: Record<string, string> }
-      ).bodies;
+      const bodies = PLCSIM.bodies;
       const header = hex('32000004bb 0000 0007 34');
       const states = Object.entries(bodies).map(([name, body]) => {
         const data = Buffer.concat([header, hex(body)]);
@@ -218,6 +220,19 @@ describe('S7CommPlus messages', () => {
         return cpuStateOf(res.body.objects);
       });
       expect(states).to.deep.equal(['RUN', 'RUN', 'STOP']);
+    });
+
+    it("decodes PLCSIM's answer to an Explore of a type-info object for attribute 529 (its modification time, a 9-byte ULInt)", () => {
+      const data = Buffer.concat([hex('32000004bb 0000 0007 34'), hex(PLCSIM.type_info_time.body)]);
+      const res = decodeExploreResponse(data, V2);
+      const [obj] = res.body.objects;
+      expect([obj!.relationId, obj!.classId, obj!.classFlags]).to.deep.equal([0x92000001, Ids.ClassTypeInfo, 0x20]);
+      expect(attributeOf(obj!, Ids.VariableTypeStructModificationTime)).to.deep.equal({
+        flags: 0,
+        type: DataType.ULInt,
+        value: 0x516f35a2d9e573f6n,
+      });
+      expect(encodeExploreResponse(res).equals(data)).to.equal(true);
     });
 
     it('reads the CPU state from the cycle attributes 0x1F80/0x1F81 when the struct is absent (1/7 RUN, 0/0 STOP)', () => {
