@@ -108,7 +108,9 @@ describe('S7CommPlus golden TIA frames', () => {
       expect(n.subscriptionId).to.equal(0x7000103f);
       expect(n.reserved).to.deep.equal([0x0400, 0, 0]);
       expect(n.sequence).to.equal(2);
-      expect(n.timestamp).to.equal(0x00065b8ba19931a9n);
+      expect(n.creditTick).to.equal(0);
+      // s7commplus's tests/test_golden_tia_captures.py reads the same: 1789505130017193 µs.
+      expect(n.timestamp).to.equal(1789505130017193n);
       expect(new Date(Number(n.timestamp! / 1000n)).toISOString()).to.match(/^2026-09-15T/); // the capture's date
       expect(n.changeCounter).to.equal(2);
       expect(n.items).to.have.length(1);
