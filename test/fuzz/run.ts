@@ -20,6 +20,7 @@ import {
 } from '../../lib/s7/codec';
 import { decodeTag } from '../../lib/values';
 import { fuzz, type FuzzTarget } from './engine';
+import { s7plusTargets } from './s7plus-targets';
 import { symbolTargets } from './symbol-targets';
 import { extraTargets } from './targets';
 
@@ -124,6 +125,7 @@ const targets: FuzzTarget[] = [
   },
   ...extraTargets(),
   ...symbolTargets(),
+  ...s7plusTargets(),
 ];
 
 const results = targets.map((t) => fuzz(t, inputs));

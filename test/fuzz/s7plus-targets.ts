@@ -1,0 +1,155 @@
+/**
+ * Fuzz targets of the S7CommPlus codec (lib/s7plus/codec/): every decoder,
+ * seeded with the golden TIA frames, the frames the s7commplus package builds
+ * (test/fixtures/s7plus/) and our encoders' output.
+ */
+import fs from 'node:fs';
+import path from 'node:path';
+import {
+  decodeExploreRequest,
+  decodeExploreResponse,
+  encodeExploreResponse,
+  cpuExecUnitObject,
+  cpuStateOf,
+} from '../../lib/s7plus/codec/explore';
+import { encodeFrames, S7pFrameReader } from '../../lib/s7plus/codec/frame';
+import { decodeObject } from '../../lib/s7plus/codec/object';
+import { decodePValue } from '../../lib/s7plus/codec/pvalue';
+import {
+  decodeCreateObjectRequest,
+  decodeCreateObjectResponse,
+  decodeDeleteObjectRequest,
+  decodeDeleteObjectResponse,
+  decodeInitSslRequest,
+  decodeInitSslResponse,
+  encodeInitSslRequest,
+  sessionInfo,
+} from '../../lib/s7plus/codec/session';
+import { decodeSubStreamedRequest, decodeSubStreamedResponse } from '../../lib/s7plus/codec/substreamed';
+import { decodeNotification, readSubscription } from '../../lib/s7plus/codec/subscription';
+import {
+  decodeGetMultiVariablesRequest,
+  decodeGetMultiVariablesResponse,
+  decodeSetMultiVariablesRequest,
+  decodeSetMultiVariablesResponse,
+} from '../../lib/s7plus/codec/variables';
+import { FunctionCode } from '../../lib/s7plus/constants';
+import type { FuzzTarget } from './engine';
+
+function fixtureFrames(): Buffer[] {
+  const dir = path.join(__dirname, '..', '..', '..', 'test', 'fixtures', 's7plus');
+  const read = (f: string) =>
+    JSON.parse(fs.readFileSync(path.join(dir, f), 'utf8')) as { frames?: Record<string, string>; bodies?: Record<string, string> };
+  const frames = ['golden-tia.json', 's7commplus-frames.json'].flatMap((f) =>
+    Object.values(read(f).frames!).map((h) => Buffer.from(h, 'hex')),
+  );
+  // PLCSIM's Explore answers, behind a response header.
+  const plcsim = Object.values(read('plcsim-cpu-exec-unit.json').bodies!).map((h) => Buffer.from('32000004bb0000000734' + h, 'hex'));
+  return [...frames, ...plcsim];
+}
+
+/** Message data: a whole frame's header and trailer taken off, bare message data as it is. */
+function messages(frames: Buffer[]): Buffer[] {
+  return frames.map((f) => (f[0] === 0x72 ? f.subarray(4, 4 + f.readUInt16BE(2)) : f));
+}
+
+/** The ways a decoder is called: without integrity ids, with them, and for a session of frame version 1. */
+function both(decode: (b: Buffer, o: { integrity: boolean; v1?: boolean }) => unknown): (b: Buffer) => void {
+  return (b) => {
+    try {
+      decode(b, { integrity: false });
+    } finally {
+      // Run also when the first call threw; an error of a later one replaces the first's.
+      try {
+        decode(b, { integrity: true });
+      } finally {
+        decode(b, { integrity: false, v1: true });
+      }
+    }
+  };
+}
+
+export function s7plusTargets(): FuzzTarget[] {
+  const frames = fixtureFrames();
+  const data = [
+    ...messages(frames),
+    encodeInitSslRequest(1),
+    encodeExploreResponse({
+      header: { functionCode: FunctionCode.Explore, sequence: 1, transportFlags: 0 },
+      body: { returnValue: 0n, objects: [cpuExecUnitObject('RUN')] },
+    }),
+  ];
+  // The values inside the messages, for the PValue and object decoders on their own.
+  const values = data.flatMap((d) => [d.subarray(14), d.subarray(10), d.subarray(11)]);
+  return [
+    {
+      name: 'S7+ frame reader (stream)',
+      seeds: [
+        Buffer.concat(
+          frames.map((f) =>
+            f[0] === 0x72 && f.length === 4 + f.readUInt16BE(2)
+              ? Buffer.concat([f, Buffer.from('72020000', 'hex')])
+              : encodeFrames(2, f, 50),
+          ),
+        ),
+      ],
+      run: (b) => {
+        const reader = new S7pFrameReader({ maxMessage: 1 << 16 });
+        for (let at = 0; at < b.length; at += 61) reader.push(b.subarray(at, at + 61));
+      },
+    },
+    { name: 'S7+ decodePValue', seeds: values, run: (b) => void decodePValue(b, 0) },
+    {
+      name: 'S7+ decodeObject',
+      seeds: values.map((v) => v.subarray(v.indexOf(0xa1) < 0 ? 0 : v.indexOf(0xa1))),
+      run: (b) => void decodeObject(b, 0),
+    },
+    { name: 'S7+ InitSSL req/res', seeds: data, run: (b) => void (b[0] === 0x31 ? decodeInitSslRequest(b) : decodeInitSslResponse(b)) },
+    {
+      name: 'S7+ CreateObject req/res',
+      seeds: data,
+      run: both((b, o) => {
+        if (b[0] === 0x31) readSubscriptionIfOne(decodeCreateObjectRequest(b, o).body.object);
+        else sessionInfoIfOk(decodeCreateObjectResponse(b, o).body);
+      }),
+    },
+    {
+      name: 'S7+ DeleteObject req/res',
+      seeds: data,
+      run: both((b, o) => (b[0] === 0x31 ? decodeDeleteObjectRequest(b, o) : decodeDeleteObjectResponse(b, o))),
+    },
+    {
+      name: 'S7+ Explore req/res',
+      seeds: data,
+      run: both((b, o) => (b[0] === 0x31 ? decodeExploreRequest(b, o) : cpuStateOf(decodeExploreResponse(b, o).body.objects))),
+    },
+    {
+      name: 'S7+ GetMultiVariables req/res',
+      seeds: data,
+      run: both((b, o) => (b[0] === 0x31 ? decodeGetMultiVariablesRequest(b, o) : decodeGetMultiVariablesResponse(b, o))),
+    },
+    {
+      name: 'S7+ SetMultiVariables req/res',
+      seeds: data,
+      run: both((b, o) => (b[0] === 0x31 ? decodeSetMultiVariablesRequest(b, o) : decodeSetMultiVariablesResponse(b, o))),
+    },
+    {
+      name: 'S7+ SubStreamed req/res',
+      seeds: data,
+      run: both((b, o) =>
+        b[0] === 0x31
+          ? decodeSubStreamedRequest(b, o)
+          : decodeSubStreamedResponse(b, b[4] === 0x86 ? FunctionCode.GetVarSubStreamed : FunctionCode.SetVarSubStreamed, o),
+      ),
+    },
+    { name: 'S7+ decodeNotification', seeds: data, run: (b) => void decodeNotification(b) },
+  ];
+}
+
+function readSubscriptionIfOne(obj: Parameters<typeof readSubscription>[0]): void {
+  if (obj.classId === 1001) readSubscription(obj);
+}
+
+function sessionInfoIfOk(body: Parameters<typeof sessionInfo>[0]): void {
+  if (body.returnValue === 0n && body.objectIds.length > 0) sessionInfo(body);
+}
