@@ -18,7 +18,7 @@ import { checkTpkt } from '../lib/s7/codec/tpkt';
 import { fingerprint256, generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import { CotpTunnel } from '../lib/s7plus/transport/tunnel';
 import { skipBecause } from './support/skip';
-import { cotpAccept, cotpConnect, countingServer, s7commplusPython, startPythonServer } from './support/s7plus-tls';
+import { cotpConnect, countingServer, listeners, s7commplusPython, startPythonServer, tunnelPair } from './support/s7plus-tls';
 import { activeHandles, settle, until, waitFor } from './support/wait';
 
 const dt = (payload: Buffer, eot = true) => {
@@ -31,30 +31,6 @@ const dt = (payload: Buffer, eot = true) => {
   payload.copy(f, 7);
   return f;
 };
-
-/** A client socket and the server's accepted one, COTP-connected; the client's and (unless `rawServer`) the server's wrapped in a tunnel. */
-async function tunnelPair(tpduCode = 0x0a, rawServer = false) {
-  let accepted!: (s: net.Socket) => void;
-  const serverSide = new Promise<net.Socket>((r) => (accepted = r));
-  const srv = await countingServer((s) => accepted(s));
-  const client = net.connect({ host: '127.0.0.1', port: srv.port });
-  const server = await serverSide;
-  const [serverHead, { head, tpduSize }] = await Promise.all([cotpAccept(server, tpduCode), cotpConnect(client)]);
-  // Listeners the sockets have before the tunnels add theirs (Node's own), to check that none of ours is left.
-  const baseline = { client: listeners(client), server: listeners(server) };
-  const clientTunnel = new CotpTunnel(client, { tpduSize, head });
-  const serverTunnel = rawServer ? undefined : new CotpTunnel(server, { tpduSize: 1 << tpduCode, head: serverHead });
-  const close = async () => {
-    clientTunnel.destroy();
-    serverTunnel?.destroy();
-    server.destroy();
-    await until(() => client.destroyed && server.destroyed, 5000, 'both sockets closed');
-    await new Promise((r) => srv.server.close(r));
-  };
-  return { client, server, clientTunnel, serverTunnel, srv, close, baseline };
-}
-
-const listeners = (s: net.Socket) => ['data', 'end', 'drain', 'error', 'close'].reduce((n, e) => n + s.listenerCount(e), 0);
 
 /** The TPKT frames a raw socket receives, cut and decoded. */
 function collectFrames(socket: net.Socket) {

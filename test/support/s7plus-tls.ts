@@ -10,6 +10,8 @@ import * as path from 'node:path';
 import { FrameReader } from '../../lib/link/framer';
 import { checkTpkt } from '../../lib/s7/codec/tpkt';
 import { decodeCotp, encodeConnectionConfirm } from '../../lib/s7/codec/cotp';
+import { CotpTunnel } from '../../lib/s7plus/transport/tunnel';
+import { until } from './wait';
 
 /** Reads one whole TPKT frame; resolves it with the bytes that came after it. Rejects on close or after `ms`. */
 export function readFrame(socket: net.Socket, ms = 5000): Promise<{ frame: Buffer; rest: Buffer }> {
@@ -95,6 +97,31 @@ export async function countingServer(
   const open = () => new Promise<number>((resolve, reject) => server.getConnections((err, n) => (err ? reject(err) : resolve(n))));
   return { server, port, open };
 }
+
+/** A client socket and the server's accepted one, COTP-connected; the client's and (unless `rawServer`) the server's wrapped in a tunnel. */
+export async function tunnelPair(tpduCode = 0x0a, rawServer = false) {
+  let accepted!: (s: net.Socket) => void;
+  const serverSide = new Promise<net.Socket>((r) => (accepted = r));
+  const srv = await countingServer((s) => accepted(s));
+  const client = net.connect({ host: '127.0.0.1', port: srv.port });
+  const server = await serverSide;
+  const [serverHead, { head, tpduSize }] = await Promise.all([cotpAccept(server, tpduCode), cotpConnect(client)]);
+  // Listeners the sockets have before the tunnels add theirs (Node's own), to check that none of ours is left.
+  const baseline = { client: listeners(client), server: listeners(server) };
+  const clientTunnel = new CotpTunnel(client, { tpduSize, head });
+  const serverTunnel = rawServer ? undefined : new CotpTunnel(server, { tpduSize: 1 << tpduCode, head: serverHead });
+  const close = async () => {
+    clientTunnel.destroy();
+    serverTunnel?.destroy();
+    server.destroy();
+    await until(() => client.destroyed && server.destroyed, 5000, 'both sockets closed');
+    await new Promise((r) => srv.server.close(r));
+  };
+  return { client, server, clientTunnel, serverTunnel, srv, close, baseline };
+}
+
+/** Listeners a socket has for the events a tunnel uses. */
+export const listeners = (s: net.Socket) => ['data', 'end', 'drain', 'error', 'close'].reduce((n, e) => n + s.listenerCount(e), 0);
 
 /**
  * The Python interpreter that has the s7commplus package, or a reason why
