@@ -140,7 +140,7 @@ export function clientTlsOptions(trust: TlsTrust): tls.ConnectionOptions {
   };
 }
 
-export function describeCertificate(cert: crypto.X509Certificate): CertificateInfo {
+function describeCertificate(cert: crypto.X509Certificate): CertificateInfo {
   return {
     fingerprint: fingerprint256(cert.raw),
     subject: oneLine(cert.subject),
