@@ -5,6 +5,7 @@ import * as net from 'node:net';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { PlcError } from '../lib/errors';
+import { encodeConnectionConfirm, encodeCotpError, encodeErrorAck, encodeSetupAck, encodeWriteResponse } from '../lib/s7/codec';
 import { diagnose, familyOf, type DoctorReport, type DoctorStep } from '../lib/s7/doctor';
 import { S7Server, type S7Profile } from '../lib/s7/server';
 import { compileSymbols } from '../lib/symbols/compile';
@@ -340,6 +341,81 @@ describe('connection doctor', function () {
       expect(last(r).detail).to.contain('COTP disconnect, reason 1: congestion): no free connection');
       expect(last(r).hint).to.contain('close other clients');
       expect(refusals).to.equal(1);
+    });
+  });
+
+  describe('each answer of the handshake in its words (a scripted peer)', () => {
+    /** A peer that answers the connection request with `cotp` and, after a confirm, setup communication with `setup`. */
+    async function scripted(cotp: (s: net.Socket) => void, setup: (s: net.Socket) => void = () => undefined): Promise<DoctorReport> {
+      const sockets = new Set<net.Socket>();
+      const server = net.createServer((s) => {
+        sockets.add(s);
+        s.on('error', () => undefined);
+        s.on('close', () => sockets.delete(s));
+        let frames = 0;
+        s.on('data', () => (++frames === 1 ? cotp(s) : frames === 2 ? setup(s) : undefined));
+      });
+      server.listen(0, '127.0.0.1');
+      await once(server, 'listening');
+      try {
+        const port = (server.address() as net.AddressInfo).port;
+        const r = await diagnose(`s7://127.0.0.1:${port}?slot=1&timeout=300`);
+        await until(() => sockets.size === 0, 2000, 'the doctor closed its sockets');
+        return r;
+      } finally {
+        await new Promise((r) => server.close(r));
+      }
+    }
+    const confirm = (s: net.Socket) =>
+      s.write(encodeConnectionConfirm({ destinationRef: 1, sourceRef: 0x11, callingTsap: 0x0100, calledTsap: 0x0101, tpduSize: 0x0a }));
+
+    it('a COTP TPDU error instead of a confirm: not an ISO-on-TCP connection confirm', async () => {
+      const r = await scripted((s) => s.write(encodeCotpError(1, 2)));
+      expect(names(r)).to.deep.equal(['resolve', 'tcp', 'cotp']);
+      expect(last(r).detail).to.equal('the answer is not an ISO-on-TCP connection confirm: a COTP ER instead of a connection confirm');
+      expect(last(r).hint).to.contain('Another protocol listens on this port');
+    });
+
+    it('setup communication unanswered: the CPU does not talk S7', async () => {
+      const r = await scripted(confirm);
+      expect(names(r)).to.deep.equal(HANDSHAKE);
+      expect(last(r)).to.deep.include({ ok: false, detail: 'no answer to setup communication within 300 ms' });
+      expect(last(r).hint).to.contain('does not talk S7');
+    });
+
+    it('the connection closed at setup communication', async () => {
+      const r = await scripted(confirm, (s) => s.end());
+      expect(last(r)).to.deep.include({ step: 'setup', ok: false, detail: 'the CPU closed the connection at setup communication' });
+      expect(last(r).hint).to.contain('not the S7 session');
+    });
+
+    it('setup communication refused with a header error, in the PLC error words', async () => {
+      const r = await scripted(confirm, (s) => s.write(encodeErrorAck(0, 0x85, 0x00)));
+      expect(last(r)).to.deep.include({
+        step: 'setup',
+        ok: false,
+        detail: 'setup communication: the PLC answered 0x8500: PDU too large for the negotiated size',
+      });
+      expect(last(r).hint).to.contain('refuses the S7 session');
+    });
+
+    it('an answer to setup communication of another kind, an unusable PDU size, bytes that are not TPKT', async () => {
+      const other = await scripted(confirm, (s) => s.write(encodeWriteResponse(0, [0xff])));
+      expect(last(other)).to.deep.include({ step: 'setup', ok: false, detail: 'the answer to setup communication is a write-ack' });
+      const small = await scripted(confirm, (s) => s.write(encodeSetupAck(0, { maxAmqCalling: 1, maxAmqCalled: 1, pduSize: 32 })));
+      expect(last(small)).to.deep.include({ step: 'setup', ok: false, detail: 'the CPU negotiated an unusable PDU size of 32 bytes' });
+      const garbage = await scripted(confirm, (s) => s.write('HTTP/1.1 400 Bad Request\r\n\r\n'));
+      expect(last(garbage)).to.deep.include({
+        step: 'setup',
+        ok: false,
+        detail: 'the answer to setup communication is malformed: TPKT version 72, expected 3',
+      });
+    });
+
+    it('a granted setup: the PDU size and the parallel jobs, at most the 8 asked for', async () => {
+      const r = await scripted(confirm, (s) => s.write(encodeSetupAck(0, { maxAmqCalling: 12, maxAmqCalled: 10, pduSize: 480 })));
+      const setup = r.steps.find((x) => x.step === 'setup')!;
+      expect(setup).to.deep.include({ ok: true, detail: 'PDU 480 bytes (asked 960), 8 parallel jobs (AmQ)' });
     });
   });
 

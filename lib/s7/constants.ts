@@ -1,16 +1,14 @@
 /**
- * S7comm protocol constants. Sources: RFC 1006 (TPKT), ISO 8073 = RFC 905
- * (COTP) and the publicly documented S7comm dissector field tables; the
- * bytes and tables are in docs/protocols.md, "S7comm over ISO-on-TCP".
+ * S7comm protocol constants. Sources: the publicly documented S7comm
+ * dissector field tables; the bytes and tables are in docs/protocols.md,
+ * "S7comm over ISO-on-TCP". TPKT and COTP's own sizes and codes (RFC 1006,
+ * ISO 8073 = RFC 905) are in lib/iso/constants.ts.
  */
 import { PlcError, type PlcErrorCode } from '../errors';
 import type { AreaName } from '../types';
 import { hex4 } from '../values/text';
 
 export const S7_PORT = 102;
-export const TPKT_VERSION = 3;
-export const TPKT_HEADER = 4;
-export const COTP_DT_HEADER = 3;
 export const S7_PROTOCOL_ID = 0x32;
 export const S7_JOB_HEADER = 10;
 export const S7_ACK_HEADER = 12;
@@ -29,14 +27,6 @@ export const WRITE_DATA_HEADER = 4;
 /** The PDU sizes the client and the planner work with: at least 64, at most what the setup's 2-byte field holds. */
 export const MIN_PDU_SIZE = 64;
 export const MAX_PDU_SIZE = 0xffff;
-/** TPKT + COTP DT in front of every S7 PDU. */
-export const FRAME_OVERHEAD = TPKT_HEADER + COTP_DT_HEADER;
-/**
- * The largest frame the client, the doctor and the simulator buffer: more
- * than a TPKT's 16-bit length field can announce, so a peer can never make
- * them hold more than one whole TPKT packet.
- */
-export const MAX_FRAME = 0x10000 + 16;
 
 // ---------------------------------------------------------------- the handshake
 
@@ -44,26 +34,6 @@ export const MAX_FRAME = 0x10000 + 16;
 export const REQUESTED_AMQ = 8;
 /** TPDU size code a client asks for in its COTP connection request: 0x0A = 1024 bytes (S7-1500 offers PDU 960 only with it). */
 export const TPDU_SIZE_CODE = 0x0a;
-/** COTP disconnect reasons (ISO 8073 = RFC 905, §13.5.3, class 0): 1 congestion at the TSAP (all connections in use). */
-export const DR_CONGESTION = 1;
-/** 3: the called TSAP (address) is unknown. */
-export const DR_ADDRESS_UNKNOWN = 3;
-
-export const enum CotpType {
-  CR = 0xe0,
-  CC = 0xd0,
-  DR = 0x80,
-  DC = 0xc0,
-  DT = 0xf0,
-  ER = 0x70,
-}
-
-export const enum CotpParam {
-  TpduSize = 0xc0,
-  CallingTsap = 0xc1,
-  CalledTsap = 0xc2,
-}
-
 export const enum Rosctr {
   Job = 1,
   Ack = 2,
@@ -254,11 +224,6 @@ export function headerError(errorClass: number, errorCode: number, context: stri
   if (known) return new PlcError(known[0], `${context}: the PLC answered ${hex}: ${known[1]}`, { plcCode: key });
   const cls = ERROR_CLASSES[errorClass] ?? 'unknown error class';
   return new PlcError('PLC_ERROR', `${context}: the PLC answered ${hex} (${cls})`, { plcCode: key });
-}
-
-/** COTP TPDU size code → bytes (0x07 = 128 … 0x0D = 8192). */
-export function tpduBytes(code: number): number {
-  return code >= 0x07 && code <= 0x0d ? 1 << code : 0;
 }
 
 export { remoteTsapFor } from './tsap';

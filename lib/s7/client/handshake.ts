@@ -1,16 +1,18 @@
 /**
- * The S7 handshake as steps: TCP, COTP connection request → confirm, setup
- * communication → its ack. `openS7Session` runs them and hands the socket,
- * its frame reader and what was negotiated to a new S7Session, which owns
- * them from then on.
+ * The S7 handshake as steps: TCP and COTP connection request → confirm (the
+ * ISO connect step, lib/iso/connect.ts, with S7's TSAPs), setup
+ * communication → its ack (`exchangeSetup`). `openS7Session` runs them and
+ * hands the socket, its frame reader and what was negotiated to a new
+ * S7Session, which owns them from then on. The connection doctor runs the
+ * same steps and reads their answers in its own words.
  */
 import type * as net from 'node:net';
 import { abortError, ConnectionError, ProtocolError, toPlcError } from '../../errors';
-import { FrameReader } from '../../link/framer';
-import { openTcp } from '../../link/tcp';
+import { IsoConnectError, isoConnect, type IsoConnection, type IsoConnectionRequest } from '../../iso/connect';
+import type { FrameResult, IsoFrames } from '../../iso/frames';
 import type { S7Endpoint } from '../url';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from '../codec';
-import { headerError, MAX_FRAME, REQUESTED_AMQ, TPDU_SIZE_CODE } from '../constants';
+import { decodeS7, encodeSetupCommunication } from '../codec';
+import { headerError, REQUESTED_AMQ, TPDU_SIZE_CODE } from '../constants';
 import { localTsapFor, remoteTsapFor } from '../tsap';
 import { S7Session, type SessionWiring } from './session';
 import { hex4 } from '../../values/text';
@@ -29,15 +31,11 @@ export interface OpenOptions extends Omit<SessionWiring, 'timeout'> {
  * TIMEOUT, ABORTED, ACCESS_DENIED …) and leaves no socket behind.
  */
 export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Session> {
-  const socket = await openTcp({ host: e.host, port: e.port, timeout: o.timeout, signal: o.signal });
-  // The socket's chunks are ours: frames are cut from them without a copy.
-  const reader = new FrameReader(checkTpkt, MAX_FRAME, { copy: false });
-  const next = frameWaiter(socket, reader, o.signal, o.name);
+  const { socket, frames } = await requestConnection(e, o);
   try {
-    await requestConnection(socket, next, e, o.name);
-    const negotiated = await setupCommunication(socket, next, e, o.name);
+    const negotiated = await setupCommunication(socket, frames, e, o.name);
     // The session's listeners go on before the handshake's come off, so no socket event is ever unheard.
-    const session = new S7Session(socket, reader, negotiated, {
+    const session = new S7Session(socket, frames.reader, negotiated, {
       name: o.name,
       timeout: o.requestTimeout ?? o.timeout,
       maxQueued: o.maxQueued,
@@ -45,10 +43,10 @@ export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Se
       lossError: o.lossError,
       lost: o.lost,
     });
-    next.stop();
+    frames.stop();
     return session;
   } catch (err) {
-    next.stop();
+    frames.stop();
     socket.destroy();
     if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
     const e2 = toPlcError(err, 'CONNECT_FAILED');
@@ -56,96 +54,97 @@ export async function openS7Session(e: S7Endpoint, o: OpenOptions): Promise<S7Se
   }
 }
 
-/** COTP CR → CC: the PLC takes the connection at the TSAPs the endpoint names (rack/slot, or configured TSAPs). */
-async function requestConnection(socket: net.Socket, next: FrameWaiter, e: S7Endpoint, name: string): Promise<void> {
-  const calledTsap = e.remoteTsap ?? remoteTsapFor(e.connectionType, e.rack, e.slot);
-  const callingTsap = e.localTsap ?? localTsapFor(e.connectionType);
-  socket.write(encodeConnectionRequest({ sourceRef: 0x0001, callingTsap, calledTsap, tpduSize: TPDU_SIZE_CODE }));
-  const cc = decodeCotp(await next());
-  if (cc.type !== 'CC') {
-    const where = e.remoteTsap !== undefined ? `TSAP 0x${hex4(calledTsap)}` : `rack ${e.rack}, slot ${e.slot}`;
+/** The COTP connection request of an endpoint: the TSAPs it names (rack/slot, or configured TSAPs) and our TPDU size. */
+function s7ConnectionRequest(e: S7Endpoint, name: string): IsoConnectionRequest & { callingTsap: number; calledTsap: number } {
+  return {
+    name,
+    calledTsap: e.remoteTsap ?? remoteTsapFor(e.connectionType, e.rack, e.slot),
+    callingTsap: e.localTsap ?? localTsapFor(e.connectionType),
+    tpduSize: TPDU_SIZE_CODE,
+  };
+}
+
+/** TCP, then COTP CR → CC (lib/iso/connect.ts): the PLC takes the connection at the endpoint's TSAPs; a refusal in S7's words. */
+async function requestConnection(e: S7Endpoint, o: OpenOptions): Promise<IsoConnection> {
+  const request = s7ConnectionRequest(e, o.name);
+  try {
+    return await isoConnect({ ...request, host: e.host, port: e.port, timeout: o.timeout, signal: o.signal });
+  } catch (err) {
+    if (!(err instanceof IsoConnectError)) throw err;
+    const r = err.refusal;
+    if (r.kind === 'garbage') throw new ConnectionError('CONNECT_FAILED', `${o.name}: ${r.message}`, { cause: err.cause });
+    if (r.kind === 'closed') {
+      if (r.error) throw new ConnectionError('CONNECT_FAILED', `${o.name}: ${r.error.message}`, { cause: r.error });
+      throw new ConnectionError(
+        'CONNECT_FAILED',
+        `${o.name} closed the connection during the handshake (wrong rack/slot or TSAP, or the connection limit is reached)`,
+      );
+    }
+    const where = e.remoteTsap !== undefined ? `TSAP 0x${hex4(request.calledTsap)}` : `rack ${e.rack}, slot ${e.slot}`;
     throw new ConnectionError(
       'CONNECT_FAILED',
-      `${name} refused the connection (${where}): wrong rack/slot or TSAP, or the PLC's connection limit is reached`,
+      `${o.name} refused the connection (${where}): wrong rack/slot or TSAP, or the PLC's connection limit is reached`,
     );
   }
 }
 
-/** Setup communication → its ack: the PDU size and parallel jobs (AmQ) the PLC grants. */
+/** How a PLC answered setup communication: what it granted, or what came instead. */
+export type SetupAnswer =
+  | { kind: 'granted'; pduSize: number; maxJobs: number }
+  /** An ack with a header error: class and code (headerError puts them in words). */
+  | { kind: 'refused'; errorClass: number; errorCode: number }
+  /** An S7 PDU of another kind (decodeS7's `kind`). */
+  | { kind: 'other'; what: string }
+  /** A PDU size below 64 bytes, which no job fits. */
+  | { kind: 'unusable'; pduSize: number }
+  | Exclude<FrameResult, { kind: 'frame' }>;
+
+/**
+ * Setup communication → its ack, on a socket whose COTP connection stands: the
+ * PDU size and parallel jobs (AmQ) the PLC grants, or what came instead.
+ * `ms`: how long to wait for the answer (none: until the signal of `frames`).
+ * Throws ProtocolError for an answer that is not an S7 PDU, ABORTED on abort.
+ */
+export async function exchangeSetup(socket: net.Socket, frames: IsoFrames, pduSize: number, ms?: number): Promise<SetupAnswer> {
+  socket.write(encodeSetupCommunication(0, { maxAmqCalling: REQUESTED_AMQ, maxAmqCalled: REQUESTED_AMQ, pduSize }));
+  const answer = await frames.next(ms);
+  if (answer.kind !== 'frame') return answer;
+  const ack = decodeS7(answer.frame);
+  if (ack.kind === 'error') return { kind: 'refused', errorClass: ack.errorClass, errorCode: ack.errorCode };
+  if (ack.kind !== 'setup-ack') return { kind: 'other', what: ack.kind };
+  const { maxAmqCalling, maxAmqCalled } = ack.params;
+  if (ack.params.pduSize < 64) return { kind: 'unusable', pduSize: ack.params.pduSize };
+  // The PLC answers with what it grants; a 0 would mean "none", which no CPU sends: treat as 1.
+  // More than we asked for is not ours to use.
+  return { kind: 'granted', pduSize: ack.params.pduSize, maxJobs: Math.max(1, Math.min(maxAmqCalling, maxAmqCalled, REQUESTED_AMQ)) };
+}
+
+/** Setup communication → its ack, as the client needs it: the grant, or an error. */
 async function setupCommunication(
   socket: net.Socket,
-  next: FrameWaiter,
+  frames: IsoFrames,
   e: S7Endpoint,
   name: string,
 ): Promise<{ pduSize: number; maxJobs: number }> {
-  socket.write(encodeSetupCommunication(0, { maxAmqCalling: REQUESTED_AMQ, maxAmqCalled: REQUESTED_AMQ, pduSize: e.pduSize }));
-  const ack = decodeS7(await next());
-  if (ack.kind === 'error') throw headerError(ack.errorClass, ack.errorCode, `${name} setup communication`);
-  if (ack.kind !== 'setup-ack') throw new ProtocolError(`${name}: expected the answer to setup communication, got ${ack.kind}`);
-  const { pduSize, maxAmqCalling, maxAmqCalled } = ack.params;
-  if (pduSize < 64) throw new ProtocolError(`${name} negotiated an unusable PDU size of ${pduSize}`);
-  // The PLC answers with what it grants; a 0 would mean "none", which no CPU sends: treat as 1.
-  // More than we asked for is not ours to use.
-  return { pduSize, maxJobs: Math.max(1, Math.min(maxAmqCalling, maxAmqCalled, REQUESTED_AMQ)) };
-}
-
-interface FrameWaiter {
-  (): Promise<Buffer>;
-  stop(): void;
-}
-
-/** Whole frames from the socket during the handshake; each call resolves the next one, or rejects on close/error/abort. */
-function frameWaiter(socket: net.Socket, reader: FrameReader, signal: AbortSignal, name: string): FrameWaiter {
-  const frames: Buffer[] = [];
-  let waiting: { resolve: (b: Buffer) => void; reject: (e: Error) => void } | undefined;
-  let failure: Error | undefined;
-  const flush = () => {
-    if (!waiting) return;
-    const w = waiting;
-    if (frames.length > 0) {
-      waiting = undefined;
-      w.resolve(frames.shift()!);
-    } else if (failure) {
-      waiting = undefined;
-      w.reject(failure);
-    }
-  };
-  const fail = (err: Error) => {
-    failure ??= err;
-    flush();
-  };
-  const onData = (chunk: Buffer) => {
-    try {
-      frames.push(...reader.push(chunk));
-    } catch (err) {
-      failure ??= toPlcError(err, 'PROTOCOL_ERROR');
-    }
-    flush();
-  };
-  const onClose = () =>
-    fail(
-      new ConnectionError(
+  const answer = await exchangeSetup(socket, frames, e.pduSize);
+  switch (answer.kind) {
+    case 'granted':
+      return { pduSize: answer.pduSize, maxJobs: answer.maxJobs };
+    case 'refused':
+      throw headerError(answer.errorClass, answer.errorCode, `${name} setup communication`);
+    case 'other':
+      throw new ProtocolError(`${name}: expected the answer to setup communication, got ${answer.what}`);
+    case 'unusable':
+      throw new ProtocolError(`${name} negotiated an unusable PDU size of ${answer.pduSize}`);
+    case 'garbage':
+      throw answer.error;
+    case 'closed':
+      if (answer.error) throw new ConnectionError('CONNECT_FAILED', `${name}: ${answer.error.message}`, { cause: answer.error });
+      throw new ConnectionError(
         'CONNECT_FAILED',
         `${name} closed the connection during the handshake (wrong rack/slot or TSAP, or the connection limit is reached)`,
-      ),
-    );
-  const onError = (err: Error) => fail(new ConnectionError('CONNECT_FAILED', `${name}: ${err.message}`, { cause: err }));
-  const onAbort = () => fail(abortError(`connecting to ${name}`, signal));
-  socket.on('data', onData);
-  socket.on('close', onClose);
-  socket.on('error', onError);
-  signal.addEventListener('abort', onAbort, { once: true });
-  const next = () =>
-    new Promise<Buffer>((resolve, reject) => {
-      waiting = { resolve, reject };
-      flush();
-    });
-  return Object.assign(next, {
-    stop() {
-      socket.removeListener('data', onData);
-      socket.removeListener('close', onClose);
-      socket.removeListener('error', onError);
-      signal.removeEventListener('abort', onAbort);
-    },
-  });
+      );
+    case 'silent': // no wait of its own: the supervisor's signal ends it
+      throw new ProtocolError(`${name}: no answer to setup communication within ${answer.ms} ms`);
+  }
 }

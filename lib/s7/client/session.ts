@@ -9,9 +9,9 @@ import { abortError, ConnectionError, PlcError, ProtocolError, TimeoutError, toP
 import { Fifo } from '../../link/fifo';
 import type { FrameReader } from '../../link/framer';
 import { decodeS7, s7AnswerRef, type S7Message } from '../codec';
-import { cotpTpduType, disconnectReason } from '../codec/cotp';
+import { cotpTpduType, disconnectReason } from '../../iso/cotp';
 import { setPduRef } from '../codec/pdu-decode';
-import { CotpType } from '../constants';
+import { CotpType } from '../../iso/constants';
 
 /** The counters a session adds to (the client's S7Stats, cumulative over reconnects). */
 export interface WireCounters {

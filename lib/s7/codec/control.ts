@@ -13,7 +13,8 @@
  *   end upload:  1F 00 00 00 | upload id (4)   answer: 1F
  */
 import { ProtocolError } from '../../errors';
-import { ControlFunction, FRAME_OVERHEAD, Rosctr, S7_ACK_HEADER, S7_JOB_HEADER, S7_PROTOCOL_ID } from '../constants';
+import { ControlFunction, Rosctr, S7_ACK_HEADER, S7_JOB_HEADER, S7_PROTOCOL_ID } from '../constants';
+import { FRAME_OVERHEAD } from '../../iso/constants';
 import { s7Frame } from './pdu';
 import { decodeS7 } from './pdu-decode';
 

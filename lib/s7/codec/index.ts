@@ -4,7 +4,7 @@
  * frame and throw only ProtocolError on malformed, truncated or hostile input.
  * Constants and error words live in ../constants.
  */
-export { checkTpkt, tpktFrame, assertTpkt } from './tpkt';
+export { checkTpkt, tpktFrame, assertTpkt } from '../../iso/tpkt';
 export {
   decodeCotp,
   encodeConnectionConfirm,
@@ -14,7 +14,7 @@ export {
   type CotpConnection,
   type CotpMessage,
   type CotpParamOrder,
-} from './cotp';
+} from '../../iso/cotp';
 export {
   dataLengthBytes,
   dataLengthField,

@@ -6,19 +6,9 @@
  * ProtocolError (the raw readers answer -1 or false instead).
  */
 import { ProtocolError } from '../../errors';
-import {
-  COTP_DT_HEADER,
-  CotpType,
-  FRAME_OVERHEAD,
-  READ_ITEM,
-  Rosctr,
-  S7Function,
-  S7_ACK_HEADER,
-  S7_JOB_HEADER,
-  S7_PROTOCOL_ID,
-  TPKT_VERSION,
-} from '../constants';
-import { decodeCotp } from './cotp';
+import { READ_ITEM, Rosctr, S7Function, S7_ACK_HEADER, S7_JOB_HEADER, S7_PROTOCOL_ID } from '../constants';
+import { COTP_DT_HEADER, CotpType, FRAME_OVERHEAD, TPKT_VERSION } from '../../iso/constants';
+import { decodeCotp } from '../../iso/cotp';
 import { dataLengthBytes, type ReadResponseItem, type S7Item, type S7Message, type S7WriteItem, type SetupParams } from './pdu';
 
 // ---------------------------------------------------------------- decoders

@@ -5,19 +5,9 @@
  * of it and throw only ProtocolError, are in pdu-decode.ts.
  */
 import { ValueError } from '../../errors';
-import {
-  COTP_DT_HEADER,
-  CotpType,
-  DataTransportSize,
-  FRAME_OVERHEAD,
-  READ_ITEM,
-  Rosctr,
-  S7Function,
-  S7_ACK_HEADER,
-  S7_JOB_HEADER,
-  S7_PROTOCOL_ID,
-} from '../constants';
-import { tpktFrame } from './tpkt';
+import { DataTransportSize, READ_ITEM, Rosctr, S7Function, S7_ACK_HEADER, S7_JOB_HEADER, S7_PROTOCOL_ID } from '../constants';
+import { COTP_DT_HEADER, CotpType, FRAME_OVERHEAD } from '../../iso/constants';
+import { tpktFrame } from '../../iso/tpkt';
 
 /** One S7ANY request item (syntax id 0x10). */
 export interface S7Item {

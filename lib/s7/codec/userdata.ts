@@ -26,7 +26,6 @@
 import { PlcError, ProtocolError, ValueError } from '../../errors';
 import {
   DataTransportSize,
-  FRAME_OVERHEAD,
   LAST_DATA_UNIT,
   MORE_DATA_UNITS,
   Rosctr,
@@ -35,7 +34,8 @@ import {
   UserdataMethod,
   UserdataType,
 } from '../constants';
-import { decodeCotp } from './cotp';
+import { FRAME_OVERHEAD } from '../../iso/constants';
+import { decodeCotp } from '../../iso/cotp';
 import { dataLengthBytes, s7Frame } from './pdu';
 
 /** The parameter part of a userdata PDU. */

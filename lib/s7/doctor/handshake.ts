@@ -1,16 +1,21 @@
 /**
  * The connection doctor's handshake steps (lib/s7/doctor/index.ts): TCP, the
- * COTP connection request and setup communication, on a raw socket with the
- * codec, so each answer (a COTP disconnect and its reason, silence, a
- * foreign protocol) can be told apart. A refused connection request is
- * followed by the usual addressings, to say which one the CPU accepts.
+ * COTP connection request and setup communication, run with the client's own
+ * step functions (openTcp, the ISO connect step of lib/iso/connect.ts,
+ * `exchangeSetup` of client/handshake.ts), each with the URL's timeout. What
+ * only the doctor does is here: each answer told apart in its words (a COTP
+ * disconnect and its reason, silence, a foreign protocol), and after a
+ * refused connection request the usual addressings, to say which one the
+ * CPU accepts.
  */
 import type * as net from 'node:net';
-import { abortError, type PlcError } from '../../errors';
-import { FrameReader } from '../../link/framer';
+import type { PlcError } from '../../errors';
+import { IsoConnectError, requestIsoConnection, type IsoRefusal } from '../../iso/connect';
+import { DR_CONGESTION } from '../../iso/constants';
+import { IsoFrames } from '../../iso/frames';
 import type { S7Endpoint } from '../../url';
-import { checkTpkt, decodeCotp, decodeS7, encodeConnectionRequest, encodeSetupCommunication } from '../codec';
-import { DR_CONGESTION, MAX_FRAME, REQUESTED_AMQ, TPDU_SIZE_CODE, headerError } from '../constants';
+import { exchangeSetup } from '../client/handshake';
+import { TPDU_SIZE_CODE, headerError } from '../constants';
 import { hex4 } from '../../values/text';
 import { addressingOf, alternatives, type Addressing } from './families';
 import { HINT } from './hints';
@@ -37,16 +42,18 @@ export class Handshake {
       return this.c.failed('tcp', err, (p) => this.tcpFailure(e, where, p));
     }
     this.c.pass('tcp', `${where} accepts TCP connections`);
+    const frames = new IsoFrames(socket, this.c.signal, 'the connection doctor');
     try {
       const tried = addressingOf(e);
-      const answer = await this.connectionRequest(socket, tried, e);
-      if (answer.kind !== 'accepted') await this.cotpFailure(e, address, tried, answer);
+      const refusal = await this.connectionRequest(socket, frames, tried, e, where);
+      if (refusal) await this.cotpFailure(e, address, tried, refusal);
       this.c.pass(
         'cotp',
         `the CPU accepted the connection request (${tried.label}: called TSAP 0x${hex4(tried.calledTsap)}, calling TSAP 0x${hex4(tried.callingTsap)})`,
       );
-      await this.setup(socket, e);
+      await this.setup(socket, frames, e);
     } finally {
+      frames.stop();
       socket.destroy();
     }
   }
@@ -73,53 +80,61 @@ export class Handshake {
     this.c.fail('tcp', p.message);
   }
 
-  /** Sends a COTP connection request and waits for the answer frame. */
-  private async connectionRequest(socket: net.Socket, a: Addressing, e: S7Endpoint): Promise<CotpAnswer> {
-    const frames = new FrameWaiter(socket, this.c.signal);
+  /** The ISO connect step's CR → CC with addressing `a`: undefined when the CPU confirms, else what it did instead. */
+  private async connectionRequest(
+    socket: net.Socket,
+    frames: IsoFrames,
+    a: Addressing,
+    e: S7Endpoint,
+    where: string,
+  ): Promise<IsoRefusal | undefined> {
     try {
-      socket.write(
-        encodeConnectionRequest({ sourceRef: 0x0001, callingTsap: a.callingTsap, calledTsap: a.calledTsap, tpduSize: TPDU_SIZE_CODE }),
-      );
-      const frame = await frames.next(this.c.stepTimeout(e));
-      if (frame.kind !== 'frame') return frame;
-      const m = decodeCotp(frame.frame);
-      if (m.type === 'CC') return { kind: 'accepted' };
-      if (m.type === 'DR') return { kind: 'refused', reason: m.reason };
-      return { kind: 'foreign', message: `a COTP ${m.type} instead of a connection confirm` };
+      await requestIsoConnection(socket, frames, {
+        name: where,
+        callingTsap: a.callingTsap,
+        calledTsap: a.calledTsap,
+        tpduSize: TPDU_SIZE_CODE,
+        answerTimeout: this.c.stepTimeout(e),
+        signal: this.c.signal,
+      });
+      return undefined;
     } catch (err) {
       if (this.c.signal.aborted) throw err;
-      return { kind: 'foreign', message: (err as Error).message };
-    } finally {
-      frames.stop();
+      if (err instanceof IsoConnectError) return err.refusal;
+      return { kind: 'garbage', message: (err as Error).message };
     }
   }
 
-  private async cotpFailure(
-    e: S7Endpoint,
-    address: string,
-    tried: Addressing,
-    answer: Exclude<CotpAnswer, { kind: 'accepted' }>,
-  ): Promise<never> {
+  private async cotpFailure(e: S7Endpoint, address: string, tried: Addressing, refusal: IsoRefusal): Promise<never> {
     const asked = (why: string) =>
       `${tried.label} (called TSAP 0x${hex4(tried.calledTsap)}, calling TSAP 0x${hex4(tried.callingTsap)}; ${why})`;
-    if (answer.kind === 'silent') {
-      this.c.fail(
-        'cotp',
-        `port ${e.port} accepts TCP but nothing answered the ISO-on-TCP connection request within ${answer.ms} ms`,
-        HINT.notIsoOnTcp,
-      );
+    const notIso = (what: string) => this.c.fail('cotp', `the answer is not an ISO-on-TCP connection confirm: ${what}`, HINT.otherProtocol);
+    switch (refusal.kind) {
+      case 'silent':
+        return this.c.fail(
+          'cotp',
+          `port ${e.port} accepts TCP but nothing answered the ISO-on-TCP connection request within ${refusal.ms} ms`,
+          HINT.notIsoOnTcp,
+        );
+      case 'garbage':
+        return notIso(refusal.message);
+      case 'error':
+        return notIso('a COTP ER instead of a connection confirm');
+      case 'unexpected':
+        return notIso(`a COTP ${refusal.type} instead of a connection confirm`);
+      case 'disconnect':
+        if (refusal.reason === DR_CONGESTION) {
+          this.c.fail(
+            'cotp',
+            `the CPU refused the connection request for ${asked('COTP disconnect, reason 1: congestion')}: no free connection`,
+            HINT.congestion,
+          );
+        }
+        break;
+      case 'closed':
+        break;
     }
-    if (answer.kind === 'foreign') {
-      this.c.fail('cotp', `the answer is not an ISO-on-TCP connection confirm: ${answer.message}`, HINT.otherProtocol);
-    }
-    if (answer.kind === 'refused' && answer.reason === DR_CONGESTION) {
-      this.c.fail(
-        'cotp',
-        `the CPU refused the connection request for ${asked('COTP disconnect, reason 1: congestion')}: no free connection`,
-        HINT.congestion,
-      );
-    }
-    const how = answer.kind === 'refused' ? `COTP disconnect, reason ${answer.reason}` : 'it closed the connection without an answer';
+    const how = refusal.kind === 'disconnect' ? `COTP disconnect, reason ${refusal.reason}` : 'it closed the connection without an answer';
     const found = await this.findAddressing(e, address);
     this.c.fail('cotp', `the CPU refused the connection request for ${asked(how)}: wrong rack/slot or TSAP`, HINT.addressing(found));
   }
@@ -129,105 +144,45 @@ export class Handshake {
     for (const a of alternatives(e)) {
       if (this.c.signal.aborted) return undefined;
       let socket: net.Socket | undefined;
+      let frames: IsoFrames | undefined;
       try {
         socket = await this.c.tcp(e, address);
-        if ((await this.connectionRequest(socket, a, e)).kind === 'accepted') return a;
+        frames = new IsoFrames(socket, this.c.signal, 'the connection doctor');
+        if ((await this.connectionRequest(socket, frames, a, e, `${address}:${e.port}`)) === undefined) return a;
       } catch {
         if (this.c.signal.aborted) return undefined;
       } finally {
+        frames?.stop();
         socket?.destroy();
       }
     }
     return undefined;
   }
 
-  private async setup(socket: net.Socket, e: S7Endpoint): Promise<void> {
-    const frames = new FrameWaiter(socket, this.c.signal);
+  /** The client's setup step (exchangeSetup), each answer in the doctor's words. */
+  private async setup(socket: net.Socket, frames: IsoFrames, e: S7Endpoint): Promise<void> {
     try {
-      socket.write(encodeSetupCommunication(0, { maxAmqCalling: REQUESTED_AMQ, maxAmqCalled: REQUESTED_AMQ, pduSize: e.pduSize }));
-      const answer = await frames.next(this.c.stepTimeout(e));
-      if (answer.kind === 'silent') this.c.fail('setup', `no answer to setup communication within ${answer.ms} ms`, HINT.setupSilent);
-      if (answer.kind === 'closed') this.c.fail('setup', 'the CPU closed the connection at setup communication', HINT.setupClosed);
-      if (answer.kind === 'foreign') this.c.fail('setup', `the answer to setup communication is malformed: ${answer.message}`);
-      const ack = decodeS7(answer.frame);
-      if (ack.kind === 'error') {
-        const err = headerError(ack.errorClass, ack.errorCode, 'setup communication');
-        this.c.fail('setup', err.message, HINT.setupRefused);
+      const answer = await exchangeSetup(socket, frames, e.pduSize, this.c.stepTimeout(e));
+      switch (answer.kind) {
+        case 'silent':
+          return this.c.fail('setup', `no answer to setup communication within ${answer.ms} ms`, HINT.setupSilent);
+        case 'closed':
+          return this.c.fail('setup', 'the CPU closed the connection at setup communication', HINT.setupClosed);
+        case 'garbage':
+          return this.c.fail('setup', `the answer to setup communication is malformed: ${answer.error.message}`);
+        case 'refused':
+          return this.c.fail('setup', headerError(answer.errorClass, answer.errorCode, 'setup communication').message, HINT.setupRefused);
+        case 'other':
+          return this.c.fail('setup', `the answer to setup communication is a ${answer.what}`);
+        case 'unusable':
+          return this.c.fail('setup', `the CPU negotiated an unusable PDU size of ${answer.pduSize} bytes`);
+        case 'granted': {
+          const amq = answer.maxJobs;
+          this.c.pass('setup', `PDU ${answer.pduSize} bytes (asked ${e.pduSize}), ${amq} parallel job${amq === 1 ? '' : 's'} (AmQ)`);
+        }
       }
-      if (ack.kind !== 'setup-ack') this.c.fail('setup', `the answer to setup communication is a ${ack.kind}`);
-      const { pduSize, maxAmqCalling, maxAmqCalled } = ack.params;
-      if (pduSize < 64) this.c.fail('setup', `the CPU negotiated an unusable PDU size of ${pduSize} bytes`);
-      const amq = Math.max(1, Math.min(maxAmqCalling, maxAmqCalled, REQUESTED_AMQ));
-      this.c.pass('setup', `PDU ${pduSize} bytes (asked ${e.pduSize}), ${amq} parallel job${amq === 1 ? '' : 's'} (AmQ)`);
     } catch (err) {
       return this.c.failed('setup', err, (p) => this.c.fail('setup', p.message));
-    } finally {
-      frames.stop();
     }
-  }
-}
-
-type CotpAnswer =
-  | { kind: 'accepted' }
-  | { kind: 'refused'; reason: number }
-  | { kind: 'closed' }
-  | { kind: 'silent'; ms: number }
-  | { kind: 'foreign'; message: string };
-type FrameResult =
-  { kind: 'frame'; frame: Buffer } | { kind: 'closed' } | { kind: 'silent'; ms: number } | { kind: 'foreign'; message: string };
-
-/** Whole TPKT frames from a raw socket, one at a time, each with its own wait. */
-class FrameWaiter {
-  private readonly reader = new FrameReader(checkTpkt, MAX_FRAME);
-  private readonly frames: Buffer[] = [];
-  private end: FrameResult | undefined;
-  private wake: (() => void) | undefined;
-  private readonly onData = (chunk: Buffer) => {
-    try {
-      this.frames.push(...this.reader.push(chunk));
-    } catch (err) {
-      this.end ??= { kind: 'foreign', message: (err as Error).message };
-    }
-    this.wake?.();
-  };
-  private readonly onClose = () => {
-    this.end ??= { kind: 'closed' };
-    this.wake?.();
-  };
-
-  constructor(
-    private readonly socket: net.Socket,
-    private readonly signal: AbortSignal,
-  ) {
-    socket.on('data', this.onData);
-    socket.on('close', this.onClose);
-    if (socket.destroyed) this.end = { kind: 'closed' };
-  }
-
-  next(ms: number): Promise<FrameResult> {
-    return new Promise((resolve, reject) => {
-      const done = () => {
-        clearTimeout(timer);
-        this.wake = undefined;
-        this.signal.removeEventListener('abort', onAbort);
-      };
-      const check = () => {
-        const frame = this.frames.shift();
-        if (frame) return (done(), resolve({ kind: 'frame', frame }), true);
-        if (this.end) return (done(), resolve(this.end), true);
-        return false;
-      };
-      const onAbort = () => (done(), reject(abortError('waiting for a frame', this.signal)));
-      const timer = setTimeout(() => (done(), resolve({ kind: 'silent', ms })), ms);
-      if (check()) return;
-      if (this.signal.aborted) return onAbort();
-      this.signal.addEventListener('abort', onAbort, { once: true });
-      this.wake = () => void check();
-    });
-  }
-
-  stop(): void {
-    this.socket.removeListener('data', this.onData);
-    this.socket.removeListener('close', this.onClose);
   }
 }

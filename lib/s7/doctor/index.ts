@@ -2,8 +2,8 @@
  * The connection doctor: walks an S7 connection step by step (name, TCP,
  * COTP, setup communication, identity, protection, PUT/GET, then each given
  * address) and stops at the first failure with what to change, in words.
- * The handshake steps run on a raw socket with the codec (handshake.ts); the
- * steps after it use an S7Client, the address and name steps in tags.ts. What
+ * The handshake steps are the client's own (handshake.ts reads their answers
+ * in the doctor's words); the steps after it use an S7Client, the address and name steps in tags.ts. What
  * a step says to change is in hints.ts, the CPU families and their usual
  * addressing in families.ts. Every socket is closed on every path, and the
  * whole walk has one deadline.

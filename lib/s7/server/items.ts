@@ -14,7 +14,8 @@
  * items (it crashed its process); the simulator writes the first N and
  * answers N return codes, the same shape as its reads.
  */
-import { FRAME_OVERHEAD, S7_JOB_HEADER, S7Function, READ_ITEM } from '../constants';
+import { S7_JOB_HEADER, S7Function, READ_ITEM } from '../constants';
+import { FRAME_OVERHEAD } from '../../iso/constants';
 import { dataLengthBytes } from '../codec/pdu';
 
 /** Where the parameters of a job start (TPKT, COTP DT, S7 job header). */

@@ -10,10 +10,7 @@ import type { AreaName } from '../../types';
 import { dataLengthBytes, dataLengthField, encodeHeaderErrorAck, s7Frame } from '../codec/pdu';
 import { s7PduRef, s7Rosctr } from '../codec/pdu-decode';
 import {
-  COTP_DT_HEADER,
-  CotpType,
   DataTransportSize,
-  FRAME_OVERHEAD,
   HeaderError,
   READ_ITEM,
   ReturnCode,
@@ -23,10 +20,10 @@ import {
   S7_ACK_HEADER,
   S7_JOB_HEADER,
   S7_PROTOCOL_ID,
-  TPKT_HEADER,
   TransportSize,
   VAR_PARAMETER_HEAD,
 } from '../constants';
+import { COTP_DT_HEADER, CotpType, FRAME_OVERHEAD, TPKT_HEADER } from '../../iso/constants';
 
 export interface JobContext {
   memory: PlcMemory;

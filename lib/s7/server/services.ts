@@ -23,7 +23,6 @@ import { decodePassword, decodeUserdata, encodeUserdataResponse, USERDATA_OVERHE
 import {
   ControlFunction,
   CpuSubfunction,
-  FRAME_OVERHEAD,
   S7Function,
   SecuritySubfunction,
   TimeSubfunction,
@@ -33,6 +32,7 @@ import {
   blockTypeName,
   type BlockType,
 } from '../constants';
+import { FRAME_OVERHEAD } from '../../iso/constants';
 import { blockNumbers, blockSpec, serveBlockFunction, type SimulatedBlock } from './blocks';
 import type { CpuIdentity } from './profiles';
 import { SERVICE_CODE as E } from './service-codes';

@@ -1,7 +1,7 @@
 /** TPKT (RFC 1006 §6): version 3, reserved 0, 16-bit length of the whole packet. */
-import { ProtocolError, ValueError } from '../../errors';
-import type { FrameCheck } from '../../link/framer';
-import { COTP_DT_HEADER, TPKT_HEADER, TPKT_VERSION } from '../constants';
+import { ProtocolError, ValueError } from '../errors';
+import type { FrameCheck } from '../link/framer';
+import { COTP_DT_HEADER, TPKT_HEADER, TPKT_VERSION } from './constants';
 
 /** Smallest TPKT that can carry a COTP header (LI + code + at least one byte). */
 const MIN_TPKT = TPKT_HEADER + COTP_DT_HEADER;

@@ -1,6 +1,6 @@
 /** COTP (ISO 8073 class 0, as used by RFC 1006): CR, CC, DR, DC, DT, ER TPDUs. */
-import { ProtocolError } from '../../errors';
-import { CotpParam, CotpType, TPKT_HEADER } from '../constants';
+import { ProtocolError, ValueError } from '../errors';
+import { CotpParam, CotpType, TPKT_HEADER } from './constants';
 import { assertTpkt, tpktFrame } from './tpkt';
 
 export interface CotpConnection {
@@ -19,11 +19,36 @@ export interface CotpConnection {
 /** Parameter order on the wire: circulated CRs send the TSAPs first, S7 CPUs' CC the TPDU size first (docs/protocols.md, "COTP"). */
 export type CotpParamOrder = 'tsap-first' | 'size-first';
 
-const CONNECTION_PARAMS = 11; // 3 + 4 + 4 bytes: C0 01 xx, C1 02 xxxx, C2 02 xxxx
+/**
+ * A TSAP as a connection request names it: a 2-byte number (S7's rack/slot
+ * TSAPs, 0x0301), or its bytes as sent, of any length up to 255 (S7CommPlus
+ * calls the TSAP "SIMATIC-ROOT-HMI", 16 ASCII bytes: s7commplus (MIT),
+ * s7commplus/protocol.py, S7COMMPLUS_REMOTE_TSAP).
+ */
+export type CotpTsap = number | Uint8Array;
 
-function encodeConnection(type: CotpType, c: CotpConnection, order: CotpParamOrder): Buffer {
-  const frame = tpktFrame(7 + CONNECTION_PARAMS);
-  frame[4] = 6 + CONNECTION_PARAMS; // length indicator: header bytes after this one
+/** What a connection request carries: a CotpConnection whose TSAPs may also be byte strings. */
+export interface CotpRequest extends Omit<CotpConnection, 'destinationRef' | 'callingTsap' | 'calledTsap'> {
+  callingTsap: CotpTsap;
+  calledTsap: CotpTsap;
+}
+
+/** The bytes of a TSAP parameter's value. */
+function tsapBytes(tsap: CotpTsap, what: string): Uint8Array {
+  if (typeof tsap !== 'number') {
+    if (tsap.length === 0 || tsap.length > 255) throw new ValueError(what, `a TSAP of ${tsap.length} bytes (1 to 255)`);
+    return tsap;
+  }
+  return Uint8Array.of((tsap >> 8) & 0xff, tsap & 0xff);
+}
+
+function encodeConnection(type: CotpType, c: CotpRequest & { destinationRef: number }, order: CotpParamOrder): Buffer {
+  const calling = tsapBytes(c.callingTsap, 'calling TSAP');
+  const called = tsapBytes(c.calledTsap, 'called TSAP');
+  const params = 3 + 2 + calling.length + 2 + called.length; // C0 01 xx, C1 len …, C2 len …
+  if (6 + params > 0xfe) throw new ValueError('COTP header', `${7 + params} bytes exceed the length indicator's 254`);
+  const frame = tpktFrame(7 + params);
+  frame[4] = 6 + params; // length indicator: header bytes after this one
   frame[5] = type;
   frame.writeUInt16BE(c.destinationRef & 0xffff, 6);
   frame.writeUInt16BE(c.sourceRef & 0xffff, 8);
@@ -35,20 +60,24 @@ function encodeConnection(type: CotpType, c: CotpConnection, order: CotpParamOrd
     frame[p + 2] = c.tpduSize;
     p += 3;
   };
+  const tsap = (code: CotpParam, value: Uint8Array) => {
+    frame[p] = code;
+    frame[p + 1] = value.length;
+    frame.set(value, p + 2);
+    p += 2 + value.length;
+  };
   if (order === 'size-first') size();
-  frame[p] = CotpParam.CallingTsap;
-  frame[p + 1] = 2;
-  frame.writeUInt16BE(c.callingTsap & 0xffff, p + 2);
-  frame[p + 4] = CotpParam.CalledTsap;
-  frame[p + 5] = 2;
-  frame.writeUInt16BE(c.calledTsap & 0xffff, p + 6);
-  p += 8;
+  tsap(CotpParam.CallingTsap, calling);
+  tsap(CotpParam.CalledTsap, called);
   if (order === 'tsap-first') size();
   return frame;
 }
 
-/** COTP Connection Request; default order as in the CR circulated in S7 examples (test/fixtures/s7.ts, DOC). */
-export function encodeConnectionRequest(c: Omit<CotpConnection, 'destinationRef'>, order: CotpParamOrder = 'tsap-first'): Buffer {
+/**
+ * COTP Connection Request; default order as in the CR circulated in S7 examples (test/fixtures/s7.ts, DOC).
+ * The TSAPs are numbers (2 bytes each) or byte strings (see CotpTsap).
+ */
+export function encodeConnectionRequest(c: CotpRequest, order: CotpParamOrder = 'tsap-first'): Buffer {
   return encodeConnection(CotpType.CR, { ...c, destinationRef: 0 }, order);
 }
 
