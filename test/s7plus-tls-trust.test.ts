@@ -16,7 +16,7 @@ import { startTls, tlsFailure, type SecureChannel } from '../lib/s7plus/transpor
 import { acceptTls, loadServerCertificate } from '../lib/s7plus/transport/server-tls';
 import { CertificateError, parseFingerprint, type TlsTrust } from '../lib/s7plus/transport/trust';
 import { FrameReader } from '../lib/link/framer';
-import { checkTpkt } from '../lib/s7/codec/tpkt';
+import { checkTpkt } from '../lib/iso/tpkt';
 import { tunnelPair } from './support/s7plus-tls';
 import { until, waitFor } from './support/wait';
 

@@ -13,12 +13,14 @@ import * as os from 'node:os';
 import * as path from 'node:path';
 import * as tls from 'node:tls';
 import { FrameReader } from '../lib/link/framer';
-import { decodeCotp } from '../lib/s7/codec/cotp';
-import { checkTpkt } from '../lib/s7/codec/tpkt';
+import { decodeCotp, encodeConnectionConfirm } from '../lib/iso/cotp';
+import { checkTpkt } from '../lib/iso/tpkt';
 import { fingerprint256, generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import { CotpTunnel } from '../lib/s7plus/transport/tunnel';
+import { startTls } from '../lib/s7plus/transport/handshake';
+import { isoConnect } from '../lib/iso/connect';
 import { skipBecause } from './support/skip';
-import { cotpConnect, countingServer, listeners, s7commplusPython, startPythonServer, tunnelPair } from './support/s7plus-tls';
+import { countingServer, listeners, s7commplusPython, startPythonServer, tunnelPair } from './support/s7plus-tls';
 import { activeHandles, settle, until, waitFor } from './support/wait';
 
 const dt = (payload: Buffer, eot = true) => {
@@ -92,6 +94,38 @@ describe('s7plus transport: COTP tunnel', function () {
     peer.end();
     await waitFor(tunnel, 'close');
     expect(client.destroyed).to.equal(true);
+    await new Promise((r) => srv.server.close(r));
+    expect(await srv.open()).to.equal(0);
+  });
+
+  it("takes over the ISO connect step's frame reader with the part of a frame that came with the CC", async () => {
+    const srv = await countingServer((s) => {
+      s.once('data', () => {
+        // The CC and the first half of a DT frame in one TCP segment, the rest later.
+        const cc = encodeConnectionConfirm({ sourceRef: 7, destinationRef: 1, callingTsap: 0x0600, calledTsap: 0x0100, tpduSize: 0x0a });
+        const data = dt(Buffer.from('handed over'));
+        s.write(Buffer.concat([cc, data.subarray(0, 9)]));
+        s.once('data', () => s.end(data.subarray(9)));
+      });
+    });
+    const iso = await isoConnect({
+      name: 'test',
+      host: '127.0.0.1',
+      port: srv.port,
+      timeout: 5000,
+      answerTimeout: 5000,
+      callingTsap: 0x0600,
+      calledTsap: Buffer.from('SIMATIC-ROOT-HMI'),
+      tpduSize: 0x0a,
+    });
+    const tunnel = new CotpTunnel(iso.socket, { tpduSize: iso.tpduBytes, reader: iso.frames.reader });
+    iso.frames.stop();
+    let got = '';
+    tunnel.on('data', (d: Buffer) => (got += d.toString()));
+    const closed = waitFor(tunnel, 'close');
+    tunnel.write('go');
+    await closed;
+    expect(got).to.equal('handed over');
     await new Promise((r) => srv.server.close(r));
     expect(await srv.open()).to.equal(0);
   });
@@ -248,39 +282,46 @@ describe('s7plus transport: COTP tunnel', function () {
       if (dir) fs.rmSync(dir, { recursive: true, force: true });
     });
 
-    it('COTP connect, InitSSL in clear, then a TLS handshake inside DT frames with our certificate; data flows inside', async () => {
+    it('ISO connect with the S7CommPlus TSAPs, InitSSL in clear, then TLS inside DT frames to our pinned certificate; data flows inside', async () => {
       const peer = await startPythonServer(python!, path.join(dir, 'cert.pem'), path.join(dir, 'key.pem'));
       try {
-        const socket = net.connect({ host: '127.0.0.1', port: peer.port });
-        await waitFor(socket, 'connect');
-        const { head, tpduSize } = await cotpConnect(socket);
-        expect(tpduSize).to.equal(1024);
-        const tunnel = new CotpTunnel(socket, { tpduSize, head });
+        // Calling TSAP 0x0600, called TSAP "SIMATIC-ROOT-HMI" (s7commplus (MIT), protocol.py S7COMMPLUS_LOCAL_TSAP / _REMOTE_TSAP).
+        const iso = await isoConnect({
+          name: 's7plus://127.0.0.1',
+          host: '127.0.0.1',
+          port: peer.port,
+          timeout: 5000,
+          answerTimeout: 5000,
+          callingTsap: 0x0600,
+          calledTsap: Buffer.from('SIMATIC-ROOT-HMI', 'ascii'),
+          tpduSize: 0x0a,
+        });
+        expect(iso.tpduBytes).to.equal(1024);
+        const tunnel = new CotpTunnel(iso.socket, { tpduSize: iso.tpduBytes, reader: iso.frames.reader });
+        iso.frames.stop();
         // InitSSL (function 0x05B3), V1 framing, transport flags 0x30 (s7commplus (MIT), connection.py _init_ssl).
         const initSsl = (seq: number) =>
           Buffer.from(`7201001231000005b30000${seq.toString(16).padStart(4, '0')}00000000300000000072010000`, 'hex');
         tunnel.write(initSsl(1));
         const reply: Buffer = await waitFor(tunnel, 'data', 5000);
-        expect(reply.subarray(0, 2).toString('hex')).to.equal('7202'); // V2 emulation answers in V2 framing
+        expect(reply.subarray(0, 2).toString('hex')).to.equal('7202'); // the V2 emulation answers in V2 framing
         expect(reply.readUInt16BE(4 + 3)).to.equal(0x05b3);
         tunnel.pause();
-        const clientTls = tls.connect({
-          socket: tunnel,
-          rejectUnauthorized: false,
-          checkServerIdentity: () => undefined,
-          minVersion: 'TLSv1.2',
+        const channel = await startTls(tunnel, {
+          trust: { fingerprint: cert.fingerprint.toLowerCase() },
+          host: '127.0.0.1',
+          timeout: 10000,
         });
-        await waitFor(clientTls, 'secureConnect', 10000);
-        expect(fingerprint256(clientTls.getPeerX509Certificate()!.raw)).to.equal(cert.fingerprint);
-        expect(['TLSv1.2', 'TLSv1.3']).to.include(clientTls.getProtocol());
+        expect(channel.certificate.fingerprint).to.equal(cert.fingerprint);
+        expect(['TLSv1.2', 'TLSv1.3']).to.include(channel.protocol);
         // The emulator answers requests inside TLS: an InitSSL again proves data both ways.
-        clientTls.write(initSsl(2));
-        const inside: Buffer = await waitFor(clientTls, 'data', 5000);
+        channel.socket.write(initSsl(2));
+        const inside: Buffer = await waitFor(channel.socket, 'data', 5000);
         expect(inside.readUInt16BE(4 + 3)).to.equal(0x05b3);
         expect(inside.readUInt16BE(4 + 7)).to.equal(2);
-        clientTls.end();
-        await waitFor(clientTls, 'close', 5000);
-        await until(() => socket.destroyed, 5000);
+        channel.socket.end();
+        await waitFor(channel.socket, 'close', 5000);
+        await until(() => iso.socket.destroyed, 5000);
       } finally {
         await peer.stop();
       }

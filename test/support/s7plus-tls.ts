@@ -8,8 +8,8 @@ import * as fs from 'node:fs';
 import * as net from 'node:net';
 import * as path from 'node:path';
 import { FrameReader } from '../../lib/link/framer';
-import { checkTpkt } from '../../lib/s7/codec/tpkt';
-import { decodeCotp, encodeConnectionConfirm } from '../../lib/s7/codec/cotp';
+import { checkTpkt } from '../../lib/iso/tpkt';
+import { decodeCotp, encodeConnectionConfirm } from '../../lib/iso/cotp';
 import { CotpTunnel } from '../../lib/s7plus/transport/tunnel';
 import { until } from './wait';
 

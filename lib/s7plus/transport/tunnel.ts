@@ -19,9 +19,9 @@
 import { Duplex } from 'node:stream';
 import { ConnectionError, ProtocolError, ValueError } from '../../errors';
 import { FrameReader } from '../../link/framer';
-import { COTP_DT_HEADER, CotpType, TPKT_HEADER, TPKT_VERSION } from '../../s7/constants';
-import { decodeCotp } from '../../s7/codec/cotp';
-import { checkTpkt } from '../../s7/codec/tpkt';
+import { COTP_DT_HEADER, CotpType, MAX_FRAME, TPKT_HEADER, TPKT_VERSION } from '../../iso/constants';
+import { decodeCotp } from '../../iso/cotp';
+import { checkTpkt } from '../../iso/tpkt';
 
 /** The byte stream below the tunnel: a net.Socket, or any Duplex (tests). */
 type Carrier = Duplex & { remoteAddress?: string; remotePort?: number };
@@ -29,7 +29,13 @@ type Carrier = Duplex & { remoteAddress?: string; remotePort?: number };
 export interface CotpTunnelOptions {
   /** The TPDU size the CC confirmed, in bytes (1 << the size code: 1024 for 0x0A). */
   tpduSize: number;
-  /** Bytes already read from the carrier after the CC, handed over in order. */
+  /**
+   * The frame reader of the handshake (lib/iso/frames.ts `IsoFrames.reader`),
+   * with any part of a frame it holds: handed over with the socket so that no
+   * byte is lost. Default: a new one.
+   */
+  reader?: FrameReader;
+  /** Bytes already read from the carrier after the CC, handed over in order (after what `reader` holds). */
   head?: Buffer;
   /** Who is at the other end, for messages; default the carrier's remote address. */
   peer?: string;
@@ -44,7 +50,7 @@ export class CotpTunnel extends Duplex {
   /** Largest DT payload sent in one frame. */
   readonly maxPayload: number;
   private readonly carrier: Carrier;
-  private readonly reader = new FrameReader(checkTpkt);
+  private readonly reader: FrameReader;
   /** A write waiting for the carrier's 'drain'. */
   private waitingDrain: (() => void) | undefined;
   private readonly onData = (chunk: Buffer) => this.receive(chunk);
@@ -74,6 +80,7 @@ export class CotpTunnel extends Duplex {
       throw new ValueError('COTP TPDU size', `${size} is not a whole number of bytes between ${MIN_TPDU} and ${MAX_TPDU}`);
     }
     this.carrier = carrier;
+    this.reader = options.reader ?? new FrameReader(checkTpkt, MAX_FRAME);
     this.maxPayload = size - COTP_DT_HEADER;
     this.peer = options.peer ?? (carrier.remoteAddress ? `${carrier.remoteAddress}:${carrier.remotePort}` : 'the peer');
     carrier.on('data', this.onData);
