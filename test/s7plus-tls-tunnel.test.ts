@@ -18,9 +18,18 @@ import { checkTpkt } from '../lib/iso/tpkt';
 import { fingerprint256, generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import { CotpTunnel } from '../lib/s7plus/transport/tunnel';
 import { startTls } from '../lib/s7plus/transport/handshake';
+import { acceptTls, loadServerCertificate } from '../lib/s7plus/transport/server-tls';
 import { isoConnect } from '../lib/iso/connect';
 import { skipBecause } from './support/skip';
-import { countingServer, listeners, s7commplusPython, startPythonServer, tunnelPair } from './support/s7plus-tls';
+import {
+  cotpAccept,
+  countingServer,
+  pythonTlsClient,
+  listeners,
+  s7commplusPython,
+  startPythonServer,
+  tunnelPair,
+} from './support/s7plus-tls';
 import { activeHandles, settle, until, waitFor } from './support/wait';
 
 const dt = (payload: Buffer, eot = true) => {
@@ -258,12 +267,16 @@ describe('s7plus transport: COTP tunnel', function () {
     expect(await pair.srv.open()).to.equal(0);
   });
 
-  it('refuses a TPDU size outside 128..65531 with a typed error', () => {
+  it('refuses a TPDU size outside 128..65531 with a typed error, and takes 0 as the default 128', () => {
     const socket = new net.Socket();
     expect(() => new CotpTunnel(socket, { tpduSize: 64 }))
       .to.throw(/TPDU size.*64/)
       .with.property('code', 'INVALID_VALUE');
     expect(() => new CotpTunnel(socket, { tpduSize: 70000 })).to.throw(/70000/);
+    // 0: the CC named no size, which is ISO 8073's default of 128 bytes (125 of payload).
+    const tunnel = new CotpTunnel(socket, { tpduSize: 0 });
+    expect(tunnel.maxPayload).to.equal(125);
+    tunnel.destroy();
     socket.destroy();
   });
 
@@ -280,6 +293,30 @@ describe('s7plus transport: COTP tunnel', function () {
     });
     after(() => {
       if (dir) fs.rmSync(dir, { recursive: true, force: true });
+    });
+
+    it("serves TLS with server-tls.ts to the s7commplus client's own TLS step (its SSL context and pin)", async () => {
+      const served = await loadServerCertificate();
+      let serverTls: tls.TLSSocket | undefined;
+      const srv = await countingServer((s) => {
+        void (async () => {
+          const head = await cotpAccept(s);
+          const tunnel = new CotpTunnel(s, { tpduSize: 1024, head });
+          serverTls = await acceptTls(tunnel, served, { timeout: 10000, peer: 'the s7commplus client' });
+          serverTls.on('data', (d: Buffer) => serverTls!.write(Buffer.concat([Buffer.from('echo: '), d])));
+          serverTls.on('error', () => {});
+        })().catch(() => s.destroy());
+      });
+      try {
+        const result = await pythonTlsClient(python!, srv.port, served.fingerprint.toLowerCase());
+        expect(result.echo).to.equal('echo: ping from python');
+        expect(result.fingerprint.toUpperCase()).to.equal(served.fingerprint);
+        expect(['TLSv1.2', 'TLSv1.3']).to.include(result.version);
+        await until(() => serverTls?.destroyed === true, 5000, 'the server side closed after the client left');
+      } finally {
+        await new Promise((r) => srv.server.close(r));
+      }
+      expect(await srv.open()).to.equal(0);
     });
 
     it('ISO connect with the S7CommPlus TSAPs, InitSSL in clear, then TLS inside DT frames to our pinned certificate; data flows inside', async () => {

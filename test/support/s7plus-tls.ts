@@ -192,3 +192,41 @@ export async function startPythonServer(
   };
   return { port, child, stop };
 }
+
+// The s7commplus client's own TLS step (its ISO connect, then connection.py `_activate_tls` with its SSL
+// context and certificate pin) against a server of ours; echoes one message inside TLS.
+const CLIENT_TLS_SCRIPT = `
+import json, sys
+from s7commplus.connection import S7CommPlusConnection
+port, pin = int(sys.argv[1]), sys.argv[2]
+c = S7CommPlusConnection("127.0.0.1", port)
+c._iso_conn.connect(5.0)
+c._tls_cert_fingerprint = bytes.fromhex(pin)
+c._activate_tls()
+c._send_s7_data(b"ping from python")
+echo = c._recv_s7_data()
+print(json.dumps({"version": c._ssl_object.version(), "cipher": c._ssl_object.cipher()[0], "echo": echo.decode(), "fingerprint": c.peer_certificate_fingerprint().hex()}))
+c._iso_conn.disconnect()
+`;
+
+/** Runs the s7commplus client's TLS step against 127.0.0.1:`port`, pinning `pin`; resolves its JSON line. */
+export function pythonTlsClient(
+  python: string,
+  port: number,
+  pin: string,
+  ms = 20000,
+): Promise<{ version: string; cipher: string; echo: string; fingerprint: string }> {
+  return new Promise((resolve, reject) => {
+    const child = spawn(python, ['-c', CLIENT_TLS_SCRIPT, String(port), pin], { stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    let err = '';
+    child.stdout!.on('data', (d: Buffer) => (out += d.toString()));
+    child.stderr!.on('data', (d: Buffer) => (err += d.toString()));
+    const timer = setTimeout(() => child.kill(), ms);
+    child.once('exit', (code) => {
+      clearTimeout(timer);
+      if (code === 0) resolve(JSON.parse(out.trim().split('\n').pop()!));
+      else reject(new Error(`the s7commplus client exited with ${code}: ${err.trim().split('\n').slice(-3).join(' | ')}`));
+    });
+  });
+}

@@ -8,7 +8,7 @@
  * the client, `new tls.TLSSocket(tunnel, { isServer: true })` on a server.
  *
  * Out: each write is cut into DT frames of at most the negotiated TPDU size
- * (header included, ISO 8073 §14.6), the last with EOT set.
+ * (header included, as ISO 8073 counts it), the last with EOT set.
  * In: the payloads of the DT frames, in order, as one byte stream (a TLS
  * record may span frames, a frame may hold several records). A DT larger
  * than the TPDU size is taken as it comes: the s7commplus emulator sends a
@@ -27,7 +27,10 @@ import { checkTpkt } from '../../iso/tpkt';
 type Carrier = Duplex & { remoteAddress?: string; remotePort?: number };
 
 export interface CotpTunnelOptions {
-  /** The TPDU size the CC confirmed, in bytes (1 << the size code: 1024 for 0x0A). */
+  /**
+   * The TPDU size the CC confirmed, in bytes (1 << the size code: 1024 for
+   * 0x0A); 0 when the CC named none, which means ISO 8073's default, 128.
+   */
   tpduSize: number;
   /**
    * The frame reader of the handshake (lib/iso/frames.ts `IsoFrames.reader`),
@@ -43,6 +46,8 @@ export interface CotpTunnelOptions {
 
 /** Smallest and largest TPDU a DT frame may be cut to: ISO 8073 size codes 7..13 are 128..8192, TPKT allows up to 65531. */
 const MIN_TPDU = 128;
+/** ISO 8073 (RFC 905), the CR/CC TPDU size parameter: when absent, the size is 128 bytes. */
+const DEFAULT_TPDU = 128;
 const MAX_TPDU = 0xffff - TPKT_HEADER;
 
 export class CotpTunnel extends Duplex {
@@ -75,7 +80,7 @@ export class CotpTunnel extends Duplex {
 
   constructor(carrier: Carrier, options: CotpTunnelOptions) {
     super({ allowHalfOpen: false });
-    const size = options.tpduSize;
+    const size = options.tpduSize === 0 ? DEFAULT_TPDU : options.tpduSize;
     if (!Number.isInteger(size) || size < MIN_TPDU || size > MAX_TPDU) {
       throw new ValueError('COTP TPDU size', `${size} is not a whole number of bytes between ${MIN_TPDU} and ${MAX_TPDU}`);
     }
