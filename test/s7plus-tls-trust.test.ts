@@ -257,6 +257,11 @@ describe('s7plus transport: TLS trust and handshake', function () {
       channel.socket.destroy();
       await closed(pair);
     }
+    // A pin given beside insecure=true is still honoured.
+    const pair = await servedPair(expired);
+    const err = await connect(pair, { insecure: true, fingerprint: 'CD'.repeat(32) }).catch((e) => e);
+    expect(err.problem).to.equal('wrong-pin');
+    await closed(pair);
   });
 
   it('fails with CONNECT_FAILED and the alert when the PLC accepts none of the suites offered', async () => {

@@ -177,20 +177,13 @@ export interface TrustVerdict {
 /**
  * Decides whether the PLC at `host` may be talked to. Throws a
  * CertificateError (CERTIFICATE_UNTRUSTED) in our words; with
- * `insecure=true` returns a warning instead.
+ * `insecure=true` returns a warning instead (but a `fingerprint=` given
+ * beside it must still match).
  */
 export function judgeCertificate(peer: PeerView, trust: TlsTrust, host: string, now = new Date()): TrustVerdict {
   if (!peer.certificate) throw new PlcError('PROTOCOL_ERROR', `the PLC at ${host} completed the TLS handshake without a certificate`);
   const c = describeCertificate(peer.certificate);
   const pinIt = `fingerprint=${c.fingerprint}`;
-  if (trust.insecure) {
-    return {
-      certificate: c,
-      warning:
-        `insecure=true: the TLS certificate of ${host} is not checked (${shown(c)}); anyone on the network path could ` +
-        `read and change this connection. To trust this certificate, use ${pinIt} instead.`,
-    };
-  }
   const pin = trust.fingerprint === undefined ? undefined : parseFingerprint(trust.fingerprint);
   if (pin !== undefined && pin !== c.fingerprint) {
     throw new CertificateError(
@@ -199,6 +192,17 @@ export function judgeCertificate(peer: PeerView, trust: TlsTrust, host: string, 
       `the TLS certificate of ${host} is not the pinned one: fingerprint= says ${pin}, the PLC shows ${shown(c)}. ` +
         `If the PLC's certificate was renewed on purpose, pin the new one with ${pinIt}; otherwise something else answers at this address.`,
     );
+  }
+  // insecure=true accepts anything else; a pin given beside it is still honoured (above).
+  if (trust.insecure) {
+    return {
+      certificate: c,
+      warning:
+        pin !== undefined
+          ? `insecure=true: the pinned TLS certificate of ${host} is used without checking its validity (${shown(c)}).`
+          : `insecure=true: the TLS certificate of ${host} is not checked (${shown(c)}); anyone on the network path could ` +
+            `read and change this connection. To trust this certificate, use ${pinIt} instead.`,
+    };
   }
   if (now.getTime() > c.notAfter.getTime()) {
     throw new CertificateError(
