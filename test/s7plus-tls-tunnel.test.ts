@@ -9,6 +9,7 @@ import { expect } from 'chai';
 import * as crypto from 'node:crypto';
 import * as fs from 'node:fs';
 import * as net from 'node:net';
+import { Duplex } from 'node:stream';
 import * as os from 'node:os';
 import * as path from 'node:path';
 import * as tls from 'node:tls';
@@ -105,6 +106,29 @@ describe('s7plus transport: COTP tunnel', function () {
     expect(client.destroyed).to.equal(true);
     await new Promise((r) => srv.server.close(r));
     expect(await srv.open()).to.equal(0);
+  });
+
+  it('gives the handed-over head before bytes already buffered in the carrier', async () => {
+    const carrier = new Duplex({ read() {}, write: (_c, _e, cb) => cb() });
+    carrier.push(dt(Buffer.from('B'))); // waits in the carrier's buffer, not yet flowing
+    const tunnel = new CotpTunnel(carrier, { tpduSize: 1024, head: dt(Buffer.from('A')) });
+    let got = '';
+    tunnel.on('data', (d: Buffer) => (got += d.toString()));
+    carrier.push(dt(Buffer.from('C')));
+    await until(() => got.length === 3, 3000, 'three bytes');
+    expect(got).to.equal('ABC');
+    tunnel.destroy();
+    expect(carrier.destroyed).to.equal(true);
+  });
+
+  it('is destroyed with a ProtocolError by a malformed head, leaving no listener on the carrier', async () => {
+    const carrier = new Duplex({ read() {}, write: (_c, _e, cb) => cb() });
+    const before = carrier.listenerCount('data') + carrier.listenerCount('close');
+    const tunnel = new CotpTunnel(carrier, { tpduSize: 1024, head: Buffer.from([9, 9, 9, 9]) });
+    const err = await waitFor<Error & { code?: string }>(tunnel, 'error');
+    expect(err.code).to.equal('PROTOCOL_ERROR');
+    expect(carrier.destroyed).to.equal(true);
+    expect(carrier.listenerCount('data') + carrier.listenerCount('close')).to.equal(before);
   });
 
   it("takes over the ISO connect step's frame reader with the part of a frame that came with the CC", async () => {

@@ -88,16 +88,14 @@ export class CotpTunnel extends Duplex {
     this.reader = options.reader ?? new FrameReader(checkTpkt, MAX_FRAME);
     this.maxPayload = size - COTP_DT_HEADER;
     this.peer = options.peer ?? (carrier.remoteAddress ? `${carrier.remoteAddress}:${carrier.remotePort}` : 'the peer');
+    // The head first, before the carrier's buffered bytes can flow (an error it causes is emitted on the next tick).
+    if (options.head && options.head.length > 0) this.receive(options.head);
+    if (this.destroyed) return;
     carrier.on('data', this.onData);
     carrier.on('end', this.onEnd);
     carrier.on('drain', this.onDrain);
     carrier.on('error', this.onError);
     carrier.on('close', this.onClose);
-    if (options.head && options.head.length > 0) {
-      const head = options.head;
-      // After the constructor, so that a malformed head reaches an 'error' listener.
-      process.nextTick(() => this.receive(head));
-    }
   }
 
   private lostError(): ConnectionError {
