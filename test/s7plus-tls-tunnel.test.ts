@@ -21,16 +21,8 @@ import { CotpTunnel } from '../lib/s7plus/transport/tunnel';
 import { startTls } from '../lib/s7plus/transport/handshake';
 import { acceptTls, loadServerCertificate } from '../lib/s7plus/transport/server-tls';
 import { isoConnect } from '../lib/iso/connect';
-import { skipBecause } from './support/skip';
-import {
-  cotpAccept,
-  countingServer,
-  pythonTlsClient,
-  listeners,
-  s7commplusPython,
-  startPythonServer,
-  tunnelPair,
-} from './support/s7plus-tls';
+import { requireS7CommPlus } from './support/s7commplus-peer';
+import { cotpAccept, countingServer, pythonTlsClient, listeners, startPythonServer, tunnelPair } from './support/s7plus-tls';
 import { activeHandles, settle, until, waitFor } from './support/wait';
 
 const dt = (payload: Buffer, eot = true) => {
@@ -308,9 +300,7 @@ describe('s7plus transport: COTP tunnel', function () {
     let python: string | undefined;
     let dir: string;
     before(function () {
-      const found = s7commplusPython();
-      if (!found.python) skipBecause(this, found.reason!);
-      python = found.python;
+      python = requireS7CommPlus(this);
       dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-s7p-tls-'));
       fs.writeFileSync(path.join(dir, 'cert.pem'), cert.cert);
       fs.writeFileSync(path.join(dir, 'key.pem'), cert.key);

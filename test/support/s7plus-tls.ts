@@ -3,10 +3,8 @@
  * a COTP-connected socket pair on 127.0.0.1, one frame read with a deadline,
  * and the s7commplus package's (MIT) server emulator started as a child.
  */
-import { spawn, spawnSync, type ChildProcess } from 'node:child_process';
-import * as fs from 'node:fs';
+import { spawn, type ChildProcess } from 'node:child_process';
 import * as net from 'node:net';
-import * as path from 'node:path';
 import { FrameReader } from '../../lib/link/framer';
 import { checkTpkt } from '../../lib/iso/tpkt';
 import { decodeCotp, encodeConnectionConfirm } from '../../lib/iso/cotp';
@@ -122,22 +120,6 @@ export async function tunnelPair(tpduCode = 0x0a, rawServer = false) {
 
 /** Listeners a socket has for the events a tunnel uses. */
 export const listeners = (s: net.Socket) => ['data', 'end', 'drain', 'error', 'close'].reduce((n, e) => n + s.listenerCount(e), 0);
-
-/**
- * The Python interpreter that has the s7commplus package, or a reason why
- * there is none: PLCWIRE_S7COMMPLUS_PYTHON, else the venv the peer installer
- * makes (test/interop/.venv-s7commplus).
- */
-export function s7commplusPython(): { python?: string; reason?: string } {
-  const root = path.resolve(__dirname, '../../..');
-  const candidates = [process.env.PLCWIRE_S7COMMPLUS_PYTHON, path.join(root, 'test/interop/.venv-s7commplus/bin/python')].filter(
-    (p): p is string => !!p && fs.existsSync(p),
-  );
-  for (const python of candidates) {
-    if (spawnSync(python, ['-c', 'import s7commplus.server'], { stdio: 'ignore' }).status === 0) return { python };
-  }
-  return { reason: 'the s7commplus Python package is not installed (test/interop/.venv-s7commplus, or PLCWIRE_S7COMMPLUS_PYTHON)' };
-}
 
 // Starts the emulator on a free port with TLS (V2) or without (V1); prints {"port": n}; stops when stdin closes.
 const SERVER_SCRIPT = `
