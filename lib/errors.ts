@@ -28,6 +28,12 @@ export type PlcErrorCode =
   | 'QUEUE_FULL'
   // the peer misbehaved (malformed, truncated or hostile frames)
   | 'PROTOCOL_ERROR'
+  /**
+   * The PLC's TLS certificate was refused (not pinned, wrong pin, expired, not
+   * yet valid, not signed by the given CA): nothing was sent to it. The error
+   * shows the certificate and the `fingerprint=` that would pin it.
+   */
+  | 'CERTIFICATE_UNTRUSTED'
   // the PLC answered with an error
   | 'PLC_ERROR'
   | 'ACCESS_DENIED'
