@@ -118,7 +118,10 @@ const LINES = new Map<string, number>([...GRAPH.keys()].map((f) => [f, lineCount
 const ISO_IMPURE: readonly string[] = ['lib/iso/connect.ts', 'lib/iso/frames.ts'];
 
 const isCodec = (file: string) =>
-  file.startsWith('lib/s7/codec/') || (file.startsWith('lib/iso/') && !ISO_IMPURE.includes(file)) || /^lib\/[^/]+\/codec\.ts$/.test(file);
+  file.startsWith('lib/s7/codec/') ||
+  file.startsWith('lib/s7plus/codec/') ||
+  (file.startsWith('lib/iso/') && !ISO_IMPURE.includes(file)) ||
+  /^lib\/[^/]+\/codec\.ts$/.test(file);
 
 describe('architecture of lib/', () => {
   it('the import reader finds the imports it is meant to check', () => {
@@ -179,6 +182,8 @@ describe('architecture of lib/', () => {
     expect(codecs).to.include.members(['lib/s7/codec/szl.ts', 'lib/s7/codec/blocks.ts', 'lib/s7/codec/diagnostics.ts']);
     // TPKT and COTP, shared by every driver over ISO-on-TCP, are codecs too.
     expect(codecs).to.include.members(['lib/iso/tpkt.ts', 'lib/iso/cotp.ts', 'lib/iso/constants.ts']);
+    // The S7CommPlus codec (VLQ, PValues, objects, messages) too.
+    expect(codecs).to.include.members(['lib/s7plus/codec/vlq.ts', 'lib/s7plus/codec/pvalue.ts', 'lib/s7plus/codec/frame.ts']);
     const bad = violations(
       isCodec,
       (e) => (e.to === undefined && e.spec !== 'node:buffer') || (e.to?.startsWith('lib/link/') === true && !e.typeOnly),
