@@ -1,7 +1,7 @@
 'use strict';
 // What must hold after a chaos run (issue #26), measured: one row per check,
 // the failures with the PLCs they concern, and those PLCs' fault histories.
-const { RECOVERY_MS } = require('./plan');
+const { RECOVERY_MS, TIMEOUT_MS } = require('./plan');
 
 const LOOP_P99_LIMIT_MS = 50;
 const HEALTHY_POLLS_MIN = 0.95;
@@ -33,7 +33,8 @@ function checkWrites(s, applied, t, fail) {
       if (n === 1) t.inDoubt++;
       if (n > 1) fail(s, `write ${w.address} = ${w.value} rejected (${w.code}) but applied ${n} times`, 'twice');
       if (!w.typed) fail(s, `write ${w.address} = ${w.value} rejected with an untyped error: ${w.message}`, 'untyped');
-      else if (!w.named) fail(s, `write ${w.address} = ${w.value} rejected (${w.code}) without naming its tag or PLC: ${w.message}`, 'unnamed');
+      else if (!w.named)
+        fail(s, `write ${w.address} = ${w.value} rejected (${w.code}) without naming its tag or PLC: ${w.message}`, 'unnamed');
     } else fail(s, `write ${w.address} = ${w.value} never settled`, 'lost');
   }
   for (const [slot, value] of applied) {
@@ -41,8 +42,25 @@ function checkWrites(s, applied, t, fail) {
   }
   // Every slot value read was one the PLC applied (or the slot's initial 0).
   s.read.forEach((values, k) => {
-    for (const v of values) if (v !== 0 && !counts.has(`${k}:${v}`)) fail(s, `read ${v} from slot ${k}, a value the PLC never held`, 'held');
+    for (const v of values)
+      if (v !== 0 && !counts.has(`${k}:${v}`)) fail(s, `read ${v} from slot ${k}, a value the PLC never held`, 'held');
   });
+}
+
+/**
+ * Is a failed item in an otherwise answered poll explained by a fault? The
+ * itemError one during an itemError episode; on a freeport bus (one request
+ * per station) any item during any episode, as a silent or slow station fails
+ * its own items only. A poll begun up to a timeout before an episode, or
+ * while the client still waits out a timeout after it, counts as during it.
+ */
+function explained(s, f, episodes) {
+  return episodes.some(
+    (e) =>
+      (e.fault === 'itemError' ? f.item : s.p.driver.protocol === 'freeport') &&
+      f.at >= e.start - TIMEOUT_MS - 500 &&
+      f.at <= (e.end ?? Infinity) + 2 * TIMEOUT_MS + 1500,
+  );
 }
 
 /** Milliseconds from each ended episode to the first good poll begun after it; undefined when none. */
@@ -92,19 +110,19 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
         fail(s, `${n} × ${code}`, 'untyped');
       }
     }
-    const itemFault = s.p.schedule.some((e) => e.fault === 'itemError');
-    if (s.itemErrors > 0 && !itemFault) {
-      unexpectedItemErrors += s.itemErrors;
-      fail(s, `${s.itemErrors} item errors without an itemError fault`, 'item');
-    }
-    if (s.failures.length > 0) {
-      unexpectedItemErrors += s.failures.length;
-      fail(s, `${s.failures.length} failed items that no fault explains, first: ${s.failures[0]}`, 'item');
+    const unexplained = s.failures.filter((f) => !explained(s, f, status.episodes[i]));
+    if (unexplained.length > 0) {
+      unexpectedItemErrors += unexplained.length;
+      fail(s, `${unexplained.length} failed items that no fault explains, first: ${unexplained[0].text}`, 'item');
     }
     for (const r of recoveries(s, status.episodes[i])) {
       if (r.ms === undefined || r.ms > RECOVERY_MS) {
         notBack++;
-        fail(s, `no good poll within ${RECOVERY_MS} ms after ${r.e.fault} ended (${r.ms === undefined ? 'none at all' : `${r.ms} ms`})`, 'recovery');
+        fail(
+          s,
+          `no good poll within ${RECOVERY_MS} ms after ${r.e.fault} ended (${r.ms === undefined ? 'none at all' : `${r.ms} ms`})`,
+          'recovery',
+        );
       } else worstRecovery = Math.max(worstRecovery, r.ms);
     }
     if (status.connections[i] !== 1) fail(s, `${status.connections[i]} connections at the simulator at the end`, 'connections');
@@ -124,14 +142,32 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
     row('item errors no fault explains', `${unexpectedItemErrors}`, '0', unexpectedItemErrors === 0),
     row('errors that are not PlcError', `${untypedErrors}`, '0', untypedErrors === 0),
     row('overlapping polls', `${overlapped}`, '0', overlapped === 0),
-    row('links back within backoff after a fault', `${episodes - notBack} of ${episodes}, worst ${worstRecovery} ms`, `≤ ${RECOVERY_MS} ms`, notBack === 0),
+    row(
+      'links back within backoff after a fault',
+      `${episodes - notBack} of ${episodes}, worst ${worstRecovery} ms`,
+      `≤ ${RECOVERY_MS} ms`,
+      notBack === 0,
+    ),
     row('connections at the simulators at the end', `${connections}`, `${o.plcs}`, connections === o.plcs && !kinds.connections),
-    row('handles left behind', handles.after === handles.before ? 'none' : `before: ${handles.before}; after: ${handles.after}`, 'none', handles.after === handles.before),
-    row('polls achieved / due, healthy PLCs', `${(healthyRatio * 100).toFixed(1)} % (${healthy.ok}/${healthy.due})`, `≥ ${HEALTHY_POLLS_MIN * 100} %`, rates || healthyRatio >= HEALTHY_POLLS_MIN, rates),
+    row(
+      'handles left behind',
+      handles.after === handles.before ? 'none' : `before: ${handles.before}; after: ${handles.after}`,
+      'none',
+      handles.after === handles.before,
+    ),
+    row(
+      'polls achieved / due, healthy PLCs',
+      `${(healthyRatio * 100).toFixed(1)} % (${healthy.ok}/${healthy.due})`,
+      `≥ ${HEALTHY_POLLS_MIN * 100} %`,
+      rates || healthyRatio >= HEALTHY_POLLS_MIN,
+      rates,
+    ),
     row('event-loop delay p99', `${loopP99Ms.toFixed(1)} ms`, `< ${LOOP_P99_LIMIT_MS} ms`, rates || loopP99Ms < LOOP_P99_LIMIT_MS, rates),
     row(
       'heap after GC vs first minute',
-      Number.isNaN(heapGrowth) ? 'not measured' : `${heapGrowth >= 0 ? '+' : ''}${(heapGrowth * 100).toFixed(1)} % (${(heap.last / 2 ** 20).toFixed(1)} MiB)`,
+      Number.isNaN(heapGrowth)
+        ? 'not measured'
+        : `${heapGrowth >= 0 ? '+' : ''}${(heapGrowth * 100).toFixed(1)} % (${(heap.last / 2 ** 20).toFixed(1)} MiB)`,
       `≤ +${HEAP_GROWTH_MAX * 100} %`,
       rates || Number.isNaN(heapGrowth) || heapGrowth <= HEAP_GROWTH_MAX,
       rates || Number.isNaN(heapGrowth),
@@ -141,7 +177,9 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
   const byFault = {};
   for (const p of fleet) for (const e of p.schedule) byFault[e.fault] = (byFault[e.fault] ?? 0) + 1;
   const figures = [
-    `seed ${o.seed}; ${fleet.filter((p) => p.healthy).length} of ${fleet.length} PLCs without faults; ${episodes} fault episodes: ${Object.entries(byFault)
+    `seed ${o.seed}; ${fleet.filter((p) => p.healthy).length} of ${fleet.length} PLCs without faults; ${episodes} fault episodes: ${Object.entries(
+      byFault,
+    )
       .map(([f, n]) => `${f} ${n}`)
       .join(', ')}`,
     `polls: ${polls.due} due, ${polls.ok} good, ${polls.partial} with item errors, ${polls.failed} failed, ${polls.skipped} skipped (previous still running)`,
@@ -154,7 +192,9 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
   ];
   const histories = [...concerned].slice(0, 10).map((i) => {
     const p = fleet[i];
-    const lines = status.episodes[i].map((e) => `    ${e.fault} at ${e.start - o.t0} ms, ended at ${e.end === undefined ? '(not ended)' : `${e.end - o.t0} ms`}`);
+    const lines = status.episodes[i].map(
+      (e) => `    ${e.fault} at ${e.start - o.t0} ms, ended at ${e.end === undefined ? '(not ended)' : `${e.end - o.t0} ms`}`,
+    );
     return `  PLC ${i} (${p.driver.id}) fault history:\n${lines.join('\n') || '    (none)'}`;
   });
   return { o, rows, failed, histories, figures, totals: t, kinds };

@@ -35,12 +35,12 @@ class Station {
     this.polls = { due: 0, started: 0, ok: 0, partial: 0, failed: 0, skipped: 0, overlapped: 0 };
     this.healthyPolls = { due: 0, ok: 0 };
     this.busy = 0;
+    /** Items that failed in a poll that otherwise answered: { at (the poll's start), item (the itemError one?), text }. */
     this.failures = [];
-    /** Times of polls started after... every good poll's start and end (for the link-back check). */
+    /** Every good poll's start and end (for the link-back check). */
     this.good = [];
     this.errorCodes = {};
     this.wrong = [];
-    this.itemErrors = 0;
     this.writes = [];
     this.slotBusy = new Array(SLOTS).fill(false);
     this.lastAcked = new Array(SLOTS).fill(0);
@@ -89,8 +89,7 @@ class Station {
       } else {
         allOk = false;
         this.typed(r.error, 'item');
-        if (s.index === item) this.itemErrors++;
-        else this.failures.push(`${addresses[s.index]}: ${r.error.code} ${r.error.message}`);
+        this.failures.push({ at: started, item: s.index === item, text: `${addresses[s.index]}: ${r.error.code} ${r.error.message}` });
       }
     }
     slots.forEach((index, k) => {
@@ -98,7 +97,7 @@ class Station {
       if (!r.ok) {
         allOk = false;
         this.typed(r.error, 'item');
-        this.failures.push(`${addresses[index]}: ${r.error.code} ${r.error.message}`);
+        this.failures.push({ at: started, item: false, text: `${addresses[index]}: ${r.error.code} ${r.error.message}` });
         return;
       }
       if (!this.issued[k].has(r.value)) this.wrongValue(addresses[index], 'a value written', r.value);

@@ -149,23 +149,24 @@ function drawEpisode(fault, rnd) {
  * { fault, at, duration, ... } in ms from the run's start). A quarter of the
  * PLCs stay healthy all along: their poll rate is the measure that a faulty
  * PLC never slows the others. Every episode ends RECOVERY_MS plus 3 s before
- * the end, so every link must be back when the run ends.
+ * the end, so every link must be back when the run ends. `calm`: no faults
+ * at all (the same load without chaos, to compare).
  */
-function fleetPlan({ seed, plcs, durationMs }) {
+function fleetPlan({ seed, plcs, durationMs, calm = false }) {
   const rnd = prng(seed);
   const warm = Math.min(5000, durationMs / 10);
   const lastEnd = durationMs - RECOVERY_MS - 3000;
   const fleet = [];
   for (let i = 0; i < plcs; i++) {
     const driver = DRIVERS[i % DRIVERS.length];
-    const healthy = rnd() < 0.25;
+    const healthy = rnd() < 0.25 || calm;
     const schedule = [];
     let t = warm + rnd() * 4000;
-    while (!healthy) {
+    for (let more = !healthy; more;) {
       const fault = driver.faults[Math.floor(rnd() * driver.faults.length)];
       const e = { fault, at: Math.round(t), ...drawEpisode(fault, rnd) };
-      if (e.at + e.duration > lastEnd) break;
-      schedule.push(e);
+      more = e.at + e.duration <= lastEnd;
+      if (more) schedule.push(e);
       t = e.at + e.duration + RECOVERY_MS + rnd() * 6000;
     }
     fleet.push({ index: i, driver, healthy: schedule.length === 0, schedule, ...tagsOf(driver.protocol, i) });

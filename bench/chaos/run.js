@@ -15,7 +15,8 @@
 // one check fails, printing the seed and the fault history of the PLCs
 // concerned (`--seed` replays the schedule). `--counts-only` leaves out the
 // checks that depend on the machine's speed (poll rate, event-loop delay,
-// heap), as the test inside `npm test` does. Run with node --expose-gc (the
+// heap), as the test inside `npm test` does; `--calm` runs the same load
+// without a fault, to compare. Run with node --expose-gc (the
 // npm script does) for the heap check.
 const { fork } = require('node:child_process');
 const path = require('node:path');
@@ -28,7 +29,16 @@ const { evaluate } = require('./checks');
 const LOOP_RESOLUTION_MS = 10;
 
 function args(argv) {
-  const o = { seed: undefined, minutes: 10, seconds: undefined, plcs: 100, intervalMs: 100, writeEveryMs: 250, countsOnly: false };
+  const o = {
+    seed: undefined,
+    minutes: 10,
+    seconds: undefined,
+    plcs: 100,
+    intervalMs: 100,
+    writeEveryMs: 250,
+    countsOnly: false,
+    calm: false,
+  };
   for (let i = 0; i < argv.length; i++) {
     const a = argv[i];
     const next = () => Number(argv[++i]);
@@ -39,7 +49,11 @@ function args(argv) {
     else if (a === '--interval') o.intervalMs = next();
     else if (a === '--write-every') o.writeEveryMs = next();
     else if (a === '--counts-only') o.countsOnly = true;
-    else throw new Error(`unknown argument ${a} (--seed N --minutes M --seconds S --plcs N --interval ms --write-every ms --counts-only)`);
+    else if (a === '--calm') o.calm = true;
+    else
+      throw new Error(
+        `unknown argument ${a} (--seed N --minutes M --seconds S --plcs N --interval ms --write-every ms --counts-only --calm)`,
+      );
   }
   o.seed ??= Math.floor(Math.random() * 2 ** 31);
   o.durationMs = Math.round((o.seconds ?? o.minutes * 60) * 1000);
@@ -64,16 +78,18 @@ function heapNow() {
 }
 
 async function run(o, log = console.log) {
-  log(`chaos: seed ${o.seed}, ${o.plcs} PLCs, ${o.durationMs / 1000} s, polls every ${o.intervalMs} ms, a write per PLC every ${o.writeEveryMs} ms`);
+  log(
+    `chaos: seed ${o.seed}, ${o.plcs} PLCs, ${o.durationMs / 1000} s, polls every ${o.intervalMs} ms, a write per PLC every ${o.writeEveryMs} ms`,
+  );
   const baseline = resources();
-  const fleet = fleetPlan({ seed: o.seed, plcs: o.plcs, durationMs: o.durationMs });
+  const fleet = fleetPlan({ seed: o.seed, plcs: o.plcs, durationMs: o.durationMs, calm: o.calm });
   const child = fork(path.join(__dirname, 'server-worker.js'), [], { serialization: 'advanced', stdio: 'inherit' });
   const exited = new Promise((resolve) => child.once('exit', resolve));
   let stations = [];
   try {
     const t0 = Date.now() + 1500 + o.plcs * 20;
     o.t0 = t0;
-    const { ports } = await ask(child, { op: 'start', seed: o.seed, plcs: o.plcs, durationMs: o.durationMs, t0 });
+    const { ports } = await ask(child, { op: 'start', seed: o.seed, plcs: o.plcs, durationMs: o.durationMs, calm: o.calm, t0 });
     stations = openStations(fleet, ports, o);
     const loop = monitorEventLoopDelay({ resolution: LOOP_RESOLUTION_MS });
     const warmMs = Math.min(5000, o.durationMs / 10);
@@ -121,10 +137,17 @@ async function run(o, log = console.log) {
 
 function print(result, log = console.log) {
   const { rows, failed, histories, o } = result;
-  const w = [Math.max(...rows.map((r) => r.check.length)), Math.max(...rows.map((r) => r.measured.length)), Math.max(...rows.map((r) => r.limit.length))];
+  const w = [
+    Math.max(...rows.map((r) => r.check.length)),
+    Math.max(...rows.map((r) => r.measured.length)),
+    Math.max(...rows.map((r) => r.limit.length)),
+  ];
   log('');
   log(`${'what must hold'.padEnd(w[0])}  ${'measured'.padEnd(w[1])}  ${'limit'.padEnd(w[2])}  ok`);
-  for (const r of rows) log(`${r.check.padEnd(w[0])}  ${r.measured.padEnd(w[1])}  ${r.limit.padEnd(w[2])}  ${r.skipped ? '(not checked)' : r.ok ? 'yes' : 'NO'}`);
+  for (const r of rows)
+    log(
+      `${r.check.padEnd(w[0])}  ${r.measured.padEnd(w[1])}  ${r.limit.padEnd(w[2])}  ${r.skipped ? '(not checked)' : r.ok ? 'yes' : 'NO'}`,
+    );
   log('');
   for (const line of result.figures) log(line);
   if (failed.length === 0) return;
