@@ -22,7 +22,7 @@ const { fork } = require('node:child_process');
 const path = require('node:path');
 const { monitorEventLoopDelay } = require('node:perf_hooks');
 const { ask } = require('../lib/fleet');
-const { fleetPlan, FAULTS, RECOVERY_MS, SLOTS } = require('./plan');
+const { fleetPlan } = require('./plan');
 const { openStations, drive } = require('./clients');
 const { evaluate } = require('./checks');
 
@@ -157,7 +157,7 @@ function print(result, log = console.log) {
   for (const h of histories) log(h);
 }
 
-module.exports = { run, print, args, FAULTS, RECOVERY_MS, SLOTS };
+module.exports = { run, print, args };
 
 if (require.main === module) {
   const o = args(process.argv.slice(2));
