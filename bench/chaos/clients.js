@@ -22,34 +22,70 @@ function same(type, expected, actual) {
   return expected === actual;
 }
 
-/** One PLC's client and everything recorded about it. */
+/**
+ * A growable column of numbers in typed-array chunks: the run's own records
+ * stay a few bytes per write or failure, so the heap figure is the library's.
+ */
+class Column {
+  constructor(Type) {
+    this.Type = Type;
+    this.chunks = [];
+    this.length = 0;
+  }
+
+  push(v) {
+    if (this.length % 65536 === 0) this.chunks.push(new this.Type(65536));
+    this.chunks[this.chunks.length - 1][this.length++ % 65536] = v;
+  }
+
+  get(i) {
+    return this.chunks[Math.floor(i / 65536)][i % 65536];
+  }
+
+  set(i, v) {
+    this.chunks[Math.floor(i / 65536)][i % 65536] = v;
+  }
+}
+
+const PENDING = 0;
+const ACKED = 1;
+const REJECTED = 2;
+
+/**
+ * One PLC's client and everything recorded about it. Write n (1, 2, …) of
+ * PLC i carries the value i × 1,000,000 + n, so a value names its write.
+ */
 class Station {
-  constructor(lib, p, port, opts) {
+  constructor(lib, p, port) {
     this.lib = lib;
     this.p = p;
     this.url = urlOf(p, port);
+    this.name = p.driver.protocol === 'fetchwrite' ? `127.0.0.1:${port}` : this.url.split('?')[0];
     this.client = lib.createClient(this.url, { backoff: BACKOFF });
     this.client.on('error', () => undefined);
     this.list = this.client.prepare(p.addresses);
-    this.opts = opts;
     this.polls = { due: 0, started: 0, ok: 0, partial: 0, failed: 0, skipped: 0, overlapped: 0 };
     this.healthyPolls = { due: 0, ok: 0 };
     this.busy = 0;
-    /** Items that failed in a poll that otherwise answered: { at (the poll's start), item (the itemError one?), text }. */
-    this.failures = [];
-    /** Every good poll's start and end (for the link-back check). */
-    this.good = [];
+    /** Items that failed in a poll that otherwise answered: when the answer came, and whether it was the itemError item. */
+    this.failAt = new Column(Float64Array);
+    this.failItem = new Column(Uint8Array);
+    this.failTexts = [];
+    /** Runs of good polls, [start of the first, start of the last] (for the link-back check). */
+    this.runs = [];
+    this.inRun = false;
     this.errorCodes = {};
     this.wrong = [];
-    this.writes = [];
+    /** Per write n - 1: its slot, its outcome, whether its value was read. */
+    this.writeSlot = new Column(Int8Array);
+    this.outcome = new Column(Uint8Array);
+    this.seenRead = new Column(Uint8Array);
+    this.rejectedCodes = {};
+    this.badRejections = [];
     this.slotBusy = new Array(SLOTS).fill(false);
     this.lastAcked = new Array(SLOTS).fill(0);
-    this.issued = Array.from({ length: SLOTS }, () => new Set([0]));
-    this.read = Array.from({ length: SLOTS }, () => new Set());
     this.seq = 0;
     this.nextSlot = 0;
-    this.states = [];
-    this.client.on('state', (s) => this.states.push([Date.now(), s]));
   }
 
   start() {
@@ -74,41 +110,52 @@ class Station {
       (err) => {
         this.busy--;
         this.polls.failed++;
+        this.inRun = false;
         this.typed(err, 'poll');
       },
     );
   }
 
+  /** The write whose value `v` is, if PLC i wrote it to slot k; 0 for the slot's initial 0; -1 when none. */
+  writeOf(v, k) {
+    if (v === 0) return 0;
+    const n = v - this.p.index * 1_000_000;
+    return Number.isInteger(n) && n >= 1 && n <= this.seq && this.writeSlot.get(n - 1) === k ? n : -1;
+  }
+
   check(results, floor, started, timing) {
     const { addresses, statics, slots, item } = this.p;
     let allOk = true;
+    const failed = (index, error) => {
+      allOk = false;
+      this.typed(error, 'item');
+      this.failAt.push(Date.now());
+      this.failItem.push(index === item ? 1 : 0);
+      if (this.failTexts.length < 3) this.failTexts.push(`${addresses[index]}: ${error.code} ${error.message}`);
+    };
     for (const s of statics) {
       const r = results[addresses[s.index]];
-      if (r.ok) {
-        if (!same(s.type, s.value, r.value)) this.wrongValue(addresses[s.index], s.value, r.value);
-      } else {
-        allOk = false;
-        this.typed(r.error, 'item');
-        this.failures.push({ at: started, item: s.index === item, text: `${addresses[s.index]}: ${r.error.code} ${r.error.message}` });
-      }
+      if (!r.ok) failed(s.index, r.error);
+      else if (!same(s.type, s.value, r.value)) this.wrongValue(addresses[s.index], s.value, r.value);
     }
     slots.forEach((index, k) => {
       const r = results[addresses[index]];
-      if (!r.ok) {
-        allOk = false;
-        this.typed(r.error, 'item');
-        this.failures.push({ at: started, item: false, text: `${addresses[index]}: ${r.error.code} ${r.error.message}` });
-        return;
-      }
-      if (!this.issued[k].has(r.value)) this.wrongValue(addresses[index], 'a value written', r.value);
+      if (!r.ok) return failed(index, r.error);
+      const n = this.writeOf(r.value, k);
+      if (n < 0) this.wrongValue(addresses[index], 'a value written', r.value);
       else if (r.value < floor[k]) this.wrongValue(addresses[index], `at least ${floor[k]} (acknowledged before the read)`, r.value);
-      this.read[k].add(r.value);
+      if (n > 0) this.seenRead.set(n - 1, 1);
     });
     if (allOk) {
       this.polls.ok++;
       if (timing) this.healthyPolls.ok++;
-      this.good.push([started, Date.now()]);
-    } else this.polls.partial++;
+      if (this.inRun) this.runs[this.runs.length - 1][1] = started;
+      else this.runs.push([started, started]);
+      this.inRun = true;
+    } else {
+      this.polls.partial++;
+      this.inRun = false;
+    }
   }
 
   wrongValue(address, expected, actual) {
@@ -126,24 +173,26 @@ class Station {
     this.nextSlot = (k + 1) % SLOTS;
     if (this.slotBusy[k]) return;
     this.slotBusy[k] = true;
-    const value = this.p.index * 1_000_000 + ++this.seq;
-    this.issued[k].add(value);
+    const n = ++this.seq;
+    const value = this.p.index * 1_000_000 + n;
+    this.writeSlot.push(k);
+    this.outcome.push(PENDING);
+    this.seenRead.push(0);
     const address = slotAddress(this.p.driver.protocol, k);
-    const w = { slot: k, value, address, issued: Date.now(), outcome: 'pending' };
-    this.writes.push(w);
     this.client.write({ [address]: value }).then(
       () => {
-        w.outcome = 'acked';
+        this.outcome.set(n - 1, ACKED);
         this.lastAcked[k] = Math.max(this.lastAcked[k], value);
         this.slotBusy[k] = false;
       },
       (err) => {
-        w.outcome = 'rejected';
-        w.typed = err instanceof this.lib.PlcError;
-        w.code = err && err.code;
+        this.outcome.set(n - 1, REJECTED);
+        const typed = err instanceof this.lib.PlcError;
+        const code = typed ? err.code : 'untyped';
+        this.rejectedCodes[code] = (this.rejectedCodes[code] ?? 0) + 1;
         const text = String(err && err.message);
-        w.named = text.includes(address) || text.includes(this.p.driver.protocol === 'fetchwrite' ? '127.0.0.1' : this.url.split('?')[0]);
-        w.message = text;
+        const named = text.includes(address) || text.includes(this.name);
+        if (!typed || !named) this.badRejections.push({ n, address, value, typed, named, code, message: text });
         this.slotBusy[k] = false;
       },
     );
@@ -155,9 +204,9 @@ class Station {
 }
 
 /** Starts a client per PLC of `fleet` (ports: the proxies'); returns the stations. */
-function openStations(fleet, ports, opts) {
+function openStations(fleet, ports) {
   const lib = plcwire();
-  const stations = fleet.map((p, i) => new Station(lib, p, ports[i], opts));
+  const stations = fleet.map((p, i) => new Station(lib, p, ports[i]));
   for (const s of stations) s.start();
   return stations;
 }
@@ -193,4 +242,4 @@ async function drive(stations, { t0, durationMs, intervalMs, writeEveryMs, warmM
   while (stations.some((s) => s.inFlight > 0) && Date.now() < deadline) await new Promise((r) => setTimeout(r, 20));
 }
 
-module.exports = { openStations, drive };
+module.exports = { openStations, drive, PENDING, ACKED, REJECTED };

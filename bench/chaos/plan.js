@@ -124,15 +124,22 @@ function freeportStatic(i, station, offset) {
   return ((i * 131 + station * 17 + offset * 7) % 30000) - 15000;
 }
 
-/** Milliseconds of an episode of `fault` and its parameter, drawn from `rnd`. */
-function drawEpisode(fault, rnd) {
+/**
+ * Milliseconds of an episode of `fault` and its parameter, drawn from `rnd`.
+ * Slow answers come up to 4 s late, twice the timeout; on a freeport bus at
+ * most 1.5 timeouts late: its default frame does not say which station
+ * answers, and the master drains the line one timeout after a timeout, so a
+ * reply later than two timeouts would be taken for the next request's (a
+ * limit of the protocol, lib/freeport/README.md), which no master can tell.
+ */
+function drawEpisode(fault, rnd, protocol) {
   const between = (lo, hi) => Math.round(lo + rnd() * (hi - lo));
   switch (fault) {
     case 'reset':
     case 'garbage':
       return { duration: 0 };
     case 'slow':
-      return { duration: between(2000, 8000), delayMs: between(200, 4000) };
+      return { duration: between(2000, 8000), delayMs: between(200, protocol === 'freeport' ? 1.5 * TIMEOUT_MS : 2 * TIMEOUT_MS) };
     case 'silence':
       return { duration: between(1000, 6000) };
     case 'restart':
@@ -164,7 +171,7 @@ function fleetPlan({ seed, plcs, durationMs, calm = false }) {
     let t = warm + rnd() * 4000;
     for (let more = !healthy; more;) {
       const fault = driver.faults[Math.floor(rnd() * driver.faults.length)];
-      const e = { fault, at: Math.round(t), ...drawEpisode(fault, rnd) };
+      const e = { fault, at: Math.round(t), ...drawEpisode(fault, rnd, driver.protocol) };
       more = e.at + e.duration <= lastEnd;
       if (more) schedule.push(e);
       t = e.at + e.duration + RECOVERY_MS + rnd() * 6000;
