@@ -21,7 +21,12 @@ import { fork, type ChildProcess } from 'node:child_process';
 import * as path from 'node:path';
 
 const RUN = path.join(__dirname, '..', '..', 'bench', 'chaos', 'run.js');
-const SEED = process.env.CHAOS_SEED ?? '26';
+/**
+ * Every fault in play, three of them slow freeport answers later than the
+ * timeout: without the line drained after a timeout (lib/freeport/session.ts)
+ * this seed reads another station's data as good (23 wrong values).
+ */
+const SEED = process.env.CHAOS_SEED ?? '392';
 const PLCS = 20;
 const SECONDS = 60;
 
