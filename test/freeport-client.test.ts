@@ -173,6 +173,20 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
     expect(await client.read(['ST5,REAL0'])).to.deep.equal({ 'ST5,REAL0': 10 });
   });
 
+  it('a reply that comes after its timeout is never taken for the next request (another station\'s data passed as good)', async () => {
+    // Every reply 150 ms late with a timeout of 100: station 6's reply to a timed-out attempt
+    // would arrive while the next request (its retry, then station 7's) waits for its own.
+    bus.faults.replyDelayMs = 150;
+    const results = await client.readDetailed(['ST6,DWORD0', 'ST7,DWORD0']);
+    const expected: Record<string, number> = { 'ST6,DWORD0': 0x12345678, 'ST7,DWORD0': 0 };
+    for (const [address, r] of Object.entries(results)) {
+      if (r.ok) expect(r.value, address).to.equal(expected[address]);
+      else expect(r.error.code, address).to.equal('TIMEOUT');
+    }
+    bus.faults.replyDelayMs = 0;
+    expect(await client.read(['ST7,DWORD0', 'ST5,REAL0'])).to.deep.equal({ 'ST7,DWORD0': 0, 'ST5,REAL0': 10 });
+  });
+
   it('a station not on the bus times out like a silent one', async () => {
     const err = await client.read(['ST30,BYTE0']).then(
       () => undefined,

@@ -41,6 +41,13 @@ export class FreeportSession implements DriverSession {
   private nextId = 1;
   private current: { id: number; station: number } | undefined;
   private quietSince = 0;
+  /**
+   * After a request timed out, no next request before this time: the reply
+   * may still come, and with a profile whose replies do not echo the
+   * station it would be taken for the next request's (another station's
+   * data passed as good). Whatever arrives meanwhile is discarded.
+   */
+  private drainUntil = 0;
   private gapTimer: { timer: NodeJS.Timeout; done(): void } | undefined;
   private dead: PlcError | undefined;
   private released: Promise<void> | undefined;
@@ -129,6 +136,9 @@ export class FreeportSession implements DriverSession {
     try {
       this.transport.write(encodeRequest(request, this.profile));
       return await reply;
+    } catch (err) {
+      if (err instanceof TimeoutError) this.drainUntil = Date.now() + this.discipline.timeout;
+      throw err;
     } finally {
       if (this.pending.has(id)) this.pending.reject(id, new PlcError('ABORTED', 'superseded'));
       this.current = undefined;
@@ -137,7 +147,7 @@ export class FreeportSession implements DriverSession {
   }
 
   private quietGap(): Promise<void> {
-    const wait = this.quietSince + this.discipline.interFrameGapMs - Date.now();
+    const wait = Math.max(this.quietSince + this.discipline.interFrameGapMs, this.drainUntil) - Date.now();
     if (wait <= 0 || this.dead) return Promise.resolve();
     return new Promise((resolve) => {
       const done = () => {
