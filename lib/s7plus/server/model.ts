@@ -21,7 +21,7 @@ import { SourceError } from '../../errors';
 import type { BlockDecl, CompileOptions, SymbolSource, SymbolTable, SymbolTableRow } from '../../symbols/model';
 import type { StructNode } from '../../symbols/layout-nodes';
 import type { DataTypeName } from '../../types';
-import { ID, SOFT } from './ids';
+import { dbAccessArea, SoftDataType } from '../constants';
 
 /** The LID of the first member of a block or struct. */
 export const FIRST_LID = 0xa;
@@ -70,37 +70,37 @@ export interface PlusModel {
 }
 
 const SOFT_OF: Readonly<Partial<Record<DataTypeName, number>>> = Object.freeze({
-  BOOL: SOFT.bool,
-  BYTE: SOFT.byte,
-  CHAR: SOFT.char,
-  WORD: SOFT.word,
-  INT: SOFT.int,
-  DWORD: SOFT.dword,
-  DINT: SOFT.dint,
-  REAL: SOFT.real,
-  DATE: SOFT.date,
-  TIME_OF_DAY: SOFT.timeOfDay,
-  TIME: SOFT.time,
-  S5TIME: SOFT.s5time,
-  DATE_AND_TIME: SOFT.dateAndTime,
-  STRING: SOFT.string,
-  LREAL: SOFT.lreal,
-  ULINT: SOFT.ulint,
-  LINT: SOFT.lint,
-  LWORD: SOFT.lword,
-  USINT: SOFT.usint,
-  UINT: SOFT.uint,
-  UDINT: SOFT.udint,
-  SINT: SOFT.sint,
-  WCHAR: SOFT.wchar,
-  WSTRING: SOFT.wstring,
-  LTIME: SOFT.ltime,
-  DTL: SOFT.dtl,
+  BOOL: SoftDataType.Bool,
+  BYTE: SoftDataType.Byte,
+  CHAR: SoftDataType.Char,
+  WORD: SoftDataType.Word,
+  INT: SoftDataType.Int,
+  DWORD: SoftDataType.DWord,
+  DINT: SoftDataType.DInt,
+  REAL: SoftDataType.Real,
+  DATE: SoftDataType.Date,
+  TIME_OF_DAY: SoftDataType.TimeOfDay,
+  TIME: SoftDataType.Time,
+  S5TIME: SoftDataType.S5Time,
+  DATE_AND_TIME: SoftDataType.DateAndTime,
+  STRING: SoftDataType.String,
+  LREAL: SoftDataType.LReal,
+  ULINT: SoftDataType.ULInt,
+  LINT: SoftDataType.LInt,
+  LWORD: SoftDataType.LWord,
+  USINT: SoftDataType.USInt,
+  UINT: SoftDataType.UInt,
+  UDINT: SoftDataType.UDInt,
+  SINT: SoftDataType.SInt,
+  WCHAR: SoftDataType.WChar,
+  WSTRING: SoftDataType.WString,
+  LTIME: SoftDataType.LTime,
+  DTL: SoftDataType.DTL,
 });
 
 /** The software data type of an elementary type. */
 export function softOf(type: DataTypeName): number {
-  return SOFT_OF[type] ?? SOFT.byte;
+  return SOFT_OF[type] ?? SoftDataType.Byte;
 }
 
 const BLOCK_SOURCES = /\.(db|udt|scl|awl)$/i;
@@ -141,7 +141,7 @@ function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], 
         name: summary.name,
         number: summary.db,
         optimized,
-        rid: ID.dbAccessAreaBase + summary.db,
+        rid: dbAccessArea(summary.db),
         type,
         length: summary.length,
       }),
@@ -172,9 +172,9 @@ class TypeBuilder {
   private member(name: string, node: LayoutNode, base: number, lid: number): PlusMember {
     const place = { name, lid, byte: node.byte - base, bit: node.bit, node };
     if (node.kind === 'elementary') return Object.freeze({ ...place, soft: softOf(node.dataType) });
-    if (node.kind === 'struct') return Object.freeze({ ...place, soft: SOFT.struct, type: this.struct(node) });
+    if (node.kind === 'struct') return Object.freeze({ ...place, soft: SoftDataType.Struct, type: this.struct(node) });
     const first = node.elements[0];
-    if (first?.kind === 'struct') return Object.freeze({ ...place, soft: SOFT.struct, type: this.struct(first) });
+    if (first?.kind === 'struct') return Object.freeze({ ...place, soft: SoftDataType.Struct, type: this.struct(first) });
     return Object.freeze({ ...place, soft: softOf(node.elementType?.dataType ?? 'BYTE') });
   }
 }

@@ -9,11 +9,12 @@
 import type { PlcMemory } from '../../sim/memory';
 import { ProtocolError } from '../../errors';
 import type { LayoutNode } from '../../symbols/layout-nodes';
-import { EXPLORE_NO_SUCH_OBJECT, ID, ITEM_ERROR, STATE_RUN, STATE_STOP } from './ids';
+import { ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
+import { Reader } from '../codec/bytes';
+import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
 import { resolveLids, type PlusDb, type PlusModel } from './model';
 import { blockList, cpuExecUnit, typeInfoContainer } from './typeinfo';
 import { blob, readNode, readPValue, writeNode } from './values';
-import { u32, u64, WireReader } from './wire';
 
 /** What a handler needs of the CPU. */
 export interface CpuSide {
@@ -37,41 +38,36 @@ export class ResetConnection extends ProtocolError {}
 
 /** Explore: the object tree under `exploreId`, or the CPU's "no such object". */
 export function explore(cpu: CpuSide, body: Buffer): Buffer {
-  const r = new WireReader(body);
-  const id = r.u32fixed('the Explore id');
-  const ok = (objects: Buffer) => Buffer.concat([u64(0n), objects, Buffer.alloc(4)]);
-  if (id === ID.thePlcProgram) return ok(blockList(cpu.model));
-  if (id === ID.theCpuExecUnit) return ok(cpuExecUnit(cpu.mode() === 'RUN' ? STATE_RUN : STATE_STOP));
-  if (id === ID.typeInfoContainer) return ok(typeInfoContainer(cpu.model));
-  return Buffer.concat([nineByteError(EXPLORE_NO_SUCH_OBJECT), Buffer.alloc(8)]);
+  const r = new Reader(body);
+  const id = r.u32('the Explore id');
+  const ok = (objects: Buffer) => Buffer.concat([encodeUVlq64(0n), objects, Buffer.alloc(4)]);
+  if (id === Ids.NativeThePlcProgramRID) return ok(blockList(cpu.model));
+  if (id === Ids.NativeTheCpuExecUnitRID) return ok(cpuExecUnit(cpu.mode() === 'RUN' ? OperatingState.Run : OperatingState.Stop));
+  if (id === Ids.ObjectOmsTypeInfoContainer) return ok(typeInfoContainer(cpu.model));
+  return Buffer.concat([encodeUVlq64(EXPLORE_NO_SUCH_OBJECT), Buffer.alloc(8)]);
 }
 
-/** A 64-bit VLQ whose value needs the ninth, full byte (the error return values). */
-function nineByteError(value: bigint): Buffer {
-  const out = Buffer.alloc(9);
-  out[8] = Number(value & 0xffn);
-  let v = value >> 8n;
-  for (let i = 7; i >= 0; i--) {
-    out[i] = Number(v & 0x7fn) | 0x80;
-    v >>= 7n;
-  }
-  return out;
-}
+/**
+ * A real S7-1500's ReturnValue for an Explore of an object that does not
+ * exist: error flag (bit 63), code -12 in the low 16 bits (s7commplus (MIT)
+ * server.py, _EXPLORE_NO_SUCH_OBJECT; ServiceResult.NoSuchObject).
+ */
+const EXPLORE_NO_SUCH_OBJECT = 0x8020ab001992fff4n;
 
-function readAddresses(r: WireReader, cpu: CpuSide): ItemAddress[] {
-  r.u32fixed('the link id');
-  const count = r.vlq('the item count');
+function readAddresses(r: Reader, cpu: CpuSide): ItemAddress[] {
+  r.u32('the link id');
+  const count = r.uvlq32();
   if (count > cpu.maxItems) throw new ResetConnection(`a request of ${count} items, more than the ${cpu.maxItems} the CPU serves`);
-  r.vlq('the field count');
+  r.uvlq32();
   const items: ItemAddress[] = [];
   for (let i = 0; i < count; i++) {
-    r.vlq('a symbol CRC');
-    const area = r.vlq('an access area');
-    const n = r.vlq('a LID count');
+    r.uvlq32();
+    const area = r.uvlq32();
+    const n = r.uvlq32();
     if (n < 1 || n > 64) throw new ProtocolError(`S7CommPlus item address with ${n} LIDs`);
-    const subArea = r.vlq('an access sub-area');
+    const subArea = r.uvlq32();
     const lids: number[] = [];
-    for (let k = 1; k < n; k++) lids.push(r.vlq('a LID'));
+    for (let k = 1; k < n; k++) lids.push(r.uvlq32());
     items.push({ area, subArea, lids });
   }
   return items;
@@ -82,12 +78,12 @@ type Target =
   { kind: 'node'; db: PlusDb; node: LayoutNode } | { kind: 'range'; db: number; byte: number; size: number } | { kind: 'rid'; rid: number };
 
 function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
-  if ((item.area & 0xffff0000) >>> 0 !== ID.dbAccessAreaBase || item.subArea !== ID.dbValueActual) return undefined;
+  if ((item.area & 0xffff0000) >>> 0 !== Ids.DBAccessAreaBase || item.subArea !== Ids.DBValueActual) return undefined;
   const db = cpu.model.dbs.find((d) => d.rid === item.area);
   if (!db) return undefined;
   const lids = item.lids;
   if (lids.length === 1 && lids[0] === 1) return { kind: 'rid', rid: db.type.rid };
-  if (lids.length === 3 && lids[0] === ID.lidClassicBlob) {
+  if (lids.length === 3 && lids[0] === Ids.LidClassicBlob) {
     // By address: standard DBs only; an optimized one has no offsets to give.
     if (db.optimized) return undefined;
     const [, byte, size] = lids as [number, number, number];
@@ -98,21 +94,21 @@ function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
 }
 
 function itemList(results: readonly (Buffer | undefined)[]): Buffer {
-  const parts: Buffer[] = [u64(0n)];
+  const parts: Buffer[] = [encodeUVlq64(0n)];
   results.forEach((v, i) => {
-    if (v) parts.push(u32(i + 1), v);
+    if (v) parts.push(encodeUVlq32(i + 1), v);
   });
-  parts.push(u32(0));
+  parts.push(encodeUVlq32(0));
   results.forEach((v, i) => {
-    if (!v) parts.push(u32(i + 1), u64(BigInt(ITEM_ERROR)));
+    if (!v) parts.push(encodeUVlq32(i + 1), encodeUVlq64(ITEM_ERROR_UNRESOLVED));
   });
-  parts.push(u32(0));
+  parts.push(encodeUVlq32(0));
   return Buffer.concat(parts);
 }
 
 /** GetMultiVariables: each item's value, or its error. */
 export function getMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
-  const items = readAddresses(new WireReader(body), cpu);
+  const items = readAddresses(new Reader(body), cpu);
   const results = items.map((item) => {
     const t = target(cpu, item);
     if (!t) return undefined;
@@ -132,11 +128,11 @@ function u32be(v: number): Buffer {
 
 /** SetMultiVariables of data: each item written, or its error (nothing of that item written). */
 export function setMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
-  const r = new WireReader(body);
+  const r = new Reader(body);
   const items = readAddresses(r, cpu);
   const values = new Map<number, Buffer>();
   for (let i = 0; i < items.length; i++) {
-    const nr = r.vlq('an item number');
+    const nr = r.uvlq32();
     if (nr === 0) break;
     if (nr > items.length || values.has(nr)) throw new ProtocolError(`S7CommPlus write names item ${nr} of ${items.length}`);
     values.set(nr, readPValue(r));
@@ -151,12 +147,12 @@ export function setMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
       cpu.memory.write('DB', t.db, t.byte, raw);
       ok = true;
     }
-    if (!ok) errors.push(u32(i + 1), u64(BigInt(ITEM_ERROR)));
+    if (!ok) errors.push(encodeUVlq32(i + 1), encodeUVlq64(ITEM_ERROR_UNRESOLVED));
   });
-  return Buffer.concat([u64(0n), ...errors, u32(0)]);
+  return Buffer.concat([encodeUVlq64(0n), ...errors, encodeUVlq32(0)]);
 }
 
 /** GetVarSubStreamed of the session's protection level (1842), the one address the simulator serves this way. */
 export function getVarSubStreamed(level: number): Buffer {
-  return Buffer.concat([u64(0n), Buffer.from([0x00, 0x00, 0x04]), u32(level)]);
+  return Buffer.concat([encodeUVlq64(0n), Buffer.from([0x00, 0x00, 0x04]), encodeUVlq32(level)]);
 }

@@ -8,9 +8,20 @@
  * (`_send_request`: where the integrity id sits), server.py.
  */
 import { ProtocolError } from '../../errors';
-import { DT, EL, FN, ID, ITEM_ERROR, OP_REQUEST, OP_RESPONSE, PROTOCOL_ID, READ_FUNCTIONS, V1, V2 } from './ids';
+import {
+  DataType,
+  ElementId,
+  FunctionCode,
+  Ids,
+  ITEM_ERROR_UNRESOLVED,
+  Opcode,
+  ProtocolVersion,
+  READ_FUNCTIONS,
+  S7P_PROTOCOL_ID,
+} from '../constants';
+import { Reader } from '../codec/bytes';
+import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
 import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
-import { u32, u64, WireReader } from './wire';
 
 /** The protection level a session without a password works at (protocol.py AccessLevel: 1 full access). */
 const FULL_ACCESS = 1;
@@ -47,70 +58,74 @@ export class PlusSession {
     if (frame.length > this.options.maxRequestBytes) {
       throw new ResetConnection(`a request of ${frame.length} bytes, more than the ${this.options.maxRequestBytes} the CPU takes`);
     }
-    if (frame.length < 8 + 14 || frame[0] !== PROTOCOL_ID) throw new ProtocolError('not an S7CommPlus request frame');
+    if (frame.length < 8 + 14 || frame[0] !== S7P_PROTOCOL_ID) throw new ProtocolError('not an S7CommPlus request frame');
     const length = frame.readUInt16BE(2);
     if (4 + length > frame.length) throw new ProtocolError(`S7CommPlus frame says ${length} bytes of data, carries ${frame.length - 4}`);
     const data = frame.subarray(4, 4 + length);
-    if (data[0] !== OP_REQUEST) throw new ProtocolError(`S7CommPlus opcode 0x${data[0]!.toString(16)} where a request was expected`);
+    if (data[0] !== Opcode.Request) throw new ProtocolError(`S7CommPlus opcode 0x${data[0]!.toString(16)} where a request was expected`);
     const fn = data.readUInt16BE(3);
     const seq = data.readUInt16BE(7);
     const session = data.readUInt32BE(9);
     const body = data.subarray(14);
-    if (this.stage !== 'init' && this.stage !== 'ssl' && fn !== FN.createObject && session !== this.sessionId) {
+    if (this.stage !== 'init' && this.stage !== 'ssl' && fn !== FunctionCode.CreateObject && session !== this.sessionId) {
       throw new ResetConnection(`request for session ${session}, this connection's is ${this.sessionId}`);
     }
     switch (this.stage) {
       case 'init':
-        if (fn !== FN.initSsl) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before InitSSL`);
+        if (fn !== FunctionCode.InitSsl) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before InitSSL`);
         this.stage = 'ssl';
-        return { reply: this.frame(V1, fn, seq, Buffer.concat([u32(0), Buffer.alloc(4)])), startTls: this.options.tls };
+        return {
+          reply: this.frame(ProtocolVersion.V1, fn, seq, Buffer.concat([encodeUVlq32(0), Buffer.alloc(4)])),
+          startTls: this.options.tls,
+        };
       case 'ssl':
-        if (fn !== FN.createObject) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before CreateObject`);
+        if (fn !== FunctionCode.CreateObject) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before CreateObject`);
         this.sessionId = this.options.newSessionId();
         this.stage = 'created';
-        return { reply: this.frame(V1, fn, seq, this.created()) };
+        return { reply: this.frame(ProtocolVersion.V1, fn, seq, this.created()) };
       case 'created':
-        if (fn !== FN.setMultiVariables) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before the session setup`);
+        if (fn !== FunctionCode.SetMultiVariables)
+          throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before the session setup`);
         this.stage = 'ready';
-        return { reply: this.frame(this.version(), fn, seq, Buffer.concat([u64(0n), u32(0)])) };
+        return { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), encodeUVlq32(0)])) };
       default:
         return this.data(fn, seq, body);
     }
   }
 
   private version(): number {
-    return this.options.tls ? V2 : V1;
+    return this.options.tls ? ProtocolVersion.V2 : ProtocolVersion.V1;
   }
 
   private data(fn: number, seq: number, body: Buffer): Step {
-    if (fn === FN.deleteObject && body.length <= 4) {
+    if (fn === FunctionCode.DeleteObject && body.length <= 4) {
       this.stage = 'init';
-      return { reply: this.frame(this.version(), fn, seq, Buffer.concat([u64(0n), Buffer.alloc(4)])), close: true };
+      return { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)])), close: true };
     }
     const read = READ_FUNCTIONS.has(fn);
     const id = this.options.tls ? this.checkIntegrity(fn, body, read ? this.readId : this.writeId) : undefined;
     let answer: Buffer;
     switch (fn) {
-      case FN.explore:
+      case FunctionCode.Explore:
         answer = explore(this.cpu, body);
         break;
-      case FN.getMultiVariables:
+      case FunctionCode.GetMultiVariables:
         answer = getMultiVariables(this.cpu, body);
         break;
-      case FN.setMultiVariables:
+      case FunctionCode.SetMultiVariables:
         answer = setMultiVariables(this.cpu, body);
         break;
-      case FN.getVarSubStreamed:
+      case FunctionCode.GetVarSubStreamed:
         answer = this.subStreamed(body);
         break;
       default:
         // Any other function: the CPU's error answer (server.py _build_error_response).
-        return { reply: this.frame(this.version(), FN.error, seq, Buffer.concat([u32(0x04b1), Buffer.alloc(4)])) };
+        return { reply: this.frame(this.version(), FunctionCode.Error, seq, Buffer.concat([encodeUVlq32(0x04b1), Buffer.alloc(4)])) };
     }
     if (id !== undefined) {
       if (read) this.readId = (this.readId + 1) >>> 0;
       else this.writeId = (this.writeId + 1) >>> 0;
-      answer = Buffer.concat([answer, u32(id)]);
+      answer = Buffer.concat([answer, encodeUVlq32(id)]);
     }
     return { reply: this.frame(this.version(), fn, seq, answer) };
   }
@@ -121,8 +136,8 @@ export class PlusSession {
    * connection.py `_send_request`). Anything else is a jump: reset.
    */
   private checkIntegrity(fn: number, body: Buffer, expected: number): number {
-    const id = u32(expected);
-    const tails = fn === FN.explore ? [5] : [4, 3];
+    const id = encodeUVlq32(expected);
+    const tails = fn === FunctionCode.Explore ? [5] : [4, 3];
     for (const tail of tails) {
       const at = body.length - tail - id.length;
       if (at >= 0 && body.subarray(at, at + id.length).equals(id)) {
@@ -134,13 +149,13 @@ export class PlusSession {
   }
 
   private subStreamed(body: Buffer): Buffer {
-    const r = new WireReader(body);
-    r.u32fixed('the object id');
+    const r = new Reader(body);
+    r.u32('the object id');
     r.bytes(3, 'the address array head');
-    const address = r.vlq('the address');
+    const address = r.uvlq32();
     if (address === EFFECTIVE_PROTECTION_LEVEL) return getVarSubStreamed(FULL_ACCESS);
     // Any other address: an error return value (the item error the simulator uses, server.py _ITEM_ERROR).
-    return Buffer.concat([u64(BigInt(ITEM_ERROR)), Buffer.alloc(4)]);
+    return Buffer.concat([encodeUVlq64(ITEM_ERROR_UNRESOLVED), Buffer.alloc(4)]);
   }
 
   /** The CreateObject answer: the session id, then the session object with its ServerSessionVersion. */
@@ -148,19 +163,19 @@ export class PlusSession {
     const rel = Buffer.alloc(4);
     rel.writeUInt32BE(1);
     return Buffer.concat([
-      u64(0n),
+      encodeUVlq64(0n),
       Buffer.from([1]),
-      u32(this.sessionId),
-      Buffer.from([EL.startOfObject]),
+      encodeUVlq32(this.sessionId),
+      Buffer.from([ElementId.StartOfObject]),
       rel,
-      u32(0),
-      u32(0),
-      u32(0),
-      Buffer.from([EL.attribute]),
-      u32(ID.serverSessionVersion),
-      Buffer.from([0x00, DT.udint]),
-      u32(this.version()),
-      Buffer.from([EL.terminatingObject]),
+      encodeUVlq32(0),
+      encodeUVlq32(0),
+      encodeUVlq32(0),
+      Buffer.from([ElementId.Attribute]),
+      encodeUVlq32(Ids.ServerSessionVersion),
+      Buffer.from([0x00, DataType.UDInt]),
+      encodeUVlq32(this.version()),
+      Buffer.from([ElementId.TerminatingObject]),
       Buffer.alloc(4),
     ]);
   }
@@ -168,13 +183,13 @@ export class PlusSession {
   /** A response frame: header, the 10-byte response header, the body, the trailer. */
   private frame(version: number, fn: number, seq: number, body: Buffer): Buffer {
     const head = Buffer.alloc(14);
-    head[0] = PROTOCOL_ID;
+    head[0] = S7P_PROTOCOL_ID;
     head[1] = version;
     head.writeUInt16BE(10 + body.length, 2);
-    head[4] = OP_RESPONSE;
+    head[4] = Opcode.Response;
     head.writeUInt16BE(fn, 7);
     head.writeUInt16BE(seq, 11);
-    const trailer = Buffer.from([PROTOCOL_ID, version, 0, 0]);
+    const trailer = Buffer.from([S7P_PROTOCOL_ID, version, 0, 0]);
     return Buffer.concat([head, body, trailer]);
   }
 }

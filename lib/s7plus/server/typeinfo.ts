@@ -7,10 +7,12 @@
  * client.py `_parse_explore_datablocks`, server.py `_cpu_exec_unit_object`.
  */
 import type { ArrayNode } from '../../symbols/layout-nodes';
-import { DT, EL, ID, SOFT } from './ids';
+import { DataType, ElementId, Ids, SoftDataType } from '../constants';
+import { encodeSVlq32, encodeUVlq32 } from '../codec/vlq';
 import type { PlusMember, PlusModel, PlusType } from './model';
-import { i32, u32 } from './wire';
 
+/** The attribute of a type object holding its byte size (typeinfo.py TI_TCOM_SIZE). */
+const TI_TCOM_SIZE = 1502;
 /** POffsetInfoType selectors (typeinfo.py parse_offset_info). */
 const OI = Object.freeze({ std: 8, string: 9, array: 10, arrayMdim: 11, struct: 12, structArray: 13, structMdim: 14 });
 /** bitoffsetinfo flag: the member has a standard (classic) address. */
@@ -36,32 +38,32 @@ function u16le(v: number): Buffer {
 
 /** An attribute: tag, id, then the PValue (flags 0, type, value). */
 export function attribute(id: number, type: number, value: Buffer): Buffer {
-  return Buffer.concat([Buffer.from([EL.attribute]), u32(id), Buffer.from([0x00, type]), value]);
+  return Buffer.concat([Buffer.from([ElementId.Attribute]), encodeUVlq32(id), Buffer.from([0x00, type]), value]);
 }
 
 /** The head of an object: tag, relation id (4 bytes), class id, class flags 0, attribute id 0. */
 export function objectHead(rid: number, classId: number): Buffer {
   const r = Buffer.alloc(5);
-  r[0] = EL.startOfObject;
+  r[0] = ElementId.StartOfObject;
   r.writeUInt32BE(rid >>> 0, 1);
-  return Buffer.concat([r, u32(classId), u32(0), u32(0)]);
+  return Buffer.concat([r, encodeUVlq32(classId), encodeUVlq32(0), encodeUVlq32(0)]);
 }
 
-const END = Buffer.from([EL.terminatingObject]);
+const END = Buffer.from([ElementId.TerminatingObject]);
 
 /** A name as a WString PValue's value (length, UTF-8 bytes, as the S7-1500 sends ASCII one byte a character). */
 function wstring(text: string): Buffer {
   const bytes = Buffer.from(text, 'utf8');
-  return Buffer.concat([u32(bytes.length), bytes]);
+  return Buffer.concat([encodeUVlq32(bytes.length), bytes]);
 }
 
 /** thePLCProgram explored: one DataBlock object per DB (name, number). */
 export function blockList(model: PlusModel): Buffer {
   const parts: Buffer[] = [];
   for (const db of model.dbs) {
-    parts.push(objectHead(db.rid, ID.dbClass));
-    parts.push(attribute(ID.objectVariableTypeName, DT.wstring, wstring(db.name)));
-    parts.push(attribute(ID.blockNumber, DT.udint, u32(db.number)));
+    parts.push(objectHead(db.rid, Ids.DBClassRID));
+    parts.push(attribute(Ids.ObjectVariableTypeName, DataType.WString, wstring(db.name)));
+    parts.push(attribute(Ids.BlockBlockNumber, DataType.UDInt, encodeUVlq32(db.number)));
     parts.push(END);
   }
   return Buffer.concat(parts);
@@ -70,16 +72,16 @@ export function blockList(model: PlusModel): Buffer {
 /** theCPUexecUnit explored: its operating state code in the struct attribute. */
 export function cpuExecUnit(stateCode: number): Buffer {
   const id = Buffer.alloc(4);
-  id.writeUInt32BE(ID.operatingStateStructId);
+  id.writeUInt32BE(Ids.CpuExecUnitOperatingStateStructId);
   return Buffer.concat([
-    objectHead(ID.theCpuExecUnit, ID.cpuExecUnitClass),
-    Buffer.from([EL.attribute]),
-    u32(ID.operatingStateStruct),
-    Buffer.from([0x00, DT.struct]),
+    objectHead(Ids.NativeTheCpuExecUnitRID, Ids.ClassCpuExecUnit),
+    Buffer.from([ElementId.Attribute]),
+    encodeUVlq32(Ids.CpuExecUnitOperatingStateStruct),
+    Buffer.from([0x00, DataType.Struct]),
     id,
-    u32(ID.operatingState),
-    Buffer.from([0x00, DT.dint]),
-    i32(stateCode),
+    encodeUVlq32(Ids.CpuExecUnitOperatingState),
+    Buffer.from([0x00, DataType.DInt]),
+    encodeSVlq32(stateCode),
     Buffer.from([0x00]),
     END,
   ]);
@@ -95,7 +97,7 @@ export function typeInfoContainer(model: PlusModel): Buffer {
   };
   for (const db of model.dbs) if (!db.optimized) markStd(db.type);
   const objects = model.types.map((t) => typeObject(t, standardTypes.has(t)));
-  return Buffer.concat([objectHead(ID.typeInfoContainer, ID.typeInfoContainerClass), ...objects, END]);
+  return Buffer.concat([objectHead(Ids.ObjectOmsTypeInfoContainer, Ids.ClassOmsTypeInfoContainer), ...objects, END]);
 }
 
 function typeObject(type: PlusType, classic: boolean): Buffer {
@@ -127,10 +129,10 @@ function typeObject(type: PlusType, classic: boolean): Buffer {
   nameLen.writeUInt16BE(nameBytes.length);
   return Buffer.concat([
     objectHead(type.rid, 0),
-    attribute(ID.tcomSize, DT.udint, u32(type.size)),
-    Buffer.from([EL.vartypeList]),
+    attribute(TI_TCOM_SIZE, DataType.UDInt, encodeUVlq32(type.size)),
+    Buffer.from([ElementId.VartypeList]),
     ...blocks,
-    Buffer.from([EL.varnameList]),
+    Buffer.from([ElementId.VarnameList]),
     ...(type.members.length > 0 ? [nameLen, nameBytes] : []),
     Buffer.alloc(2),
     END,
@@ -162,7 +164,7 @@ function vartype(m: PlusMember, classic: boolean): Buffer {
   head.writeUInt32LE(m.lid, 0);
   head.writeUInt32LE(0, 4);
   head[8] = m.soft;
-  head.writeUInt16BE((oi << 12) | (m.soft === SOFT.bool ? bit & 7 : 0), 9);
+  head.writeUInt16BE((oi << 12) | (m.soft === SoftDataType.Bool ? bit & 7 : 0), 9);
   head[11] = (classic ? CLASSIC | ((bit & 7) << 4) : 0) | (bit & 7);
   return Buffer.concat([head, info]);
 }

@@ -9,65 +9,66 @@ import { ProtocolError } from '../../errors';
 import type { PlcMemory } from '../../sim/memory';
 import type { LayoutNode } from '../../symbols/layout-nodes';
 import type { DataTypeName } from '../../types';
-import { DT } from './ids';
-import { i32, u32, type WireReader } from './wire';
+import { DataType } from '../constants';
+import type { Reader } from '../codec/bytes';
+import { encodeSVlq32, encodeUVlq32 } from '../codec/vlq';
 
 /** Elementary types sent with their own wire type: the type and its byte width. */
 const TYPED: Readonly<Partial<Record<DataTypeName, readonly [number, number]>>> = Object.freeze({
-  BYTE: [DT.byte, 1],
-  USINT: [DT.usint, 1],
-  SINT: [DT.sint, 1],
-  CHAR: [DT.usint, 1],
-  WORD: [DT.word, 2],
-  UINT: [DT.uint, 2],
-  INT: [DT.int, 2],
-  DWORD: [DT.dword, 4],
-  REAL: [DT.real, 4],
-  UDINT: [DT.udint, 4],
-  DINT: [DT.dint, 4],
-  LREAL: [DT.lreal, 8],
-  LWORD: [DT.lword, 8],
+  BYTE: [DataType.Byte, 1],
+  USINT: [DataType.USInt, 1],
+  SINT: [DataType.SInt, 1],
+  CHAR: [DataType.USInt, 1],
+  WORD: [DataType.Word, 2],
+  UINT: [DataType.UInt, 2],
+  INT: [DataType.Int, 2],
+  DWORD: [DataType.DWord, 4],
+  REAL: [DataType.Real, 4],
+  UDINT: [DataType.UDInt, 4],
+  DINT: [DataType.DInt, 4],
+  LREAL: [DataType.LReal, 8],
+  LWORD: [DataType.LWord, 8],
 });
 
 /** A BLOB PValue: flags, type, root id 0, length, bytes. */
 export function blob(bytes: Buffer): Buffer {
-  return Buffer.concat([Buffer.from([0x00, DT.blob]), u32(0), u32(bytes.length), bytes]);
+  return Buffer.concat([Buffer.from([0x00, DataType.Blob]), encodeUVlq32(0), encodeUVlq32(bytes.length), bytes]);
 }
 
 /** The PValue of `node` in the block image `image`. */
 export function readNode(node: LayoutNode, image: Buffer): Buffer {
   const raw = image.subarray(node.byte, node.byte + node.size);
   if (node.kind !== 'elementary') return blob(Buffer.from(raw));
-  if (node.dataType === 'BOOL') return Buffer.from([0x00, DT.bool, (image[node.byte]! >> (node.bit ?? 0)) & 1]);
+  if (node.dataType === 'BOOL') return Buffer.from([0x00, DataType.Bool, (image[node.byte]! >> (node.bit ?? 0)) & 1]);
   const typed = TYPED[node.dataType];
   if (!typed) return blob(Buffer.from(raw));
   const [type] = typed;
-  if (type === DT.udint) return Buffer.concat([Buffer.from([0x00, type]), u32(raw.readUInt32BE(0))]);
-  if (type === DT.dint) return Buffer.concat([Buffer.from([0x00, type]), i32(raw.readInt32BE(0))]);
+  if (type === DataType.UDInt) return Buffer.concat([Buffer.from([0x00, type]), encodeUVlq32(raw.readUInt32BE(0))]);
+  if (type === DataType.DInt) return Buffer.concat([Buffer.from([0x00, type]), encodeSVlq32(raw.readInt32BE(0))]);
   return Buffer.concat([Buffer.from([0x00, type]), raw]);
 }
 
 const FIXED: Readonly<Record<number, number>> = Object.freeze({
-  [DT.bool]: 1,
-  [DT.usint]: 1,
-  [DT.byte]: 1,
-  [DT.sint]: 1,
-  [DT.uint]: 2,
-  [DT.word]: 2,
-  [DT.int]: 2,
-  [DT.dword]: 4,
-  [DT.real]: 4,
-  [DT.rid]: 4,
-  [DT.lreal]: 8,
-  [DT.lword]: 8,
+  [DataType.Bool]: 1,
+  [DataType.USInt]: 1,
+  [DataType.Byte]: 1,
+  [DataType.SInt]: 1,
+  [DataType.UInt]: 2,
+  [DataType.Word]: 2,
+  [DataType.Int]: 2,
+  [DataType.DWord]: 4,
+  [DataType.Real]: 4,
+  [DataType.RID]: 4,
+  [DataType.LReal]: 8,
+  [DataType.LWord]: 8,
 });
 
 /** Reads one PValue of a request and gives its value as big-endian bytes (what a standard DB holds). */
-export function readPValue(r: WireReader): Buffer {
-  const flags = r.byte('the flags of a value');
-  const type = r.byte('the type of a value');
+export function readPValue(r: Reader): Buffer {
+  const flags = r.u8('the flags of a value');
+  const type = r.u8('the type of a value');
   if (flags & 0x10) {
-    const count = r.vlq('an array count');
+    const count = r.uvlq32();
     const size = FIXED[type];
     if (size === undefined) throw new ProtocolError(`S7CommPlus array of wire type 0x${type.toString(16)} is not one the simulator takes`);
     return Buffer.from(r.bytes(count * size, 'an array'));
@@ -76,24 +77,24 @@ export function readPValue(r: WireReader): Buffer {
   if (size !== undefined) return Buffer.from(r.bytes(size, 'a value'));
   const out = Buffer.alloc(4);
   switch (type) {
-    case DT.udint:
-    case DT.aid:
-      out.writeUInt32BE(r.vlq('a UDINT value'));
+    case DataType.UDInt:
+    case DataType.AID:
+      out.writeUInt32BE(r.uvlq32());
       return out;
-    case DT.dint:
-      out.writeInt32BE(r.vlqSigned('a DINT value'));
+    case DataType.DInt:
+      out.writeInt32BE(r.svlq32());
       return out;
-    case DT.ulint: {
+    case DataType.ULInt: {
       const b = Buffer.alloc(8);
-      b.writeBigUInt64BE(r.vlq64('a ULINT value'));
+      b.writeBigUInt64BE(r.uvlq64());
       return b;
     }
-    case DT.blob: {
-      r.vlq('a BLOB root id');
-      return Buffer.from(r.bytes(r.vlq('a BLOB length'), 'a BLOB'));
+    case DataType.Blob: {
+      r.uvlq32();
+      return Buffer.from(r.bytes(r.uvlq32(), 'a BLOB'));
     }
-    case DT.wstring:
-      return Buffer.from(r.bytes(r.vlq('a WSTRING length'), 'a WSTRING'));
+    case DataType.WString:
+      return Buffer.from(r.bytes(r.uvlq32(), 'a WSTRING'));
     default:
       throw new ProtocolError(`S7CommPlus value of wire type 0x${type.toString(16)} is not one the simulator takes`);
   }
