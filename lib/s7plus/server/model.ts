@@ -57,6 +57,8 @@ export interface PlusDb {
   /** The access area of its values: 0x8A0E0000 + number. */
   readonly rid: number;
   readonly type: PlusType;
+  /** The block's own layout (a shared type object's members are those of the UDT's first use). */
+  readonly root: StructNode;
   readonly length: number;
 }
 
@@ -143,6 +145,7 @@ function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], 
         optimized,
         rid: dbAccessArea(summary.db),
         type,
+        root: layout.root,
         length: summary.length,
       }),
     );
@@ -183,29 +186,32 @@ class TypeBuilder {
  * The node a LID path names in `db`: member LIDs, a 0-based element index
  * after an array, and for an element of an array of structs the marker 1
  * before its member's LID (typeinfo.py `_walk`: `<lid>.<index>.1.<lid>`).
- * Undefined when the path names nothing.
+ * A type object is shared by every instance of its UDT, so the path walks
+ * the block's own layout alongside it. Undefined when the path names nothing.
  */
 export function resolveLids(db: PlusDb, lids: readonly number[]): LayoutNode | undefined {
   let type: PlusType | undefined = db.type;
+  let struct: StructNode | undefined = db.root;
   let node: LayoutNode | undefined;
   let i = 0;
   while (i < lids.length) {
-    if (!type) return undefined;
-    const member: PlusMember | undefined = type.members.find((m) => m.lid === lids[i]);
-    if (!member) return undefined;
-    node = member.node;
-    type = member.type;
+    if (!type || !struct) return undefined;
+    const index = type.members.findIndex((m) => m.lid === lids[i]);
+    if (index < 0) return undefined;
+    type = type.members[index]!.type;
+    node = struct.members[index]?.node;
+    if (!node) return undefined;
     i++;
     if (node.kind === 'array' && i < lids.length) {
       node = node.elements[lids[i]!];
       if (!node) return undefined;
       i++;
-      if (node.kind === 'struct') {
-        if (i >= lids.length) return node;
+      if (node.kind === 'struct' && i < lids.length) {
         if (lids[i] !== 1) return undefined;
         i++;
       }
     }
+    struct = node.kind === 'struct' ? node : undefined;
   }
   return node;
 }
