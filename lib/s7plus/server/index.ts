@@ -5,11 +5,12 @@
  * CPU: standard DBs are the S7 simulator's, read and written over either
  * protocol; optimized DBs are served here by name only.
  */
-import { createHash, X509Certificate } from 'node:crypto';
+import { X509Certificate } from 'node:crypto';
 import type { Socket } from 'node:net';
 import * as tls from 'node:tls';
 import type { PlcMemory } from '../../sim/memory';
 import type { CompileOptions, SymbolSource } from '../../symbols/model';
+import { fingerprint256 } from '../transport/cert';
 import { PlusConnection } from './connection';
 import { buildPlusModel, type PlusModel } from './model';
 import { isS7PlusRequest } from './tsap';
@@ -43,7 +44,7 @@ export interface PlusLink {
 
 export class S7PlusService {
   readonly model: PlusModel;
-  /** SHA-256 of the certificate (DER), 64 hex digits; undefined in plain text. */
+  /** SHA-256 of the certificate (DER), 64 upper-case hex digits; undefined in plain text. */
   readonly fingerprint: string | undefined;
   private readonly secureContext: tls.SecureContext | undefined;
   private readonly maxItems: number;
@@ -61,7 +62,7 @@ export class S7PlusService {
         minVersion: 'TLSv1.2',
         maxVersion: 'TLSv1.3',
       });
-      this.fingerprint = createHash('sha256').update(new X509Certificate(options.tls.cert).raw).digest('hex');
+      this.fingerprint = fingerprint256(new X509Certificate(options.tls.cert).raw);
     }
   }
 
