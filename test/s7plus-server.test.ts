@@ -7,9 +7,7 @@
  * client over TLS: test/s7plus-server-python.test.ts.
  */
 import { expect } from 'chai';
-import * as fs from 'node:fs';
 import * as net from 'node:net';
-import * as path from 'node:path';
 import { FrameReader } from '../lib/link/framer';
 import { S7Client } from '../lib/s7/client';
 import { checkTpkt, decodeCotp, encodeConnectionRequest } from '../lib/s7/codec';
@@ -19,14 +17,8 @@ import { Ids } from '../lib/s7plus/constants';
 import { resolveLids } from '../lib/s7plus/server/model';
 import { S7PlusService } from '../lib/s7plus/server';
 import { parseUrl, type S7Endpoint } from '../lib/url';
+import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
 import { waitFor } from './support/wait';
-
-const FIXTURES = path.join(__dirname, '..', '..', 'test', 'fixtures', 's7plus');
-export const SOURCES = ['Valve.udt', 'Tank.db', 'Recipe.db'].map((name) => ({
-  name,
-  content: fs.readFileSync(path.join(FIXTURES, name), 'utf8'),
-}));
-export const DB_NUMBERS = { Tank: 1, Recipe: 2 };
 
 const HMI = Buffer.from('SIMATIC-ROOT-HMI', 'latin1');
 
