@@ -45,6 +45,21 @@ elif scenario == "values":
     c.write_tag("Tank.Count", struct.pack(">h", 4321))
     out["step"] = c.read_tag("Recipe.Step").hex()
     out["db_read"] = c.db_read(1, 0, 8).hex()
+elif scenario == "subscribe":
+    c.browse()
+    sid = c.create_subscription([c.resolve_tag("Tank.Level"), c.resolve_tag("Recipe.Step")], cycle_ms=50)
+    n = c.receive_subscription_notification(sid)
+    print(json.dumps({"first": [n.values[1].hex(), n.values[2].hex()]}), flush=True)
+    sys.stdin.readline()
+    n = c.receive_subscription_notification(sid)
+    out["second"] = [n.values.get(1, b"").hex(), n.values.get(2, b"").hex()]
+    for i in range(12):
+        c.write_tag("Recipe.Step", struct.pack(">h", i + 1))
+        n = c.receive_subscription_notification(sid)
+        out.setdefault("steps", []).append(n.values[2].hex())
+    out["tick"] = n.credit_tick
+    c.delete_subscription(sid)
+    out["after"] = c.read_tag("Tank.Level").hex()
 elif scenario == "jump":
     c.read_tag("Tank.Level")
     c._connection._integrity_id_read += 3
@@ -156,6 +171,54 @@ describe('S7CommPlus simulator and the s7commplus Python client over TLS (issue 
     }
     // Level, Count (4321), Running and Alarm (bits 0 and 1 of byte 6), byte 7.
     expect(out.db_read).to.equal(real(99.5) + '10e1' + '01' + '00');
+  });
+
+  it('a subscription delivers the initial values, then a change made through plcwire write, then every change past the first credits', async () => {
+    const child = spawn(PYTHON, [script, String(server.port), service.fingerprint!, 'subscribe'], { stdio: ['pipe', 'pipe', 'pipe'] });
+    let out = '';
+    let err = '';
+    child.stderr.on('data', (d: Buffer) => (err += d.toString()));
+    const exited = new Promise<number>((resolve) => child.on('close', (code) => resolve(code ?? -1)));
+    const line = () =>
+      new Promise<string>((resolve, reject) => {
+        const onData = (d: Buffer) => {
+          out += d.toString();
+          const nl = out.indexOf('\n');
+          if (nl < 0) return;
+          child.stdout.off('data', onData);
+          const first = out.slice(0, nl);
+          out = out.slice(nl + 1);
+          resolve(first);
+        };
+        child.stdout.on('data', onData);
+        void exited.then((code) => reject(new Error(`peer exited ${code}: ${err}`)));
+      });
+    try {
+      const first = JSON.parse(await line()) as { first: string[] };
+      expect(first.first).to.deep.equal(['42c70000', 'fb2e']); // Tank.Level 99.5, Recipe.Step -1234 from the test before
+      const w = await run(process.execPath, [
+        BIN,
+        'write',
+        `s7://127.0.0.1:${server.port}?rack=0&slot=1`,
+        '--symbols',
+        path.join(S7PLUS_FIXTURES, 'Tank.db'),
+        '--symbols',
+        path.join(S7PLUS_FIXTURES, 'Valve.udt'),
+        '--db',
+        'Tank=1',
+        '"Tank".Level=42.5',
+      ]);
+      expect(w.code, w.err).to.equal(0);
+      child.stdin.write('\n');
+      const result = JSON.parse(await line()) as { second: string[]; steps: string[]; tick: number; after: string };
+      expect(result.second).to.deep.equal(['422a0000', 'fb2e']);
+      expect(result.steps).to.deep.equal(Array.from({ length: 12 }, (_, i) => (i + 1).toString(16).padStart(4, '0')));
+      expect(result.tick).to.be.greaterThan(10); // past the 10 credits the client starts with
+      expect(result.after).to.equal('422a0000');
+      expect(await exited, err).to.equal(0);
+    } finally {
+      child.kill();
+    }
   });
 
   it('resets a connection whose integrity id jumps, as a PLC does; the next connection is served', async () => {

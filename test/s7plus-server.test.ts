@@ -107,9 +107,9 @@ class Peer {
     expect(decodeCotp(await this.next()).type).to.equal('CC');
     await this.ask(0x05b3, Buffer.alloc(4), 0);
     const created = await this.ask(0x04ca, Buffer.alloc(4), 288);
-    // ReturnValue 0, one object id: the session.
+    // ReturnValue 0, two object ids: the session and its subscription container.
     expect(created.body[0]).to.equal(0);
-    expect(created.body[1]).to.equal(1);
+    expect(created.body[1]).to.equal(2);
     this.session = created.body[2]! & 0x80 ? ((created.body[2]! & 0x7f) << 7) | created.body[3]! : created.body[2]!;
     const setup = await this.ask(
       0x0542,
@@ -364,6 +364,71 @@ describe('S7CommPlus simulator (issue #25)', function () {
       expect((await refused).message).to.match(/session/);
       await p.closed;
       expect(server.connectionCount).to.be.at.most(1);
+    });
+
+    it('a subscription sends the values at once and a notification when one changes, none while nothing does; a malformed one resets', async () => {
+      const p = peer();
+      const frames: Buffer[] = [];
+      await p.open();
+      const container = 0x3a0 + 1 + (p.session - 0x3a0);
+      const list = [0x80010000, 0, 1, 0x80040002, 7, 0, Ids.DBAccessAreaBase + 2, 0, Ids.DBValueActual, 0xb];
+      const refs = Buffer.concat([Buffer.from([0x20, 0x04]), v(list.length), ...list.map((x) => v(x))]);
+      const object = Buffer.concat([
+        Buffer.from([0xa1, 0x7f, 0xff, 0xc0, 0x01]),
+        v(1001),
+        v(0),
+        v(0),
+        Buffer.from([0xa3]),
+        v(1048),
+        refs,
+        Buffer.from([0xa3]),
+        v(1049),
+        Buffer.from([0, 4]),
+        v(20),
+        Buffer.from([0xa2]),
+        Buffer.alloc(4),
+      ]);
+      const head = Buffer.alloc(4);
+      head.writeUInt32BE(container);
+      const created = await p.ask(0x04ca, Buffer.concat([head, Buffer.from([0, 4, 0]), Buffer.alloc(4), object]));
+      expect(created.body.subarray(0, 2).toString('hex')).to.equal('0001');
+      const notification = async () => {
+        const f = await p.next();
+        frames.push(f);
+        return f.subarray(7 + 4);
+      };
+      // Opcode 0x33, subscription id, 6 reserved, credit tick 1, sequence 1, change counter 1, value record of reference 7: INT 3, end.
+      const first = await notification();
+      expect(first[0]).to.equal(0x33);
+      expect(first.subarray(11).toString('hex')).to.equal('010101' + '92' + '00000007' + '00070003' + '00' + '72010000');
+      server.memory.write('DB', 2, 4, Buffer.from([0x01, 0x00]));
+      const second = await notification();
+      expect(second.subarray(11).toString('hex')).to.equal('020201' + '92' + '00000007' + '00070100' + '00' + '72010000');
+      // A read in between is answered as usual (no notification queued before it: the value did not change).
+      const r = await p.ask(0x054c, Buffer.concat([items([{ db: 2, lids: [0xb] }]), Buffer.alloc(4)]));
+      expect(r.body.toString('hex')).to.equal('00' + '0100070100' + '00' + '00');
+      const refused = waitFor<S7RefusedEvent>(server, 'refused');
+      p.socket.write(
+        request(
+          0x04ca,
+          50,
+          p.session,
+          Buffer.concat([
+            head,
+            Buffer.from([0, 4, 0]),
+            Buffer.alloc(4),
+            Buffer.from([0xa1, 0, 0, 0, 1]),
+            v(1001),
+            v(0),
+            v(0),
+            Buffer.from([0xa3]),
+            v(1048),
+            Buffer.from([0x20, 0x04, 0x05, 1, 2]),
+          ]),
+        ),
+      );
+      expect((await refused).reason).to.equal('protocol-error');
+      await p.closed;
     });
 
     it('DeleteObject of the session answers and closes the connection', async () => {
