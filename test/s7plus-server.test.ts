@@ -431,6 +431,47 @@ describe('S7CommPlus simulator (issue #25)', function () {
       await p.closed;
     });
 
+    it('survives 3000 mutated requests after a session: each answered or refused with a typed event, the simulator still serving', async () => {
+      let seed = 25;
+      const rand = (n: number) => {
+        seed = (seed * 1103515245 + 12345) & 0x7fffffff;
+        return seed % n;
+      };
+      const templates = [
+        Buffer.concat([
+          items([
+            { db: 2, lids: [0xa] },
+            { db: 1, lids: [0x11, 1, 1, 0xb] },
+          ]),
+          Buffer.alloc(4),
+        ]),
+        Buffer.concat([items([{ db: 2, lids: [0xb] }]), v(1), Buffer.from([0, 0x07, 0x01, 0x2c]), Buffer.from([0]), Buffer.alloc(4)]),
+        Buffer.concat([Buffer.from([0, 0, 0x02, 0x19]), v(0), Buffer.from([1, 1, 0, 0]), v(0), Buffer.alloc(5)]),
+      ];
+      const fns = [0x054c, 0x0542, 0x04bb, 0x04ca, 0x04d4, 0x04f2, 0x0586, 0x1234];
+      let refused = 0;
+      server.on('refused', () => refused++);
+      let p = peer();
+      await p.open();
+      for (let i = 0; i < 3000; i++) {
+        if (p.socket.destroyed || p.socket.readyState !== 'open') {
+          p = peer();
+          await p.open();
+        }
+        const body = Buffer.from(templates[rand(templates.length)]!);
+        for (let k = rand(4); k >= 0; k--) body[rand(body.length)] = rand(256);
+        const cut = rand(3) === 0 ? body.subarray(0, rand(body.length)) : body;
+        p.socket.write(request(fns[rand(fns.length)]!, i & 0xffff, p.session, cut));
+        // Each request is answered or its connection reset; wait for either before the next.
+        await Promise.race([p.next(3000).catch(() => undefined), p.closed]);
+      }
+      expect(refused).to.be.greaterThan(0);
+      const q = peer();
+      await q.open();
+      const r = await q.ask(0x054c, Buffer.concat([items([{ db: 1, lids: [0xb] }]), Buffer.alloc(4)]));
+      expect(r.body.toString('hex')).to.equal('00' + '0100070007' + '00' + '00');
+    });
+
     it('DeleteObject of the session answers and closes the connection', async () => {
       const p = peer();
       await p.open();
