@@ -15,7 +15,7 @@ import { DataType } from '../constants';
 
 /** protocol.py AccessLevel. */
 export const FULL_ACCESS = 1;
-export const READ_ACCESS = 2;
+const READ_ACCESS = 2;
 /** legitimation.py / connection.py: the exporter label and length of the OMS secret. */
 export const OMS_EXPORTER_LABEL = 'EXPERIMENTAL_OMS';
 export const OMS_EXPORTER_LENGTH = 32;
