@@ -6,7 +6,7 @@ import { orList } from '../values/text';
 import { UsageError, intFlag, listFlag, stringFlag, type ParsedArgs } from './args';
 import { readInputFile } from './files';
 import { EXIT, untilInterrupted, type CliIo } from './io';
-import { symbolsFlag } from './symbols';
+import { sourceFilesFlag, symbolsFlag } from './symbols';
 
 export const SERVE_FLAGS = [
   'port',
@@ -20,6 +20,9 @@ export const SERVE_FLAGS = [
   'tcp',
   'stations',
   'max-items',
+  'tls-cert',
+  'tls-key',
+  'password-file',
 ];
 
 export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
@@ -36,6 +39,7 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
     string: (flag) => stringFlag(args, flag),
     int: (flag, fallback, min, max) => intFlag(args, flag, fallback, min, max),
     source: () => symbolsFlag(args, 'source'),
+    sourceFiles: () => sourceFilesFlag(args, 'source'),
     hasSource: () => args.lists.has('source'),
     tryByName: (table) => tryByName(table, args),
     usage: (message) => new UsageError(message),

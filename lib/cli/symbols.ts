@@ -77,6 +77,16 @@ export function symbolsFlag(args: ParsedArgs, flag: 'symbols' | 'source'): Symbo
   return loadSymbols(files, args);
 }
 
+/** The files given with `--<flag>` read but not compiled, with the --db numbers (the S7CommPlus simulator builds its own model of them), or undefined when none was given. */
+export function sourceFilesFlag(args: ParsedArgs, flag: 'source'): { sources: SymbolSource[]; db: Record<string, number> } | undefined {
+  const files = listFlag(args, flag);
+  if (files.length === 0) {
+    symbolsFlag(args, flag); // --db without --source: its usage error
+    return undefined;
+  }
+  return { sources: files.map(readSource), db: dbNumbers(args) };
+}
+
 /** One row of `plcwire symbols --json`: byte, bit and address null for a member of an optimized block. */
 interface SymbolRow {
   name: string;

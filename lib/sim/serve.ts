@@ -3,7 +3,7 @@
  * hands each registry entry (lib/drivers.ts) its flags through this contract,
  * so a protocol's folder starts its own simulator without importing the CLI.
  */
-import type { SymbolTable } from '../symbols/model';
+import type { SymbolSource, SymbolTable } from '../symbols/model';
 
 /** The command line of `plcwire serve`, as a protocol's serve function reads it. */
 export interface ServeFlags {
@@ -17,6 +17,8 @@ export interface ServeFlags {
   int(flag: string, fallback: number, min: number, max: number): number;
   /** The data blocks of the --source files (with --db), compiled; undefined without --source. */
   source(): SymbolTable | undefined;
+  /** The --source files read but not compiled, with the --db numbers; undefined without --source. */
+  sourceFiles(): { sources: SymbolSource[]; db: Record<string, number> } | undefined;
   /** True when --source was given (also when it names no file). */
   hasSource(): boolean;
   /** The read command that reads the first member of the sources by name. */
