@@ -343,3 +343,10 @@ export const NotificationRecord = {
   Value: 0x92,
   ValueVlq: 0x9b,
 } as const;
+
+/** The COTP called TSAPs of the client roles. s7commplus (MIT), protocol.py. */
+export const RemoteTsap = {
+  hmi: 'SIMATIC-ROOT-HMI',
+  es: 'SIMATIC-ROOT-ES',
+  pg: 'SIMATIC-ROOT-PG',
+} as const;

@@ -135,6 +135,8 @@ function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], 
   layouts.forEach((layout: BlockLayout, i) => {
     const summary = table.blocks[i];
     if (!summary) throw new SourceError(layout.decl.at, `DB ${layout.decl.name} has no number`);
+    // Laid out with standard rules above, so every block has a length here.
+    if (summary.length === null) throw new SourceError(layout.decl.at, `DB ${layout.decl.name} has no standard layout`);
     const optimized = optimizedDecls.has(blocks[standard.indexOf(layout.decl)] as BlockDecl);
     if (optimized) optimizedDbs.add(summary.db);
     const type = builder.struct(layout.root, DB_TYPE_RID + summary.db);
