@@ -7,14 +7,11 @@
  * (parse_create_object_attributes, encode_object_qualifier).
  */
 import { ProtocolError } from '../../errors';
-import { readVlqU32, vlqU32 } from './frame';
-import { Element, ObjectId } from './ids';
-import { skipValue } from './pvalue-skip';
+import { skipPValue } from '../codec/pvalue';
+import { decodeUVlq32 as readVlqU32, decodeUVlq64, encodeUVlq32 as vlqU32 } from '../codec/vlq';
+import { DataType, ElementId as Element, Ids } from '../constants';
 
-const UDINT = 0x04;
-const RID = 0x12;
-const AID = 0x13;
-const WSTRING = 0x15;
+const { UDInt: UDINT, RID, AID, WString: WSTRING } = DataType;
 
 /** InitSSL: nothing but the trailing u32 after the request header. */
 export function initSslPayload(): Buffer {
@@ -22,7 +19,7 @@ export function initSslPayload(): Buffer {
 }
 
 function attribute(id: number, type: number, value: Buffer): Buffer {
-  return Buffer.concat([Buffer.from([Element.ATTRIBUTE]), vlqU32(id), Buffer.from([0x00, type]), value]);
+  return Buffer.concat([Buffer.from([Element.Attribute]), vlqU32(id), Buffer.from([0x00, type]), value]);
 }
 
 function wstring(id: number, text: string): Buffer {
@@ -32,8 +29,8 @@ function wstring(id: number, text: string): Buffer {
 
 function objectStart(classId: number): Buffer {
   const relation = Buffer.alloc(4);
-  relation.writeUInt32BE(ObjectId.GET_NEW_RID_ON_SERVER);
-  return Buffer.concat([Buffer.from([Element.START_OF_OBJECT]), relation, vlqU32(classId), vlqU32(0), vlqU32(0)]);
+  relation.writeUInt32BE(Ids.GetNewRIDOnServer);
+  return Buffer.concat([Buffer.from([Element.StartOfObject]), relation, vlqU32(classId), vlqU32(0), vlqU32(0)]);
 }
 
 /**
@@ -44,7 +41,7 @@ function objectStart(classId: number): Buffer {
  */
 export function createObjectPayload(clientName = 'plcwire'): Buffer {
   const head = Buffer.alloc(4);
-  head.writeUInt32BE(ObjectId.OBJECT_SERVER_SESSION_CONTAINER);
+  head.writeUInt32BE(Ids.ObjectServerSessionContainer);
   const rid = Buffer.alloc(4);
   rid.writeUInt32BE(0x80c3c901);
   return Buffer.concat([
@@ -52,18 +49,18 @@ export function createObjectPayload(clientName = 'plcwire'): Buffer {
     Buffer.from([0x00, UDINT]),
     vlqU32(0),
     Buffer.alloc(4),
-    objectStart(ObjectId.CLASS_SERVER_SESSION),
-    wstring(ObjectId.OBJECT_VARIABLE_TYPE_NAME, clientName),
-    wstring(289, `1:::6.0::${clientName}`),
-    wstring(296, clientName),
-    wstring(297, ''),
-    wstring(298, clientName),
-    attribute(299, UDINT, vlqU32(1)),
-    attribute(ObjectId.SERVER_SESSION_CLIENT_RID, RID, rid),
-    wstring(301, ''),
-    objectStart(ObjectId.CLASS_SUBSCRIPTIONS),
-    wstring(ObjectId.OBJECT_VARIABLE_TYPE_NAME, 'SubscriptionContainer'),
-    Buffer.from([Element.TERMINATING_OBJECT, Element.TERMINATING_OBJECT]),
+    objectStart(Ids.ClassServerSession),
+    wstring(Ids.ObjectVariableTypeName, clientName),
+    wstring(Ids.ServerSessionClientId, `1:::6.0::${clientName}`),
+    wstring(Ids.ServerSessionUser, clientName),
+    wstring(Ids.ServerSessionApplication, ''),
+    wstring(Ids.ServerSessionHost, clientName),
+    attribute(Ids.ServerSessionRole, UDINT, vlqU32(1)),
+    attribute(Ids.ServerSessionClientRID, RID, rid),
+    wstring(Ids.ServerSessionComment, ''),
+    objectStart(Ids.ClassSubscriptions),
+    wstring(Ids.ObjectVariableTypeName, 'SubscriptionContainer'),
+    Buffer.from([Element.TerminatingObject, Element.TerminatingObject]),
     Buffer.alloc(4),
   ]);
 }
@@ -71,7 +68,7 @@ export function createObjectPayload(clientName = 'plcwire'): Buffer {
 /** What the CreateObject answer gives the session. */
 export interface CreatedSession {
   /** The PLC's return value (0: fine; some S7-1200 answer non-zero on a usable TLS session). */
-  returnValue: number;
+  returnValue: bigint;
   sessionId: number;
   /** The ServerSessionVersion attribute as it came (flags, type, value), to echo back; undefined when absent. */
   serverSessionVersion: Buffer | undefined;
@@ -80,7 +77,7 @@ export interface CreatedSession {
 /** Reads a CreateObject answer (after the response header): return value, object ids, attribute 306. */
 export function readCreateObject(payload: Buffer): CreatedSession {
   let at = 0;
-  const ret = readVlqU64Small(payload, at);
+  const ret = decodeUVlq64(payload, at);
   at += ret.length;
   const count = payload[at++];
   if (count === undefined || count === 0) throw new ProtocolError('S7CommPlus: the CreateObject answer names no session object');
@@ -90,21 +87,8 @@ export function readCreateObject(payload: Buffer): CreatedSession {
   return {
     returnValue: ret.value,
     sessionId: first.value,
-    serverSessionVersion: findAttribute(payload, at, ObjectId.SERVER_SESSION_VERSION),
+    serverSessionVersion: findAttribute(payload, at, Ids.ServerSessionVersion),
   };
-}
-
-/** A return value (a 64-bit VLQ) read as a number: exact up to 2^53, which tells 0 from not 0 all the same. */
-function readVlqU64Small(buf: Buffer, offset: number): { value: number; length: number } {
-  let value = 0;
-  for (let i = 0; i < 9; i++) {
-    const b = buf[offset + i];
-    if (b === undefined) throw new ProtocolError('S7CommPlus: a return value runs past the end of the answer');
-    if (i === 8) return { value: value * 256 + b, length: 9 };
-    value = value * 128 + (b & 0x7f);
-    if ((b & 0x80) === 0) return { value, length: i + 1 };
-  }
-  throw new ProtocolError('S7CommPlus: a return value is malformed');
 }
 
 /**
@@ -115,15 +99,15 @@ function findAttribute(buf: Buffer, offset: number, id: number): Buffer | undefi
   let at = offset;
   while (at < buf.length) {
     const tag = buf[at++]!;
-    if (tag === Element.START_OF_OBJECT) {
+    if (tag === Element.StartOfObject) {
       at += 4; // relation id
       for (let i = 0; i < 3; i++) at += readVlqU32(buf, at).length; // class id, class flags, attribute id
-    } else if (tag === Element.TERMINATING_OBJECT) {
+    } else if (tag === Element.TerminatingObject) {
       continue;
-    } else if (tag === Element.ATTRIBUTE) {
+    } else if (tag === Element.Attribute) {
       const attr = readVlqU32(buf, at);
       at += attr.length;
-      const end = skipValue(buf, at);
+      const end = skipPValue(buf, at);
       if (attr.value === id) return Buffer.from(buf.subarray(at, end));
       at = end;
     } else {
@@ -136,20 +120,20 @@ function findAttribute(buf: Buffer, offset: number, id: number): Buffer | undefi
 /** The object qualifier every data request ends with (codec.py, encode_object_qualifier): parent RID, composition AID, key qualifier. */
 export function objectQualifier(v1: boolean): Buffer {
   const id = Buffer.alloc(4);
-  id.writeUInt32BE(1256);
+  id.writeUInt32BE(Ids.ObjectQualifier);
   const rid = Buffer.alloc(4);
   const key = v1
     ? Buffer.concat([Buffer.from([0x00, UDINT]), Buffer.alloc(4)])
     : Buffer.concat([Buffer.from([0x00, UDINT]), vlqU32(0), Buffer.from([0x00])]);
   return Buffer.concat([
     id,
-    vlqU32(1257),
+    vlqU32(Ids.ParentRID),
     Buffer.from([0x00, RID]),
     rid,
-    vlqU32(1258),
+    vlqU32(Ids.CompositionAID),
     Buffer.from([0x00, AID]),
     vlqU32(0),
-    vlqU32(1259),
+    vlqU32(Ids.KeyQualifier),
     key,
   ]);
 }
@@ -165,7 +149,7 @@ export function sessionSetupPayload(sessionId: number, serverSessionVersion: Buf
     head,
     vlqU32(1),
     vlqU32(1),
-    vlqU32(ObjectId.SERVER_SESSION_VERSION),
+    vlqU32(Ids.ServerSessionVersion),
     vlqU32(1),
     serverSessionVersion,
     Buffer.from([0x00]),
@@ -176,5 +160,5 @@ export function sessionSetupPayload(sessionId: number, serverSessionVersion: Buf
 
 /** The session setup's answer: accepted when its return value is 0. */
 export function setupAccepted(payload: Buffer): boolean {
-  return payload.length > 0 && readVlqU64Small(payload, 0).value === 0;
+  return payload.length > 0 && decodeUVlq64(payload, 0).value === 0n;
 }

@@ -8,9 +8,10 @@
 import type { Duplex } from 'node:stream';
 import { abortError, ConnectionError, PlcError, toPlcError } from '../../errors';
 import type { S7PlusEndpoint } from '../url';
-import { MessageCutter, requestFrame, responseOf } from './frame';
+import { S7pFrameReader } from '../codec/frame';
+import { FunctionCode, Ids, ProtocolVersion, TransportFlags } from '../constants';
+import { requestFrame, responseOf } from './frame';
 import { createObjectPayload, initSslPayload, readCreateObject, sessionSetupPayload, setupAccepted } from './handshake-frames';
-import { Flags, Fn, ObjectId, Version } from './ids';
 import { S7PlusSession, type S7PlusWireCounters, type S7PlusWiring } from './session';
 import { startTls, type PeerCertificate } from './tls';
 import { openTunnel } from './tunnel';
@@ -45,16 +46,20 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     }
     session = new S7PlusSession(
       stream,
-      { sessionId: ObjectId.OBJECT_NULL_SERVER_SESSION, version: Version.V1, nextSeq: 1 },
+      { sessionId: Ids.ObjectNullServerSession, version: ProtocolVersion.V1, nextSeq: 1 },
       { name: o.name, timeout: o.timeout, maxQueued: o.maxQueued, lossError: o.lossError, lost: o.lost },
       o.stats,
     );
     const signal = o.signal;
     const created = readCreateObject(
-      await session.request(Fn.CREATE_OBJECT, createObjectPayload(), { flags: Flags.CREATE_OBJECT, integrity: false, signal }),
+      await session.request(FunctionCode.CreateObject, createObjectPayload(), {
+        flags: TransportFlags.SessionCreate,
+        integrity: false,
+        signal,
+      }),
     );
     const spoken = session.answerVersion;
-    if (!e.tls && spoken !== Version.V1) {
+    if (!e.tls && spoken !== ProtocolVersion.V1) {
       throw new ConnectionError(
         'CONNECT_FAILED',
         `${o.name} speaks S7CommPlus V${spoken} and wants it over TLS (tls=false asks for plain V1): drop tls=false` +
@@ -68,11 +73,11 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       );
     }
     session.sessionId = created.sessionId;
-    if (e.tls) session.version = Version.V2;
+    if (e.tls) session.version = ProtocolVersion.V2;
     const setup = await session.request(
-      Fn.SET_MULTI_VARIABLES,
+      FunctionCode.SetMultiVariables,
       sessionSetupPayload(created.sessionId, created.serverSessionVersion, !e.tls),
-      { version: Version.V2, integrity: false, signal },
+      { version: ProtocolVersion.V2, integrity: false, signal },
     );
     if (!setupAccepted(setup)) throw new ConnectionError('CONNECT_FAILED', `${o.name} refused the session setup`);
     if (e.tls) session.startIntegrity();
@@ -92,7 +97,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
 
 /** InitSSL → its answer, on the plain tunnel (connection.py, _init_ssl); the deadline is the connect's. */
 function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Promise<void> {
-  const cutter = new MessageCutter();
+  const cutter = new S7pFrameReader();
   return new Promise<void>((resolve, reject) => {
     const done = (err?: PlcError) => {
       tunnel.off('data', onData);
@@ -107,7 +112,7 @@ function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Prom
         const [m] = cutter.push(chunk);
         if (!m) return;
         const r = responseOf(m.data);
-        if (r.fn !== Fn.INIT_SSL || r.seq !== 0) {
+        if (r.fn !== FunctionCode.InitSsl || r.seq !== 0) {
           return done(new PlcError('PROTOCOL_ERROR', `${o.name} answered InitSSL with function 0x${r.fn.toString(16)}, sequence ${r.seq}`));
         }
         done();
@@ -129,7 +134,14 @@ function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Prom
     tunnel.on('close', onClose);
     o.signal.addEventListener('abort', onAbort, { once: true });
     tunnel.write(
-      requestFrame({ version: Version.V1, fn: Fn.INIT_SSL, seq: 0, sessionId: 0, flags: Flags.INIT_SSL, payload: initSslPayload() }),
+      requestFrame({
+        version: ProtocolVersion.V1,
+        fn: FunctionCode.InitSsl,
+        seq: 0,
+        sessionId: 0,
+        flags: TransportFlags.InitSsl,
+        payload: initSslPayload(),
+      }),
     );
   });
 }

@@ -15,8 +15,9 @@
 import type { Duplex } from 'node:stream';
 import { abortError, ConnectionError, type PlcError, ProtocolError, TimeoutError, toPlcError } from '../../errors';
 import { Fifo } from '../../link/fifo';
-import { MessageCutter, requestFrame, responseOf, type Message } from './frame';
-import { Flags, Fn, Opcode, READ_FUNCTIONS, Version } from './ids';
+import { S7pFrameReader, type S7pMessage } from '../codec/frame';
+import { FunctionCode, Opcode, ProtocolVersion, READ_FUNCTIONS, TransportFlags } from '../constants';
+import { requestFrame, responseOf } from './frame';
 
 /** What a session is given by its client, and all it reports back. */
 export interface S7PlusWiring {
@@ -74,7 +75,7 @@ export class S7PlusSession {
   private integrity = false;
   private readId = 0;
   private writeId = 0;
-  private readonly cutter = new MessageCutter();
+  private readonly cutter = new S7pFrameReader();
   private readonly waiting = new Fifo<Job>();
   private current: (Job & { seq: number }) | undefined;
   private timer: NodeJS.Timeout | undefined;
@@ -154,7 +155,7 @@ export class S7PlusSession {
     const timer = setTimeout(() => ac.abort(), deadline);
     try {
       await Promise.race([
-        this.request(Fn.DELETE_OBJECT, zero, { integrity: false, signal: ac.signal }),
+        this.request(FunctionCode.DeleteObject, zero, { integrity: false, signal: ac.signal }),
         new Promise((_, reject) => ac.signal.addEventListener('abort', () => reject(new Error('deadline')), { once: true })),
       ]);
     } catch {
@@ -186,7 +187,7 @@ export class S7PlusSession {
         fn: job.fn,
         seq,
         sessionId: this.sessionId,
-        flags: o.flags ?? Flags.DATA,
+        flags: o.flags ?? TransportFlags.Normal,
         payload: job.payload,
         integrityId: counted ? (isRead ? this.readId : this.writeId) : undefined,
         ...(o.integrityTail !== undefined ? { integrityTail: o.integrityTail } : {}),
@@ -223,15 +224,15 @@ export class S7PlusSession {
   };
 
   /** One message: the answer of the request in flight, a stale answer, a notification, a SystemEvent. */
-  private answer(m: Message): void {
+  private answer(m: S7pMessage): void {
     if (this.dead) return;
-    if (m.version === Version.SYSTEM_EVENT) return this.systemEvent(m.data);
-    if (m.data[0] === Opcode.NOTIFICATION) {
+    if (m.version === ProtocolVersion.SystemEvent) return this.systemEvent(m.data);
+    if (m.data[0] === Opcode.Notification) {
       this.stats.ignored++;
       return;
     }
     const r = responseOf(m.data);
-    if (r.opcode !== Opcode.RESPONSE && r.opcode !== Opcode.RESPONSE2) {
+    if (r.opcode !== Opcode.Response && r.opcode !== Opcode.Response2) {
       throw new ProtocolError(`${this.wiring.name}: an answer with opcode 0x${r.opcode.toString(16)}`);
     }
     const job = this.current;
@@ -244,13 +245,13 @@ export class S7PlusSession {
       }
       throw new ProtocolError(`${this.wiring.name}: an answer with sequence ${r.seq} while waiting for ${job.seq}`);
     }
-    if (r.fn !== job.fn && r.fn !== Fn.ERROR) {
+    if (r.fn !== job.fn && r.fn !== FunctionCode.Error) {
       throw new ProtocolError(`${this.wiring.name}: the answer to request 0x${job.fn.toString(16)} is for function 0x${r.fn.toString(16)}`);
     }
     clearTimeout(this.timer);
     this.current = undefined;
     this.answerVersion = m.version;
-    if (r.fn === Fn.ERROR) {
+    if (r.fn === FunctionCode.Error) {
       this.settle(job, new ProtocolError(`${this.wiring.name} answered request 0x${job.fn.toString(16)} with an error PDU`));
     } else {
       this.settle(job, undefined, r.payload);

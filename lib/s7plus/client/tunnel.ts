@@ -15,7 +15,7 @@ import { abortError, ConnectionError, type PlcError, ProtocolError, toPlcError }
 import { FrameReader } from '../../link/framer';
 import { openTcp } from '../../link/tcp';
 import { checkTpkt } from '../../s7/codec/tpkt';
-import { LOCAL_TSAP, REMOTE_TSAP } from './ids';
+import { LOCAL_TSAP, RemoteTsap as REMOTE_TSAP } from '../constants';
 import type { S7PlusRole } from '../url';
 
 const COTP_CR = 0xe0;
