@@ -97,7 +97,10 @@ export class S7PlusSession {
     this.maxQueued = wiring.maxQueued ?? DEFAULT_MAX_QUEUED;
     stream.on('data', this.receive);
     stream.on('error', (err: Error) => this.lose(new ConnectionError('CONNECTION_LOST', `${wiring.name}: ${err.message}`, { cause: err })));
-    stream.on('close', () => this.lose(new ConnectionError('CONNECTION_LOST', `${wiring.name} closed the connection`)));
+    // A stream the PLC ended is as gone as a closed one (a half-open stream would leave requests to their timeout).
+    const ended = () => this.lose(new ConnectionError('CONNECTION_LOST', `${wiring.name} closed the connection`));
+    stream.on('end', ended);
+    stream.on('close', ended);
   }
 
   /** True until the link is lost or destroyed. */
