@@ -11,9 +11,9 @@ import { expect } from 'chai';
 import { duplexPair, type Duplex } from 'node:stream';
 import { ConnectionError, PlcError } from '../lib/errors';
 import { encodeFrames, S7pFrameReader } from '../lib/s7plus/codec/frame';
-import { decodeUVlq32 } from '../lib/s7plus/codec/vlq';
+import { decodeUVlq32, encodeUVlq32 } from '../lib/s7plus/codec/vlq';
 import { FunctionCode, ProtocolVersion } from '../lib/s7plus/constants';
-import { S7PlusSession } from '../lib/s7plus/client/session';
+import { S7PlusSession, type Encode } from '../lib/s7plus/client/session';
 import { until } from './support/wait';
 
 interface Seen {
@@ -85,17 +85,31 @@ async function rejection(p: Promise<unknown>): Promise<PlcError> {
 
 const PAYLOAD = Buffer.from([1, 2, 3, 0, 0, 0, 0]);
 
+/** A request of function `fn` with PAYLOAD, its IntegrityId before the trailing 4 bytes (as the codec's encoders place it). */
+function enc(fn: number): Encode {
+  return (seq, sessionId, integrityId) => {
+    const head = Buffer.alloc(14);
+    head[0] = 0x31;
+    head.writeUInt16BE(fn, 3);
+    head.writeUInt16BE(seq, 7);
+    head.writeUInt32BE(sessionId, 9);
+    head[13] = 0x34;
+    const id = integrityId === undefined ? Buffer.alloc(0) : encodeUVlq32(integrityId);
+    return Buffer.concat([head, PAYLOAD.subarray(0, 3), id, PAYLOAD.subarray(3)]);
+  };
+}
+
 describe('s7plus client: the session', () => {
   it('numbers requests one by one and sends the next only once the one before is answered', async () => {
     const { session, plc } = open();
-    const a = session.request(FunctionCode.GetMultiVariables, PAYLOAD);
-    const b = session.request(FunctionCode.SetMultiVariables, PAYLOAD);
+    const a = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const b = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables));
     await until(() => plc.seen.length === 1);
     await new Promise((r) => setImmediate(r));
     expect(plc.seen, 'one in flight').to.have.length(1);
     expect(plc.seen[0]).to.include({ fn: FunctionCode.GetMultiVariables, seq: 5, sessionId: 0x1234, flags: 0x34, version: 2 });
     plc.answer(FunctionCode.GetMultiVariables, 5, Buffer.from([0x00, 0xaa]));
-    expect([...(await a)]).to.deep.equal([0x00, 0xaa]);
+    expect([...(await a).subarray(10)]).to.deep.equal([0x00, 0xaa]);
     await until(() => plc.seen.length === 2);
     expect(plc.seen[1]).to.include({ fn: FunctionCode.SetMultiVariables, seq: 6 });
     plc.answer(FunctionCode.SetMultiVariables, 6);
@@ -115,7 +129,7 @@ describe('s7plus client: the session', () => {
       FunctionCode.SetMultiVariables,
     ];
     for (const [i, fn] of order.entries()) {
-      const p = session.request(fn, PAYLOAD);
+      const p = session.request(fn, enc(fn));
       await until(() => plc.seen.length === i + 1);
       plc.answer(fn, plc.seen[i]!.seq);
       await p;
@@ -124,7 +138,7 @@ describe('s7plus client: the session', () => {
     expect(plc.seen.map((s) => [...s.body.subarray(0, 3)])).to.deep.equal(order.map(() => [1, 2, 3]));
     expect(session.integrityIds).to.deep.equal({ read: 3, write: 2 });
     // The session setup write carries none and advances neither counter.
-    const setup = session.request(FunctionCode.SetMultiVariables, PAYLOAD, { integrity: false });
+    const setup = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables), { integrity: false });
     await until(() => plc.seen.length === 6);
     expect(plc.seen[5]!.body).to.deep.equal(PAYLOAD);
     plc.answer(FunctionCode.SetMultiVariables, plc.seen[5]!.seq);
@@ -142,7 +156,7 @@ describe('s7plus client: the session', () => {
     );
     const plc = new FakePlc(theirs);
     for (const seq of [0xffff, 0]) {
-      const p = session.request(FunctionCode.GetMultiVariables, PAYLOAD);
+      const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
       await until(() => plc.seen.at(-1)?.seq === seq);
       plc.answer(FunctionCode.GetMultiVariables, seq);
       await p;
@@ -152,11 +166,11 @@ describe('s7plus client: the session', () => {
 
   it('ignores an answer to an earlier sequence number (a request given up on) and takes the right one', async () => {
     const { session, plc } = open();
-    const p = session.request(FunctionCode.GetMultiVariables, PAYLOAD);
+    const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
     await until(() => plc.seen.length === 1);
     plc.answer(FunctionCode.GetMultiVariables, 4, Buffer.from([0x00, 0x01]));
     plc.answer(FunctionCode.GetMultiVariables, 5, Buffer.from([0x00, 0x02]));
-    expect([...(await p)]).to.deep.equal([0x00, 0x02]);
+    expect([...(await p).subarray(10)]).to.deep.equal([0x00, 0x02]);
     expect(session.stats.ignored).to.equal(1);
     expect(session.alive).to.equal(true);
     session.destroy();
@@ -187,8 +201,8 @@ describe('s7plus client: the session', () => {
   ] as const) {
     it(`${what} drops the link: every request fails with ${code}, the stream is destroyed, the client told once`, async () => {
       const { session, plc, lost, ours } = open();
-      const inFlight = session.request(FunctionCode.GetMultiVariables, PAYLOAD);
-      const queued = session.request(FunctionCode.SetMultiVariables, PAYLOAD);
+      const inFlight = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+      const queued = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables));
       await until(() => plc.seen.length === 1);
       act(plc);
       const err = await rejection(inFlight);
@@ -198,13 +212,13 @@ describe('s7plus client: the session', () => {
       expect(lost).to.have.length(1);
       expect(session.alive).to.equal(false);
       expect(ours.destroyed).to.equal(true);
-      expect((await rejection(session.request(FunctionCode.GetMultiVariables, PAYLOAD))).code).to.equal(code);
+      expect((await rejection(session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables)))).code).to.equal(code);
     });
   }
 
   it('a request unanswered within the timeout drops the link with TIMEOUT (its numbers are spent on both sides)', async () => {
     const { session, plc, lost } = open(50);
-    const err = await rejection(session.request(FunctionCode.GetMultiVariables, PAYLOAD));
+    const err = await rejection(session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables)));
     expect(err.code).to.equal('TIMEOUT');
     expect(err.message).to.contain('did not answer request 0x54c (sequence 5) within 50 ms');
     expect(plc.seen).to.have.length(1);
@@ -213,10 +227,10 @@ describe('s7plus client: the session', () => {
 
   it('a request aborted while it waits leaves the queue without spending a sequence number', async () => {
     const { session, plc } = open();
-    const first = session.request(FunctionCode.GetMultiVariables, PAYLOAD);
+    const first = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
     const ac = new AbortController();
-    const second = session.request(FunctionCode.GetMultiVariables, PAYLOAD, { signal: ac.signal });
-    const third = session.request(FunctionCode.GetMultiVariables, PAYLOAD);
+    const second = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables), { signal: ac.signal });
+    const third = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
     ac.abort();
     expect((await rejection(second)).code).to.equal('ABORTED');
     await until(() => plc.seen.length === 1);
@@ -229,13 +243,14 @@ describe('s7plus client: the session', () => {
     session.destroy();
   });
 
-  it('goodbye() sends DeleteObject of the session without IntegrityId, then closes; a silent PLC is closed at the deadline', async () => {
+  it('goodbye() sends DeleteObject of the session (with the next write IntegrityId), then closes; a silent PLC is closed at the deadline', async () => {
     const { session, plc, lost, ours } = open();
     session.startIntegrity();
     const bye = session.goodbye(5000);
     await until(() => plc.seen.length === 1);
     expect(plc.seen[0]).to.include({ fn: FunctionCode.DeleteObject, sessionId: 0x1234, flags: 0x34 });
-    expect([...plc.seen[0]!.body]).to.deep.equal([0, 0, 0, 0]);
+    // ObjectId (the session), IntegrityId 0, the closing fill.
+    expect([...plc.seen[0]!.body]).to.deep.equal([0, 0, 0x12, 0x34, 0, 0, 0, 0, 0]);
     plc.answer(FunctionCode.DeleteObject, plc.seen[0]!.seq);
     await bye;
     expect(ours.destroyed).to.equal(true);
@@ -250,7 +265,7 @@ describe('s7plus client: the session', () => {
 
   it('destroy() fails what waits with CLOSED and never throws twice', async () => {
     const { session } = open();
-    const p = session.request(FunctionCode.GetMultiVariables, PAYLOAD);
+    const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
     session.destroy();
     session.destroy();
     const err = await rejection(p);

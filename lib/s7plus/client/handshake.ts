@@ -8,13 +8,23 @@
 import type { Duplex } from 'node:stream';
 import { abortError, ConnectionError, PlcError, toPlcError } from '../../errors';
 import type { S7PlusEndpoint } from '../url';
-import { S7pFrameReader } from '../codec/frame';
-import { FunctionCode, Ids, ProtocolVersion, TransportFlags } from '../constants';
-import { requestFrame, responseOf } from './frame';
-import { createObjectPayload, initSslPayload, readCreateObject, sessionSetupPayload, setupAccepted } from './handshake-frames';
+import { encodeFrames, S7pFrameReader } from '../codec/frame';
+import {
+  decodeCreateObjectResponse,
+  decodeInitSslResponse,
+  encodeCreateObjectRequest,
+  encodeInitSslRequest,
+  sessionCreateRequest,
+  sessionInfo,
+} from '../codec/session';
+import { decodeSetMultiVariablesResponse, encodeSetMultiVariablesRequest, sessionSetupRequest } from '../codec/variables';
+import { FunctionCode, Ids, ProtocolVersion } from '../constants';
 import { S7PlusSession, type S7PlusWireCounters, type S7PlusWiring } from './session';
 import { startTls, type PeerCertificate } from './tls';
 import { openTunnel } from './tunnel';
+
+/** How the client names itself in the session's CreateObject (the PLC shows it among its connections). */
+const CLIENT_NAME = 'plcwire';
 
 export interface OpenOptions extends Omit<S7PlusWiring, 'timeout'> {
   timeout: number;
@@ -51,13 +61,12 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       o.stats,
     );
     const signal = o.signal;
-    const created = readCreateObject(
-      await session.request(FunctionCode.CreateObject, createObjectPayload(), {
-        flags: TransportFlags.SessionCreate,
-        integrity: false,
-        signal,
-      }),
+    const createAnswer = await session.request(
+      FunctionCode.CreateObject,
+      (sequence) => encodeCreateObjectRequest(sessionCreateRequest(sequence, { name: CLIENT_NAME })),
+      { integrity: false, signal },
     );
+    const created = sessionInfo(decodeCreateObjectResponse(createAnswer).body);
     const spoken = session.answerVersion;
     if (!e.tls && spoken !== ProtocolVersion.V1) {
       throw new ConnectionError(
@@ -74,12 +83,20 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     }
     session.sessionId = created.sessionId;
     if (e.tls) session.version = ProtocolVersion.V2;
-    const setup = await session.request(
-      FunctionCode.SetMultiVariables,
-      sessionSetupPayload(created.sessionId, created.serverSessionVersion, !e.tls),
-      { version: ProtocolVersion.V2, integrity: false, signal },
+    const version = created.serverSessionVersion;
+    const setup = decodeSetMultiVariablesResponse(
+      await session.request(
+        FunctionCode.SetMultiVariables,
+        (sequence, sessionId) => encodeSetMultiVariablesRequest(sessionSetupRequest(sequence, sessionId, version)),
+        { version: ProtocolVersion.V2, integrity: false, signal },
+      ),
+      { integrity: false },
     );
-    if (!setupAccepted(setup)) throw new ConnectionError('CONNECT_FAILED', `${o.name} refused the session setup`);
+    if (setup.body.returnValue !== 0n) {
+      throw new ConnectionError('CONNECT_FAILED', `${o.name} refused the session setup (0x${setup.body.returnValue.toString(16)})`, {
+        plcCode: Number(setup.body.returnValue & 0xffffn),
+      });
+    }
     if (e.tls) session.startIntegrity();
     return { session, certificate };
   } catch (err) {
@@ -111,9 +128,9 @@ function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Prom
       try {
         const [m] = cutter.push(chunk);
         if (!m) return;
-        const r = responseOf(m.data);
-        if (r.fn !== FunctionCode.InitSsl || r.seq !== 0) {
-          return done(new PlcError('PROTOCOL_ERROR', `${o.name} answered InitSSL with function 0x${r.fn.toString(16)}, sequence ${r.seq}`));
+        const answer = decodeInitSslResponse(m.data);
+        if (answer.header.sequence !== 0) {
+          return done(new PlcError('PROTOCOL_ERROR', `${o.name} answered InitSSL with sequence ${answer.header.sequence}`));
         }
         done();
       } catch (err) {
@@ -133,15 +150,6 @@ function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Prom
     tunnel.on('error', onError);
     tunnel.on('close', onClose);
     o.signal.addEventListener('abort', onAbort, { once: true });
-    tunnel.write(
-      requestFrame({
-        version: ProtocolVersion.V1,
-        fn: FunctionCode.InitSsl,
-        seq: 0,
-        sessionId: 0,
-        flags: TransportFlags.InitSsl,
-        payload: initSslPayload(),
-      }),
-    );
+    tunnel.write(encodeFrames(ProtocolVersion.V1, encodeInitSslRequest(0)));
   });
 }

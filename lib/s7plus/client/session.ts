@@ -15,9 +15,10 @@
 import type { Duplex } from 'node:stream';
 import { abortError, ConnectionError, type PlcError, ProtocolError, TimeoutError, toPlcError } from '../../errors';
 import { Fifo } from '../../link/fifo';
-import { S7pFrameReader, type S7pMessage } from '../codec/frame';
+import { encodeFrames, S7pFrameReader, type S7pMessage } from '../codec/frame';
+import { peekMessage } from '../codec/header';
+import { encodeDeleteObjectRequest } from '../codec/session';
 import { FunctionCode, Opcode, ProtocolVersion, READ_FUNCTIONS, TransportFlags } from '../constants';
-import { requestFrame, responseOf } from './frame';
 
 /** What a session is given by its client, and all it reports back. */
 export interface S7PlusWiring {
@@ -32,12 +33,16 @@ export interface S7PlusWiring {
   lost(session: S7PlusSession, err: PlcError): void;
 }
 
+/**
+ * A request's message (its header included), made when it goes on the wire:
+ * with the sequence number and the session id it gets then, and the
+ * IntegrityId when the session sends one (the codec's encoders put it where
+ * the PLC expects it).
+ */
+export type Encode = (sequence: number, sessionId: number, integrityId: number | undefined) => Buffer;
+
 export interface RequestOptions {
   signal?: AbortSignal | undefined;
-  /** The payload's trailing bytes the IntegrityId goes before (4, the default; 5 for Explore). */
-  integrityTail?: number;
-  /** Transport flags (default: the data requests' 0x34). */
-  flags?: number;
   /** Frame version of this request (default: the session's). */
   version?: number;
   /** False: this request carries no IntegrityId and advances no counter (the session setup write). */
@@ -55,7 +60,7 @@ export interface S7PlusWireCounters {
 
 interface Job {
   fn: number;
-  payload: Buffer;
+  encode: Encode;
   options: RequestOptions;
   resolve(payload: Buffer): void;
   reject(err: PlcError): void;
@@ -113,6 +118,11 @@ export class S7PlusSession {
     return this.integrity ? { read: this.readId, write: this.writeId } : undefined;
   }
 
+  /** Whether requests carry IntegrityIds (what the codec's decoders are told). */
+  get integrityOn(): boolean {
+    return this.integrity;
+  }
+
   /** From now on every request carries an IntegrityId, both counters starting at 0 (after the session setup over TLS). */
   startIntegrity(): void {
     this.integrity = true;
@@ -121,18 +131,19 @@ export class S7PlusSession {
   }
 
   /**
-   * Sends a request when the one before it is answered; resolves with what
-   * follows the answer's response header. A malformed answer, one to another
-   * function, or a timeout drops the link (a ProtocolError, a TimeoutError).
+   * Sends a request when the one before it is answered; resolves with the
+   * answer's message (its response header included, for the codec's
+   * decoder). An answer of the wrong kind or sequence, or none within the
+   * timeout, drops the link (a ProtocolError, a TimeoutError).
    */
-  request(fn: number, payload: Buffer, options: RequestOptions = {}): Promise<Buffer> {
+  request(fn: number, encode: Encode, options: RequestOptions = {}): Promise<Buffer> {
     if (this.dead) return Promise.reject(this.dead);
     if (options.signal?.aborted) return Promise.reject(abortError(`a request to ${this.wiring.name}`, options.signal));
     if (this.waiting.size >= this.maxQueued) {
       return Promise.reject(new ConnectionError('QUEUE_FULL', `${this.wiring.name}: ${this.maxQueued} requests are already waiting`));
     }
     return new Promise<Buffer>((resolve, reject) => {
-      const job: Job = { fn, payload, options, resolve, reject };
+      const job: Job = { fn, encode, options, resolve, reject };
       const signal = options.signal;
       if (signal) {
         // A request still waiting leaves the queue; one on the wire is answered (its numbers are spent) and its answer dropped.
@@ -150,15 +161,21 @@ export class S7PlusSession {
    * DeleteObject of the session, as a clean close asks (connection.py,
    * _delete_session): after the requests already queued, and at most
    * `deadline` ms; the link is then destroyed whatever the PLC answered.
+   * It counts on the write IntegrityId as every other write of the session.
    */
   async goodbye(deadline: number): Promise<void> {
-    if (this.dead || this.sessionId === 0) return this.destroy();
-    const zero = Buffer.alloc(4);
+    if (this.dead) return this.destroy();
+    const encode: Encode = (sequence, sessionId, integrityId) =>
+      encodeDeleteObjectRequest({
+        header: { functionCode: FunctionCode.DeleteObject, sequence, sessionId, transportFlags: TransportFlags.Normal },
+        body: { objectId: sessionId },
+        ...(integrityId === undefined ? {} : { integrityId }),
+      });
     const ac = new AbortController();
     const timer = setTimeout(() => ac.abort(), deadline);
     try {
       await Promise.race([
-        this.request(FunctionCode.DeleteObject, zero, { integrity: false, signal: ac.signal }),
+        this.request(FunctionCode.DeleteObject, encode, { signal: ac.signal }),
         new Promise((_, reject) => ac.signal.addEventListener('abort', () => reject(new Error('deadline')), { once: true })),
       ]);
     } catch {
@@ -185,16 +202,10 @@ export class S7PlusSession {
     const isRead = READ_FUNCTIONS.has(job.fn);
     let frame: Buffer;
     try {
-      frame = requestFrame({
-        version: o.version ?? this.version,
-        fn: job.fn,
-        seq,
-        sessionId: this.sessionId,
-        flags: o.flags ?? TransportFlags.Normal,
-        payload: job.payload,
-        integrityId: counted ? (isRead ? this.readId : this.writeId) : undefined,
-        ...(o.integrityTail !== undefined ? { integrityTail: o.integrityTail } : {}),
-      });
+      frame = encodeFrames(
+        o.version ?? this.version,
+        job.encode(seq, this.sessionId, counted ? (isRead ? this.readId : this.writeId) : undefined),
+      );
     } catch (err) {
       // Nothing went out: the numbers are not spent.
       this.nextSeq = seq;
@@ -234,10 +245,14 @@ export class S7PlusSession {
       this.stats.ignored++;
       return;
     }
-    const r = responseOf(m.data);
-    if (r.opcode !== Opcode.Response && r.opcode !== Opcode.Response2) {
-      throw new ProtocolError(`${this.wiring.name}: an answer with opcode 0x${r.opcode.toString(16)}`);
+    const peek = peekMessage(m.data);
+    if (peek.opcode !== Opcode.Response && peek.opcode !== Opcode.Response2) {
+      throw new ProtocolError(`${this.wiring.name}: an answer with opcode 0x${peek.opcode.toString(16)}`);
     }
+    if (peek.sequence === undefined || peek.functionCode === undefined) {
+      throw new ProtocolError(`${this.wiring.name}: an answer of ${m.data.length} bytes has no response header`);
+    }
+    const r = { seq: peek.sequence, fn: peek.functionCode };
     const job = this.current;
     if (!job) throw new ProtocolError(`${this.wiring.name}: an answer (sequence ${r.seq}) to no request`);
     if (r.seq !== job.seq) {
@@ -257,7 +272,7 @@ export class S7PlusSession {
     if (r.fn === FunctionCode.Error) {
       this.settle(job, new ProtocolError(`${this.wiring.name} answered request 0x${job.fn.toString(16)} with an error PDU`));
     } else {
-      this.settle(job, undefined, r.payload);
+      this.settle(job, undefined, m.data);
     }
     this.pump();
   }
