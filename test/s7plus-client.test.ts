@@ -150,6 +150,42 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(socketsTo(peer.port)).to.equal(0);
     });
 
+    it('reads and writes a standard DB by address, with the IntegrityIds counting a read and a write, and tells the CPU state and the DBs', async () => {
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`);
+      await client.connect();
+      await client.write({ 'DB1.DBD0:REAL': 21.5, 'DB1.DBD4:DINT': -7, 'DB1.DBW10': 300, 'DB1.DBB12': 0x5a });
+      expect(await client.read(['DB1.DBD0:REAL', 'DB1.DBD4:DINT', 'DB1.DBW10', 'DB1.DBB12'])).to.deep.equal({
+        'DB1.DBD0:REAL': 21.5,
+        'DB1.DBD4:DINT': -7,
+        'DB1.DBW10': 300,
+        'DB1.DBB12': 0x5a,
+      });
+      const session = (client as unknown as { session: { integrityIds: unknown } }).session;
+      expect(session.integrityIds).to.deep.equal({ read: 1, write: 1 });
+      expect(await client.cpuState()).to.equal('RUN');
+      expect((await client.dataBlocks()).map((b) => b.number)).to.deep.equal([1]);
+      expect(session.integrityIds).to.deep.equal({ read: 3, write: 1 });
+      await client.close();
+    });
+
+    it('gives each tag its own failure: a DB the PLC lacks, an offset past the end, an area S7CommPlus does not reach, a bit write', async () => {
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`);
+      await client.connect();
+      const read = await client.readDetailed(['DB1.DBW10', 'DB2.DBW0', 'DB1.DBB100', 'C1']);
+      expect(read['DB1.DBW10']!.ok).to.equal(true);
+      const code = (a: string) => (read[a]!.ok ? 'ok' : read[a]!.error.code);
+      expect([code('DB2.DBW0'), code('DB1.DBB100'), code('C1')]).to.deep.equal([
+        'OBJECT_DOES_NOT_EXIST',
+        'OBJECT_DOES_NOT_EXIST',
+        'NOT_SUPPORTED',
+      ]);
+      const written = await client.writeDetailed({ 'DB1.DBX8.0': true, 'DB1.DBW10': 301 });
+      expect(written['DB1.DBX8.0']!.ok).to.equal(false);
+      expect(written['DB1.DBW10']!.ok).to.equal(true);
+      expect(await client.read(['DB1.DBW10'])).to.deep.equal({ 'DB1.DBW10': 301 });
+      await client.close();
+    });
+
     it('refuses a certificate the pin does not match before any S7CommPlus request, showing the pin that would match', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${'0'.repeat(64)}&timeout=5000`);
       const err = await connectError(client);
@@ -210,6 +246,15 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(client.stats.requestsSent).to.equal(3);
       await settle();
       expect(socketsTo(peer.port)).to.equal(0);
+    });
+
+    it('reads and writes by address and tells the CPU state in plain text too', async () => {
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=5000`);
+      await client.connect();
+      await client.write({ 'DB1.DBD4:DINT': 123456, 'DB1.DBW10': 7 });
+      expect(await client.read(['DB1.DBD4:DINT', 'DB1.DBW10'])).to.deep.equal({ 'DB1.DBD4:DINT': 123456, 'DB1.DBW10': 7 });
+      expect(await client.cpuState()).to.equal('RUN');
+      await client.close();
     });
 
     it('a TLS URL against a PLC without TLS fails: never a fallback to plain text', async () => {

@@ -9,16 +9,19 @@
  * no property, no JSON, no inspect() output, no error and no log line.
  */
 import { S7_TAG_SYNTAX } from '../../address';
-import { BaseClient, endpointOptions, type ClientOptions } from '../../client/base';
-import { isLinkError, PlcError, type TagResult } from '../../errors';
+import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
+import { ConnectionError, isLinkError, PlcError } from '../../errors';
 import type { Driver } from '../../link/driver';
-import type { PlcValue, Protocol, Tag } from '../../types';
-import { S7PLUS_URLS, type S7PlusEndpoint } from '../url';
+import type { Protocol, RequestOptions, Tag } from '../../types';
+import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../url';
 import { openS7PlusSession } from './handshake';
+import { readTags, writeTags, type Limits } from './io';
+import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';
 import type { PeerCertificate } from './tls';
 
 export type { PeerCertificate } from './tls';
+export type { CpuState, S7PlusDataBlock } from './services';
 
 /** A client's options: ClientOptions and the PLC's password. */
 export interface S7PlusClientOptions extends Partial<ClientOptions> {
@@ -43,12 +46,22 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   /** The PLC's certificate on the live TLS connection; undefined without one. */
   certificate: PeerCertificate | undefined;
   readonly #password: string | undefined;
+  /** Items per request: the URL's maxItems or 20, lowered when the PLC refuses a request as too large. */
+  private itemLimit: number;
+  private readonly limits: Limits = {
+    maxItems: () => this.itemLimit,
+    refused: (items) => this.learnItemLimit(items),
+  };
 
   protected readonly driver: Driver<S7PlusSession, Tag> = {
     syntax: S7_TAG_SYNTAX,
     openSession: (signal) => this.openSession(signal),
-    readTags: (_session, tags) => Promise.resolve(tags.map((t) => notYet<PlcValue>(t, 'read'))),
-    writeTags: (_session, items) => Promise.resolve(items.map(({ tag }) => notYet<void>(tag, 'write'))),
+    readValues: (session, tags, signal) => readTags(session, tags, this.limits, signal),
+    readTags: async (session, tags, signal) => {
+      const { values, errors } = await readTags(session, tags, this.limits, signal);
+      return toResults(values, errors);
+    },
+    writeTags: (session, items, signal) => writeTags(session, items, this.limits, signal),
     noBlockLength: 'S7CommPlus reads data blocks by their own layout: there is no PUT/GET layout to check',
     isLinkError,
   };
@@ -58,6 +71,38 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     super(endpointOptions(S7PLUS_URLS.name(endpoint), endpoint, rest));
     this.endpoint = endpoint;
     this.#password = password;
+    this.itemLimit = endpoint.maxItems ?? S7PLUS_DEFAULT_MAX_ITEMS;
+  }
+
+  /** The most items this client puts into one request. */
+  get maxItems(): number {
+    return this.itemLimit;
+  }
+
+  /** The PLC refused a request of `items` items as a whole: requests carry half as many from now on (the `itemLimit` event). */
+  private learnItemLimit(items: number): void {
+    const limit = Math.max(1, Math.floor(items / 2));
+    if (limit >= this.itemLimit) return;
+    const was = this.itemLimit;
+    this.itemLimit = limit;
+    this.emit('itemLimit', { limit, was });
+  }
+
+  /** The CPU's operating state: RUN, STOP or UNKNOWN (theCPUexecUnit). */
+  cpuState(options: RequestOptions = {}): Promise<CpuState> {
+    return this.withSession((s) => cpuState(s, options.signal));
+  }
+
+  /** The data blocks of the PLC's program (standard and optimized), by number, with their names. */
+  dataBlocks(options: RequestOptions = {}): Promise<S7PlusDataBlock[]> {
+    return this.withSession((s) => dataBlocks(s, options.signal));
+  }
+
+  /** Runs `fn` on the live session; NOT_CONNECTED when there is none. */
+  private async withSession<R>(fn: (session: S7PlusSession) => Promise<R>): Promise<R> {
+    const session = this.session;
+    if (!session?.alive) throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (the link is ${this.state})`);
+    return fn(session);
   }
 
   /** Ends the PLC's session (DeleteObject, at most 2 s), then closes as every client does. Always resolves. */
@@ -93,11 +138,4 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     if (this.listenerCount('insecure') > 0) this.emit('insecure', { certificate, message } satisfies InsecureEvent);
     else process.emitWarning(message, 'PlcwireInsecureWarning');
   }
-}
-
-function notYet<V>(tag: Tag, what: string): TagResult<V> {
-  return {
-    ok: false,
-    error: new PlcError('NOT_SUPPORTED', `${tag.address}: ${what} over S7CommPlus is not implemented yet`, { tag: tag.address }),
-  };
 }
