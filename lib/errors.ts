@@ -37,6 +37,8 @@ export type PlcErrorCode =
   | 'TYPE_NOT_SUPPORTED'
   /** The PLC's data block no longer has the length its sources declare (with strictSymbols). */
   | 'LAYOUT_MISMATCH'
+  /** A name in a data block with optimized access, asked of a protocol that reads by address (s7://, fetchwrite://): nothing was sent. */
+  | 'OPTIMIZED_BLOCK'
   /** The CPU has no such SZL list (ID or index). */
   | 'SZL_NOT_AVAILABLE'
   /** The CPU family does not offer the service at all. */
@@ -105,6 +107,32 @@ export class SourceError extends PlcError {
     this.file = at.file;
     this.line = at.line;
     this.column = at.column;
+  }
+}
+
+/**
+ * A name in a data block with optimized access asked of a protocol that
+ * reads by absolute address (S7comm PUT/GET, FETCH/WRITE): such a block has
+ * no fixed offsets, so its members are read by name over S7CommPlus
+ * (`s7plus://`). Thrown before anything is sent; the message names the tag
+ * and the block.
+ */
+export class OptimizedBlockError extends PlcError {
+  /** The block as its sources name it: `Tank`, `DB10`. */
+  readonly block: string;
+  readonly db: number;
+
+  constructor(tag: string, block: string, db: number) {
+    const which = block === `DB${db}` ? block : `DB${db} "${block}"`;
+    super(
+      'OPTIMIZED_BLOCK',
+      `${quoteTag(tag)} is in ${which}, a block with optimized access: it has no absolute address to read or write by. ` +
+        `Read it by name over s7plus:// (S7CommPlus), or untick "Optimized block access" in the block's properties in TIA Portal, ` +
+        'download it and use PUT/GET',
+      { tag },
+    );
+    this.block = block;
+    this.db = db;
   }
 }
 

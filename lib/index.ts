@@ -15,6 +15,7 @@ export {
   compileSymbols,
   type BlockSummary,
   type CompileOptions,
+  type SymbolAccess,
   type SymbolEntry,
   type SymbolSource,
   type SymbolTable,

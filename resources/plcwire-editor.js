@@ -326,8 +326,8 @@
         function (results) {
           var r = results[address];
           if (closed || !r) return;
-          // A name: its type and the absolute address it stands for.
-          if (r.ok) hint.text(r.type + (r.count > 1 ? '[' + r.count + ']' : '') + (r.symbol ? ' = ' + r.address : ''));
+          // A name: its type and the absolute address it stands for (none in an optimized block: read by name).
+          if (r.ok) hint.text(r.type + (r.count > 1 ? '[' + r.count + ']' : '') + (r.symbol && r.address ? ' = ' + r.address : ''));
           else {
             input.addClass('plcwire-invalid');
             hint.text(r.message).addClass('plcwire-bad');
@@ -465,8 +465,8 @@
             if (!res) return;
             if (res.ok) {
               type.text(res.type + (res.count > 1 ? '[' + res.count + ']' : '')).attr('title', res.type);
-              // A name: the absolute address it stands for, as the library resolved it.
-              if (res.symbol) resolved.text(res.address).attr('title', res.symbol + ' = ' + res.address);
+              // A name: the absolute address it stands for, as the library resolved it (none in an optimized block).
+              if (res.symbol && res.address) resolved.text(res.address).attr('title', res.symbol + ' = ' + res.address);
               if (res.symbol && res.kind !== 'elementary') {
                 members
                   .data('symbol', res.symbol)
@@ -497,7 +497,9 @@
             var label = $('<div class="plcwire-completion">');
             $('<span class="plcwire-completion-name">').text(e.name).appendTo(label);
             $('<span class="plcwire-completion-type">').text(e.type).appendTo(label);
-            $('<span class="plcwire-completion-address">').text(e.address).appendTo(label);
+            $('<span class="plcwire-completion-address">')
+              .text(e.address || '')
+              .appendTo(label);
             return { value: e.name, label: label };
           }),
         );

@@ -198,6 +198,46 @@ describe('editor: tags by name in headless Chromium', function () {
     }
   });
 
+  it('lists an optimized block as one read by name over s7plus://, beside a standard one with its length', async () => {
+    const { context, page, errors } = await openEditor();
+    try {
+      await editConnection(page, 'conn-new');
+      await page.click('#node-config-plcwire-paste');
+      await page.fill('#node-config-plcwire-paste-name', 'Both.db');
+      const optimized = TANK_DB.replace('"Tank"', '"Recipe"').replace("'FALSE'", "'TRUE'").replace('Motor : "Motor";', 'Step : Int;');
+      await page.fill('#node-config-plcwire-paste-text', `${optimized}\n${TANK_DB.replace('Motor : "Motor";', 'Step : Int;')}`);
+      await page.click('#node-config-plcwire-paste-add');
+      await page.waitForSelector('#node-config-plcwire-sources li[data-name="Both.db"]');
+      for (const [block, db] of [
+        ['Recipe', '2'],
+        ['Tank', '1'],
+      ] as const) {
+        await page.click('.plcwire-symbols .red-ui-editableList-addButton');
+        await page.locator('.plcwire-dbnumber-block').last().fill(block);
+        await page.locator('.plcwire-dbnumber-db').last().fill(db);
+      }
+      const rows = [
+        connectionText('plcwire-connection.editor.blockRowOptimized', { db: 2, name: 'Recipe', file: 'Both.db' }),
+        connectionText('plcwire-connection.editor.blockRow', { db: 1, name: 'Tank', length: 8, file: 'Both.db' }),
+      ];
+      expect(rows[0]).to.equal('DB2 Recipe: optimized access, read by name over s7plus:// (Both.db)');
+      await page.waitForFunction(
+        (texts) => {
+          const shown = [...(globalThis as any).document.querySelectorAll('#node-config-plcwire-blocks li')].map(
+            (li: any) => li.textContent,
+          );
+          return JSON.stringify(shown) === JSON.stringify(texts);
+        },
+        rows,
+        { timeout: 10_000 },
+      );
+      await page.locator('#node-config-plcwire-blocks li', { hasText: 'optimized access' }).waitFor({ state: 'visible' });
+      expect(errors).to.deep.equal([]);
+    } finally {
+      await context.close();
+    }
+  });
+
   it('shows the errors of a source that does not compile with file, line and column, and the connection gets the red triangle', async () => {
     const { context, page, errors } = await openEditor();
     try {

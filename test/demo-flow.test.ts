@@ -146,7 +146,7 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
         const entry = table.lookup(name);
         expect(entry, name).to.not.equal(undefined);
         // The process reads and writes the same bytes (DEMO_TAGS), and the name is the one DEMO_SYMBOLS gives them.
-        const tag = byAddress.get(formatAddress(parseAddress(entry!.address)));
+        const tag = byAddress.get(formatAddress(parseAddress(entry!.address!)));
         expect(tag, `${name} is ${entry!.address}, none of DEMO_TAGS`).to.not.equal(undefined);
         expect(DEMO_SYMBOLS[tag as keyof typeof DEMO_SYMBOLS]).to.equal(name);
       }

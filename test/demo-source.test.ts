@@ -58,7 +58,7 @@ describe('demo plant: DB1 as a TIA source', () => {
       const entry = table.lookup(name);
       expect(entry, name).to.not.equal(undefined);
       expect(entry!.name).to.equal(name);
-      expect(canonical(entry!.address), name).to.equal(canonical(DEMO_TAGS[key as keyof typeof DEMO_TAGS]));
+      expect(canonical(entry!.address!), name).to.equal(canonical(DEMO_TAGS[key as keyof typeof DEMO_TAGS]));
     }
     // No member the process does not know: the table is the plant's memory map, nothing beside it.
     expect(table.entries.map((e) => e.name)).to.have.members(Object.values(DEMO_SYMBOLS));

@@ -364,10 +364,11 @@ describe('reading and writing by symbol: a table compiled from TIA sources (S7 s
       await ok;
       // Values put by absolute address at the entries' offsets, read back by name.
       const speed = table.lookup('"Tank".Pumps[2].Speed')!;
+      const speedAddress = speed.address!;
       await client.write({
-        [speed.address]: 1234,
-        [table.lookup('"Tank".Motor.Fault')!.address]: true,
-        [table.lookup('"Tank".Level')!.address]: 2.5,
+        [speedAddress]: 1234,
+        [table.lookup('"Tank".Motor.Fault')!.address!]: true,
+        [table.lookup('"Tank".Level')!.address!]: 2.5,
       });
       expect(await client.read<PlcData>(['"Tank".Level', '"Tank".Motor', '"Tank".Pumps'])).to.deep.equal({
         '"Tank".Level': 2.5,
@@ -378,9 +379,9 @@ describe('reading and writing by symbol: a table compiled from TIA sources (S7 s
         ],
       });
       await client.write({ '"Tank".Pumps': [{ Run: true }, undefined], '"Tank".Label': 'ok' });
-      expect(await client.read([table.lookup('"Tank".Pumps[1].Run')!.address, speed.address, '"Tank".Label'])).to.deep.equal({
-        [table.lookup('"Tank".Pumps[1].Run')!.address]: true,
-        [speed.address]: 1234,
+      expect(await client.read([table.lookup('"Tank".Pumps[1].Run')!.address!, speedAddress, '"Tank".Label'])).to.deep.equal({
+        [table.lookup('"Tank".Pumps[1].Run')!.address!]: true,
+        [speedAddress]: 1234,
         '"Tank".Label': 'ok',
       });
     } finally {

@@ -103,7 +103,8 @@ class Generator {
 
 /** Bit range an elementary entry occupies. */
 function bits(e: SymbolEntry): [number, number] {
-  return e.bit === null ? [e.byte * 8, (e.byte + e.size) * 8] : [e.byte * 8 + e.bit, e.byte * 8 + e.bit + 1];
+  const byte = e.byte!;
+  return e.bit === null ? [byte * 8, (byte + e.size) * 8] : [byte * 8 + e.bit, byte * 8 + e.bit + 1];
 }
 
 const noLiterals = (): never => {
@@ -126,7 +127,7 @@ describe(`symbols layout: properties over ${NUM_RUNS.toLocaleString('en-US')} ra
     for (let n = 1; n <= NUM_RUNS; n++) {
       const blocks = gen.blocks(n);
       const table = compileDeclarations(blocks, [], { db: { [`B${n}`]: n } }, noLiterals);
-      const { length } = table.blocks[0]!;
+      const length = table.blocks[0]!.length!;
       const where = (e: SymbolEntry) => `block ${n} (length ${length}) ${e.name} ${e.type} @${e.byte}.${e.bit ?? ''}+${e.size}`;
       expect(length % 2, `block ${n} length`).to.equal(0);
       const byName = new Map(table.entries.map((e) => [e.name, e]));
@@ -138,14 +139,14 @@ describe(`symbols layout: properties over ${NUM_RUNS.toLocaleString('en-US')} ra
         );
       for (const e of table.entries) {
         entries++;
-        expect(e.byte + e.size, `${where(e)} ends beyond the block`).to.be.at.most(length);
+        expect(e.byte! + e.size, `${where(e)} ends beyond the block`).to.be.at.most(length);
         const wide = e.kind !== 'elementary' || !['BOOL', 'BYTE', 'CHAR', 'SINT', 'USINT'].includes(e.dataType!);
-        if (wide) expect(e.byte % 2, `${where(e)} starts on an odd byte`).to.equal(0);
+        if (wide) expect(e.byte! % 2, `${where(e)} starts on an odd byte`).to.equal(0);
         for (const c of e.children ?? []) {
           const k = byName.get(c)!;
-          expect(k.byte >= e.byte && k.byte + k.size <= e.byte + e.size, `${where(k)} outside ${where(e)}`).to.equal(true);
+          expect(k.byte! >= e.byte! && k.byte! + k.size <= e.byte! + e.size, `${where(k)} outside ${where(e)}`).to.equal(true);
         }
-        const tag = parseAddress(e.address);
+        const tag = parseAddress(e.address!);
         expect([tag.dbNumber, tag.byteOffset, tag.bitOffset], `${where(e)} ${e.address}`).to.deep.equal([n, e.byte, e.bit ?? 0]);
         expect(tag.byteLength, `${where(e)} ${e.address}`).to.equal(e.size);
         if (e.kind === 'elementary')

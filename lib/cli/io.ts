@@ -58,6 +58,7 @@ export function exitCode(err: unknown): number {
     case 'INVALID_VALUE':
     case 'INVALID_URL':
     case 'INVALID_SOURCE':
+    case 'OPTIMIZED_BLOCK': // a name in an optimized block over a protocol that reads by address: nothing was sent
       return EXIT.USAGE;
     case 'WRITE_NOT_ALLOWED':
       return EXIT.REFUSED;

@@ -6,7 +6,7 @@ import { orList } from '../values/text';
 import { UsageError, intFlag, listFlag, stringFlag, type ParsedArgs } from './args';
 import { readInputFile } from './files';
 import { EXIT, untilInterrupted, type CliIo } from './io';
-import { symbolsFlag } from './symbols';
+import { sourceFilesFlag, symbolsFlag } from './symbols';
 
 export const SERVE_FLAGS = [
   'port',
@@ -20,6 +20,9 @@ export const SERVE_FLAGS = [
   'tcp',
   'stations',
   'max-items',
+  'tls-cert',
+  'tls-key',
+  'password-file',
 ];
 
 export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
@@ -36,6 +39,7 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
     string: (flag) => stringFlag(args, flag),
     int: (flag, fallback, min, max) => intFlag(args, flag, fallback, min, max),
     source: () => symbolsFlag(args, 'source'),
+    sourceFiles: () => sourceFilesFlag(args, 'source'),
     hasSource: () => args.lists.has('source'),
     tryByName: (table) => tryByName(table, args),
     usage: (message) => new UsageError(message),
@@ -49,9 +53,13 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
   return EXIT.OK;
 }
 
-/** The read command for the first elementary member of the sources, by name: `--symbols Tank.db --db Tank=1 '"Tank".Level'`. */
+/**
+ * The read command for the first elementary member of the sources that a
+ * read by address reaches (not one of an optimized block), by name:
+ * `--symbols Tank.db --db Tank=1 '"Tank".Level'`.
+ */
 function tryByName(table: SymbolTable, args: ParsedArgs): string {
-  const first = table.entries.find((e) => e.kind === 'elementary' && e.db !== null);
+  const first = table.entries.find((e) => e.kind === 'elementary' && e.db !== null && e.address !== null);
   const files = listFlag(args, 'source').map((f) => `--symbols ${shellWord(f)}`);
   const dbs = listFlag(args, 'db').map((d) => `--db ${shellWord(d)}`);
   return [...files, ...dbs, ...(first ? [shellWord(first.name)] : [])].join(' ');

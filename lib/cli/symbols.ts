@@ -1,6 +1,7 @@
 /**
  * Tags by name on the command line: `plcwire symbols` lists what DB sources
- * and symbol tables compile to (name, address, type, byte, bit); read, write
+ * and symbol tables compile to (name, address, type, byte, bit; the members
+ * of an optimized block without byte, bit and address); read, write
  * and watch take them with --symbols, `serve` builds its data blocks from them
  * with --source; --db numbers the blocks of TIA sources, which do not carry
  * their numbers.
@@ -76,14 +77,24 @@ export function symbolsFlag(args: ParsedArgs, flag: 'symbols' | 'source'): Symbo
   return loadSymbols(files, args);
 }
 
-/** One row of `plcwire symbols --json`. */
+/** The files given with `--<flag>` read but not compiled, with the --db numbers (the S7CommPlus simulator builds its own model of them), or undefined when none was given. */
+export function sourceFilesFlag(args: ParsedArgs, flag: 'source'): { sources: SymbolSource[]; db: Record<string, number> } | undefined {
+  const files = listFlag(args, flag);
+  if (files.length === 0) {
+    symbolsFlag(args, flag); // --db without --source: its usage error
+    return undefined;
+  }
+  return { sources: files.map(readSource), db: dbNumbers(args) };
+}
+
+/** One row of `plcwire symbols --json`: byte, bit and address null for a member of an optimized block. */
 interface SymbolRow {
   name: string;
   type: string;
   db: number | null;
-  byte: number;
+  byte: number | null;
   bit: number | null;
-  address: string;
+  address: string | null;
 }
 
 function rowOf(e: SymbolEntry): SymbolRow {
@@ -111,7 +122,14 @@ export function symbols(rest: string[], args: ParsedArgs, io: CliIo): number {
   if (rest.length === 0)
     throw new UsageError('symbols needs one or more DB sources or symbol tables (.db, .udt, .sdf, .asc, .seq, .xlsx, .csv)');
   if (args.flags.has('json') && args.flags.has('csv')) throw new UsageError('give --json or --csv, not both');
-  const rows = loadSymbols(rest, args).entries.map(rowOf);
+  const table = loadSymbols(rest, args);
+  // Said once per block, on stderr: stdout stays the table a script reads.
+  for (const b of table.blocks.filter((block) => block.optimized))
+    io.stderr.write(
+      `note: ${blockName(b.name, b.db)} has optimized access: its members have no byte, bit or address; ` +
+        'they are read and written by name over s7plus:// (S7CommPlus), not over s7:// or fetchwrite://\n',
+    );
+  const rows = table.entries.map(rowOf);
   if (args.flags.has('json')) {
     io.stdout.write(`${toJson(rows)}\n`);
   } else if (args.flags.has('csv')) {
@@ -119,7 +137,13 @@ export function symbols(rest: string[], args: ParsedArgs, io: CliIo): number {
     const lines = [fields.join(','), ...rows.map((r) => fields.map((f) => csvField(r[f] === null ? '' : String(r[f]))).join(','))];
     io.stdout.write(lines.map((l) => `${l}\r\n`).join(''));
   } else {
-    const cells = rows.map((r) => [r.name, r.address, r.type, String(r.byte), r.bit === null ? '' : String(r.bit)]);
+    const cells = rows.map((r) => [
+      r.name,
+      r.address ?? '',
+      r.type,
+      r.byte === null ? '' : String(r.byte),
+      r.bit === null ? '' : String(r.bit),
+    ]);
     for (const line of alignedTable([['name', 'address', 'type', 'byte', 'bit'], ...cells])) io.stdout.write(`${line}\n`);
   }
   return EXIT.OK;

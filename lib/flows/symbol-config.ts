@@ -136,7 +136,8 @@ export function compileCached(config: SymbolConfig | null | undefined): Compiled
 /** An entry as the editor lists it: what completion, the row's hint and "add all members" need. */
 interface EntryInfo {
   name: string;
-  address: string;
+  /** Null for a member of an optimized block: it is read by name (s7plus://), not by address. */
+  address: string | null;
   type: string;
   kind: SymbolEntry['kind'];
   children?: readonly string[];
@@ -166,7 +167,7 @@ export function describe(result: CompiledSymbols): SymbolsDescription {
 /** A tag row's address as resolveAddress() answers for it. */
 export type AddressAnswer =
   | { ok: true; type: string; count: number }
-  | { ok: true; symbol: string; address: string; type: string; kind: SymbolEntry['kind'] }
+  | { ok: true; symbol: string; address: string | null; type: string; kind: SymbolEntry['kind'] }
   | { ok: false; code: string; message: string };
 
 /**

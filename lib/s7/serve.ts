@@ -3,6 +3,7 @@ import { hostPart } from '../link/url-params';
 import type { MemoryLayout } from '../sim/memory';
 import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
 import { S7Server, type S7Profile } from './server';
+import { servePlus } from '../s7plus/server/serve';
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
 
@@ -22,8 +23,10 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   if (!PROFILES.includes(profile)) throw flags.usage(`--profile must be one of ${PROFILES.join(', ')}`);
   // Without --layout the profile's own memory (DB1 only for s7-200 and logo).
   const layout = loadLayout(flags, flags.string('layout'));
+  // An S7-1200/1500 serves S7CommPlus on the same port, its blocks (optimized ones too) from --source.
+  const s7plus = await servePlus(flags, profile);
   // --source: the data blocks of DB sources, at their declared lengths with their start values.
-  const symbols = flags.source();
+  const symbols = s7plus ? s7plus.model.table : flags.source();
   // --max-items: serve at most N items per job, as snap7's server (20) and the devices built on it.
   const maxItems = flags.has('max-items') ? flags.int('max-items', 20, 1, 255) : undefined;
   const server = new S7Server({
@@ -33,12 +36,17 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
     ...(layout ? { layout } : {}),
     ...(symbols ? { symbols } : {}),
     ...(maxItems !== undefined ? { maxItems } : {}),
+    ...(s7plus ? { s7plus } : {}),
   });
   const port = await flags.listen(() => server.listen(), 'port');
   say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
   const url = `s7://${hostPart(host)}:${port}?${REACH[profile].query}`;
   if (symbols) for (const line of servedBlocks(symbols)) say(line);
   say(`try: plcwire read "${url}" ${symbols ? flags.tryByName(symbols) : REACH[profile].addresses}`);
+  if (s7plus?.fingerprint) {
+    say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}`);
+    say(`  s7plus://${hostPart(host)}:${port}?fingerprint=${s7plus.fingerprint}`);
+  }
   return { close: () => server.close() };
 }
 

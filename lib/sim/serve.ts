@@ -3,7 +3,7 @@
  * hands each registry entry (lib/drivers.ts) its flags through this contract,
  * so a protocol's folder starts its own simulator without importing the CLI.
  */
-import type { SymbolTable } from '../symbols/model';
+import type { SymbolSource, SymbolTable } from '../symbols/model';
 
 /** The command line of `plcwire serve`, as a protocol's serve function reads it. */
 export interface ServeFlags {
@@ -17,6 +17,8 @@ export interface ServeFlags {
   int(flag: string, fallback: number, min: number, max: number): number;
   /** The data blocks of the --source files (with --db), compiled; undefined without --source. */
   source(): SymbolTable | undefined;
+  /** The --source files read but not compiled, with the --db numbers; undefined without --source. */
+  sourceFiles(): { sources: SymbolSource[]; db: Record<string, number> } | undefined;
   /** True when --source was given (also when it names no file). */
   hasSource(): boolean;
   /** The read command that reads the first member of the sources by name. */
@@ -36,7 +38,15 @@ export interface Served {
   close(): Promise<void>;
 }
 
-/** The data blocks built from --source, one line each: what a client's block info will report. */
+/**
+ * The data blocks built from --source, one line each: what a client's block
+ * info will report. A block with optimized access has no standard-access
+ * image to serve by address (lib/symbols/memory.ts): its line says so.
+ */
 export function servedBlocks(table: SymbolTable): string[] {
-  return table.blocks.map((b) => `serving DB${b.db} "${b.name}" of ${b.length} bytes (${b.file})`);
+  return table.blocks.map((b) =>
+    b.length === null
+      ? `not serving DB${b.db} "${b.name}" by address: it has optimized access, its members are read by name over s7plus:// (${b.file})`
+      : `serving DB${b.db} "${b.name}" of ${b.length} bytes (${b.file})`,
+  );
 }

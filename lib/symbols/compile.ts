@@ -1,6 +1,7 @@
 /**
  * compileSymbols(): a PLC's own DB and UDT sources and symbol tables in, a
- * table of every member with its standard-access address out. The source
+ * table of every member with its standard-access address out (a member of a
+ * block with optimized access: with its type and structure, no address). The source
  * parser and the symbol-table readers read the files, the layout engine
  * places the members (lib/symbols/layout.ts); this file gives the blocks
  * their numbers, names every member as TIA writes it, evaluates the start
@@ -176,7 +177,8 @@ export function compileDeclarations(
       Object.freeze({
         name,
         db,
-        length: layout.length,
+        // An optimized block has no standard-access length; `optimized` is only written when true (BlockSummary).
+        ...(decl.optimized ? { optimized: true, length: null } : { length: layout.length }),
         file: decl.at.file,
         ...(layout.instanceOf ? { instanceOf: layout.instanceOf } : {}),
       }),
@@ -210,8 +212,10 @@ function extensionOf(name: string): string {
  * tables (`.sdf .asc .seq .xlsx .csv`) into a table of every member with
  * its standard-access address, found by name as users type it. Throws
  * SourceError (code INVALID_SOURCE, `file:line:column: problem`) for what
- * cannot be compiled: a syntax error, an optimized block, an unknown type, a
- * block without number, … (docs/symbols.md).
+ * cannot be compiled: a syntax error, an unknown type, a block without
+ * number, … (docs/symbols.md). A block with optimized access compiles: its
+ * entries have byte, bit and address null (they are read by name over
+ * S7CommPlus) and its summary says `optimized: true`, `length: null`.
  */
 export function compileSymbols(sources: readonly SymbolSource[], options: CompileOptions = {}): SymbolTable {
   const blocks: BlockDecl[] = [];

@@ -12,6 +12,11 @@
  * A PLC that cannot tell (no block functions, as S7-1200/1500 over PUT/GET;
  * FETCH/WRITE, which has no such service) gives `layoutUnknown` and no
  * refusal: nothing contradicts the sources.
+ *
+ * Blocks with optimized access are not checked (no check, no event, no
+ * refusal): they have no standard-access length to compare, and their
+ * members are read by name over S7CommPlus, which finds them by the PLC's
+ * own identifiers rather than by offsets that could shift.
  */
 import type { EventEmitter } from 'node:events';
 import { abortError, isLinkError, PlcError, toPlcError } from '../errors';
@@ -32,6 +37,11 @@ export interface LayoutMonitorOptions {
   unsupported: string;
   /** Block infos asked at once (the PLC's parallel jobs). */
   parallel: () => number;
+}
+
+/** The blocks a check compares: those with a standard-access length (optimized blocks have none). */
+function checkedBlocks(table: SymbolTable): (BlockSummary & { readonly length: number })[] {
+  return table.blocks.filter((b): b is BlockSummary & { readonly length: number } => b.length !== null);
 }
 
 /** Errors that say the PLC refuses the service itself, not one block: the other blocks are not asked. */
@@ -63,7 +73,7 @@ export class LayoutMonitor {
   /** Each connect and reconnect: a fresh check of every block, in the background. */
   linkUp(): void {
     this.reset();
-    if (this.o.table.blocks.length > 0) this.run(undefined).catch(() => undefined);
+    if (checkedBlocks(this.o.table).length > 0) this.run(undefined).catch(() => undefined);
   }
 
   /** The client was closed: a check under way reports nothing. */
@@ -152,7 +162,7 @@ export class LayoutMonitor {
   }
 
   private async checkAll(generation: number, signal: AbortSignal | undefined): Promise<LayoutCheck[]> {
-    const { blocks } = this.o.table;
+    const blocks = checkedBlocks(this.o.table);
     const { blockLength } = this.o;
     if (!blockLength) {
       const error = new PlcError('NOT_SUPPORTED', this.o.unsupported);
@@ -237,7 +247,7 @@ export class LayoutMonitor {
   }
 }
 
-function unknown(b: BlockSummary, error: PlcError): LayoutCheck {
+function unknown(b: BlockSummary & { readonly length: number }, error: PlcError): LayoutCheck {
   return { block: b.name, db: b.db, declared: b.length, actual: undefined, status: 'unknown', error };
 }
 

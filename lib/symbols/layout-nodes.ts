@@ -52,7 +52,11 @@ export interface BlockLayout {
   readonly decl: DataBlockDecl;
   /** The block's body, at byte 0. */
   readonly root: StructNode;
-  /** Bytes of the block (even). */
+  /**
+   * Bytes of the block (even). A block with optimized access (decl.optimized)
+   * is laid out by the same rules, for its structure and its members' sizes
+   * only: the CPU places its members elsewhere, so its table has no offsets.
+   */
   readonly length: number;
   /** The UDT the block is an instance of, as TIA writes it (`"Motor"`, `UDT 5`). */
   readonly instanceOf?: string;

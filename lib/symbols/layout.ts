@@ -327,9 +327,11 @@ class Engine {
  * Lays out every data block of the declarations (UDTs are laid out where
  * they are used, and each once on its own so that a UDT nobody uses is
  * checked too). Throws SourceError at the first declaration that cannot be
- * laid out: an optimized block, an unknown type, a UDT that contains
- * itself, an instance of an FB, bad array bounds, a block over 64 KB (refused at the
- * member that crosses the limit, before the rest is built).
+ * laid out: an unknown type, a UDT that contains itself, an instance of an
+ * FB, bad array bounds, a block over 64 KB (refused at the member that
+ * crosses the limit, before the rest is built). A block with optimized
+ * access is laid out by the same rules and limits, for its members and their
+ * types (its table gives them no offsets: compile.ts, table-builder.ts).
  */
 export function layoutBlocks(blocks: readonly BlockDecl[], options: LayoutOptions = {}): BlockLayout[] {
   const types = blocks.filter((b): b is TypeDecl => b.kind === 'type');
@@ -342,12 +344,6 @@ export function layoutBlocks(blocks: readonly BlockDecl[], options: LayoutOption
 
 function layoutBlock(engine: Engine, db: DataBlockDecl): BlockLayout {
   const name = blockRef(db);
-  if (db.optimized)
-    throw new SourceError(
-      db.at,
-      `DB ${name} has optimized block access: its members have no fixed offsets to read by address. ` +
-        `In TIA Portal uncheck 'Optimized block access' in the block's properties (Attributes), compile and download it, then export its source again`,
-    );
   const where: Where = { segment: name };
   let root: StructNode;
   let instanceOf: string | undefined;

@@ -39,9 +39,10 @@ function shapeOf(entry: SymbolEntry): TagShape {
  */
 export function dataBlockImages(table: SymbolTable): Map<number, Buffer> {
   const images = new Map<number, Buffer>();
-  for (const block of table.blocks) images.set(block.db, Buffer.alloc(block.length));
+  // An optimized block has no standard-access image: the simulators of PUT/GET and FETCH/WRITE do not hold it.
+  for (const block of table.blocks) if (block.length !== null) images.set(block.db, Buffer.alloc(block.length));
   for (const entry of table.entries) {
-    if (entry.kind !== 'elementary' || entry.dataType === undefined || entry.db === null) continue;
+    if (entry.kind !== 'elementary' || entry.dataType === undefined || entry.db === null || entry.byte === null) continue;
     const image = images.get(entry.db);
     if (image === undefined) continue;
     const tag = shapeOf(entry);

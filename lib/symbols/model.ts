@@ -137,14 +137,20 @@ export interface SymbolEntry {
   readonly area: AreaName;
   /** Data block number; null for I/Q/M symbols. */
   readonly db: number | null;
-  /** Byte offset in the block (or area). */
-  readonly byte: number;
-  /** 0–7 for BOOL (and a BOOL array's first bit); null otherwise. */
+  /** Byte offset in the block (or area); null in a block with optimized access, whose members have no fixed offset. */
+  readonly byte: number | null;
+  /** 0–7 for BOOL (and a BOOL array's first bit); null otherwise, and for every member of an optimized block. */
   readonly bit: number | null;
   /** Bytes covered from `byte` (a BOOL: 1; a packed BOOL array: the bytes its bits touch). */
   readonly size: number;
-  /** The absolute address in our syntax, which parseAddress() reads back to the same location and type: `DB1.DBD8:REAL`, `DB1.DBX4.0`, `DB1.DBB20:STRING[30]`; a struct: its bytes, `DB1.DBB10:BYTE[12]`. */
-  readonly address: string;
+  /**
+   * The absolute address in our syntax, which parseAddress() reads back to
+   * the same location and type: `DB1.DBD8:REAL`, `DB1.DBX4.0`,
+   * `DB1.DBB20:STRING[30]`; a struct: its bytes, `DB1.DBB10:BYTE[12]`. Null
+   * in a block with optimized access: such a member is read by name over
+   * S7CommPlus (`s7plus://`), never by address.
+   */
+  readonly address: string | null;
   /** Elementary entries with a start value in the source (declaration or BEGIN section), evaluated to its JS value. */
   readonly initial?: PlcValue;
   /** Arrays and structs: the names of their direct children (members, or elements in index order). */
@@ -152,6 +158,23 @@ export interface SymbolEntry {
   /** The declaration's comment, '' when none. */
   readonly comment: string;
   readonly at?: SourcePosition;
+  /**
+   * How S7CommPlus reaches the entry: the access area of its data block
+   * (for a DB, 0x8A0E0000 plus the DB number) and the LIDs from the block
+   * down to the entry (one per level: member, element, member …). Undefined
+   * for tables compiled from sources (they do not know the PLC's LIDs);
+   * filled by a browse of the PLC (`client.browse()` over `s7plus://`) or by
+   * the simulator, which gives its members their LIDs.
+   */
+  readonly access?: SymbolAccess;
+}
+
+/** The S7CommPlus access path of an entry (SymbolEntry.access). */
+export interface SymbolAccess {
+  /** The access area of the entry's block: for a data block 0x8A0E0000 + its number. */
+  readonly area: number;
+  /** The LIDs from the block down to the entry, outermost first. */
+  readonly lids: readonly number[];
 }
 
 /** A data block of the compiled sources. */
@@ -159,8 +182,16 @@ export interface BlockSummary {
   /** As TIA writes it (unquoted): `Tank`; a STEP 7 DB without symbol: `DB10`. */
   readonly name: string;
   readonly db: number;
-  /** Bytes of the block in standard access, as the CPU's block info reports it. */
-  readonly length: number;
+  /**
+   * True when the block has optimized access (`S7_Optimized_Access := 'TRUE'`):
+   * its members are read by name over S7CommPlus, `length` is null and its
+   * entries' byte, bit and address are null. Absent on a block with standard
+   * access, so that such a summary is what it was before optimized blocks
+   * compiled (a test's or a flow's deep comparison of it still holds).
+   */
+  readonly optimized?: boolean;
+  /** Bytes of the block in standard access, as the CPU's block info reports it; null for an optimized block (no fixed layout). */
+  readonly length: number | null;
   readonly file: string;
   /** The UDT or FB it is an instance of, when it is one. */
   readonly instanceOf?: string;

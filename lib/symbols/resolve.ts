@@ -13,7 +13,7 @@
  * and writing by name").
  */
 import { parseAddress } from '../address';
-import { AddressError, PlcError, ValueError, toPlcError } from '../errors';
+import { AddressError, OptimizedBlockError, PlcError, ValueError, toPlcError } from '../errors';
 import type { DriverTag } from '../link/driver';
 import type { PlcData, PlcStruct, PlcValue, Tag } from '../types';
 import { tagDecoder, validateValue, type TagDecoder } from '../values';
@@ -143,7 +143,9 @@ function membersOf(entry: Pick<SymbolEntry, 'name' | 'children'>): string {
  * Resolves `name` through the table to a driver tag (`parse` is the driver's
  * address parser: its reach checks apply to the entry's address), or
  * undefined when the table has no such name. A name whose entry the driver
- * cannot reach throws that error, naming the symbol.
+ * cannot reach throws that error, naming the symbol; a name in a block with
+ * optimized access, which has no address, throws OptimizedBlockError
+ * (OPTIMIZED_BLOCK): this path reads by address (PUT/GET, FETCH/WRITE).
  */
 export function resolveSymbol<T extends DriverTag>(
   table: SymbolTable,
@@ -162,9 +164,18 @@ export function resolveSymbol<T extends DriverTag>(
     }
     return { ...tag, address: as };
   };
-  if (isElementary(entry)) return { entry, tag: named(entry.address, name) };
-  const shape = shapeOf(table, entry, entry, named);
-  return { entry, tag: named(spanAddress(entry), name), shape };
+  const { address, byte } = placed(table, entry, name);
+  if (isElementary(entry)) return { entry, tag: named(address, name) };
+  const shape = shapeOf(table, byte, entry, named);
+  return { entry, tag: named(spanAddress(entry, byte), name), shape };
+}
+
+/** An entry's address and byte; OptimizedBlockError, naming `as` and the block, for one of an optimized block (no address). */
+function placed(table: SymbolTable, entry: SymbolEntry, as: string): { address: string; byte: number } {
+  if (entry.address !== null && entry.byte !== null) return { address: entry.address, byte: entry.byte };
+  const db = entry.db ?? 0;
+  const block = table.blocks.find((b) => b.db === db);
+  throw new OptimizedBlockError(as, block?.name ?? `DB${db}`, db);
 }
 
 /** Per table: each data block's first entry and the names of its top-level members (wholeBlock). */
@@ -201,6 +212,7 @@ function wholeBlock(table: SymbolTable, name: string): SymbolEntry | undefined {
     const blockName = canonicalName(own.slice(0, 1));
     const rest = canonicalName(own).slice(blockName.length);
     if (table.lookup(`${name.trim()}${rest}`) !== m.first) continue;
+    const length = block.length;
     return {
       name: blockName,
       type: block.instanceOf ? `"${block.instanceOf}"` : 'Struct',
@@ -208,10 +220,11 @@ function wholeBlock(table: SymbolTable, name: string): SymbolEntry | undefined {
       stringLength: 0,
       area: 'DB',
       db: block.db,
-      byte: 0,
+      // An optimized block has no length and no address: resolveSymbol refuses it by name.
+      byte: length === null ? null : 0,
       bit: null,
-      size: block.length,
-      address: `DB${block.db}.DBB0:BYTE[${block.length}]`,
+      size: length ?? 0,
+      address: length === null ? null : `DB${block.db}.DBB0:BYTE[${length}]`,
       children: m.top,
       comment: '',
     };
@@ -224,22 +237,24 @@ function isElementary(entry: SymbolEntry): boolean {
   return entry.kind === 'elementary' || (entry.kind === 'array' && entry.dataType !== undefined);
 }
 
-/** A struct's bytes as one BYTE array: `DB1.DBB10:BYTE[12]`, `MB4:BYTE[2]`. */
-function spanAddress(entry: SymbolEntry): string {
+/** A struct's bytes (from `byte`) as one BYTE array: `DB1.DBB10:BYTE[12]`, `MB4:BYTE[2]`. */
+function spanAddress(entry: SymbolEntry, byte: number): string {
   const count = Math.max(1, entry.size);
-  const at = entry.area === 'DB' ? `DB${entry.db ?? 0}.DBB${entry.byte}` : `${entry.area}B${entry.byte}`;
+  const at = entry.area === 'DB' ? `DB${entry.db ?? 0}.DBB${byte}` : `${entry.area}B${byte}`;
   return `${at}:BYTE[${count}]`;
 }
 
-function shapeOf<T>(table: SymbolTable, root: SymbolEntry, entry: SymbolEntry, named: (address: string, as: string) => T): SymbolShape<T> {
+/** The shape of `entry`, its leaves' offsets counted from `rootByte` (the byte of the struct read as one tag). */
+function shapeOf<T>(table: SymbolTable, rootByte: number, entry: SymbolEntry, named: (address: string, as: string) => T): SymbolShape<T> {
   if (isElementary(entry)) {
-    const s7 = { ...parseAddress(entry.address), address: entry.name };
+    const { address, byte } = placed(table, entry, entry.name);
+    const s7 = { ...parseAddress(address), address: entry.name };
     return {
       kind: 'leaf',
       name: entry.name,
-      tag: named(entry.address, entry.name),
+      tag: named(address, entry.name),
       s7,
-      offset: entry.byte - root.byte,
+      offset: byte - rootByte,
       decode: tagDecoder(s7),
     };
   }
@@ -249,9 +264,9 @@ function shapeOf<T>(table: SymbolTable, root: SymbolEntry, entry: SymbolEntry, n
       throw new PlcError('INVALID_ADDRESS', `symbol ${entry.name}: its member ${child} is not in the symbol table`, { tag: entry.name });
     return found;
   });
-  if (entry.kind === 'array') return { kind: 'array', name: entry.name, elements: children.map((c) => shapeOf(table, root, c, named)) };
+  if (entry.kind === 'array') return { kind: 'array', name: entry.name, elements: children.map((c) => shapeOf(table, rootByte, c, named)) };
   const members = new Map<string, SymbolShape<T>>();
-  for (const child of children) members.set(memberKey(entry.name, child.name), shapeOf(table, root, child, named));
+  for (const child of children) members.set(memberKey(entry.name, child.name), shapeOf(table, rootByte, child, named));
   return { kind: 'struct', name: entry.name, members };
 }
 

@@ -100,8 +100,12 @@ export class TableBuilder {
 
   constructor(private readonly evaluate: EvaluateLiteral | undefined) {}
 
+  /** The block being built has optimized access: its entries get no byte, bit or address. */
+  private optimized = false;
+
   block(layout: BlockLayout, name: string, db: number): void {
     this.relative = new Map();
+    this.optimized = layout.decl.optimized;
     const top: string[] = [];
     for (const m of layout.root.members) this.node(m.node, name, `.${memberRef(m.name)}`, db, top);
     for (const sv of layout.decl.startValues) {
@@ -194,7 +198,8 @@ export class TableBuilder {
 
   private push(entry: SymbolEntry, rel: string, siblings: string[]): void {
     this.relative.set(key(rel), this.entries.length);
-    this.entries.push(entry);
+    // A member of an optimized block has no fixed offset: nothing to read by address (SymbolEntry).
+    this.entries.push(this.optimized ? { ...entry, byte: null, bit: null, address: null } : entry);
     this.literals.push(undefined);
     siblings.push(entry.name);
   }

@@ -49,4 +49,9 @@ export const HINT = {
   putGet:
     'Allow PUT/GET in the CPU: TIA Portal → the CPU\'s Properties → Protection & Security → Connection mechanisms → tick "Permit access with PUT/GET communication from remote partner", then download the hardware configuration.',
   password: 'The protection level forbids reads: give the password (S7Client.setPassword) or lower the protection.',
+  /** A name of the sources in a block with optimized access: PUT/GET cannot reach it. */
+  optimizedName:
+    'Read this name over an s7plus:// URL (S7CommPlus: the PLC finds the member by name, which PUT/GET cannot), with the same sources. ' +
+    'Or switch the DB to standard access: TIA Portal → the DB\'s Properties → Attributes → untick "Optimized block access", compile and download, ' +
+    'then export its source again (Generate source from blocks) and read it over s7:// with PUT/GET.',
 } as const;

@@ -11,6 +11,7 @@ import type { Tag } from '../../types';
 import { textOf } from '../../values/text';
 import type { S7Client } from '../client';
 import type { Family } from './families';
+import { HINT } from './hints';
 
 /** What the steps need of the doctor's walk: its client, its abort, and how a step passes or ends the walk. */
 export interface StepContext {
@@ -75,6 +76,8 @@ export class TagSteps {
     try {
       tag = this.c.client.tag(name);
     } catch (err) {
+      // A member of an optimized block exists in the sources but has no address PUT/GET could read.
+      if (err instanceof PlcError && err.code === 'OPTIMIZED_BLOCK') this.c.fail(step, err.message, HINT.optimizedName);
       this.c.fail(
         step,
         (err as Error).message,

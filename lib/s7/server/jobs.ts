@@ -34,6 +34,8 @@ export interface JobContext {
   pduSize: number;
   /** DBs that answer "object does not exist" (fault injection); undefined when none. */
   missingDb?: ((dbNumber: number) => boolean) | undefined;
+  /** Optimized DBs (served by S7CommPlus only): a CPU answers PUT/GET on them "address out of range" (python-snap7#191). */
+  optimizedDb?: ReadonlySet<number> | undefined;
   /** false: the S5 counter and timer areas answer 0x03 (an S7-200 or LOGO!); default true. */
   s5CountersTimers?: boolean;
 }
@@ -201,6 +203,7 @@ function locate(frame: Buffer, i: number, o: number, ctx: JobContext, forWrite: 
   }
   if (length === 0) return ReturnCode.AddressOutOfRange;
   if (area === 'DB' && ctx.missingDb?.(db)) return ReturnCode.ObjectDoesNotExist;
+  if (area === 'DB' && ctx.optimizedDb?.has(db)) return ReturnCode.AddressOutOfRange;
   const buf = ctx.memory.area(area, db);
   if (!buf) return ReturnCode.ObjectDoesNotExist;
   if (offset + length > buf.length) return ReturnCode.AddressOutOfRange;

@@ -3,6 +3,7 @@
  * the faults it can inject, and the payloads of its 'request' and 'refused'
  * events.
  */
+import type { Socket } from 'node:net';
 import type { PlcMemory } from '../../sim/memory';
 import type { SymbolTable } from '../../symbols/model';
 import type { CpuIdentity, CpuProfile, S7Layout, S7Profile } from './profiles';
@@ -32,6 +33,32 @@ export interface S7ServerOptions {
   maxItems?: number;
   /** What the CPU says about itself (order code, firmware, names …); the profile's defaults (S7-1500's for a custom CpuProfile) for what is not given. */
   identity?: Partial<CpuIdentity>;
+  /**
+   * S7CommPlus on the same port (lib/s7plus/server S7PlusService): a COTP CR
+   * calling an S7CommPlus TSAP goes to it, as on an S7-1200/1500; its
+   * program's blocks are the memory's, and PUT/GET refuses its optimized DBs.
+   */
+  s7plus?: S7PlusEndpoint;
+}
+
+/** The S7CommPlus side the simulator hands connections to (lib/s7plus/server S7PlusService). */
+export interface S7PlusEndpoint {
+  readonly model: { readonly table: SymbolTable; readonly optimizedDbs: ReadonlySet<number> };
+  /** True when a COTP CR calls an S7CommPlus TSAP. */
+  claims(frame: Buffer): boolean;
+  /** Confirms the CR `frame` on `socket` and serves the connection from `cpu`; `hostile` reports a frame that breaks the protocol (the simulator then drops the connection). */
+  open(
+    frame: Buffer,
+    socket: Socket,
+    cpu: { readonly memory: PlcMemory; readonly state: 'RUN' | 'STOP' },
+    hostile: (err: Error) => void,
+  ): S7PlusLink;
+}
+
+/** One S7CommPlus connection: the simulator gives it every frame after the CR, and tells it when the socket closed. */
+export interface S7PlusLink {
+  onFrame(frame: Buffer): void;
+  dispose(): void;
 }
 
 /** Fault injection; every field can be changed at any time. */

@@ -19,11 +19,11 @@ import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconn
 import { firstItems } from './items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './jobs';
 import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuProfile } from './profiles';
-import type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
+import type { S7Faults, S7PlusLink, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
 
 export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './profiles';
 export { STOP_CAUSES, type SimulatorMode, type StopCause } from './services';
-export type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
+export type { S7Faults, S7PlusEndpoint, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
 
 /** The CPU's COTP source reference. */
 const CPU_REF = 0x0001;
@@ -45,6 +45,7 @@ interface Connection {
   queue: Buffer[];
   timers: Set<NodeJS.Timeout>;
   counted: boolean;
+  plus?: S7PlusLink | undefined;
 }
 
 /**
@@ -66,6 +67,7 @@ export class S7Server extends EventEmitter {
   private readonly connections = new Set<Connection>();
   private boundPort = 0;
   private counted = 0;
+  private readonly plus: S7ServerOptions['s7plus'];
   private readonly missingDb = (db: number): boolean => {
     const m = this.faults.missingDb;
     return typeof m === 'number' ? m === db : m !== undefined && m.includes(db);
@@ -82,7 +84,9 @@ export class S7Server extends EventEmitter {
     if (!resolved) throw new TypeError(`unknown S7 profile "${String(profile)}" (${Object.keys(PROFILES).join(', ')})`);
     this.profile = resolved;
     const layout = options.layout ? toMemoryLayout(options.layout) : resolved.layout;
-    this.memory = options.memory ?? (options.symbols ? memoryFromSymbols(options.symbols, layout) : new PlcMemory(layout));
+    this.plus = options.s7plus;
+    const symbols = options.symbols ?? options.s7plus?.model.table;
+    this.memory = options.memory ?? (symbols ? memoryFromSymbols(symbols, layout) : new PlcMemory(layout));
     if (options.maxItems !== undefined && !(Number.isInteger(options.maxItems) && options.maxItems >= 1 && options.maxItems <= 255)) {
       throw new TypeError(`maxItems must be a whole number 1..255, got ${String(options.maxItems)}`);
     }
@@ -199,6 +203,7 @@ export class S7Server extends EventEmitter {
         pduSize: this.profile.pduSize,
         missingDb: undefined,
         s5CountersTimers: this.profile.s5CountersTimers !== false,
+        optimizedDb: this.plus?.model.optimizedDbs,
       },
       services: newServiceSession(),
       maxJobs: 1,
@@ -215,6 +220,7 @@ export class S7Server extends EventEmitter {
       for (const t of conn.timers) clearTimeout(t);
       conn.timers.clear();
       conn.queue.length = 0;
+      conn.plus?.dispose();
       if (conn.counted) {
         conn.counted = false;
         this.counted--;
@@ -257,6 +263,7 @@ export class S7Server extends EventEmitter {
   }
 
   private onFrame(conn: Connection, frame: Buffer): void {
+    if (conn.plus) return conn.plus.onFrame(frame);
     if (conn.stage === 'jobs') {
       const func = jobFunction(frame);
       if (func !== 0) {
@@ -304,7 +311,8 @@ export class S7Server extends EventEmitter {
     if (this.counted >= this.profile.maxConnections) {
       return refuse('connection-limit', DR_CONGESTION, `all ${this.profile.maxConnections} connections of the CPU are in use`);
     }
-    const wrongTsap = tsapRefusal(this.profile, cr.callingTsap, cr.calledTsap);
+    const plus = this.plus?.claims(frame) ? this.plus : undefined;
+    const wrongTsap = plus ? undefined : tsapRefusal(this.profile, cr.callingTsap, cr.calledTsap);
     if (wrongTsap !== undefined) return refuse('wrong-tsap', DR_ADDRESS_UNKNOWN, wrongTsap);
     const tpdu = tpduBytes(cr.tpduSize) ? Math.min(cr.tpduSize, MAX_TPDU) : MAX_TPDU;
     // A PDU travels in one TPDU (3 bytes of COTP DT header): a CPU offers the largest of its sizes that fits.
@@ -314,15 +322,18 @@ export class S7Server extends EventEmitter {
     conn.stage = 'setup';
     conn.counted = true;
     this.counted++;
-    conn.socket.write(
-      encodeConnectionConfirm({
-        sourceRef: CPU_REF,
-        destinationRef: cr.sourceRef,
-        callingTsap: cr.callingTsap,
-        calledTsap: cr.calledTsap,
-        tpduSize: tpdu,
-      }),
-    );
+    // S7CommPlus (its CR called an S7CommPlus TSAP): the link confirms and serves every later frame.
+    conn.plus = plus?.open(frame, conn.socket, this, (err) => this.hostile(conn, err));
+    if (!conn.plus)
+      conn.socket.write(
+        encodeConnectionConfirm({
+          sourceRef: CPU_REF,
+          destinationRef: cr.sourceRef,
+          callingTsap: cr.callingTsap,
+          calledTsap: cr.calledTsap,
+          tpduSize: tpdu,
+        }),
+      );
     this.emit('connection', this.counted);
   }
 

@@ -1,0 +1,92 @@
+/**
+ * S7PlusService: the S7CommPlus side of a simulated S7-1200/1500. The S7
+ * simulator (lib/s7/server) hands it each connection whose COTP CR calls an
+ * S7CommPlus TSAP, so both protocols share one port and one memory as on a
+ * CPU: standard DBs are the S7 simulator's, read and written over either
+ * protocol; optimized DBs are served here by name only.
+ */
+import { X509Certificate } from 'node:crypto';
+import type { Socket } from 'node:net';
+import * as tls from 'node:tls';
+import type { PlcMemory } from '../../sim/memory';
+import type { CompileOptions, SymbolSource } from '../../symbols/model';
+import { fingerprint256 } from '../transport/cert';
+import { PlusConnection } from './connection';
+import { buildPlusModel, type PlusModel } from './model';
+import { isS7PlusRequest } from './tsap';
+
+export { isS7PlusRequest } from './tsap';
+export type { PlusModel, PlusDb } from './model';
+
+/** Items a CPU 1215C serves in one request (public reports, issue #25; s7commplus (MIT) client.py max_items_per_request). */
+const DEFAULT_MAX_ITEMS = 50;
+/** Request bytes PLCSIM Advanced takes before it drops the connection (s7commplus (MIT) server.py max_request_bytes: "past about 1 KB"); a real CPU takes more, so the default is the TPKT limit. */
+const DEFAULT_MAX_REQUEST_BYTES = 65535;
+
+export interface S7PlusOptions {
+  /** The DB and UDT sources (and symbol tables) the CPU's program is built from, as `--source` gives them. */
+  readonly sources: readonly SymbolSource[];
+  /** Block numbers by name, as `--db` gives them. */
+  readonly db?: CompileOptions['db'];
+  /** The CPU's certificate and key (PEM). `false`: the CPU is configured without secure communication and speaks S7CommPlus in plain text. */
+  readonly tls: { readonly cert: string | Buffer; readonly key: string | Buffer } | false;
+  /** Items one request may carry; more resets the connection. Default 50 (CPU 1215C). */
+  readonly maxItems?: number;
+  /** Bytes one request frame may have; more resets the connection. Default 65535. */
+  readonly maxRequestBytes?: number;
+}
+
+/** What the S7 simulator gives each S7CommPlus connection. */
+export interface PlusLink {
+  onFrame(frame: Buffer): void;
+  dispose(): void;
+}
+
+export class S7PlusService {
+  readonly model: PlusModel;
+  /** SHA-256 of the certificate (DER), 64 upper-case hex digits; undefined in plain text. */
+  readonly fingerprint: string | undefined;
+  private readonly secureContext: tls.SecureContext | undefined;
+  private readonly maxItems: number;
+  private readonly maxRequestBytes: number;
+  private nextSession = 0x3a0;
+
+  constructor(options: S7PlusOptions) {
+    this.model = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
+    this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
+    this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
+    if (options.tls) {
+      this.secureContext = tls.createSecureContext({
+        cert: options.tls.cert,
+        key: options.tls.key,
+        minVersion: 'TLSv1.2',
+        maxVersion: 'TLSv1.3',
+      });
+      this.fingerprint = fingerprint256(new X509Certificate(options.tls.cert).raw);
+    }
+  }
+
+  /** True when a COTP CR asks for S7CommPlus. */
+  claims(frame: Buffer): boolean {
+    return isS7PlusRequest(frame);
+  }
+
+  /** Opens a connection on the CR `frame` (S7Server calls it for each CR that `claims` accepts). */
+  open(
+    frame: Buffer,
+    socket: Socket,
+    cpu: { readonly memory: PlcMemory; readonly state: 'RUN' | 'STOP' },
+    hostile: (err: Error) => void,
+  ): PlusLink {
+    return new PlusConnection(
+      {
+        cpu: { model: this.model, memory: cpu.memory, mode: () => cpu.state, maxItems: this.maxItems },
+        secureContext: this.secureContext,
+        session: { maxRequestBytes: this.maxRequestBytes, newSessionId: () => this.nextSession++ },
+        send: (bytes) => socket.write(bytes),
+        close: (reason) => (reason ? hostile(reason) : socket.end()),
+      },
+      frame,
+    );
+  }
+}

@@ -1,0 +1,217 @@
+/**
+ * The simulated CPU's object model for S7CommPlus, built from the same DB
+ * and UDT sources as the S7 simulator: every DB, optimized or not, with its
+ * members, their LIDs and the type objects a browse reads. Optimized blocks
+ * are laid out by the standard rules for the simulator's own storage only:
+ * their offsets never leave the simulator (a client reads them by LID), and
+ * PUT/GET refuses them (lib/s7/server/jobs.ts).
+ *
+ * LIDs: the first member of a block or struct has LID 0xA, the next 0xB and
+ * so on in declaration order (s7commplus (MIT) tests address the first
+ * member of DB1 as `8A0E0001.A`; thomas-v2/S7CommPlusDriver's test program
+ * numbers members upwards the same way). LID 1 of a DB answers the RID of
+ * its type object (client.py `_read_typeinfo_rid`).
+ */
+import { compileDeclarations } from '../../symbols/compile';
+import { layoutBlocks, type BlockLayout, type LayoutNode } from '../../symbols/layout';
+import { literalValue } from '../../symbols/literals';
+import { parseBlockSource } from '../../symbols/source-parser';
+import { readSymbolTable } from '../../symbols/symbol-files';
+import { SourceError } from '../../errors';
+import type { BlockDecl, CompileOptions, SymbolSource, SymbolTable, SymbolTableRow } from '../../symbols/model';
+import type { StructNode } from '../../symbols/layout-nodes';
+import type { DataTypeName } from '../../types';
+import { dbAccessArea, SoftDataType } from '../constants';
+
+/** The LID of the first member of a block or struct. */
+export const FIRST_LID = 0xa;
+/** RIDs of the simulator's type objects: a DB's is this base plus its number, a struct's or UDT's the other base plus its index. */
+const DB_TYPE_RID = 0x92000000;
+const STRUCT_TYPE_RID = 0x93000000;
+
+/** One member of a type object as a browse sees it. */
+export interface PlusMember {
+  readonly name: string;
+  readonly lid: number;
+  /** Offset from the start of its struct (byte, and bit for BOOL). */
+  readonly byte: number;
+  readonly bit: number | null;
+  readonly node: LayoutNode;
+  /** The software data type (ids.ts SOFT); STRUCT for structs and arrays of structs. */
+  readonly soft: number;
+  /** The struct's type object for a struct or an array of structs. */
+  readonly type?: PlusType;
+}
+
+/** A struct, UDT or block body: its members in declaration order. */
+export interface PlusType {
+  readonly rid: number;
+  readonly size: number;
+  readonly members: readonly PlusMember[];
+}
+
+export interface PlusDb {
+  readonly name: string;
+  readonly number: number;
+  readonly optimized: boolean;
+  /** The access area of its values: 0x8A0E0000 + number. */
+  readonly rid: number;
+  readonly type: PlusType;
+  /** The block's own layout (a shared type object's members are those of the UDT's first use). */
+  readonly root: StructNode;
+  readonly length: number;
+}
+
+export interface PlusModel {
+  /** The compiled table of every block, optimized ones laid out by the standard rules (the simulator's storage). */
+  readonly table: SymbolTable;
+  readonly dbs: readonly PlusDb[];
+  /** Every type object, for the type-info container. */
+  readonly types: readonly PlusType[];
+  readonly optimizedDbs: ReadonlySet<number>;
+}
+
+const SOFT_OF: Readonly<Partial<Record<DataTypeName, number>>> = Object.freeze({
+  BOOL: SoftDataType.Bool,
+  BYTE: SoftDataType.Byte,
+  CHAR: SoftDataType.Char,
+  WORD: SoftDataType.Word,
+  INT: SoftDataType.Int,
+  DWORD: SoftDataType.DWord,
+  DINT: SoftDataType.DInt,
+  REAL: SoftDataType.Real,
+  DATE: SoftDataType.Date,
+  TIME_OF_DAY: SoftDataType.TimeOfDay,
+  TIME: SoftDataType.Time,
+  S5TIME: SoftDataType.S5Time,
+  DATE_AND_TIME: SoftDataType.DateAndTime,
+  STRING: SoftDataType.String,
+  LREAL: SoftDataType.LReal,
+  ULINT: SoftDataType.ULInt,
+  LINT: SoftDataType.LInt,
+  LWORD: SoftDataType.LWord,
+  USINT: SoftDataType.USInt,
+  UINT: SoftDataType.UInt,
+  UDINT: SoftDataType.UDInt,
+  SINT: SoftDataType.SInt,
+  WCHAR: SoftDataType.WChar,
+  WSTRING: SoftDataType.WString,
+  LTIME: SoftDataType.LTime,
+  DTL: SoftDataType.DTL,
+});
+
+/** The software data type of an elementary type. */
+export function softOf(type: DataTypeName): number {
+  return SOFT_OF[type] ?? SoftDataType.Byte;
+}
+
+const BLOCK_SOURCES = /\.(db|udt|scl|awl)$/i;
+
+/** Builds the model from source files (as `--source` gives them) and block numbers (as `--db` gives them). Throws SourceError. */
+export function buildPlusModel(sources: readonly SymbolSource[], options: CompileOptions = {}): PlusModel {
+  const blocks: BlockDecl[] = [];
+  const rows: SymbolTableRow[] = [];
+  for (const source of sources) {
+    if (BLOCK_SOURCES.test(source.name)) blocks.push(...parseBlockSource(source));
+    else rows.push(...readSymbolTable(source));
+  }
+  return modelOf(blocks, rows, options);
+}
+
+function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], options: CompileOptions): PlusModel {
+  const optimizedDecls = new Set(blocks.filter((b) => b.kind === 'db' && b.optimized));
+  // Standard rules for every block: the optimized ones get a storage layout that only the simulator sees.
+  const standard = blocks.map((b) => (b.kind === 'db' && b.optimized ? { ...b, optimized: false } : b));
+  const table = compileDeclarations(standard, rows, options, literalValue);
+  const typeNumbers = new Map<string, number>();
+  for (const row of rows) {
+    const udt = /^UDT\s*(\d+)$/i.exec(row.address.trim());
+    if (udt) typeNumbers.set(row.name.toLowerCase(), Number(udt[1]));
+  }
+  const layouts = layoutBlocks(standard, { typeNumbers });
+  const builder = new TypeBuilder();
+  const dbs: PlusDb[] = [];
+  const optimizedDbs = new Set<number>();
+  layouts.forEach((layout: BlockLayout, i) => {
+    const summary = table.blocks[i];
+    if (!summary) throw new SourceError(layout.decl.at, `DB ${layout.decl.name} has no number`);
+    const optimized = optimizedDecls.has(blocks[standard.indexOf(layout.decl)] as BlockDecl);
+    if (optimized) optimizedDbs.add(summary.db);
+    const type = builder.struct(layout.root, DB_TYPE_RID + summary.db);
+    dbs.push(
+      Object.freeze({
+        name: summary.name,
+        number: summary.db,
+        optimized,
+        rid: dbAccessArea(summary.db),
+        type,
+        root: layout.root,
+        length: summary.length,
+      }),
+    );
+  });
+  return Object.freeze({ table, dbs: Object.freeze(dbs), types: Object.freeze(builder.types), optimizedDbs });
+}
+
+/** Gives each struct its type object; instances of one UDT share one. */
+class TypeBuilder {
+  readonly types: PlusType[] = [];
+  private readonly byUdt = new Map<string, PlusType>();
+
+  struct(node: StructNode, rid?: number): PlusType {
+    const shared = rid === undefined && node.typeName !== undefined ? this.byUdt.get(node.typeName) : undefined;
+    if (shared) return shared;
+    const members = node.members.map((m, i) => this.member(m.name, m.node, node.byte, FIRST_LID + i));
+    const type: PlusType = Object.freeze({
+      rid: rid ?? STRUCT_TYPE_RID + this.types.length,
+      size: node.size,
+      members: Object.freeze(members),
+    });
+    this.types.push(type);
+    if (rid === undefined && node.typeName !== undefined) this.byUdt.set(node.typeName, type);
+    return type;
+  }
+
+  private member(name: string, node: LayoutNode, base: number, lid: number): PlusMember {
+    const place = { name, lid, byte: node.byte - base, bit: node.bit, node };
+    if (node.kind === 'elementary') return Object.freeze({ ...place, soft: softOf(node.dataType) });
+    if (node.kind === 'struct') return Object.freeze({ ...place, soft: SoftDataType.Struct, type: this.struct(node) });
+    const first = node.elements[0];
+    if (first?.kind === 'struct') return Object.freeze({ ...place, soft: SoftDataType.Struct, type: this.struct(first) });
+    return Object.freeze({ ...place, soft: softOf(node.elementType?.dataType ?? 'BYTE') });
+  }
+}
+
+/**
+ * The node a LID path names in `db`: member LIDs, a 0-based element index
+ * after an array, and for an element of an array of structs the marker 1
+ * before its member's LID (typeinfo.py `_walk`: `<lid>.<index>.1.<lid>`).
+ * A type object is shared by every instance of its UDT, so the path walks
+ * the block's own layout alongside it. Undefined when the path names nothing.
+ */
+export function resolveLids(db: PlusDb, lids: readonly number[]): LayoutNode | undefined {
+  let type: PlusType | undefined = db.type;
+  let struct: StructNode | undefined = db.root;
+  let node: LayoutNode | undefined;
+  let i = 0;
+  while (i < lids.length) {
+    if (!type || !struct) return undefined;
+    const index = type.members.findIndex((m) => m.lid === lids[i]);
+    if (index < 0) return undefined;
+    type = type.members[index]!.type;
+    node = struct.members[index]?.node;
+    if (!node) return undefined;
+    i++;
+    if (node.kind === 'array' && i < lids.length) {
+      node = node.elements[lids[i]!];
+      if (!node) return undefined;
+      i++;
+      if (node.kind === 'struct' && i < lids.length) {
+        if (lids[i] !== 1) return undefined;
+        i++;
+      }
+    }
+    struct = node.kind === 'struct' ? node : undefined;
+  }
+  return node;
+}

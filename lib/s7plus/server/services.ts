@@ -1,0 +1,158 @@
+/**
+ * What the simulated CPU answers each S7CommPlus request with, once the
+ * frame and its header are taken apart (session.ts): Explore of the block
+ * list, the CPU state and the type-info container; GetMultiVariables and
+ * SetMultiVariables by LID (named access) and by address (the classic blob
+ * of a standard DB); the session's protection level. Layouts: s7commplus
+ * (MIT) client.py (the request builders and answer parsers), server.py.
+ */
+import type { PlcMemory } from '../../sim/memory';
+import { ProtocolError } from '../../errors';
+import type { LayoutNode } from '../../symbols/layout-nodes';
+import { ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
+import { Reader } from '../codec/bytes';
+import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
+import { resolveLids, type PlusDb, type PlusModel } from './model';
+import { blockList, cpuExecUnit, typeInfoContainer } from './typeinfo';
+import { blob, readNode, readPValue, writeNode } from './values';
+
+/** What a handler needs of the CPU. */
+export interface CpuSide {
+  readonly model: PlusModel;
+  readonly memory: PlcMemory;
+  /** RUN or STOP. */
+  mode(): 'RUN' | 'STOP';
+  /** Items one Get/SetMultiVariables may carry; more resets the connection (as a CPU 1215C does past 50). */
+  readonly maxItems: number;
+}
+
+/** One item address of a request: the area, its sub-area and LIDs. */
+interface ItemAddress {
+  readonly area: number;
+  readonly subArea: number;
+  readonly lids: readonly number[];
+}
+
+/** Thrown for a request the CPU answers by resetting the connection. */
+export class ResetConnection extends ProtocolError {}
+
+/** Explore: the object tree under `exploreId`, or the CPU's "no such object". */
+export function explore(cpu: CpuSide, body: Buffer): Buffer {
+  const r = new Reader(body);
+  const id = r.u32('the Explore id');
+  const ok = (objects: Buffer) => Buffer.concat([encodeUVlq64(0n), objects, Buffer.alloc(4)]);
+  if (id === Ids.NativeThePlcProgramRID) return ok(blockList(cpu.model));
+  if (id === Ids.NativeTheCpuExecUnitRID) return ok(cpuExecUnit(cpu.mode() === 'RUN' ? OperatingState.Run : OperatingState.Stop));
+  if (id === Ids.ObjectOmsTypeInfoContainer) return ok(typeInfoContainer(cpu.model));
+  return Buffer.concat([encodeUVlq64(EXPLORE_NO_SUCH_OBJECT), Buffer.alloc(8)]);
+}
+
+/**
+ * A real S7-1500's ReturnValue for an Explore of an object that does not
+ * exist: error flag (bit 63), code -12 in the low 16 bits (s7commplus (MIT)
+ * server.py, _EXPLORE_NO_SUCH_OBJECT; ServiceResult.NoSuchObject).
+ */
+const EXPLORE_NO_SUCH_OBJECT = 0x8020ab001992fff4n;
+
+function readAddresses(r: Reader, cpu: CpuSide): ItemAddress[] {
+  r.u32('the link id');
+  const count = r.uvlq32();
+  if (count > cpu.maxItems) throw new ResetConnection(`a request of ${count} items, more than the ${cpu.maxItems} the CPU serves`);
+  r.uvlq32();
+  const items: ItemAddress[] = [];
+  for (let i = 0; i < count; i++) {
+    r.uvlq32();
+    const area = r.uvlq32();
+    const n = r.uvlq32();
+    if (n < 1 || n > 64) throw new ProtocolError(`S7CommPlus item address with ${n} LIDs`);
+    const subArea = r.uvlq32();
+    const lids: number[] = [];
+    for (let k = 1; k < n; k++) lids.push(r.uvlq32());
+    items.push({ area, subArea, lids });
+  }
+  return items;
+}
+
+/** Where an item lands: a node of a DB, a byte range of a standard DB, the type object's RID (LID 1), or nothing. */
+type Target =
+  { kind: 'node'; db: PlusDb; node: LayoutNode } | { kind: 'range'; db: number; byte: number; size: number } | { kind: 'rid'; rid: number };
+
+function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
+  if ((item.area & 0xffff0000) >>> 0 !== Ids.DBAccessAreaBase || item.subArea !== Ids.DBValueActual) return undefined;
+  const db = cpu.model.dbs.find((d) => d.rid === item.area);
+  if (!db) return undefined;
+  const lids = item.lids;
+  if (lids.length === 1 && lids[0] === 1) return { kind: 'rid', rid: db.type.rid };
+  if (lids.length === 3 && lids[0] === Ids.LidClassicBlob) {
+    // By address: standard DBs only; an optimized one has no offsets to give.
+    if (db.optimized) return undefined;
+    const [, byte, size] = lids as [number, number, number];
+    return byte + size <= db.length && size > 0 ? { kind: 'range', db: db.number, byte, size } : undefined;
+  }
+  const node = resolveLids(db, lids);
+  return node ? { kind: 'node', db, node } : undefined;
+}
+
+function itemList(results: readonly (Buffer | undefined)[]): Buffer {
+  const parts: Buffer[] = [encodeUVlq64(0n)];
+  results.forEach((v, i) => {
+    if (v) parts.push(encodeUVlq32(i + 1), v);
+  });
+  parts.push(encodeUVlq32(0));
+  results.forEach((v, i) => {
+    if (!v) parts.push(encodeUVlq32(i + 1), encodeUVlq64(ITEM_ERROR_UNRESOLVED));
+  });
+  parts.push(encodeUVlq32(0));
+  return Buffer.concat(parts);
+}
+
+/** GetMultiVariables: each item's value, or its error. */
+export function getMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
+  const items = readAddresses(new Reader(body), cpu);
+  const results = items.map((item) => {
+    const t = target(cpu, item);
+    if (!t) return undefined;
+    if (t.kind === 'rid') return Buffer.concat([Buffer.from([0x00, 0x12]), u32be(t.rid)]);
+    const image = cpu.memory.area('DB', t.kind === 'node' ? t.db.number : t.db);
+    if (!image) return undefined;
+    return t.kind === 'node' ? readNode(t.node, image) : blob(Buffer.from(image.subarray(t.byte, t.byte + t.size)));
+  });
+  return itemList(results);
+}
+
+function u32be(v: number): Buffer {
+  const b = Buffer.alloc(4);
+  b.writeUInt32BE(v >>> 0);
+  return b;
+}
+
+/** SetMultiVariables of data: each item written, or its error (nothing of that item written). */
+export function setMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
+  const r = new Reader(body);
+  const items = readAddresses(r, cpu);
+  const values = new Map<number, Buffer>();
+  for (let i = 0; i < items.length; i++) {
+    const nr = r.uvlq32();
+    if (nr === 0) break;
+    if (nr > items.length || values.has(nr)) throw new ProtocolError(`S7CommPlus write names item ${nr} of ${items.length}`);
+    values.set(nr, readPValue(r));
+  }
+  const errors: Buffer[] = [];
+  items.forEach((item, i) => {
+    const raw = values.get(i + 1);
+    const t = target(cpu, item);
+    let ok = false;
+    if (raw && t?.kind === 'node') ok = writeNode(t.node, cpu.memory, t.db.number, raw);
+    else if (raw && t?.kind === 'range' && raw.length === t.size) {
+      cpu.memory.write('DB', t.db, t.byte, raw);
+      ok = true;
+    }
+    if (!ok) errors.push(encodeUVlq32(i + 1), encodeUVlq64(ITEM_ERROR_UNRESOLVED));
+  });
+  return Buffer.concat([encodeUVlq64(0n), ...errors, encodeUVlq32(0)]);
+}
+
+/** GetVarSubStreamed of the session's protection level (1842), the one address the simulator serves this way. */
+export function getVarSubStreamed(level: number): Buffer {
+  return Buffer.concat([encodeUVlq64(0n), Buffer.from([0x00, 0x00, 0x04]), encodeUVlq32(level)]);
+}

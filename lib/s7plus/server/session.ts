@@ -1,0 +1,195 @@
+/**
+ * One S7CommPlus session as a CPU keeps it: InitSSL, CreateObject (the
+ * session id and ServerSessionVersion), the setup write that echoes it, then
+ * data requests whose integrity ids (one counter for reads, one for writes)
+ * must follow on without a gap: a jump resets the connection, as a PLC does.
+ * Takes whole S7CommPlus frames, gives whole frames; the transport
+ * (connection.ts) carries them. Layouts: s7commplus (MIT) connection.py
+ * (`_send_request`: where the integrity id sits), server.py.
+ */
+import { ProtocolError } from '../../errors';
+import {
+  DataType,
+  ElementId,
+  FunctionCode,
+  Ids,
+  ITEM_ERROR_UNRESOLVED,
+  Opcode,
+  ProtocolVersion,
+  READ_FUNCTIONS,
+  S7P_PROTOCOL_ID,
+} from '../constants';
+import { Reader } from '../codec/bytes';
+import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
+import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
+
+/** The protection level a session without a password works at (protocol.py AccessLevel: 1 full access). */
+const FULL_ACCESS = 1;
+/** protocol.py Ids.EFFECTIVE_PROTECTION_LEVEL. */
+const EFFECTIVE_PROTECTION_LEVEL = 1842;
+
+export interface SessionOptions {
+  readonly tls: boolean;
+  /** Bytes of a request frame the CPU takes; a longer one resets the connection. */
+  readonly maxRequestBytes: number;
+  newSessionId(): number;
+}
+
+/** What the transport does after a frame: send `reply`; switch to TLS; close. */
+export interface Step {
+  readonly reply?: Buffer;
+  readonly startTls?: boolean;
+  readonly close?: boolean;
+}
+
+export class PlusSession {
+  private stage: 'init' | 'ssl' | 'created' | 'ready' = 'init';
+  private sessionId = 0;
+  private readId = 0;
+  private writeId = 0;
+
+  constructor(
+    private readonly cpu: CpuSide,
+    private readonly options: SessionOptions,
+  ) {}
+
+  /** Handles one frame (header, data, trailer); throws ProtocolError for a frame that breaks the protocol (the connection is then reset). */
+  handle(frame: Buffer): Step {
+    if (frame.length > this.options.maxRequestBytes) {
+      throw new ResetConnection(`a request of ${frame.length} bytes, more than the ${this.options.maxRequestBytes} the CPU takes`);
+    }
+    if (frame.length < 8 + 14 || frame[0] !== S7P_PROTOCOL_ID) throw new ProtocolError('not an S7CommPlus request frame');
+    const length = frame.readUInt16BE(2);
+    if (4 + length > frame.length) throw new ProtocolError(`S7CommPlus frame says ${length} bytes of data, carries ${frame.length - 4}`);
+    const data = frame.subarray(4, 4 + length);
+    if (data[0] !== Opcode.Request) throw new ProtocolError(`S7CommPlus opcode 0x${data[0]!.toString(16)} where a request was expected`);
+    const fn = data.readUInt16BE(3);
+    const seq = data.readUInt16BE(7);
+    const session = data.readUInt32BE(9);
+    const body = data.subarray(14);
+    if (this.stage !== 'init' && this.stage !== 'ssl' && fn !== FunctionCode.CreateObject && session !== this.sessionId) {
+      throw new ResetConnection(`request for session ${session}, this connection's is ${this.sessionId}`);
+    }
+    switch (this.stage) {
+      case 'init':
+        if (fn !== FunctionCode.InitSsl) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before InitSSL`);
+        this.stage = 'ssl';
+        return {
+          reply: this.frame(ProtocolVersion.V1, fn, seq, Buffer.concat([encodeUVlq32(0), Buffer.alloc(4)])),
+          startTls: this.options.tls,
+        };
+      case 'ssl':
+        if (fn !== FunctionCode.CreateObject) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before CreateObject`);
+        this.sessionId = this.options.newSessionId();
+        this.stage = 'created';
+        return { reply: this.frame(ProtocolVersion.V1, fn, seq, this.created()) };
+      case 'created':
+        if (fn !== FunctionCode.SetMultiVariables)
+          throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before the session setup`);
+        this.stage = 'ready';
+        return { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), encodeUVlq32(0)])) };
+      default:
+        return this.data(fn, seq, body);
+    }
+  }
+
+  private version(): number {
+    return this.options.tls ? ProtocolVersion.V2 : ProtocolVersion.V1;
+  }
+
+  private data(fn: number, seq: number, body: Buffer): Step {
+    if (fn === FunctionCode.DeleteObject && body.length <= 4) {
+      this.stage = 'init';
+      return { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)])), close: true };
+    }
+    const read = READ_FUNCTIONS.has(fn);
+    const id = this.options.tls ? this.checkIntegrity(fn, body, read ? this.readId : this.writeId) : undefined;
+    let answer: Buffer;
+    switch (fn) {
+      case FunctionCode.Explore:
+        answer = explore(this.cpu, body);
+        break;
+      case FunctionCode.GetMultiVariables:
+        answer = getMultiVariables(this.cpu, body);
+        break;
+      case FunctionCode.SetMultiVariables:
+        answer = setMultiVariables(this.cpu, body);
+        break;
+      case FunctionCode.GetVarSubStreamed:
+        answer = this.subStreamed(body);
+        break;
+      default:
+        // Any other function: the CPU's error answer (server.py _build_error_response).
+        return { reply: this.frame(this.version(), FunctionCode.Error, seq, Buffer.concat([encodeUVlq32(0x04b1), Buffer.alloc(4)])) };
+    }
+    if (id !== undefined) {
+      if (read) this.readId = (this.readId + 1) >>> 0;
+      else this.writeId = (this.writeId + 1) >>> 0;
+      answer = Buffer.concat([answer, encodeUVlq32(id)]);
+    }
+    return { reply: this.frame(this.version(), fn, seq, answer) };
+  }
+
+  /**
+   * The request's integrity id must be the next of its counter: it sits
+   * just before the request's fixed tail (5 bytes for Explore, 4 otherwise;
+   * connection.py `_send_request`). Anything else is a jump: reset.
+   */
+  private checkIntegrity(fn: number, body: Buffer, expected: number): number {
+    const id = encodeUVlq32(expected);
+    const tails = fn === FunctionCode.Explore ? [5] : [4, 3];
+    for (const tail of tails) {
+      const at = body.length - tail - id.length;
+      if (at >= 0 && body.subarray(at, at + id.length).equals(id)) {
+        // The byte before must end a field, not continue a VLQ.
+        if (at === 0 || (body[at - 1]! & 0x80) === 0) return expected;
+      }
+    }
+    throw new ResetConnection(`integrity id of function 0x${fn.toString(16)} is not the expected ${expected}: the counters jumped`);
+  }
+
+  private subStreamed(body: Buffer): Buffer {
+    const r = new Reader(body);
+    r.u32('the object id');
+    r.bytes(3, 'the address array head');
+    const address = r.uvlq32();
+    if (address === EFFECTIVE_PROTECTION_LEVEL) return getVarSubStreamed(FULL_ACCESS);
+    // Any other address: an error return value (the item error the simulator uses, server.py _ITEM_ERROR).
+    return Buffer.concat([encodeUVlq64(ITEM_ERROR_UNRESOLVED), Buffer.alloc(4)]);
+  }
+
+  /** The CreateObject answer: the session id, then the session object with its ServerSessionVersion. */
+  private created(): Buffer {
+    const rel = Buffer.alloc(4);
+    rel.writeUInt32BE(1);
+    return Buffer.concat([
+      encodeUVlq64(0n),
+      Buffer.from([1]),
+      encodeUVlq32(this.sessionId),
+      Buffer.from([ElementId.StartOfObject]),
+      rel,
+      encodeUVlq32(0),
+      encodeUVlq32(0),
+      encodeUVlq32(0),
+      Buffer.from([ElementId.Attribute]),
+      encodeUVlq32(Ids.ServerSessionVersion),
+      Buffer.from([0x00, DataType.UDInt]),
+      encodeUVlq32(this.version()),
+      Buffer.from([ElementId.TerminatingObject]),
+      Buffer.alloc(4),
+    ]);
+  }
+
+  /** A response frame: header, the 10-byte response header, the body, the trailer. */
+  private frame(version: number, fn: number, seq: number, body: Buffer): Buffer {
+    const head = Buffer.alloc(14);
+    head[0] = S7P_PROTOCOL_ID;
+    head[1] = version;
+    head.writeUInt16BE(10 + body.length, 2);
+    head[4] = Opcode.Response;
+    head.writeUInt16BE(fn, 7);
+    head.writeUInt16BE(seq, 11);
+    const trailer = Buffer.from([S7P_PROTOCOL_ID, version, 0, 0]);
+    return Buffer.concat([head, body, trailer]);
+  }
+}

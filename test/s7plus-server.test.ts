@@ -1,0 +1,377 @@
+/**
+ * The S7CommPlus simulator on the S7 simulator's port (issue #25), spoken to
+ * by a raw peer of this file in plain text (`tls: false`, a CPU configured
+ * without secure communication): the object model from the sources, the
+ * TSAP that decides the protocol, named reads and writes, optimized DBs
+ * refused over PUT/GET, and what resets a connection. The s7commplus Python
+ * client over TLS: test/s7plus-server-python.test.ts.
+ */
+import { expect } from 'chai';
+import * as net from 'node:net';
+import { FrameReader } from '../lib/link/framer';
+import { S7Client } from '../lib/s7/client';
+import { checkTpkt, decodeCotp, encodeConnectionRequest } from '../lib/s7/codec';
+import { S7Server, type S7RefusedEvent } from '../lib/s7/server';
+import { encodeUVlq32 } from '../lib/s7plus/codec/vlq';
+import { Ids } from '../lib/s7plus/constants';
+import { resolveLids } from '../lib/s7plus/server/model';
+import { S7PlusService } from '../lib/s7plus/server';
+import { parseUrl, type S7Endpoint } from '../lib/url';
+import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
+import { waitFor } from './support/wait';
+
+const HMI = Buffer.from('SIMATIC-ROOT-HMI', 'latin1');
+
+/** A TPKT + COTP CR calling `called` (a 2-byte rack/slot TSAP or an S7CommPlus name). */
+function connectionRequest(called: Buffer): Buffer {
+  const params = Buffer.concat([Buffer.from([0xc1, 2, 0x06, 0x00, 0xc2, called.length]), called, Buffer.from([0xc0, 1, 0x0a])]);
+  const cotp = Buffer.concat([Buffer.from([6 + params.length, 0xe0, 0, 0, 0x00, 0x42, 0]), params]);
+  const tpkt = Buffer.from([3, 0, 0, 0]);
+  tpkt.writeUInt16BE(4 + cotp.length, 2);
+  return Buffer.concat([tpkt, cotp]);
+}
+
+function dt(payload: Buffer): Buffer {
+  const head = Buffer.from([3, 0, 0, 0, 2, 0xf0, 0x80]);
+  head.writeUInt16BE(7 + payload.length, 2);
+  return Buffer.concat([head, payload]);
+}
+
+/** An S7CommPlus request frame (V1), with its trailer. */
+function request(fn: number, seq: number, session: number, body: Buffer): Buffer {
+  const head = Buffer.alloc(18);
+  head[0] = 0x72;
+  head[1] = 0x01;
+  head.writeUInt16BE(14 + body.length, 2);
+  head[4] = 0x31;
+  head.writeUInt16BE(fn, 7);
+  head.writeUInt16BE(seq, 11);
+  head.writeUInt32BE(session, 13);
+  head[17] = 0x34;
+  return dt(Buffer.concat([head, body, Buffer.from([0x72, 0x01, 0, 0])]));
+}
+
+const v = encodeUVlq32;
+
+/** The item list of a Get/SetMultiVariables: DB items by LID path. */
+function items(list: readonly { db: number; lids: number[] }[]): Buffer {
+  const parts = [Buffer.alloc(4), v(list.length), v(list.length * 4)];
+  for (const it of list)
+    parts.push(v(0), v(Ids.DBAccessAreaBase + it.db), v(it.lids.length + 1), v(Ids.DBValueActual), ...it.lids.map((l) => v(l)));
+  return Buffer.concat(parts);
+}
+
+class Peer {
+  readonly socket: net.Socket;
+  private readonly reader = new FrameReader(checkTpkt);
+  private readonly frames: Buffer[] = [];
+  private wake: (() => void) | undefined;
+  readonly closed: Promise<void>;
+  private seq = 1;
+  session = 0;
+
+  constructor(port: number) {
+    this.socket = net.connect(port, '127.0.0.1');
+    this.socket.on('data', (c) => {
+      this.frames.push(...this.reader.push(c));
+      this.wake?.();
+    });
+    this.socket.on('error', () => undefined);
+    this.closed = new Promise((resolve) => this.socket.on('close', () => (resolve(), this.wake?.())));
+  }
+
+  async next(ms = 3000): Promise<Buffer> {
+    const deadline = Date.now() + ms;
+    while (this.frames.length === 0) {
+      if (this.socket.destroyed) throw new Error('connection closed');
+      if (Date.now() > deadline) throw new Error(`no frame within ${ms} ms`);
+      await new Promise<void>((r) => {
+        const t = setTimeout(r, 50);
+        this.wake = () => (clearTimeout(t), r());
+      });
+    }
+    return this.frames.shift()!;
+  }
+
+  /** Sends a request and gives the response's body (after the 10-byte response header). */
+  async ask(fn: number, body: Buffer, session = this.session): Promise<{ fn: number; body: Buffer }> {
+    this.socket.write(request(fn, this.seq++, session, body));
+    const frame = await this.next();
+    const data = frame.subarray(7 + 4, 7 + 4 + frame.readUInt16BE(7 + 2));
+    return { fn: data.readUInt16BE(3), body: data.subarray(10) };
+  }
+
+  /** CR, InitSSL, CreateObject and the setup write, as the s7commplus client does them in plain text. */
+  async open(): Promise<void> {
+    this.socket.write(connectionRequest(HMI));
+    expect(decodeCotp(await this.next()).type).to.equal('CC');
+    await this.ask(0x05b3, Buffer.alloc(4), 0);
+    const created = await this.ask(0x04ca, Buffer.alloc(4), 288);
+    // ReturnValue 0, one object id: the session.
+    expect(created.body[0]).to.equal(0);
+    expect(created.body[1]).to.equal(1);
+    this.session = created.body[2]! & 0x80 ? ((created.body[2]! & 0x7f) << 7) | created.body[3]! : created.body[2]!;
+    const setup = await this.ask(
+      0x0542,
+      Buffer.concat([Buffer.alloc(4), v(1), v(1), v(306), v(1), Buffer.from([0, 4, 1, 0]), Buffer.alloc(4)]),
+    );
+    expect(setup.body[0]).to.equal(0);
+  }
+}
+
+describe('S7CommPlus simulator (issue #25)', function () {
+  this.timeout(15000);
+  let server: S7Server;
+  let service: S7PlusService;
+  const peers: Peer[] = [];
+  const clients: S7Client[] = [];
+  const peer = () => {
+    const p = new Peer(server.port);
+    peers.push(p);
+    return p;
+  };
+  const s7 = async () => {
+    const c = new S7Client(parseUrl(`s7://127.0.0.1:${server.port}?rack=0&slot=1&timeout=2000`) as S7Endpoint);
+    clients.push(c);
+    await c.connect();
+    return c;
+  };
+
+  beforeEach(async () => {
+    service = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: false, maxItems: 4, maxRequestBytes: 400 });
+    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    await server.listen();
+  });
+  afterEach(async () => {
+    for (const p of peers.splice(0)) p.socket.destroy();
+    await Promise.all(clients.splice(0).map((c) => c.close()));
+    await server.close();
+  });
+
+  describe('the object model from the sources', () => {
+    it('numbers members from LID 0xA in declaration order, per struct, a UDT sharing one type object', () => {
+      const tank = service.model.dbs.find((d) => d.name === 'Tank')!;
+      const recipe = service.model.dbs.find((d) => d.name === 'Recipe')!;
+      expect(tank.type.members.map((m) => [m.name, m.lid])).to.deep.equal([
+        ['Level', 0xa],
+        ['Count', 0xb],
+        ['Running', 0xc],
+        ['Alarm', 0xd],
+        ['Name', 0xe],
+        ['Motor', 0xf],
+        ['Temps', 0x10],
+        ['Valves', 0x11],
+      ]);
+      expect(recipe.optimized).to.equal(true);
+      expect(tank.optimized).to.equal(false);
+      expect([...service.model.optimizedDbs]).to.deep.equal([2]);
+      const inlet = recipe.type.members.find((m) => m.name === 'Inlet')!;
+      const valves = tank.type.members.find((m) => m.name === 'Valves')!;
+      expect(inlet.type).to.equal(valves.type);
+    });
+
+    it('resolves LID paths as a browse builds them: member, element index, and the 1 before a struct element`s member', () => {
+      const tank = service.model.dbs.find((d) => d.name === 'Tank')!;
+      const at = (lids: number[]) => {
+        const n = resolveLids(tank, lids);
+        return n && [n.byte, n.bit];
+      };
+      expect(at([0xf, 0xb])).to.deep.equal([24, 0]); // Motor.On
+      expect(at([0x10, 1])).to.deep.equal([30, null]); // Temps[2]
+      expect(at([0x11, 1, 1, 0xb])).to.deep.equal([44, null]); // Valves[1].Position
+      expect(at([0x11, 1, 2, 0xb])).to.equal(undefined);
+      expect(at([0x12])).to.equal(undefined);
+      expect(at([0x10, 3])).to.equal(undefined);
+    });
+  });
+
+  describe('on the S7 port: the called TSAP decides', () => {
+    it('PUT/GET reads a standard DB and refuses the optimized one as a CPU does: address out of range (0x05)', async () => {
+      const c = await s7();
+      const r = await c.readDetailed(['DB1.DBD0:REAL', 'DB2.DBD0:REAL', 'DB2.DBW4:INT']);
+      expect(r['DB1.DBD0:REAL']).to.deep.include({ ok: true, value: 12.5 });
+      for (const a of ['DB2.DBD0:REAL', 'DB2.DBW4:INT']) {
+        const x = r[a]!;
+        expect(x.ok ? 'ok' : x.error.code, a).to.equal('ADDRESS_OUT_OF_RANGE');
+      }
+      const w = await c.writeDetailed({ 'DB2.DBW4:INT': 9 });
+      expect(w['DB2.DBW4:INT']!.ok).to.equal(false);
+      expect(server.memory.area('DB', 2)!.readInt16BE(4)).to.equal(3);
+    });
+
+    it('confirms a CR calling SIMATIC-ROOT-HMI with the TSAPs echoed; without S7CommPlus its InitSSL is a protocol error there', async () => {
+      const p = peer();
+      p.socket.write(connectionRequest(HMI));
+      const cc = await p.next();
+      expect(decodeCotp(cc).type).to.equal('CC');
+      expect(cc.includes(HMI)).to.equal(true);
+      const plain = new S7Server({ port: 0, profile: 's7-1500' });
+      await plain.listen();
+      try {
+        const q = new Peer(plain.port);
+        peers.push(q);
+        q.socket.write(connectionRequest(HMI));
+        await q.next();
+        const refused = waitFor<S7RefusedEvent>(plain, 'refused');
+        q.socket.write(request(0x05b3, 1, 0, Buffer.alloc(4)));
+        expect((await refused).reason).to.equal('protocol-error');
+        await q.closed;
+      } finally {
+        await plain.close();
+      }
+      // A PUT/GET CR on the S7CommPlus simulator's port still gets the S7 side.
+      const s = new Peer(server.port);
+      peers.push(s);
+      s.socket.write(encodeConnectionRequest({ sourceRef: 1, callingTsap: 0x0100, calledTsap: 0x0101, tpduSize: 0x0a }));
+      expect(decodeCotp(await s.next()).type).to.equal('CC');
+    });
+  });
+
+  describe('a session', () => {
+    it('reads members of the optimized DB by LID with their own wire types (REAL, INT, BOOL) and a whole UDT as a BLOB', async () => {
+      const p = peer();
+      await p.open();
+      const r = await p.ask(
+        0x054c,
+        Buffer.concat([
+          items([
+            { db: 2, lids: [0xa] },
+            { db: 2, lids: [0xb] },
+            { db: 2, lids: [0xc] },
+            { db: 2, lids: [0xd] },
+          ]),
+          Buffer.alloc(4),
+        ]),
+      );
+      expect(r.fn).to.equal(0x054c);
+      // ReturnValue 0; item 1: REAL 80.0; item 2: INT 3; item 3: BOOL false; item 4: BLOB of 4 bytes; end of values; end of errors.
+      expect(r.body.toString('hex')).to.equal('00' + '01000e42a00000' + '0200070003' + '03000100' + '040014000400000000' + '00' + '00');
+    });
+
+    it('reads a member of a UDT at its own instance: Recipe.Inlet.Position, Tank.Valves[1].Position (one shared type object)', async () => {
+      server.memory.area('DB', 2)!.writeInt16BE(258, 10);
+      server.memory.area('DB', 1)!.writeInt16BE(-2, 44);
+      const p = peer();
+      await p.open();
+      const r = await p.ask(
+        0x054c,
+        Buffer.concat([
+          items([
+            { db: 2, lids: [0xd, 0xb] },
+            { db: 1, lids: [0x11, 1, 1, 0xb] },
+          ]),
+          Buffer.alloc(4),
+        ]),
+      );
+      expect(r.body.toString('hex')).to.equal('00' + '0100070102' + '020007fffe' + '00' + '00');
+    });
+
+    it('writes a member of the optimized DB by LID (the simulator sees it) and a standard member seen over s7:// and back', async () => {
+      const p = peer();
+      await p.open();
+      const write = Buffer.concat([
+        items([
+          { db: 2, lids: [0xb] },
+          { db: 1, lids: [0xf, 0xa] },
+        ]),
+        v(1),
+        Buffer.from([0, 0x07, 0x01, 0x2c]),
+        v(2),
+        Buffer.from([0, 0x08]),
+        Buffer.from([0x8f, 0x50]),
+        Buffer.from([0]),
+        Buffer.alloc(4),
+      ]);
+      const w = await p.ask(0x0542, write);
+      expect(w.body.toString('hex')).to.equal('0000'); // ReturnValue 0, no item errors
+      expect(server.memory.area('DB', 2)!.readInt16BE(4)).to.equal(300);
+      const c = await s7();
+      expect(await c.read(['DB1.DBD20:DINT'])).to.deep.equal({ 'DB1.DBD20:DINT': 2000 });
+      await c.write({ 'DB1.DBD20:DINT': -5 });
+      const r = await p.ask(0x054c, Buffer.concat([items([{ db: 1, lids: [0xf, 0xa] }]), Buffer.alloc(4)]));
+      expect(r.body.toString('hex')).to.equal('00' + '0100087b' + '00' + '00'); // DINT -5 as a signed VLQ
+    });
+
+    it('answers an item it cannot serve with its error, the others with values (an unknown LID, a classic read of the optimized DB)', async () => {
+      const p = peer();
+      await p.open();
+      const classic = Buffer.concat([
+        Buffer.alloc(4),
+        v(2),
+        v(8),
+        v(0),
+        v(Ids.DBAccessAreaBase + 2),
+        v(4),
+        v(Ids.DBValueActual),
+        v(3),
+        v(0),
+        v(4),
+        v(0),
+        v(Ids.DBAccessAreaBase + 1),
+        v(4),
+        v(Ids.DBValueActual),
+        v(3),
+        v(0),
+        v(4),
+        Buffer.alloc(4),
+      ]);
+      const r = await p.ask(0x054c, classic);
+      // Item 2 (DB1 bytes 0..3) as a BLOB; item 1 (optimized DB2 by address) an error 0x8104.
+      expect(r.body.toString('hex')).to.equal('00' + '0200140004' + '41480000' + '00' + '01' + '828204' + '00');
+      const unknown = await p.ask(0x054c, Buffer.concat([items([{ db: 2, lids: [0x30] }]), Buffer.alloc(4)]));
+      expect(unknown.body.toString('hex')).to.equal('00' + '00' + '01828204' + '00');
+    });
+
+    it('resets the connection on a request of more items than the CPU serves, and on a request too long; others go on', async () => {
+      for (const body of [
+        Buffer.concat([items([1, 2, 3, 4, 5].map(() => ({ db: 1, lids: [0xa] }))), Buffer.alloc(4)]),
+        Buffer.concat([items([{ db: 1, lids: [0xa] }]), Buffer.alloc(400)]),
+      ]) {
+        const p = peer();
+        await p.open();
+        const refused = waitFor<S7RefusedEvent>(server, 'refused');
+        p.socket.write(request(0x054c, 9, p.session, body));
+        expect((await refused).reason).to.equal('protocol-error');
+        await p.closed;
+      }
+      const q = peer();
+      await q.open();
+      const r = await q.ask(0x054c, Buffer.concat([items([{ db: 1, lids: [0xb] }]), Buffer.alloc(4)]));
+      expect(r.body.toString('hex')).to.equal('00' + '0100070007' + '00' + '00');
+    });
+
+    it('a hostile frame (garbage after the CC, a request before InitSSL, a wrong session id) is a typed refused event and a closed connection, never a crash', async () => {
+      const garbage = [
+        dt(Buffer.from('not s7commplus at all')),
+        request(0x054c, 1, 0, Buffer.alloc(8)),
+        Buffer.from([3, 0, 0, 9, 2, 0xe0, 0, 0, 0]),
+      ];
+      for (const frame of garbage) {
+        const p = peer();
+        p.socket.write(connectionRequest(HMI));
+        await p.next();
+        const refused = waitFor<S7RefusedEvent>(server, 'refused');
+        p.socket.write(frame);
+        const e = await refused;
+        expect(e.reason).to.equal('protocol-error');
+        expect(e.message).to.be.a('string').and.not.equal('');
+        await p.closed;
+      }
+      const p = peer();
+      await p.open();
+      const refused = waitFor<S7RefusedEvent>(server, 'refused');
+      p.socket.write(request(0x054c, 5, p.session + 1, Buffer.concat([items([{ db: 1, lids: [0xa] }]), Buffer.alloc(4)])));
+      expect((await refused).message).to.match(/session/);
+      await p.closed;
+      expect(server.connectionCount).to.be.at.most(1);
+    });
+
+    it('DeleteObject of the session answers and closes the connection', async () => {
+      const p = peer();
+      await p.open();
+      const r = await p.ask(0x04d4, Buffer.alloc(4));
+      expect(r.body[0]).to.equal(0);
+      await p.closed;
+    });
+  });
+});
