@@ -35,7 +35,7 @@ const AREA_OBJECT: Partial<Record<Tag['area'], number>> = {
 };
 
 /** Where a tag's bytes are, as an item address; a PlcError for an area S7CommPlus does not reach by address. */
-export function itemAddress(tag: Tag): ItemAddress | PlcError {
+function itemAddress(tag: Tag): ItemAddress | PlcError {
   if (tag.area === 'DB') return classicBlobAddress(tag.dbNumber, tag.byteOffset, tag.byteLength);
   const area = AREA_OBJECT[tag.area];
   if (area === undefined) {
