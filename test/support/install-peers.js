@@ -8,7 +8,11 @@
 //   nr5:     Node 22 and Node-RED 5
 //   awlsim:  awlsim AWLSIM_VERSION, pure Python, in the venv test/interop/.venv,
 //            for the layout comparison of test/symbols-awlsim.test.ts
-// Usage: node test/support/install-peers.js interop [nr5] [awlsim]
+//   s7commplus: the s7commplus package S7COMMPLUS_VERSION (PyPI, MIT, pure
+//            Python with the cryptography wheel), in a venv of its own,
+//            test/interop/.venv-s7commplus, so awlsim's venv is never touched:
+//            the independent S7CommPlus client and server of test/interop/s7commplus/
+// Usage: node test/support/install-peers.js interop [nr5] [awlsim] [s7commplus]
 // Already installed: does nothing (no network). A peer that cannot be installed
 // (no network, no python3) is not fatal: the rest still runs, and the tests that
 // need it fail or skip saying so.
@@ -19,7 +23,30 @@ const path = require('node:path');
 const ROOT = path.resolve(__dirname, '../..');
 /** The awlsim whose layout differences test/symbols-awlsim.test.ts knows. */
 const AWLSIM_VERSION = '0.77.1';
-const VENV = 'test/interop/.venv';
+/** The s7commplus whose client and server emulator test/interop/s7commplus/ drives. */
+const S7COMMPLUS_VERSION = '0.3.0';
+
+const PYTHON_PEERS = {
+  awlsim: {
+    name: 'awlsim',
+    version: AWLSIM_VERSION,
+    pip: 'awlsim',
+    venv: 'test/interop/.venv',
+    probe: 'from awlsim_loader.common import VERSION_STRING; print(VERSION_STRING)',
+    // Pure Python (no Cython build: a few seconds).
+    env: { AWLSIM_CYTHON_BUILD: '0' },
+    skip: 'test/symbols-awlsim.test.ts will skip',
+  },
+  s7commplus: {
+    name: 's7commplus',
+    version: S7COMMPLUS_VERSION,
+    pip: 's7commplus',
+    venv: 'test/interop/.venv-s7commplus',
+    // Importing the package proves its dependency (cryptography) loads too.
+    probe: 'import importlib.metadata as m, s7commplus; print(m.version("s7commplus"))',
+    skip: 'the tests against the s7commplus peer (test/support/s7commplus-peer.ts) will skip',
+  },
+};
 
 const NPM_PEERS = {
   interop: {
@@ -28,7 +55,7 @@ const NPM_PEERS = {
   },
   nr5: { dir: 'test/nr5', has: ['node_modules/node/bin/node', 'node_modules/node-red/package.json'] },
 };
-const SETS = [...Object.keys(NPM_PEERS), 'awlsim'];
+const SETS = [...Object.keys(NPM_PEERS), ...Object.keys(PYTHON_PEERS)];
 
 function installNpmPeer(peer) {
   const cwd = path.join(ROOT, peer.dir);
@@ -43,50 +70,57 @@ function installNpmPeer(peer) {
   if (r.status !== 0) console.warn(`Could not install ${peer.dir} (npm ci exited ${r.status ?? r.signal}).`);
 }
 
-/** The awlsim version `python` imports, or undefined (no such Python, no awlsim). */
-function awlsimVersion(python) {
-  const r = spawnSync(python, ['-c', 'from awlsim_loader.common import VERSION_STRING; print(VERSION_STRING)'], {
-    encoding: 'utf8',
-    timeout: 30_000,
-  });
+/** The venv's Python of `venv` (an absolute path). */
+function venvPython(venv) {
+  return path.join(venv, process.platform === 'win32' ? 'Scripts/python.exe' : 'bin/python');
+}
+
+/** The version `python` reports with `probe` (a Python one-liner that prints it), or undefined (no such Python, no package). */
+function probeVersion(python, probe) {
+  const r = spawnSync(python, ['-c', probe], { encoding: 'utf8', timeout: 30_000 });
   return r.status === 0 ? r.stdout.trim() : undefined;
 }
 
-function installAwlsim() {
-  const venv = path.join(ROOT, VENV);
-  const python = path.join(venv, process.platform === 'win32' ? 'Scripts/python.exe' : 'bin/python');
-  const found = fs.existsSync(python) ? awlsimVersion(python) : undefined;
-  if (found === AWLSIM_VERSION) return;
-  const skip = 'test/symbols-awlsim.test.ts will skip';
+/**
+ * Installs `peer.pip` into the venv `peer.venv` unless its Python already
+ * reports `peer.version`. Not fatal: without python3 or PyPI it warns what
+ * will skip, and leaves no half-made venv behind.
+ */
+function installPythonPeer(peer) {
+  const venv = path.join(ROOT, peer.venv);
+  const python = venvPython(venv);
+  const found = fs.existsSync(python) ? probeVersion(python, peer.probe) : undefined;
+  if (found === peer.version) return;
+  const what = `${peer.name} ${peer.version}`;
   const py3 = spawnSync('python3', ['--version'], { encoding: 'utf8', timeout: 30_000 });
   if (py3.status !== 0) {
-    console.warn(`awlsim ${AWLSIM_VERSION} not installed: no python3 (${py3.error?.code ?? `exit ${py3.status}`}); ${skip}.`);
+    console.warn(`${what} not installed: no python3 (${py3.error?.code ?? `exit ${py3.status}`}); ${peer.skip}.`);
     return;
   }
-  console.log(`Installing awlsim ${AWLSIM_VERSION} into ${VENV} (${found ? `it has awlsim ${found}` : 'missing'})`);
+  console.log(`Installing ${what} into ${peer.venv} (${found ? `it has ${peer.name} ${found}` : 'missing'})`);
   fs.rmSync(venv, { recursive: true, force: true });
   const run = (cmd, args, env) => spawnSync(cmd, args, { cwd: ROOT, stdio: 'inherit', env: { ...process.env, ...env } });
   const made = run('python3', ['-m', 'venv', venv]);
-  // Pure Python (no Cython build: a few seconds); a short network timeout, so no PyPI fails fast.
+  // A short network timeout, so no PyPI fails fast.
   const pip =
     made.status === 0 &&
     run(
       python,
-      ['-m', 'pip', 'install', '-q', '--disable-pip-version-check', '--timeout', '20', '--retries', '1', `awlsim==${AWLSIM_VERSION}`],
-      { AWLSIM_CYTHON_BUILD: '0' },
+      ['-m', 'pip', 'install', '-q', '--disable-pip-version-check', '--timeout', '20', '--retries', '1', `${peer.pip}==${peer.version}`],
+      peer.env,
     );
-  if (!pip || pip.status !== 0 || awlsimVersion(python) !== AWLSIM_VERSION) {
+  if (!pip || pip.status !== 0 || probeVersion(python, peer.probe) !== peer.version) {
     fs.rmSync(venv, { recursive: true, force: true });
-    console.warn(`awlsim ${AWLSIM_VERSION} not installed (${made.status !== 0 ? 'python3 -m venv' : 'pip install'} failed); ${skip}.`);
+    console.warn(`${what} not installed (${made.status !== 0 ? 'python3 -m venv' : 'pip install'} failed); ${peer.skip}.`);
   }
 }
 
 if (require.main === module) {
   for (const name of process.argv.slice(2)) {
     if (!SETS.includes(name)) throw new Error(`install-peers: unknown set "${name}" (${SETS.join(', ')})`);
-    if (name === 'awlsim') installAwlsim();
+    if (PYTHON_PEERS[name]) installPythonPeer(PYTHON_PEERS[name]);
     else installNpmPeer(NPM_PEERS[name]);
   }
 }
 
-module.exports = { AWLSIM_VERSION };
+module.exports = { AWLSIM_VERSION, S7COMMPLUS_VERSION };
