@@ -24,7 +24,7 @@ import {
   type PeerDb,
   type S7CommPlusPeerServer,
 } from './support/s7commplus-peer';
-import { settle } from './support/wait';
+import { settle, waitFor } from './support/wait';
 
 const DB1: PeerDb = { number: 1, size: 64, variables: { temperature: ['Real', 0], count: ['DInt', 4] } };
 
@@ -39,6 +39,16 @@ async function noConnections(peer: S7CommPlusPeerServer): Promise<void> {
   await peer.waitForNoClients(10_000);
   await settle();
   expect(socketsTo(peer.port)).to.equal(0);
+}
+
+async function rejection(p: Promise<unknown>): Promise<PlcError> {
+  try {
+    await p;
+  } catch (err) {
+    expect(err).to.be.instanceOf(PlcError);
+    return err as PlcError;
+  }
+  throw new Error('resolved');
 }
 
 async function connectError(client: S7PlusClient): Promise<PlcError> {
@@ -212,6 +222,33 @@ describe('s7plus client against the s7commplus emulator', function () {
       const err = await connectError(client);
       expect(['CONNECT_FAILED', 'TIMEOUT']).to.include(err.code);
       expect(client.stats.requestsSent).to.equal(0);
+      await client.close();
+      await noConnections(peer);
+    });
+  });
+
+  describe('a PLC that resets the connection on a too large request', () => {
+    let peer: S7CommPlusPeerServer;
+    before(async () => (peer = await startS7CommPlusServer(python, { dbs: [DB1], version: 1, maxRequestBytes: 250 })));
+    after(() => peer?.stop());
+
+    it('teaches the client a lower item limit: the read after the reconnect goes in smaller requests and gets every value', async () => {
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=5000`, {
+        backoff: { initialDelay: 10, maxDelay: 50 },
+      });
+      await peer.write(1, 0, Buffer.from(Array.from({ length: 20 }, (_, i) => i + 1)));
+      const limits: { limit: number; was: number }[] = [];
+      client.on('itemLimit', (e: { limit: number; was: number }) => limits.push(e));
+      client.on('error', () => {});
+      await client.connect();
+      const tags = Array.from({ length: 20 }, (_, i) => `DB1.DBB${i}`);
+      const err = await rejection(client.read(tags));
+      expect(err.code).to.equal('CONNECTION_LOST');
+      expect(limits).to.deep.equal([{ limit: 10, was: 20 }]);
+      await waitFor(client, 'connected', 10_000);
+      const values = await client.read(tags);
+      expect(Object.values(values)).to.deep.equal(Array.from({ length: 20 }, (_, i) => i + 1));
+      expect(client.maxItems).to.equal(10);
       await client.close();
       await noConnections(peer);
     });
