@@ -15,6 +15,7 @@ import * as os from 'node:os';
 import * as path from 'node:path';
 import { createClient } from '../lib/connect';
 import { PlcError } from '../lib/errors';
+import { compileSymbols } from '../lib/symbols';
 import type { S7PlusClient } from '../lib/s7plus/client';
 import { generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import {
@@ -147,6 +148,33 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(written['DB1.DBX8.0']!.ok).to.equal(false);
       expect(written['DB1.DBW10']!.ok).to.equal(true);
       expect(await client.read(['DB1.DBW10'])).to.deep.equal({ 'DB1.DBW10': 301 });
+      await client.close();
+    });
+
+    it('reads and writes a standard DB by the names of its source (a compiled symbol table), at the offsets the source gives', async () => {
+      const symbols = compileSymbols(
+        [
+          {
+            name: 'Tank.db',
+            content:
+              'DATA_BLOCK "Tank"\n{ S7_Optimized_Access := \'FALSE\' }\nSTRUCT\n  Level : REAL;\n  Count : DINT;\n  Name : STRING[8];\nEND_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n',
+          },
+        ],
+        { db: { Tank: 1 } },
+      );
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`, { symbols });
+      client.on('layoutUnknown', () => {});
+      await client.connect();
+      await client.write({ '"Tank".Level': 3.25, '"Tank".Count': 42, '"Tank".Name': 'pump' });
+      expect(await client.read(['"Tank".Level', '"Tank".Count', '"Tank".Name'])).to.deep.equal({
+        '"Tank".Level': 3.25,
+        '"Tank".Count': 42,
+        '"Tank".Name': 'pump',
+      });
+      const memory = await peer.read(1, 0, 14);
+      expect(memory.readFloatBE(0)).to.equal(3.25);
+      expect(memory.readInt32BE(4)).to.equal(42);
+      expect(memory.subarray(8, 14).toString('latin1')).to.equal('\x08\x04pump');
       await client.close();
     });
 
