@@ -1,97 +1,55 @@
 /**
  * Our S7CommPlus client against an independent peer: the server emulator of
- * the s7commplus Python package (MIT; s7commplus.server.S7CommPlusServer),
- * over TLS (a certificate from lib/s7plus/transport/cert.ts, pinned by its
- * fingerprint) and in plain V1 with tls=false. The handshake, the trust
- * decision before any S7CommPlus data, never a fallback between TLS and plain
- * text, the DeleteObject on close, and no socket left after any of it.
- *
- * The peer runs from a small launcher of this file until the shared peer
- * harness (test/support/s7commplus-peer.ts) is there.
+ * the s7commplus Python package (MIT; s7commplus.server.S7CommPlusServer, run
+ * by test/support/s7commplus-peer.ts), over TLS (a certificate from
+ * lib/s7plus/transport/cert.ts, pinned by its fingerprint) and in plain V1
+ * with tls=false. The handshake, the trust decision before any S7CommPlus
+ * data, never a fallback between TLS and plain text, reads and writes by
+ * address checked in the emulator's memory, the CPU state and the data
+ * blocks, the DeleteObject on close, and no connection left after any of it.
  */
 import { expect } from 'chai';
-import { spawn, type ChildProcess } from 'node:child_process';
 import * as fs from 'node:fs';
 import * as net from 'node:net';
 import * as os from 'node:os';
 import * as path from 'node:path';
 import { createClient } from '../lib/connect';
 import { PlcError } from '../lib/errors';
+import { compileSymbols } from '../lib/symbols';
 import type { S7PlusClient } from '../lib/s7plus/client';
 import { generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
-import { skipBecause } from './support/skip';
-import { settle, until } from './support/wait';
+import {
+  requireS7CommPlus,
+  startS7CommPlusServer,
+  stopS7CommPlusPeers,
+  type PeerDb,
+  type S7CommPlusPeerServer,
+} from './support/s7commplus-peer';
+import { settle, waitFor } from './support/wait';
 
-const ROOT = path.resolve(__dirname, '../..');
-const PYTHON = path.join(ROOT, 'test/interop/.venv-s7commplus', process.platform === 'win32' ? 'Scripts/python.exe' : 'bin/python');
-
-/** Starts the emulator with DB1 registered; prints "READY <port>", and a line per client that leaves; stops when stdin closes. */
-const LAUNCHER = `
-import sys, socket, logging
-from s7commplus.server import S7CommPlusServer
-class Gone(logging.Handler):
-    def emit(self, record):
-        if record.getMessage().startswith('Client disconnected'): print('GONE', flush=True)
-log = logging.getLogger('s7commplus.server'); log.setLevel(logging.INFO); log.addHandler(Gone())
-version, cert, key = int(sys.argv[1]), sys.argv[2], sys.argv[3]
-server = S7CommPlusServer(protocol_version=version)
-server.register_db(1, {"temperature": ("Real", 0), "count": ("DInt", 4)}, size=64)
-probe = socket.socket(); probe.bind(('127.0.0.1', 0)); port = probe.getsockname()[1]; probe.close()
-tls = cert != '-'
-server.start('127.0.0.1', port, use_tls=tls, tls_cert=cert if tls else None, tls_key=key if tls else None)
-print('READY', port, flush=True)
-sys.stdin.read()
-server.stop()
-`;
-
-interface Peer {
-  port: number;
-  /** Clients that left (the emulator's "Client disconnected"). */
-  gone: number;
-  stop(): Promise<void>;
-}
-
-function startPeer(version: number, cert?: { certFile: string; keyFile: string }): Promise<Peer> {
-  const child: ChildProcess = spawn(PYTHON, ['-c', LAUNCHER, String(version), cert?.certFile ?? '-', cert?.keyFile ?? '-'], {
-    stdio: ['pipe', 'pipe', 'pipe'],
-  });
-  let stderr = '';
-  child.stderr!.on('data', (d: Buffer) => (stderr += d.toString()));
-  return new Promise((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`the s7commplus emulator did not start: ${stderr}`)), 20_000);
-    const peer: Peer = {
-      port: 0,
-      gone: 0,
-      stop: () =>
-        new Promise<void>((done) => {
-          if (child.exitCode !== null) return done();
-          child.once('exit', () => done());
-          child.stdin!.end();
-        }),
-    };
-    let out = '';
-    child.stdout!.on('data', (d: Buffer) => {
-      out += d.toString();
-      const lines = out.split('\n');
-      out = lines.pop()!;
-      for (const line of lines) {
-        const ready = /^READY (\d+)/.exec(line);
-        if (ready) {
-          clearTimeout(timer);
-          peer.port = Number(ready[1]);
-          resolve(peer);
-        }
-        if (line.startsWith('GONE')) peer.gone++;
-      }
-    });
-    child.once('exit', (code) => reject(new Error(`the s7commplus emulator exited (${code}): ${stderr}`)));
-  });
-}
+const DB1: PeerDb = { number: 1, size: 64, variables: { temperature: ['Real', 0], count: ['DInt', 4] } };
 
 /** Our sockets to `port` still open. */
 function socketsTo(port: number): number {
   const handles = (process as unknown as { _getActiveHandles(): unknown[] })._getActiveHandles();
   return handles.filter((h) => h instanceof net.Socket && !h.destroyed && h.remotePort === port).length;
+}
+
+/** No connection left on either side: none of our sockets, none the emulator still holds. */
+async function noConnections(peer: S7CommPlusPeerServer): Promise<void> {
+  await peer.waitForNoClients(10_000);
+  await settle();
+  expect(socketsTo(peer.port)).to.equal(0);
+}
+
+async function rejection(p: Promise<unknown>): Promise<PlcError> {
+  try {
+    await p;
+  } catch (err) {
+    expect(err).to.be.instanceOf(PlcError);
+    return err as PlcError;
+  }
+  throw new Error('resolved');
 }
 
 async function connectError(client: S7PlusClient): Promise<PlcError> {
@@ -106,27 +64,28 @@ async function connectError(client: S7PlusClient): Promise<PlcError> {
 
 describe('s7plus client against the s7commplus emulator', function () {
   this.timeout(60_000);
+  let python: string;
   let cert: GeneratedCertificate;
-  let files: { certFile: string; keyFile: string };
+  let files: { cert: string; key: string };
   let dir: string;
 
   before(async function () {
-    if (!fs.existsSync(PYTHON))
-      skipBecause(this, 'no s7commplus venv (test/interop/.venv-s7commplus): run `node test/support/install-peers.js`');
+    python = requireS7CommPlus(this);
     cert = await generateCertificate({ commonName: 'plcwire test PLC' });
     dir = fs.mkdtempSync(path.join(os.tmpdir(), 's7plus-client-'));
-    files = { certFile: path.join(dir, 'cert.pem'), keyFile: path.join(dir, 'key.pem') };
-    fs.writeFileSync(files.certFile, cert.cert);
-    fs.writeFileSync(files.keyFile, cert.key);
+    files = { cert: path.join(dir, 'cert.pem'), key: path.join(dir, 'key.pem') };
+    fs.writeFileSync(files.cert, cert.cert);
+    fs.writeFileSync(files.key, cert.key);
   });
 
-  after(() => {
+  after(async () => {
+    await stopS7CommPlusPeers();
     if (dir) fs.rmSync(dir, { recursive: true, force: true });
   });
 
   describe('over TLS', () => {
-    let peer: Peer;
-    before(async () => (peer = await startPeer(1, files)));
+    let peer: S7CommPlusPeerServer;
+    before(async () => (peer = await startS7CommPlusServer(python, { dbs: [DB1], tls: files, version: 1 })));
     after(() => peer?.stop());
 
     it('connects with the certificate pinned (colons and case ignored), sets the session up with IntegrityIds at 0, and closes with a DeleteObject', async () => {
@@ -141,19 +100,22 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(session.version).to.equal(2);
       // CreateObject and the session setup.
       expect(client.stats.requestsSent).to.equal(2);
-      const gone = peer.gone;
+      const deletes = peer.events.filter((e) => e.event === 'deleteObject').length;
       await client.close();
       // The DeleteObject went out and was answered before the link closed.
       expect(client.stats.requestsSent).to.equal(3);
-      await until(() => peer.gone === gone + 1, 10_000, 'the emulator saw the client leave');
-      await settle();
-      expect(socketsTo(peer.port)).to.equal(0);
+      await peer.waitForEvent((e) => e.event === 'deleteObject' && peer.events.filter((x) => x.event === 'deleteObject').length > deletes);
+      await noConnections(peer);
     });
 
     it('reads and writes a standard DB by address, with the IntegrityIds counting a read and a write, and tells the CPU state and the DBs', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`);
       await client.connect();
       await client.write({ 'DB1.DBD0:REAL': 21.5, 'DB1.DBD4:DINT': -7, 'DB1.DBW10': 300, 'DB1.DBB12': 0x5a });
+      // What the emulator holds, read from its memory, not over the network.
+      expect((await peer.read(1, 0, 13)).toString('hex')).to.equal('41ac0000' + 'fffffff9' + '0000' + '012c' + '5a');
+      await peer.write(1, 20, Buffer.from([0x12, 0x34]));
+      expect(await client.read(['DB1.DBW20'])).to.deep.equal({ 'DB1.DBW20': 0x1234 });
       expect(await client.read(['DB1.DBD0:REAL', 'DB1.DBD4:DINT', 'DB1.DBW10', 'DB1.DBB12'])).to.deep.equal({
         'DB1.DBD0:REAL': 21.5,
         'DB1.DBD4:DINT': -7,
@@ -161,10 +123,13 @@ describe('s7plus client against the s7commplus emulator', function () {
         'DB1.DBB12': 0x5a,
       });
       const session = (client as unknown as { session: { integrityIds: unknown } }).session;
-      expect(session.integrityIds).to.deep.equal({ read: 1, write: 1 });
+      expect(session.integrityIds).to.deep.equal({ read: 2, write: 1 });
       expect(await client.cpuState()).to.equal('RUN');
+      await peer.setCpuState('STOP');
+      expect(await client.cpuState()).to.equal('STOP');
+      await peer.setCpuState('RUN');
       expect((await client.dataBlocks()).map((b) => b.number)).to.deep.equal([1]);
-      expect(session.integrityIds).to.deep.equal({ read: 3, write: 1 });
+      expect(session.integrityIds).to.deep.equal({ read: 5, write: 1 });
       await client.close();
     });
 
@@ -186,6 +151,33 @@ describe('s7plus client against the s7commplus emulator', function () {
       await client.close();
     });
 
+    it('reads and writes a standard DB by the names of its source (a compiled symbol table), at the offsets the source gives', async () => {
+      const symbols = compileSymbols(
+        [
+          {
+            name: 'Tank.db',
+            content:
+              'DATA_BLOCK "Tank"\n{ S7_Optimized_Access := \'FALSE\' }\nSTRUCT\n  Level : REAL;\n  Count : DINT;\n  Name : STRING[8];\nEND_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n',
+          },
+        ],
+        { db: { Tank: 1 } },
+      );
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`, { symbols });
+      client.on('layoutUnknown', () => {});
+      await client.connect();
+      await client.write({ '"Tank".Level': 3.25, '"Tank".Count': 42, '"Tank".Name': 'pump' });
+      expect(await client.read(['"Tank".Level', '"Tank".Count', '"Tank".Name'])).to.deep.equal({
+        '"Tank".Level': 3.25,
+        '"Tank".Count': 42,
+        '"Tank".Name': 'pump',
+      });
+      const memory = await peer.read(1, 0, 14);
+      expect(memory.readFloatBE(0)).to.equal(3.25);
+      expect(memory.readInt32BE(4)).to.equal(42);
+      expect(memory.subarray(8, 14).toString('latin1')).to.equal('\x08\x04pump');
+      await client.close();
+    });
+
     it('refuses a certificate the pin does not match before any S7CommPlus request, showing the pin that would match', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${'0'.repeat(64)}&timeout=5000`);
       const err = await connectError(client);
@@ -195,8 +187,7 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(err.message).to.contain('plcwire test PLC');
       expect(client.stats.requestsSent).to.equal(0);
       await client.close();
-      await settle();
-      expect(socketsTo(peer.port)).to.equal(0);
+      await noConnections(peer);
     });
 
     it('refuses a certificate nothing in the URL trusts, and says how to pin it', async () => {
@@ -206,8 +197,7 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(err.message).to.match(/valid .* to /);
       expect(client.stats.requestsSent).to.equal(0);
       await client.close();
-      await settle();
-      expect(socketsTo(peer.port)).to.equal(0);
+      await noConnections(peer);
     });
 
     it('insecure=true connects and warns with the certificate it accepted unchecked', async () => {
@@ -225,14 +215,13 @@ describe('s7plus client against the s7commplus emulator', function () {
       const err = await connectError(client);
       expect(['CONNECT_FAILED', 'TIMEOUT']).to.include(err.code);
       await client.close();
-      await settle();
-      expect(socketsTo(peer.port)).to.equal(0);
+      await noConnections(peer);
     });
   });
 
   describe('in plain V1 (tls=false)', () => {
-    let peer: Peer;
-    before(async () => (peer = await startPeer(1)));
+    let peer: S7CommPlusPeerServer;
+    before(async () => (peer = await startS7CommPlusServer(python, { dbs: [DB1], version: 1 })));
     after(() => peer?.stop());
 
     it('connects without IntegrityIds and closes with a DeleteObject', async () => {
@@ -244,8 +233,7 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(client.certificate).to.equal(undefined);
       await client.close();
       expect(client.stats.requestsSent).to.equal(3);
-      await settle();
-      expect(socketsTo(peer.port)).to.equal(0);
+      await noConnections(peer);
     });
 
     it('reads and writes by address and tells the CPU state in plain text too', async () => {
@@ -263,14 +251,40 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(['CONNECT_FAILED', 'TIMEOUT']).to.include(err.code);
       expect(client.stats.requestsSent).to.equal(0);
       await client.close();
-      await settle();
-      expect(socketsTo(peer.port)).to.equal(0);
+      await noConnections(peer);
+    });
+  });
+
+  describe('a PLC that resets the connection on a too large request', () => {
+    let peer: S7CommPlusPeerServer;
+    before(async () => (peer = await startS7CommPlusServer(python, { dbs: [DB1], version: 1, maxRequestBytes: 250 })));
+    after(() => peer?.stop());
+
+    it('teaches the client a lower item limit: the read after the reconnect goes in smaller requests and gets every value', async () => {
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=5000`, {
+        backoff: { initialDelay: 10, maxDelay: 50 },
+      });
+      await peer.write(1, 0, Buffer.from(Array.from({ length: 20 }, (_, i) => i + 1)));
+      const limits: { limit: number; was: number }[] = [];
+      client.on('itemLimit', (e: { limit: number; was: number }) => limits.push(e));
+      client.on('error', () => {});
+      await client.connect();
+      const tags = Array.from({ length: 20 }, (_, i) => `DB1.DBB${i}`);
+      const err = await rejection(client.read(tags));
+      expect(err.code).to.equal('CONNECTION_LOST');
+      expect(limits).to.deep.equal([{ limit: 10, was: 20 }]);
+      await waitFor(client, 'connected', 10_000);
+      const values = await client.read(tags);
+      expect(Object.values(values)).to.deep.equal(Array.from({ length: 20 }, (_, i) => i + 1));
+      expect(client.maxItems).to.equal(10);
+      await client.close();
+      await noConnections(peer);
     });
   });
 
   describe('a PLC that speaks V2 asked for plain text', () => {
-    let peer: Peer;
-    before(async () => (peer = await startPeer(2)));
+    let peer: S7CommPlusPeerServer;
+    before(async () => (peer = await startS7CommPlusServer(python, { dbs: [DB1], version: 2 })));
     after(() => peer?.stop());
 
     it('is refused with what the PLC wants and what to do', async () => {
@@ -280,8 +294,7 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(err.message).to.contain('speaks S7CommPlus V2 and wants it over TLS');
       expect(err.message).to.contain('drop tls=false');
       await client.close();
-      await settle();
-      expect(socketsTo(peer.port)).to.equal(0);
+      await noConnections(peer);
     });
   });
 });

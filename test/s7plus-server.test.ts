@@ -107,9 +107,9 @@ class Peer {
     expect(decodeCotp(await this.next()).type).to.equal('CC');
     await this.ask(0x05b3, Buffer.alloc(4), 0);
     const created = await this.ask(0x04ca, Buffer.alloc(4), 288);
-    // ReturnValue 0, one object id: the session.
+    // ReturnValue 0, two object ids: the session and its subscription container.
     expect(created.body[0]).to.equal(0);
-    expect(created.body[1]).to.equal(1);
+    expect(created.body[1]).to.equal(2);
     this.session = created.body[2]! & 0x80 ? ((created.body[2]! & 0x7f) << 7) | created.body[3]! : created.body[2]!;
     const setup = await this.ask(
       0x0542,
@@ -364,6 +364,112 @@ describe('S7CommPlus simulator (issue #25)', function () {
       expect((await refused).message).to.match(/session/);
       await p.closed;
       expect(server.connectionCount).to.be.at.most(1);
+    });
+
+    it('a subscription sends the values at once and a notification when one changes, none while nothing does; a malformed one resets', async () => {
+      const p = peer();
+      const frames: Buffer[] = [];
+      await p.open();
+      const container = 0x3a0 + 1 + (p.session - 0x3a0);
+      const list = [0x80010000, 0, 1, 0x80040002, 7, 0, Ids.DBAccessAreaBase + 2, 0, Ids.DBValueActual, 0xb];
+      const refs = Buffer.concat([Buffer.from([0x20, 0x04]), v(list.length), ...list.map((x) => v(x))]);
+      const object = Buffer.concat([
+        Buffer.from([0xa1, 0x7f, 0xff, 0xc0, 0x01]),
+        v(1001),
+        v(0),
+        v(0),
+        Buffer.from([0xa3]),
+        v(1048),
+        refs,
+        Buffer.from([0xa3]),
+        v(1049),
+        Buffer.from([0, 4]),
+        v(20),
+        Buffer.from([0xa2]),
+        Buffer.alloc(4),
+      ]);
+      const head = Buffer.alloc(4);
+      head.writeUInt32BE(container);
+      const created = await p.ask(0x04ca, Buffer.concat([head, Buffer.from([0, 4, 0]), Buffer.alloc(4), object]));
+      expect(created.body.subarray(0, 2).toString('hex')).to.equal('0001');
+      const notification = async () => {
+        const f = await p.next();
+        frames.push(f);
+        return f.subarray(7 + 4);
+      };
+      // Opcode 0x33, subscription id, 6 reserved, credit tick 1, sequence 1, change counter 1, value record of reference 7: INT 3, end.
+      const first = await notification();
+      expect(first[0]).to.equal(0x33);
+      expect(first.subarray(11).toString('hex')).to.equal('010101' + '92' + '00000007' + '00070003' + '00' + '72010000');
+      server.memory.write('DB', 2, 4, Buffer.from([0x01, 0x00]));
+      const second = await notification();
+      expect(second.subarray(11).toString('hex')).to.equal('020201' + '92' + '00000007' + '00070100' + '00' + '72010000');
+      // A read in between is answered as usual (no notification queued before it: the value did not change).
+      const r = await p.ask(0x054c, Buffer.concat([items([{ db: 2, lids: [0xb] }]), Buffer.alloc(4)]));
+      expect(r.body.toString('hex')).to.equal('00' + '0100070100' + '00' + '00');
+      const refused = waitFor<S7RefusedEvent>(server, 'refused');
+      p.socket.write(
+        request(
+          0x04ca,
+          50,
+          p.session,
+          Buffer.concat([
+            head,
+            Buffer.from([0, 4, 0]),
+            Buffer.alloc(4),
+            Buffer.from([0xa1, 0, 0, 0, 1]),
+            v(1001),
+            v(0),
+            v(0),
+            Buffer.from([0xa3]),
+            v(1048),
+            Buffer.from([0x20, 0x04, 0x05, 1, 2]),
+          ]),
+        ),
+      );
+      expect((await refused).reason).to.equal('protocol-error');
+      await p.closed;
+    });
+
+    it('survives 3000 mutated requests after a session: each answered or refused with a typed event, the simulator still serving', async () => {
+      let seed = 25;
+      const rand = (n: number) => {
+        seed = (seed * 1103515245 + 12345) & 0x7fffffff;
+        return seed % n;
+      };
+      const templates = [
+        Buffer.concat([
+          items([
+            { db: 2, lids: [0xa] },
+            { db: 1, lids: [0x11, 1, 1, 0xb] },
+          ]),
+          Buffer.alloc(4),
+        ]),
+        Buffer.concat([items([{ db: 2, lids: [0xb] }]), v(1), Buffer.from([0, 0x07, 0x01, 0x2c]), Buffer.from([0]), Buffer.alloc(4)]),
+        Buffer.concat([Buffer.from([0, 0, 0x02, 0x19]), v(0), Buffer.from([1, 1, 0, 0]), v(0), Buffer.alloc(5)]),
+      ];
+      const fns = [0x054c, 0x0542, 0x04bb, 0x04ca, 0x04d4, 0x04f2, 0x0586, 0x1234];
+      let refused = 0;
+      server.on('refused', () => refused++);
+      let p = peer();
+      await p.open();
+      for (let i = 0; i < 3000; i++) {
+        if (p.socket.destroyed || p.socket.readyState !== 'open') {
+          p = peer();
+          await p.open();
+        }
+        const body = Buffer.from(templates[rand(templates.length)]!);
+        for (let k = rand(4); k >= 0; k--) body[rand(body.length)] = rand(256);
+        const cut = rand(3) === 0 ? body.subarray(0, rand(body.length)) : body;
+        p.socket.write(request(fns[rand(fns.length)]!, i & 0xffff, p.session, cut));
+        // Each request is answered or its connection reset; wait for either before the next.
+        await Promise.race([p.next(3000).catch(() => undefined), p.closed]);
+      }
+      expect(refused).to.be.greaterThan(0);
+      const q = peer();
+      await q.open();
+      const r = await q.ask(0x054c, Buffer.concat([items([{ db: 1, lids: [0xb] }]), Buffer.alloc(4)]));
+      expect(r.body.toString('hex')).to.equal('00' + '0100070007' + '00' + '00');
     });
 
     it('DeleteObject of the session answers and closes the connection', async () => {

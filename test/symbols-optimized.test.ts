@@ -110,6 +110,20 @@ describe('symbols: blocks with optimized access', () => {
       expect(table().lookup('"Tank".Pump.Speed')).to.include({ byte: 6, bit: null, address: 'DB1.DBD6:REAL' });
     });
 
+    it('refuses what cannot be laid out as in a standard block, the 64 KB limit in words about optimized access', () => {
+      const source = (body: string) =>
+        `DATA_BLOCK "Big"\r\n{ S7_Optimized_Access := 'TRUE' }\r\nVERSION : 0.1\r\n   VAR \r\n${body}\r\n   END_VAR\r\n\r\nBEGIN\r\n\r\nEND_DATA_BLOCK\r\n`;
+      const compile = (body: string) => () => compileSymbols([{ name: 'Big.db', content: source(body) }], { db: { Big: 4 } });
+      expect(thrown(compile('      Values : Array[1..9000] of LReal;')).message).to.equal(
+        'Big.db:5:16: "Big".Values ends beyond byte 65535: plcwire compiles a block with optimized access up to 65536 bytes (64 KB) ' +
+          'counted as if it had standard access',
+      );
+      expect(thrown(compile('      Pump : "Nope";')).message).to.match(/^Big\.db:5:14: unknown type "Nope"/);
+      expect(compile('      Values : Array[1..8000] of LReal;')().blocks).to.deep.equal([
+        { name: 'Big', db: 4, optimized: true, length: null, file: 'Big.db' },
+      ]);
+    });
+
     it('tells the editor the same: no address for those entries, the block marked optimized', () => {
       const t = table();
       const d = describeSymbols({ table: t });

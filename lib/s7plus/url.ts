@@ -60,7 +60,7 @@ const DEFAULTS = Object.freeze({
 const PARAMS = ['fingerprint', 'ca', 'insecure', 'tls', 'timeout', 'maxItems', 'type', 'password'];
 
 /** Where the password goes instead of the URL (the refusal says it, and the docs). */
-export const PASSWORD_HINT = 'give it as connect(url, { password }), in PLCWIRE_PASSWORD or with --password-file';
+const PASSWORD_HINT = 'give it as connect(url, { password }), in PLCWIRE_PASSWORD or with --password-file';
 
 /**
  * A SHA-256 fingerprint as the URL (or a TIA/openssl/browser dialog) writes

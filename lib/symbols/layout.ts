@@ -41,11 +41,11 @@ const MAX_ARRAY_ELEMENTS = 65535;
 const BLOCK_BITS = MAX_BLOCK_BYTES * 8;
 
 /** Checked as members are placed, so that a huge declaration is refused before it is built. */
-function tooLong(at: SourcePosition, where: Where): SourceError {
-  return new SourceError(
-    at,
-    `${whereText(where)} ends beyond byte ${MAX_BLOCK_BYTES - 1}: a block with standard access holds at most ${MAX_BLOCK_BYTES} bytes (64 KB)`,
-  );
+function tooLong(at: SourcePosition, where: Where, optimized: boolean): SourceError {
+  const limit = optimized
+    ? `plcwire compiles a block with optimized access up to ${MAX_BLOCK_BYTES} bytes (64 KB) counted as if it had standard access`
+    : `a block with standard access holds at most ${MAX_BLOCK_BYTES} bytes (64 KB)`;
+  return new SourceError(at, `${whereText(where)} ends beyond byte ${MAX_BLOCK_BYTES - 1}: ${limit}`);
 }
 
 /** Types that take one byte and may start on any byte. */
@@ -70,6 +70,8 @@ class Engine {
   private readonly byNumber = new Map<number, TypeDecl>();
   /** UDTs being laid out, innermost last: a UDT met again contains itself. */
   private readonly open: TypeDecl[] = [];
+  /** The block being laid out has optimized access (only the words of the 64 KB refusal differ). */
+  optimized = false;
 
   constructor(
     types: readonly TypeDecl[],
@@ -216,7 +218,7 @@ class Engine {
       const { node, next } = this.place(m.type, cursor, child(where, m.name), m);
       placed.push({ name: m.name, node });
       cursor = next;
-      if (cursor > BLOCK_BITS) throw tooLong(m.at, child(where, m.name));
+      if (cursor > BLOCK_BITS) throw tooLong(m.at, child(where, m.name), this.optimized);
     }
     // A STRUCT occupies memory up to the next word limit.
     const end = nextWord(cursor);
@@ -271,7 +273,7 @@ class Engine {
       if (isBool && type.dims.length > 1 && k % rowLength === 0) cursor = nextByte(cursor);
       const { node, next } = this.place(element, cursor, { parent: where, segment: `[${elementIndex(type.dims, k)}]` }, undefined);
       elements[k] = node;
-      if (next > BLOCK_BITS) throw tooLong(type.at, where);
+      if (next > BLOCK_BITS) throw tooLong(type.at, where, this.optimized);
       dataEnd = node.kind === 'elementary' && node.bit !== null ? node.byte * 8 + node.bit + 1 : (node.byte + node.size) * 8;
       cursor = next;
     }
@@ -344,6 +346,7 @@ export function layoutBlocks(blocks: readonly BlockDecl[], options: LayoutOption
 
 function layoutBlock(engine: Engine, db: DataBlockDecl): BlockLayout {
   const name = blockRef(db);
+  engine.optimized = db.optimized;
   const where: Where = { segment: name };
   let root: StructNode;
   let instanceOf: string | undefined;

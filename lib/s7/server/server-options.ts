@@ -42,7 +42,7 @@ export interface S7ServerOptions {
 }
 
 /** The S7CommPlus side the simulator hands connections to (lib/s7plus/server S7PlusService). */
-export interface S7PlusEndpoint {
+interface S7PlusEndpoint {
   readonly model: { readonly table: SymbolTable; readonly optimizedDbs: ReadonlySet<number> };
   /** True when a COTP CR calls an S7CommPlus TSAP. */
   claims(frame: Buffer): boolean;

@@ -23,7 +23,7 @@ import type { S7Faults, S7PlusLink, S7RefusedEvent, S7RequestEvent, S7ServerOpti
 
 export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './profiles';
 export { STOP_CAUSES, type SimulatorMode, type StopCause } from './services';
-export type { S7Faults, S7PlusEndpoint, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
+export type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
 
 /** The CPU's COTP source reference. */
 const CPU_REF = 0x0001;

@@ -30,7 +30,7 @@ export interface S7PlusClientOptions extends Partial<ClientOptions> {
 }
 
 /** The `insecure` event of a connection with `insecure=true`: which certificate it accepted unchecked. */
-export interface InsecureEvent {
+interface InsecureEvent {
   certificate: PeerCertificate;
   message: string;
 }

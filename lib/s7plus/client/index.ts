@@ -1,1 +1,1 @@
-export { S7PlusClient, type InsecureEvent, type PeerCertificate, type S7PlusClientOptions } from './client';
+export { S7PlusClient } from './client';

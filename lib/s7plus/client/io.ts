@@ -35,7 +35,7 @@ const AREA_OBJECT: Partial<Record<Tag['area'], number>> = {
 };
 
 /** Where a tag's bytes are, as an item address; a PlcError for an area S7CommPlus does not reach by address. */
-export function itemAddress(tag: Tag): ItemAddress | PlcError {
+function itemAddress(tag: Tag): ItemAddress | PlcError {
   if (tag.area === 'DB') return classicBlobAddress(tag.dbNumber, tag.byteOffset, tag.byteLength);
   const area = AREA_OBJECT[tag.area];
   if (area === undefined) {
@@ -77,8 +77,23 @@ function bytesOf(v: PValue): Buffer | undefined {
 /** What the client gives the reads and writes: the item limit, and how to learn a lower one. */
 export interface Limits {
   maxItems(): number;
-  /** The PLC refused a request of `items` items as a whole: the limit goes below it. */
+  /** The PLC refused a request of `items` items as a whole, or reset the connection on it: the limit goes below it. */
   refused(items: number): void;
+}
+
+/**
+ * Sends a request of `items` items; a PLC that drops the connection on it
+ * (PLCSIM is reported to reset on requests past about 1 kB) has shown its
+ * limit too: it is lowered before the link error goes on, so the request
+ * after the reconnect is smaller.
+ */
+async function sized(session: S7PlusSession, items: number, limits: Limits, send: () => Promise<Buffer>): Promise<Buffer> {
+  try {
+    return await send();
+  } catch (err) {
+    if (items > 1 && (err as PlcError).code === 'CONNECTION_LOST') limits.refused(items);
+    throw err;
+  }
 }
 
 function chunks(indexes: number[], size: number): number[][] {
@@ -102,18 +117,20 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
     const size = limits.maxItems();
     const retry: number[] = [];
     for (const chunk of chunks(pending, size)) {
-      const answer = await session.request(
-        FunctionCode.GetMultiVariables,
-        (sequence, sessionId, integrityId) =>
-          encodeGetMultiVariablesRequest({
-            ...readRequest(
-              sequence,
-              sessionId,
-              chunk.map((i) => addresses[i]!),
-            ),
-            ...(integrityId === undefined ? {} : { integrityId }),
-          }),
-        { signal },
+      const answer = await sized(session, chunk.length, limits, () =>
+        session.request(
+          FunctionCode.GetMultiVariables,
+          (sequence, sessionId, integrityId) =>
+            encodeGetMultiVariablesRequest({
+              ...readRequest(
+                sequence,
+                sessionId,
+                chunk.map((i) => addresses[i]!),
+              ),
+              ...(integrityId === undefined ? {} : { integrityId }),
+            }),
+          { signal },
+        ),
       );
       const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
       if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
@@ -192,19 +209,21 @@ export async function writeTags(
     const retry: typeof ready = [];
     for (let at = 0; at < pending.length; at += size) {
       const chunk = pending.slice(at, at + size);
-      const answer = await session.request(
-        FunctionCode.SetMultiVariables,
-        (sequence, sessionId, integrityId) =>
-          encodeSetMultiVariablesRequest({
-            ...writeRequest(
-              sequence,
-              sessionId,
-              chunk.map((c) => c.address),
-              chunk.map((c) => c.value),
-            ),
-            ...(integrityId === undefined ? {} : { integrityId }),
-          }),
-        { signal },
+      const answer = await sized(session, chunk.length, limits, () =>
+        session.request(
+          FunctionCode.SetMultiVariables,
+          (sequence, sessionId, integrityId) =>
+            encodeSetMultiVariablesRequest({
+              ...writeRequest(
+                sequence,
+                sessionId,
+                chunk.map((c) => c.address),
+                chunk.map((c) => c.value),
+              ),
+              ...(integrityId === undefined ? {} : { integrityId }),
+            }),
+          { signal },
+        ),
       );
       const { body } = decodeSetMultiVariablesResponse(answer, { integrity: session.integrityOn });
       if (body.returnValue !== 0n && body.errors.size === 0) {

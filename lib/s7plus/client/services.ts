@@ -20,7 +20,7 @@ export interface S7PlusDataBlock {
 }
 
 /** An Explore of `exploreId` (with these attributes): the objects of the answer; a refusal is a PlcError. */
-export async function explore(
+async function explore(
   session: S7PlusSession,
   exploreId: number,
   attributes: number[],

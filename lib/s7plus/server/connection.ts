@@ -20,7 +20,7 @@ const MAX_PENDING = 1 << 20;
 export interface ConnectionHost {
   readonly cpu: CpuSide;
   readonly secureContext: tls.SecureContext | undefined;
-  readonly session: Omit<SessionOptions, 'tls'>;
+  readonly session: Omit<SessionOptions, 'tls' | 'push'>;
   /** Writes bytes to the socket. */
   send(bytes: Buffer): void;
   /** Ends the connection (reset, or after DeleteObject). */
@@ -41,7 +41,7 @@ export class PlusConnection {
   ) {
     const cr = connectionRequest(crFrame);
     if (!cr) throw new ProtocolError('not a COTP connection request');
-    this.session = new PlusSession(host.cpu, { ...host.session, tls: host.secureContext !== undefined });
+    this.session = new PlusSession(host.cpu, { ...host.session, tls: host.secureContext !== undefined, push: (frame) => this.push(frame) });
     host.send(connectionConfirm(cr));
   }
 
@@ -61,6 +61,7 @@ export class PlusConnection {
   /** The socket closed: end TLS too. */
   dispose(): void {
     this.closed = true;
+    this.session.close();
     this.secure?.destroy();
     this.tunnel?.destroy();
   }
@@ -84,6 +85,7 @@ export class PlusConnection {
     if (step.startTls) this.startTls();
     if (step.close) {
       this.closed = true;
+      this.session.close();
       if (this.secure) this.secure.end(() => this.host.close());
       else this.host.close();
     }
@@ -103,6 +105,13 @@ export class PlusConnection {
       if (this.secure) this.secure.write(out);
       else this.host.send(dataFrame(out));
     });
+  }
+
+  /** A notification: one frame, sent as a response is. */
+  private push(frame: Buffer): void {
+    if (this.closed) return;
+    if (this.secure) this.secure.write(frame);
+    else this.host.send(dataFrame(frame));
   }
 
   private startTls(): void {

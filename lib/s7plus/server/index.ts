@@ -15,8 +15,7 @@ import { PlusConnection } from './connection';
 import { buildPlusModel, type PlusModel } from './model';
 import { isS7PlusRequest } from './tsap';
 
-export { isS7PlusRequest } from './tsap';
-export type { PlusModel, PlusDb } from './model';
+export type { PlusModel } from './model';
 
 /** Items a CPU 1215C serves in one request (public reports, issue #25; s7commplus (MIT) client.py max_items_per_request). */
 const DEFAULT_MAX_ITEMS = 50;

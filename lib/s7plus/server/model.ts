@@ -24,7 +24,7 @@ import type { DataTypeName } from '../../types';
 import { dbAccessArea, SoftDataType } from '../constants';
 
 /** The LID of the first member of a block or struct. */
-export const FIRST_LID = 0xa;
+const FIRST_LID = 0xa;
 /** RIDs of the simulator's type objects: a DB's is this base plus its number, a struct's or UDT's the other base plus its index. */
 const DB_TYPE_RID = 0x92000000;
 const STRUCT_TYPE_RID = 0x93000000;
@@ -101,7 +101,7 @@ const SOFT_OF: Readonly<Partial<Record<DataTypeName, number>>> = Object.freeze({
 });
 
 /** The software data type of an elementary type. */
-export function softOf(type: DataTypeName): number {
+function softOf(type: DataTypeName): number {
   return SOFT_OF[type] ?? SoftDataType.Byte;
 }
 

@@ -9,7 +9,7 @@
 import type { PlcMemory } from '../../sim/memory';
 import { ProtocolError } from '../../errors';
 import type { LayoutNode } from '../../symbols/layout-nodes';
-import { ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
+import { DataType, ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
 import { Reader } from '../codec/bytes';
 import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
 import { resolveLids, type PlusDb, type PlusModel } from './model';
@@ -27,7 +27,7 @@ export interface CpuSide {
 }
 
 /** One item address of a request: the area, its sub-area and LIDs. */
-interface ItemAddress {
+export interface ItemAddress {
   readonly area: number;
   readonly subArea: number;
   readonly lids: readonly number[];
@@ -106,18 +106,19 @@ function itemList(results: readonly (Buffer | undefined)[]): Buffer {
   return Buffer.concat(parts);
 }
 
+/** The PValue an item address names now, or undefined when it names nothing the CPU serves. */
+export function itemValue(cpu: CpuSide, item: ItemAddress): Buffer | undefined {
+  const t = target(cpu, item);
+  if (!t) return undefined;
+  if (t.kind === 'rid') return Buffer.concat([Buffer.from([0x00, DataType.RID]), u32be(t.rid)]);
+  const image = cpu.memory.area('DB', t.kind === 'node' ? t.db.number : t.db);
+  if (!image) return undefined;
+  return t.kind === 'node' ? readNode(t.node, image) : blob(Buffer.from(image.subarray(t.byte, t.byte + t.size)));
+}
+
 /** GetMultiVariables: each item's value, or its error. */
 export function getMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
-  const items = readAddresses(new Reader(body), cpu);
-  const results = items.map((item) => {
-    const t = target(cpu, item);
-    if (!t) return undefined;
-    if (t.kind === 'rid') return Buffer.concat([Buffer.from([0x00, 0x12]), u32be(t.rid)]);
-    const image = cpu.memory.area('DB', t.kind === 'node' ? t.db.number : t.db);
-    if (!image) return undefined;
-    return t.kind === 'node' ? readNode(t.node, image) : blob(Buffer.from(image.subarray(t.byte, t.byte + t.size)));
-  });
-  return itemList(results);
+  return itemList(readAddresses(new Reader(body), cpu).map((item) => itemValue(cpu, item)));
 }
 
 function u32be(v: number): Buffer {

@@ -21,6 +21,7 @@ import {
 } from '../constants';
 import { Reader } from '../codec/bytes';
 import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
+import { Subscriptions } from './subscriptions';
 import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
 
 /** The protection level a session without a password works at (protocol.py AccessLevel: 1 full access). */
@@ -33,6 +34,8 @@ export interface SessionOptions {
   /** Bytes of a request frame the CPU takes; a longer one resets the connection. */
   readonly maxRequestBytes: number;
   newSessionId(): number;
+  /** Sends a frame the client did not ask for (a notification). */
+  push(frame: Buffer): void;
 }
 
 /** What the transport does after a frame: send `reply`; switch to TLS; close. */
@@ -47,11 +50,21 @@ export class PlusSession {
   private sessionId = 0;
   private readId = 0;
   private writeId = 0;
+  /** The session's subscription container: the second object id of its CreateObject. */
+  private container = 0;
+  private readonly subscriptions: Subscriptions;
 
   constructor(
     private readonly cpu: CpuSide,
     private readonly options: SessionOptions,
-  ) {}
+  ) {
+    this.subscriptions = new Subscriptions(cpu, options.push, this.version());
+  }
+
+  /** The connection ended: no more notifications. */
+  close(): void {
+    this.subscriptions.clear();
+  }
 
   /** Handles one frame (header, data, trailer); throws ProtocolError for a frame that breaks the protocol (the connection is then reset). */
   handle(frame: Buffer): Step {
@@ -66,6 +79,7 @@ export class PlusSession {
     const fn = data.readUInt16BE(3);
     const seq = data.readUInt16BE(7);
     const session = data.readUInt32BE(9);
+    const transport = data[13]!;
     const body = data.subarray(14);
     if (this.stage !== 'init' && this.stage !== 'ssl' && fn !== FunctionCode.CreateObject && session !== this.sessionId) {
       throw new ResetConnection(`request for session ${session}, this connection's is ${this.sessionId}`);
@@ -81,6 +95,7 @@ export class PlusSession {
       case 'ssl':
         if (fn !== FunctionCode.CreateObject) throw new ProtocolError(`S7CommPlus function 0x${fn.toString(16)} before CreateObject`);
         this.sessionId = this.options.newSessionId();
+        this.container = this.options.newSessionId();
         this.stage = 'created';
         return { reply: this.frame(ProtocolVersion.V1, fn, seq, this.created()) };
       case 'created':
@@ -89,7 +104,7 @@ export class PlusSession {
         this.stage = 'ready';
         return { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), encodeUVlq32(0)])) };
       default:
-        return this.data(fn, seq, body);
+        return this.data(fn, seq, body, transport);
     }
   }
 
@@ -97,15 +112,27 @@ export class PlusSession {
     return this.options.tls ? ProtocolVersion.V2 : ProtocolVersion.V1;
   }
 
-  private data(fn: number, seq: number, body: Buffer): Step {
+  private data(fn: number, seq: number, body: Buffer, transport: number): Step {
     if (fn === FunctionCode.DeleteObject && body.length <= 4) {
       this.stage = 'init';
+      this.subscriptions.clear();
       return { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)])), close: true };
     }
     const read = READ_FUNCTIONS.has(fn);
     const id = this.options.tls ? this.checkIntegrity(fn, body, read ? this.readId : this.writeId) : undefined;
     let answer: Buffer;
     switch (fn) {
+      case FunctionCode.CreateObject:
+        answer = this.createSubscription(body, id);
+        break;
+      case FunctionCode.DeleteObject:
+        answer = this.deleteObject(body);
+        break;
+      case FunctionCode.SetVariable:
+        this.writeId = id === undefined ? this.writeId : (this.writeId + 1) >>> 0;
+        this.setVariable(body);
+        // The credit update comes with transport flags 0x74: no answer (connection.py send_subscription_credit).
+        return transport & 0x40 ? {} : { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)])) };
       case FunctionCode.Explore:
         answer = explore(this.cpu, body);
         break;
@@ -137,6 +164,11 @@ export class PlusSession {
    */
   private checkIntegrity(fn: number, body: Buffer, expected: number): number {
     const id = encodeUVlq32(expected);
+    // A CreateObject carries it after its request set (container id, value, fill: 11 bytes; subscription.py).
+    if (fn === FunctionCode.CreateObject) {
+      if (body.subarray(11, 11 + id.length).equals(id)) return expected;
+      throw new ResetConnection(`integrity id of a CreateObject is not the expected ${expected}: the counters jumped`);
+    }
     const tails = fn === FunctionCode.Explore ? [5] : [4, 3];
     for (const tail of tails) {
       const at = body.length - tail - id.length;
@@ -158,14 +190,42 @@ export class PlusSession {
     return Buffer.concat([encodeUVlq64(ITEM_ERROR_UNRESOLVED), Buffer.alloc(4)]);
   }
 
-  /** The CreateObject answer: the session id, then the session object with its ServerSessionVersion. */
+  /** A subscription under the session's container: its object id. */
+  private createSubscription(body: Buffer, id: number | undefined): Buffer {
+    const r = new Reader(body);
+    if (r.u32('the container id') !== this.container)
+      throw new ProtocolError("S7CommPlus CreateObject outside the session's subscription container");
+    const object = body.subarray(11 + (id === undefined ? 0 : encodeUVlq32(id).length));
+    const created = this.subscriptions.create(object);
+    return Buffer.concat([encodeUVlq64(0n), Buffer.from([1]), encodeUVlq32(created), Buffer.alloc(4)]);
+  }
+
+  /** DeleteObject of the subscription container: every subscription ends. */
+  private deleteObject(body: Buffer): Buffer {
+    const object = new Reader(body).u32('the object id');
+    if (object !== this.container) return Buffer.concat([encodeUVlq64(ITEM_ERROR_UNRESOLVED), Buffer.alloc(4)]);
+    this.subscriptions.clear();
+    return Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)]);
+  }
+
+  /** SetVariable: a subscription's credit limit (the one variable the simulator sets this way). */
+  private setVariable(body: Buffer): void {
+    const r = new Reader(body);
+    const object = r.u32('the object id');
+    if (r.uvlq32() !== 1 || r.uvlq32() !== Ids.SubscriptionCreditLimit) return;
+    r.u8('flags');
+    if (r.u8('type') === DataType.Int) this.subscriptions.setCredit(object, r.bytes(2, 'an Int').readInt16BE(0));
+  }
+
+  /** The CreateObject answer: the session id and its subscription container, then the session object with its ServerSessionVersion. */
   private created(): Buffer {
     const rel = Buffer.alloc(4);
     rel.writeUInt32BE(1);
     return Buffer.concat([
       encodeUVlq64(0n),
-      Buffer.from([1]),
+      Buffer.from([2]),
       encodeUVlq32(this.sessionId),
+      encodeUVlq32(this.container),
       Buffer.from([ElementId.StartOfObject]),
       rel,
       encodeUVlq32(0),

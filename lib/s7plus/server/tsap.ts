@@ -5,12 +5,14 @@
  * calls a 2-byte rack/slot TSAP (s7commplus (MIT) protocol.py
  * S7COMMPLUS_REMOTE_TSAP and ConnectionType; transport.py builds the CR).
  */
+import { RemoteTsap } from '../constants';
 
 /** COTP parameter codes in a connection request (ISO 8073). */
 const CALLING_TSAP = 0xc1;
 const CALLED_TSAP = 0xc2;
 const TPDU_SIZE = 0xc0;
-const TSAP_PREFIX = 'SIMATIC-ROOT-';
+/** The called TSAPs of S7CommPlus roles. */
+const PLUS_TSAPS: ReadonlySet<string> = new Set(Object.values(RemoteTsap));
 
 export interface ConnectionRequest {
   readonly sourceRef: number;
@@ -38,10 +40,10 @@ export function connectionRequest(frame: Buffer): ConnectionRequest | undefined 
   return { sourceRef, calling, called };
 }
 
-/** True when the frame is a COTP CR whose called TSAP names an S7CommPlus role. */
+/** True when the frame is a COTP CR whose called TSAP names an S7CommPlus role (HMI, ES, PG). */
 export function isS7PlusRequest(frame: Buffer): boolean {
   const cr = connectionRequest(frame);
-  return cr !== undefined && cr.called.length > TSAP_PREFIX.length && cr.called.toString('latin1').startsWith(TSAP_PREFIX);
+  return cr !== undefined && PLUS_TSAPS.has(cr.called.toString('latin1'));
 }
 
 /** The CPU's connection confirm: its reference 1, the TSAPs echoed, TPDU size 1024. */

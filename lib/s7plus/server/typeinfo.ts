@@ -37,12 +37,12 @@ function u16le(v: number): Buffer {
 }
 
 /** An attribute: tag, id, then the PValue (flags 0, type, value). */
-export function attribute(id: number, type: number, value: Buffer): Buffer {
+function attribute(id: number, type: number, value: Buffer): Buffer {
   return Buffer.concat([Buffer.from([ElementId.Attribute]), encodeUVlq32(id), Buffer.from([0x00, type]), value]);
 }
 
 /** The head of an object: tag, relation id (4 bytes), class id, class flags 0, attribute id 0. */
-export function objectHead(rid: number, classId: number): Buffer {
+function objectHead(rid: number, classId: number): Buffer {
   const r = Buffer.alloc(5);
   r[0] = ElementId.StartOfObject;
   r.writeUInt32BE(rid >>> 0, 1);
