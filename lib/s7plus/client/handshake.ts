@@ -113,7 +113,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
 }
 
 /** InitSSL → its answer, on the plain tunnel (connection.py, _init_ssl); the deadline is the connect's. */
-function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Promise<void> {
+export function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Promise<void> {
   const cutter = new S7pFrameReader();
   return new Promise<void>((resolve, reject) => {
     const done = (err?: PlcError) => {
