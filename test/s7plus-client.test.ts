@@ -210,10 +210,12 @@ describe('s7plus client against the s7commplus emulator', function () {
       await client.close();
     });
 
-    it('tls=false against a PLC that starts TLS fails: never a fallback to plain text', async () => {
+    it('tls=false against a PLC that starts TLS fails, saying to drop tls=false: never a fallback to plain text', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=3000`);
       const err = await connectError(client);
-      expect(['CONNECT_FAILED', 'TIMEOUT']).to.include(err.code);
+      expect(err.code).to.equal('CONNECT_FAILED');
+      expect(err.message).to.contain('CreateObject failed');
+      expect(err.message).to.contain('drop tls=false');
       await client.close();
       await noConnections(peer);
     });
@@ -245,10 +247,29 @@ describe('s7plus client against the s7commplus emulator', function () {
       await client.close();
     });
 
-    it('a TLS URL against a PLC without TLS fails: never a fallback to plain text', async () => {
+    it('puts a poll in the fewest requests the item limit allows: 20 tags in one, 21 in two, 12 in three with maxItems=5', async () => {
+      const tags = (n: number) => Array.from({ length: n }, (_, i) => `DB1.DBB${i}`);
+      for (const [query, count, requests] of [
+        ['', 20, 1],
+        ['', 21, 2],
+        ['&maxItems=5', 12, 3],
+      ] as const) {
+        const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=5000${query}`);
+        await client.connect();
+        const before = client.stats.requestsSent;
+        const values = await client.read(tags(count));
+        expect(Object.keys(values), query).to.have.length(count);
+        expect(client.stats.requestsSent - before, `${count} tags${query}`).to.equal(requests);
+        await client.close();
+      }
+    });
+
+    it('a TLS URL against a PLC without TLS fails, naming tls=false: never a fallback to plain text', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?insecure=true&timeout=3000`);
       const err = await connectError(client);
-      expect(['CONNECT_FAILED', 'TIMEOUT']).to.include(err.code);
+      expect(err.code).to.equal('CONNECT_FAILED');
+      expect(err.message).to.contain('TLS failed');
+      expect(err.message).to.contain('tls=false reaches it');
       expect(client.stats.requestsSent).to.equal(0);
       await client.close();
       await noConnections(peer);

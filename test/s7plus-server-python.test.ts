@@ -150,6 +150,53 @@ describe('S7CommPlus simulator and the s7commplus Python client over TLS (issue 
     }
   });
 
+  it('with a password: read access until the session legitimates (the new AES legitimation over the TLS exporter); a wrong password refused', async () => {
+    const cert = await generateCertificate();
+    const locked = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key }, password: 'hunter2' });
+    const guarded = new S7Server({ port: 0, profile: 's7-1500', s7plus: locked });
+    await guarded.listen();
+    try {
+      // The harness has no legitimation operation: the package's own authenticate() is called.
+      const script = [
+        'import sys, struct',
+        'from s7commplus import Client',
+        'c = Client()',
+        'c.connect("127.0.0.1", int(sys.argv[1]), use_tls=True, tls_cert_fingerprint=sys.argv[2])',
+        'out = [c.protection_level]',
+        'def write():',
+        '    try:',
+        '        c.write_tag("Tank.Count", struct.pack(">h", 555))',
+        '        return "written"',
+        '    except Exception as e:',
+        '        return "refused"',
+        'out.append(write())',
+        'try:',
+        '    c._connection.authenticate(sys.argv[3])',
+        '    out.append(c._connection.protection_level)',
+        'except Exception as e:',
+        '    out.append(type(e).__name__)',
+        'out.append(write())',
+        'print(" ".join(map(str, out)))',
+      ].join('\n');
+      const attempt = (password: string) =>
+        new Promise<string>((resolve, reject) => {
+          const child = spawn(python, ['-c', script, String(guarded.port), locked.fingerprint!, password], {
+            stdio: ['ignore', 'pipe', 'pipe'],
+          });
+          let text = '';
+          child.stdout.on('data', (d: Buffer) => (text += d.toString()));
+          child.on('error', reject);
+          child.on('close', () => resolve(text.trim()));
+        });
+      expect(await attempt('wrong')).to.equal('2 refused S7ConnectionError refused');
+      expect(guarded.memory.area('DB', 1)!.readInt16BE(4)).to.equal(7);
+      expect(await attempt('hunter2')).to.equal('2 refused 1 written');
+      expect(guarded.memory.area('DB', 1)!.readInt16BE(4)).to.equal(555);
+    } finally {
+      await guarded.close();
+    }
+  });
+
   it('resets a connection whose integrity id jumps, as a PLC does; the next connection is served', async () => {
     // The harness has no operation that makes the client's counter jump: a few lines of the package's own client do.
     const script = [

@@ -44,7 +44,8 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   if (symbols) for (const line of servedBlocks(symbols)) say(line);
   say(`try: plcwire read "${url}" ${symbols ? flags.tryByName(symbols) : REACH[profile].addresses}`);
   if (s7plus?.fingerprint) {
-    say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}`);
+    const protectedNote = s7plus.password === undefined ? '' : ', protected: writes need the password';
+    say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}${protectedNote}`);
     say(`  s7plus://${hostPart(host)}:${port}?fingerprint=${s7plus.fingerprint}`);
   }
   return { close: () => server.close() };

@@ -20,7 +20,7 @@ import {
 import { decodeSetMultiVariablesResponse, encodeSetMultiVariablesRequest, sessionSetupRequest } from '../codec/variables';
 import { FunctionCode, Ids, ProtocolVersion } from '../constants';
 import { S7PlusSession, type S7PlusWireCounters, type S7PlusWiring } from './session';
-import { startTls, type PeerCertificate } from './tls';
+import { startTls, TrustRefusal, type PeerCertificate } from './tls';
 import { openTunnel } from './tunnel';
 
 /** How the client names itself in the session's CreateObject (the PLC shows it among its connections). */
@@ -44,11 +44,13 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
   const tunnel = await openTunnel(e, o);
   let stream: Duplex = tunnel;
   let session: S7PlusSession | undefined;
+  let step: Step = 'InitSSL';
   try {
     // InitSSL goes in plain text with sequence number 0, before TLS.
     await initSsl(tunnel, o);
     let certificate: PeerCertificate | undefined;
     if (e.tls) {
+      step = 'TLS';
       const started = await startTls(tunnel, e, o);
       stream = started.socket;
       certificate = started.certificate;
@@ -61,6 +63,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       o.stats,
     );
     const signal = o.signal;
+    step = 'CreateObject';
     const createAnswer = await session.request(
       FunctionCode.CreateObject,
       (sequence) => encodeCreateObjectRequest(sessionCreateRequest(sequence, { name: CLIENT_NAME })),
@@ -84,6 +87,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     session.sessionId = created.sessionId;
     if (e.tls) session.version = ProtocolVersion.V2;
     const version = created.serverSessionVersion;
+    step = 'session setup';
     const setup = decodeSetMultiVariablesResponse(
       await session.request(
         FunctionCode.SetMultiVariables,
@@ -105,11 +109,23 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     tunnel.destroy();
     if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
     const e2 = toPlcError(err, 'CONNECT_FAILED');
-    if (e2.code === 'PROTOCOL_ERROR' || e2.code === 'CLOSED' || e2.code === 'CONNECTION_LOST') {
-      throw new ConnectionError('CONNECT_FAILED', `${o.name}: ${e2.message}`, { cause: e2 });
-    }
-    throw e2;
+    if (e2.code !== 'PROTOCOL_ERROR' && e2.code !== 'CLOSED' && e2.code !== 'CONNECTION_LOST' && e2.code !== 'CONNECT_FAILED') throw e2;
+    if (e2 instanceof TrustRefusal || (e2.code === 'CONNECT_FAILED' && step !== 'TLS' && step !== 'CreateObject')) throw e2;
+    const what = e2.message.startsWith(o.name) ? e2.message.slice(o.name.length).replace(/^:?\s*/, '') : e2.message;
+    throw new ConnectionError('CONNECT_FAILED', `${o.name}: ${step} failed: ${what}${hint(e, step)}`, { cause: e2 });
   }
+}
+
+/** The handshake's steps after the COTP connection, for messages. */
+type Step = 'InitSSL' | 'TLS' | 'CreateObject' | 'session setup';
+
+/** What a failure at `step` most likely means, for the URL it used. */
+function hint(e: S7PlusEndpoint, step: Step): string {
+  if (step === 'TLS' && e.tls) {
+    return ' (a PLC without secure PG/HMI communication speaks plain S7CommPlus: tls=false reaches it, without encryption)';
+  }
+  if (step === 'CreateObject' && !e.tls) return ' (a PLC with secure PG/HMI communication on wants TLS after InitSSL: drop tls=false)';
+  return '';
 }
 
 /** InitSSL → its answer, on the plain tunnel (connection.py, _init_ssl); the deadline is the connect's. */

@@ -41,8 +41,11 @@ function colons(hex: string): string {
   return hex.toUpperCase().replace(/(..)(?!$)/g, '$1:');
 }
 
+/** The PLC's certificate refused by the URL's trust settings (not a failed handshake). */
+export class TrustRefusal extends ConnectionError {}
+
 function refusal(name: string, why: string, c: PeerCertificate): PlcError {
-  return new ConnectionError(
+  return new TrustRefusal(
     'CONNECT_FAILED',
     `${name}: ${why}. Its certificate: SHA-256 ${colons(c.fingerprint)}, subject ${c.subject}, valid ${c.validFrom} to ${c.validTo}. ` +
       `If it is your PLC's, pin it with fingerprint=${c.fingerprint} in the URL`,

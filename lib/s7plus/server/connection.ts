@@ -8,6 +8,7 @@
 import { Duplex } from 'node:stream';
 import * as tls from 'node:tls';
 import { ProtocolError } from '../../errors';
+import { OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH } from './legitimation';
 import { PlusSession, type SessionOptions } from './session';
 import type { CpuSide } from './services';
 import { connectionConfirm, connectionRequest, dataFrame } from './tsap';
@@ -20,7 +21,7 @@ const MAX_PENDING = 1 << 20;
 export interface ConnectionHost {
   readonly cpu: CpuSide;
   readonly secureContext: tls.SecureContext | undefined;
-  readonly session: Omit<SessionOptions, 'tls' | 'push'>;
+  readonly session: Omit<SessionOptions, 'tls' | 'push' | 'exporter'>;
   /** Writes bytes to the socket. */
   send(bytes: Buffer): void;
   /** Ends the connection (reset, or after DeleteObject). */
@@ -41,7 +42,12 @@ export class PlusConnection {
   ) {
     const cr = connectionRequest(crFrame);
     if (!cr) throw new ProtocolError('not a COTP connection request');
-    this.session = new PlusSession(host.cpu, { ...host.session, tls: host.secureContext !== undefined, push: (frame) => this.push(frame) });
+    this.session = new PlusSession(host.cpu, {
+      ...host.session,
+      tls: host.secureContext !== undefined,
+      push: (frame) => this.push(frame),
+      exporter: () => this.secure?.exportKeyingMaterial(OMS_EXPORTER_LENGTH, OMS_EXPORTER_LABEL, Buffer.alloc(0)),
+    });
     host.send(connectionConfirm(cr));
   }
 

@@ -31,6 +31,8 @@ export interface S7PlusOptions {
   readonly tls: { readonly cert: string | Buffer; readonly key: string | Buffer } | false;
   /** Items one request may carry; more resets the connection. Default 50 (CPU 1215C). */
   readonly maxItems?: number;
+  /** The CPU's password: a session has read access until it legitimates with it (over TLS). Never logged. */
+  readonly password?: string;
   /** Bytes one request frame may have; more resets the connection. Default 65535. */
   readonly maxRequestBytes?: number;
 }
@@ -49,10 +51,13 @@ export class S7PlusService {
   private readonly maxItems: number;
   private readonly maxRequestBytes: number;
   private nextSession = 0x3a0;
+  /** The CPU's password (`S7PlusOptions.password`); nothing prints it. */
+  readonly password: string | undefined;
 
   constructor(options: S7PlusOptions) {
     this.model = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
     this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
+    this.password = options.password;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
     if (options.tls) {
       this.secureContext = tls.createSecureContext({
@@ -81,7 +86,7 @@ export class S7PlusService {
       {
         cpu: { model: this.model, memory: cpu.memory, mode: () => cpu.state, maxItems: this.maxItems },
         secureContext: this.secureContext,
-        session: { maxRequestBytes: this.maxRequestBytes, newSessionId: () => this.nextSession++ },
+        session: { maxRequestBytes: this.maxRequestBytes, newSessionId: () => this.nextSession++, password: this.password },
         send: (bytes) => socket.write(bytes),
         close: (reason) => (reason ? hostile(reason) : socket.end()),
       },

@@ -128,7 +128,7 @@ function u32be(v: number): Buffer {
 }
 
 /** SetMultiVariables of data: each item written, or its error (nothing of that item written). */
-export function setMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
+export function setMultiVariables(cpu: CpuSide, body: Buffer, mayWrite: boolean): Buffer {
   const r = new Reader(body);
   const items = readAddresses(r, cpu);
   const values = new Map<number, Buffer>();
@@ -143,7 +143,9 @@ export function setMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
     const raw = values.get(i + 1);
     const t = target(cpu, item);
     let ok = false;
-    if (raw && t?.kind === 'node') ok = writeNode(t.node, cpu.memory, t.db.number, raw);
+    // Without the password (read access) every write is refused.
+    if (!mayWrite) ok = false;
+    else if (raw && t?.kind === 'node') ok = writeNode(t.node, cpu.memory, t.db.number, raw);
     else if (raw && t?.kind === 'range' && raw.length === t.size) {
       cpu.memory.write('DB', t.db, t.byte, raw);
       ok = true;

@@ -21,13 +21,14 @@ import {
 } from '../constants';
 import { Reader } from '../codec/bytes';
 import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
+import { FULL_ACCESS, Legitimation } from './legitimation';
 import { Subscriptions } from './subscriptions';
 import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
 
-/** The protection level a session without a password works at (protocol.py AccessLevel: 1 full access). */
-const FULL_ACCESS = 1;
-/** protocol.py Ids.EFFECTIVE_PROTECTION_LEVEL. */
-const EFFECTIVE_PROTECTION_LEVEL = 1842;
+/** The device string of ServerSessionVersion: an S7-1500 at firmware V3.1 (the form of legitimation.py's examples). */
+const PAOM = '1;6ES7 516-3AN02-0AB0 ;V3.1';
+/** A refused legitimation's return value: bit 15 set (connection.py _check_set_variable_response). */
+const LEGITIMATION_REFUSED = 0x8000n;
 
 export interface SessionOptions {
   readonly tls: boolean;
@@ -36,6 +37,10 @@ export interface SessionOptions {
   newSessionId(): number;
   /** Sends a frame the client did not ask for (a notification). */
   push(frame: Buffer): void;
+  /** The CPU's password (`--password-file`): without it the session has read access only. */
+  readonly password?: string | undefined;
+  /** The TLS exporter secret the legitimation key derives from; undefined without TLS. */
+  exporter(): Buffer | undefined;
 }
 
 /** What the transport does after a frame: send `reply`; switch to TLS; close. */
@@ -53,12 +58,14 @@ export class PlusSession {
   /** The session's subscription container: the second object id of its CreateObject. */
   private container = 0;
   private readonly subscriptions: Subscriptions;
+  private readonly legitimation: Legitimation;
 
   constructor(
     private readonly cpu: CpuSide,
     private readonly options: SessionOptions,
   ) {
     this.subscriptions = new Subscriptions(cpu, options.push, this.version());
+    this.legitimation = new Legitimation(options.password, options.exporter);
   }
 
   /** The connection ended: no more notifications. */
@@ -129,10 +136,13 @@ export class PlusSession {
         answer = this.deleteObject(body);
         break;
       case FunctionCode.SetVariable:
-        this.writeId = id === undefined ? this.writeId : (this.writeId + 1) >>> 0;
-        this.setVariable(body);
+        answer = Buffer.concat([encodeUVlq64(this.setVariable(body)), Buffer.alloc(4)]);
         // The credit update comes with transport flags 0x74: no answer (connection.py send_subscription_credit).
-        return transport & 0x40 ? {} : { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)])) };
+        if (transport & 0x40) {
+          if (id !== undefined) this.writeId = (this.writeId + 1) >>> 0;
+          return {};
+        }
+        break;
       case FunctionCode.Explore:
         answer = explore(this.cpu, body);
         break;
@@ -140,7 +150,7 @@ export class PlusSession {
         answer = getMultiVariables(this.cpu, body);
         break;
       case FunctionCode.SetMultiVariables:
-        answer = setMultiVariables(this.cpu, body);
+        answer = setMultiVariables(this.cpu, body, this.legitimation.level === FULL_ACCESS);
         break;
       case FunctionCode.GetVarSubStreamed:
         answer = this.subStreamed(body);
@@ -185,7 +195,18 @@ export class PlusSession {
     r.u32('the object id');
     r.bytes(3, 'the address array head');
     const address = r.uvlq32();
-    if (address === EFFECTIVE_PROTECTION_LEVEL) return getVarSubStreamed(FULL_ACCESS);
+    if (address === Ids.EffectiveProtectionLevel) return getVarSubStreamed(this.legitimation.level);
+    if (address === Ids.ServerSessionRequest) {
+      // The legitimation challenge, as a USInt array (connection.py _parse_get_var_substreamed_response).
+      const challenge = this.legitimation.newChallenge();
+      return Buffer.concat([
+        encodeUVlq64(0n),
+        Buffer.from([0x00, 0x10, DataType.USInt]),
+        encodeUVlq32(challenge.length),
+        challenge,
+        Buffer.alloc(4),
+      ]);
+    }
     // Any other address: an error return value (the item error the simulator uses, server.py _ITEM_ERROR).
     return Buffer.concat([encodeUVlq64(ITEM_ERROR_UNRESOLVED), Buffer.alloc(4)]);
   }
@@ -208,13 +229,21 @@ export class PlusSession {
     return Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)]);
   }
 
-  /** SetVariable: a subscription's credit limit (the one variable the simulator sets this way). */
-  private setVariable(body: Buffer): void {
+  /** SetVariable: a subscription's credit limit, or the session's legitimation; the return value (an error has bit 15 set). */
+  private setVariable(body: Buffer): bigint {
     const r = new Reader(body);
     const object = r.u32('the object id');
-    if (r.uvlq32() !== 1 || r.uvlq32() !== Ids.SubscriptionCreditLimit) return;
+    if (r.uvlq32() !== 1) return LEGITIMATION_REFUSED;
+    const address = r.uvlq32();
     r.u8('flags');
-    if (r.u8('type') === DataType.Int) this.subscriptions.setCredit(object, r.bytes(2, 'an Int').readInt16BE(0));
+    const type = r.u8('type');
+    if (address === Ids.SubscriptionCreditLimit && type === DataType.Int)
+      this.subscriptions.setCredit(object, r.bytes(2, 'an Int').readInt16BE(0));
+    else if (address === Ids.Legitimate && type === DataType.Blob) {
+      r.uvlq32();
+      return this.legitimation.attempt(r.bytes(r.uvlq32(), 'the credentials')) ? 0n : LEGITIMATION_REFUSED;
+    }
+    return 0n;
   }
 
   /** The CreateObject answer: the session id and its subscription container, then the session object with its ServerSessionVersion. */
@@ -233,10 +262,32 @@ export class PlusSession {
       encodeUVlq32(0),
       Buffer.from([ElementId.Attribute]),
       encodeUVlq32(Ids.ServerSessionVersion),
-      Buffer.from([0x00, DataType.UDInt]),
-      encodeUVlq32(this.version()),
+      this.sessionVersion(),
       Buffer.from([ElementId.TerminatingObject]),
       Buffer.alloc(4),
+    ]);
+  }
+
+  /**
+   * ServerSessionVersion: Struct 314 with the protocol version (315) and the
+   * device string (319) whose firmware tells a client which legitimation the
+   * CPU takes: V3.1 of an S7-1500, the "new" one (legitimation.py).
+   */
+  private sessionVersion(): Buffer {
+    const id = Buffer.alloc(4);
+    id.writeUInt32BE(Ids.SessionVersionStruct);
+    const paom = Buffer.from(PAOM, 'utf8');
+    return Buffer.concat([
+      Buffer.from([0x00, DataType.Struct]),
+      id,
+      encodeUVlq32(315),
+      Buffer.from([0x00, DataType.UDInt]),
+      encodeUVlq32(this.version()),
+      encodeUVlq32(Ids.SessionVersionSystemPaomString),
+      Buffer.from([0x00, DataType.WString]),
+      encodeUVlq32(paom.length),
+      paom,
+      Buffer.from([0x00]),
     ]);
   }
 
