@@ -7,13 +7,20 @@
  * puts the fingerprint into the field and the URL.
  */
 import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
 import type { Browser } from 'playwright-core';
 import { S7Server } from '../lib/s7/server';
+import { S7PlusClient } from '../lib/s7plus/client';
 import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
 import { launchChromium } from './support/browser';
 import { openEditor, startNodeRedProcess, type NodeRedProcess } from './support/node-red-process';
+
+const CATALOG = JSON.parse(fs.readFileSync(path.join(__dirname, '../../nodes/locales/en-US/connection.json'), 'utf8'))[
+  'plcwire-connection'
+];
 
 describe('editor in Chromium: the connection dialog on s7plus://', function () {
   this.timeout(120_000);
@@ -51,7 +58,7 @@ describe('editor in Chromium: the connection dialog on s7plus://', function () {
     await server?.close();
   });
 
-  it('S7CommPlus shows the TLS fields; Get certificate shows the fingerprint, Pin puts it in the URL', async () => {
+  it('S7CommPlus shows the TLS fields; Get certificate shows the fingerprint, Pin puts it in the URL; Browse PLC answers in view', async () => {
     const { context, page, errors } = await openEditor(browser, red, 'en-US', 'read');
     try {
       await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn'));
@@ -86,6 +93,31 @@ describe('editor in Chromium: the connection dialog on s7plus://', function () {
         { timeout: 5_000 },
       );
       expect(await page.isVisible('#node-config-plcwire-pin')).to.equal(false);
+
+      // Browse PLC: visible, clickable, and its answer shown; with a client that browses, the tag tables complete from it.
+      await page.click('#node-config-plcwire-browse');
+      await page.waitForFunction(
+        (asking) => {
+          const text = (globalThis as any).document.querySelector('#node-config-plcwire-browse-result').textContent;
+          return text !== '' && text !== asking;
+        },
+        CATALOG.editor.browsing,
+        { timeout: 20_000 },
+      );
+      const answer = (await page.textContent('#node-config-plcwire-browse-result')) ?? '';
+      if (typeof (S7PlusClient.prototype as { browse?: unknown }).browse !== 'function') {
+        expect(answer).to.include('cannot browse the PLC yet');
+      } else {
+        expect(answer).to.match(/^\d+ tags in \d+ blocks/);
+        const names = await page.evaluate(
+          () =>
+            new Promise<string[]>((resolve) => {
+              const ed = (globalThis as any).plcwireEditor;
+              ed.compileSymbols(ed.symbolsOf('conn'), (a: any) => resolve(a.entries.map((e: any) => e.name)));
+            }),
+        );
+        expect(names).to.include('"Recipe".Step');
+      }
       expect(errors, errors.join('\n')).to.deep.equal([]);
     } finally {
       await context.close();
