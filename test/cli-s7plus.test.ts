@@ -43,6 +43,35 @@ async function done(args: string[], env: NodeJS.ProcessEnv = {}): Promise<{ code
   return { code, ...r.output() };
 }
 
+/** `plcwire serve s7 --profile s7-1500` on the fixtures, with `extra` flags: its process and the URLs it prints. */
+async function startSimulator(extra: string[]): Promise<{ sim: Run; url: string; s7url: string; fingerprint: string }> {
+  const sim = run([
+    'serve',
+    's7',
+    '--profile',
+    's7-1500',
+    '--port',
+    '0',
+    ...['Valve.udt', 'Tank.db', 'Recipe.db'].flatMap((f) => ['--source', f]),
+    ...['--db', 'Tank=1', '--db', 'Recipe=2'],
+    ...extra,
+  ]);
+  await until(() => /Ctrl-C stops/.test(sim.output().out + sim.output().err), 20000, 'the simulator to start');
+  const text = sim.output().out;
+  const url = /(s7plus:\/\/\S+)/.exec(text)![1]!;
+  const s7url = /"(s7:\/\/[^"]+)"/.exec(text)![1]!;
+  const fingerprint = /certificate SHA-256 ([0-9A-F]{64})/.exec(text)![1]!.toLowerCase();
+  expect(url).to.include(`fingerprint=${fingerprint.toUpperCase()}`);
+  return { sim, url, s7url, fingerprint };
+}
+
+async function stop(sim: Run | undefined): Promise<void> {
+  if (sim && sim.child.exitCode === null) {
+    sim.child.kill('SIGTERM');
+    await sim.exit;
+  }
+}
+
 describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulator)', function () {
   this.timeout(60000);
   let sim: Run;
@@ -53,29 +82,11 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
 
   before(async () => {
     tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-cli-s7plus-'));
-    sim = run([
-      'serve',
-      's7',
-      '--profile',
-      's7-1500',
-      '--port',
-      '0',
-      ...['Valve.udt', 'Tank.db', 'Recipe.db'].flatMap((f) => ['--source', f]),
-      ...['--db', 'Tank=1', '--db', 'Recipe=2'],
-    ]);
-    await until(() => /Ctrl-C stops/.test(sim.output().out + sim.output().err), 20000, 'the simulator to start');
-    const text = sim.output().out;
-    url = /(s7plus:\/\/\S+)/.exec(text)![1]!;
-    s7url = /"(s7:\/\/[^"]+)"/.exec(text)![1]!;
-    fingerprint = /certificate SHA-256 ([0-9A-F]{64})/.exec(text)![1]!.toLowerCase();
-    expect(url).to.include(`fingerprint=${fingerprint.toUpperCase()}`);
+    ({ sim, url, s7url, fingerprint } = await startSimulator([]));
   });
 
   after(async () => {
-    if (sim && sim.child.exitCode === null) {
-      sim.child.kill('SIGTERM');
-      await sim.exit;
-    }
+    await stop(sim);
     fs.rmSync(tmp, { recursive: true, force: true });
   });
 
@@ -162,6 +173,22 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
       const s7 = await done(['read', s7url, 'DB1.DBW4:INT', '--password-file', empty]);
       expect(s7.code).to.equal(EXIT.USAGE);
       expect(s7.err).to.include('--password-file is for s7plus:// URLs');
+    });
+
+    it('a PLC protected with the simulator --password-file: without a password a write is refused and nothing changes; the password of the file reaches the client', async () => {
+      const pwFile = path.join(tmp, 'plc-password.txt');
+      fs.writeFileSync(pwFile, `${SECRET}\n`);
+      const guarded = await startSimulator(['--password-file', pwFile]);
+      try {
+        expect(guarded.sim.output().out).to.include('protected: writes need the password').and.not.include(SECRET);
+        const w = await done(['write', guarded.url, 'DB1.DBW4:INT=99']);
+        expect(w.code, w.err).to.equal(EXIT.TAG_ERROR);
+        const r = await done(['read', guarded.s7url, 'DB1.DBW4:INT', '--json']);
+        expect(JSON.parse(r.out)).to.deep.equal({ 'DB1.DBW4:INT': 7 });
+        reachedClient(await done(['write', guarded.url, 'DB1.DBW4:INT=99', '--password-file', pwFile]));
+      } finally {
+        await stop(guarded.sim);
+      }
     });
 
     it('in the URL it is refused without echoing it', async () => {
