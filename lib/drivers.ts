@@ -19,6 +19,8 @@ import type { UrlScheme } from './link/driver';
 import { S7Client } from './s7/client';
 import { serveS7 } from './s7/serve';
 import { S7_URLS } from './s7/url';
+import { S7PlusClient } from './s7plus/client';
+import { S7PLUS_URLS } from './s7plus/url';
 import type { Served, ServeFlags } from './sim/serve';
 import type { PlcClient, Protocol } from './types';
 
@@ -35,6 +37,8 @@ export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
   binding?: BindingInterface;
   /** Freeport frame profile of your PLC program; unnamed fields keep the default profile's (docs/protocols.md, "S7-200 freeport"). */
   profile?: Partial<FreeportProfile>;
+  /** s7plus: the PLC's password (legitimation); never in a URL, never in a log, an error or JSON. */
+  password?: string;
 }
 
 /** One protocol in the registry. */
@@ -58,7 +62,7 @@ export interface DriverEntry<E extends { readonly protocol: Protocol }, C extend
 
 /** The options every client takes: ConnectOptions without freeport's serial binding and frame profile. */
 function common(options: ConnectOptions): Partial<ClientOptions> {
-  const { binding: _binding, profile: _profile, ...rest } = options;
+  const { binding: _binding, profile: _profile, password: _password, ...rest } = options;
   return rest;
 }
 
@@ -86,6 +90,14 @@ export const DRIVERS = Object.freeze({
     blockLength: false,
     serve: serveFreeport,
   }),
+  s7plus: entry({
+    urls: S7PLUS_URLS,
+    createClient: (e, o) => new S7PlusClient(e, { ...common(o), ...(o.password !== undefined ? { password: o.password } : {}) }),
+    symbols: true,
+    blockLength: false,
+    // Its simulator is the S7 one's (S7CommPlus on the same port as PUT/GET, as a CPU serves it) once that serves it.
+    serve: (flags) => Promise.reject(flags.usage('no S7CommPlus simulator yet: `plcwire serve s7` serves PUT/GET only')),
+  }),
 }) satisfies { readonly [P in Protocol]: DriverEntry<{ readonly protocol: P }, PlcClient> };
 
 type Drivers = typeof DRIVERS;
@@ -104,6 +116,7 @@ export const URL_SCHEMES = Object.freeze({
   s7: ['s7'],
   fetchwrite: ['fetchwrite'],
   freeport: ['freeport', 'freeport+tcp'],
+  s7plus: ['s7plus'],
 } as const) satisfies {
   readonly [P in Protocol]: readonly string[];
 };

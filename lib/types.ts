@@ -88,7 +88,7 @@ export type PlcData = PlcValue | PlcStruct | PlcStruct[];
 
 export type LinkState = 'idle' | 'connecting' | 'connected' | 'reconnecting' | 'closed';
 
-export type Protocol = 's7' | 'fetchwrite' | 'freeport';
+export type Protocol = 's7' | 'fetchwrite' | 'freeport' | 's7plus';
 
 export interface RequestOptions {
   /** Abort the request (it rejects with code ABORTED). */

@@ -3,6 +3,7 @@ const plc = require('..');
 const { ClientPool, withoutCredentials } = require('../dist/lib/flows/client-pool');
 const { settleWithin } = require('./shared/user');
 const symbols = require('../dist/lib/flows/symbol-config');
+const s7plusAdmin = require('./shared/s7plus-admin');
 
 /** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
 const pool = new ClientPool();
@@ -29,7 +30,9 @@ module.exports = function (RED) {
     node.symbols = compiled.table;
     /** Why the sources did not compile: [{ code, message, file?, line?, column? }]. */
     node.symbolProblems = compiled.problems || [];
-    const symbolsOf = { key: symbols.symbolsKey(config), table: node.symbols, strict: !!config.strictSymbols };
+    // The PLC's password (s7plus://) is a credential: in no flow export, no property a Debug node could show.
+    const password = node.credentials && node.credentials.password ? node.credentials.password : undefined;
+    const symbolsOf = { key: symbols.symbolsKey(config), table: node.symbols, strict: !!config.strictSymbols, password };
     /** Data blocks whose length on the PLC differs from their source's, by DB number, since the link came up. */
     const mismatches = new Map();
     let link;
@@ -175,7 +178,7 @@ module.exports = function (RED) {
     });
   }
 
-  RED.nodes.registerType('plcwire-connection', PlcwireConnection);
+  RED.nodes.registerType('plcwire-connection', PlcwireConnection, { credentials: { password: { type: 'password' } } });
 
   /** The sources of a request body, the way a connection node's config carries them. */
   function symbolConfig(body) {
@@ -183,6 +186,7 @@ module.exports = function (RED) {
   }
 
   const canRead = RED.auth.needsPermission('plcwire.read');
+  s7plusAdmin(RED, canRead);
 
   /**
    * The address parser of a URL's protocol (the client's own, which knows the

@@ -28,13 +28,28 @@
   /** The sources of connection `connectionId` as the runtime's endpoints take them, or undefined when it has none. */
   editor.symbolsOf = function (connectionId) {
     var c = editor.connectionNode(connectionId);
-    if (!c || !Array.isArray(c.symbolSources) || c.symbolSources.length === 0) return undefined;
-    return { symbolSources: c.symbolSources, dbNumbers: c.dbNumbers || [] };
+    if (c && Array.isArray(c.symbolSources) && c.symbolSources.length > 0)
+      return { symbolSources: c.symbolSources, dbNumbers: c.dbNumbers || [] };
+    // No sources, but the PLC's own table from Browse PLC (s7plus://): the tag tables complete from it as from compiled sources.
+    if (c && browsed[c.id]) return { symbolSources: [], dbNumbers: [], browsed: c.id };
+    return undefined;
+  };
+
+  var browsed = {}; // connection id → the runtime's answer of plcwire/s7plus/browse, with byName
+
+  /** Keeps what Browse PLC answered for connection `connectionId` (the shape of a compile: blocks, entries, types, errors). */
+  editor.setBrowsed = function (connectionId, answer) {
+    var table = { blocks: answer.blocks || [], entries: answer.entries || [], types: answer.types || [], errors: [], byName: {} };
+    table.entries.forEach(function (e) {
+      table.byName[e.name] = e;
+    });
+    browsed[connectionId] = table;
   };
 
   /** A short fingerprint of a set of sources (32-bit FNV-1a over their JSON), to cache the runtime's answers by; '' for none. */
   function keyOf(symbols) {
     if (!symbols) return '';
+    if (symbols.browsed) return 'browse:' + symbols.browsed;
     var text = JSON.stringify([symbols.symbolSources, symbols.dbNumbers]);
     var h = 0x811c9dc5;
     for (var i = 0; i < text.length; i++) {
@@ -55,6 +70,7 @@
   editor.compileSymbols = function (symbols, callback) {
     var key = keyOf(symbols);
     if (!key) return callback({ blocks: [], entries: [], types: [], errors: [], byName: {} });
+    if (symbols.browsed) return callback(browsed[symbols.browsed] || { blocks: [], entries: [], types: [], errors: [], byName: {} });
     if (compiled[key]) return callback(compiled[key]);
     if (compiling[key]) return void compiling[key].push(callback);
     compiling[key] = [callback];

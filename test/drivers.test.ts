@@ -22,9 +22,10 @@ const SAMPLES: Readonly<Record<string, string>> = {
   fetchwrite: 'fetchwrite://127.0.0.1?port=1',
   freeport: 'freeport:///dev/ttyFAKE0?baud=9600',
   'freeport+tcp': 'freeport+tcp://127.0.0.1:1',
+  s7plus: 's7plus://127.0.0.1:1?tls=false',
 };
 
-const PROTOCOLS: readonly Protocol[] = ['s7', 'fetchwrite', 'freeport'];
+const PROTOCOLS: readonly Protocol[] = ['s7', 'fetchwrite', 'freeport', 's7plus'];
 
 const TABLE = compileSymbols(
   [

@@ -35,6 +35,9 @@ export function parseArgs(argv: readonly string[], valueFlags: readonly string[]
       if (value === undefined) throw new UsageError(`--${name} needs a value`);
       flags.set(name, value);
       lists.set(name, [...(lists.get(name) ?? []), value]);
+    } else if (name === 'password') {
+      // Never echoed: the value is the secret. A command line is visible to every user of the machine (ps).
+      throw new UsageError('--password is not an option: give the password in PLCWIRE_PASSWORD or with --password-file FILE');
     } else {
       throw new UsageError(`unknown option --${name}`);
     }

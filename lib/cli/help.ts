@@ -4,7 +4,9 @@
  * usage (main.ts) lists every command.
  */
 
-const URL_NOTE = 'url: s7://host?rack=0&slot=1, fetchwrite://host?fetchPort=2000&writePort=2001, freeport:///dev/ttyUSB0?baud=9600';
+const URL_NOTE = `url: s7://host?rack=0&slot=1, fetchwrite://host?fetchPort=2000&writePort=2001, freeport:///dev/ttyUSB0?baud=9600,
+  s7plus://host?fingerprint=<SHA-256 of the PLC's certificate> (S7-1200/1500 over TLS; or ca=FILE, insecure=true on the bench)`;
+const PASSWORD_OPTION = `  --password-file F  s7plus://: the PLC's password is the first line of F (else PLCWIRE_PASSWORD); never in the URL`;
 const SYMBOL_OPTIONS = `  --symbols file     DB/UDT sources or a symbol table that declare the names (repeatable)
   --db NAME=N        the number of a TIA data block, which its source does not carry (repeatable)
   --strict-symbols   refuse names in a DB whose length in the PLC differs from the sources'`;
@@ -15,6 +17,7 @@ Reads each tag once and prints "address = value" (REAL with the digits TIA shows
 ${SYMBOL_OPTIONS}
   --json             one JSON object keyed by the tags as given (64-bit integers as exact digits)
   --timeout ms       how long to wait for the PLC
+${PASSWORD_OPTION}
 ${URL_NOTE}
 example:
   plcwire read "s7://192.168.0.1?rack=0&slot=1" DB1.DBW2:INT MW4 '"Plant".Level' --symbols Plant.db --db Plant=1`,
@@ -26,14 +29,17 @@ ${SYMBOL_OPTIONS}
   --yes              write to a PLC that is not on this machine without asking (needed in scripts)
   --json             one JSON object: "ok" or the error per tag
   --timeout ms       how long to wait for the PLC
+${PASSWORD_OPTION}
 ${URL_NOTE}
 example:
   plcwire write "s7://192.168.0.1?rack=0&slot=1" DB1.DBW2:INT=42 '"Plant".MotorRun=true' --symbols Plant.db --db Plant=1 --yes`,
   watch: `usage: plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--json]
 Polls until Ctrl-C (exit code 130) and prints a line per changed value, all values first; reconnects by itself.
+On s7plus:// it polls too: the S7CommPlus client offers no subscription yet (the PLC pushing changes).
 ${SYMBOL_OPTIONS}
   --interval ms      time between polls (default 1000)
   --json             one JSON object per line: { "time": ISO 8601, "values": { tag: value } }
+${PASSWORD_OPTION}
 ${URL_NOTE}
 example:
   plcwire watch "s7://192.168.0.1?rack=0&slot=1" '"Plant".Level' MW4 --symbols Plant.db --db Plant=1 --interval 500`,
@@ -45,8 +51,19 @@ name, address, type, byte and bit of every member; a source that does not compil
   --csv              RFC 4180 with a header row
 example:
   plcwire symbols Plant.db --db Plant=1`,
+  browse: `usage: plcwire browse <s7plus-url> [--password-file FILE] [--json | --csv]
+Asks an S7-1200/1500 for its own tags over S7CommPlus (data blocks, optimized ones too, and the PLC tag table) and
+prints them as plcwire symbols prints compiled sources: name, address, type, byte and bit; a member of an
+optimized block has no address, byte or bit: read and write it by name on the same s7plus:// URL.
+  --json             an array of { name, type, db, byte, bit, address }
+  --csv              RFC 4180 with a header row
+${PASSWORD_OPTION}
+example:
+  plcwire browse "s7plus://192.168.0.1?fingerprint=<64 hex digits the simulator or TIA shows>" --json`,
   info: `usage: plcwire info <url> [--json]
-Prints the CPU's identity, its state (RUN, STOP, ...), protection, PDU size, parallel jobs and clock (S7 only).
+Prints what the PLC's client can tell: over s7:// the CPU's identity, its state (RUN, STOP, ...), protection,
+PDU size, parallel jobs and clock; over s7plus:// its state and the certificate of the TLS session.
+${PASSWORD_OPTION}
 example:
   plcwire info "s7://192.168.0.1?rack=0&slot=1" --json`,
   szl: `usage: plcwire szl <url> <id> [index] [--json]
@@ -64,7 +81,8 @@ example:
   plcwire clock "s7://192.168.0.1?rack=0&slot=1&control=true" --set now --yes`,
   blocks: `usage: plcwire blocks <url> [TYPE [NUMBER]] [--json]
 Without a type: the count per type; with a type (OB, FB, FC, DB, SDB, SFC, SFB) its numbers; with a number its
-block info. S7-1200/1500 have no block functions over S7comm.
+block info. S7-1200/1500 have no block functions over S7comm; over s7plus:// they list their data blocks
+with names (no counts of code blocks, no block info).
 example:
   plcwire blocks "s7://192.168.0.10?rack=0&slot=2" DB 10 --json`,
   cpu: `usage: plcwire cpu <url> stop|start|cold-start [--yes] [--json]

@@ -16,6 +16,7 @@ import { EXIT, confirm, exitCode, fail, withClient, type CliIo } from './io';
 import { serve, SERVE_FLAGS } from './serve';
 import { realsForPeople } from '../flows/reals';
 import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
+import { browse, passwordOption } from './s7plus';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { textOf, toJson, valueFromText, type TypedTag } from './values';
 
@@ -24,6 +25,7 @@ const USAGE = `usage:
   plcwire write <url> <address|symbol>=<value>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--yes] [--json] [--timeout ms]
   plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--json]
   plcwire symbols <file>... [--db NAME=N]... [--json | --csv]   (DB/UDT sources, symbol tables)
+  plcwire browse <s7plus-url> [--password-file FILE] [--json | --csv]   (the PLC's own tags, optimized blocks too)
   plcwire info  <url> [--json]
   plcwire szl   <url> <id> [index] [--json]              (hex, e.g. 0x0011 0)
   plcwire diag  <url> [--max N] [--json]
@@ -41,10 +43,12 @@ symbols: names as TIA writes them ('"Tank".Motor.Speed', Tank.Motor.Speed); a ST
       and is written as JSON ('"Tank".Motor={"Speed":1.5}'); --db numbers the blocks of TIA sources;
       a DB whose length in the PLC differs from the sources' is a warning, --strict-symbols refuses its names.
 urls: s7://host?rack=0&slot=1  fetchwrite://host?fetchPort=2000&writePort=2001
+      s7plus://host?fingerprint=<SHA-256 of the PLC's certificate>  (or ca=FILE; insecure=true for the bench)
+password (s7plus:// only): PLCWIRE_PASSWORD or --password-file FILE (its first line); never in the URL or a flag
       freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
 exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
-const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
+const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', 'password-file', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
 const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'strict-symbols'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
@@ -100,13 +104,15 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
         return await doctor(rest, args, io);
       case 'symbols':
         return symbols(rest, args, io);
+      case 'browse':
+        return await browse(rest, args, io);
       case 'serve':
         return await serve(rest, args, io);
       case 'demo':
         return await (await import('./demo')).runDemo(io);
       default:
         throw new UsageError(
-          `unknown command "${command}" (read, write, watch, symbols, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`,
+          `unknown command "${command}" (read, write, watch, symbols, browse, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`,
         );
     }
   } catch (err) {
@@ -137,7 +143,7 @@ function targetClient(
   const { table, options } = symbolOptions(args);
   let client: AnyClient;
   try {
-    client = createClient(withTimeout(endpoint, args), options);
+    client = createClient(withTimeout(endpoint, args), { ...options, ...passwordOption(endpoint, args) });
   } catch (err) {
     // Freeport refuses a symbol table: a bad command line, nothing was sent.
     if (err instanceof PlcError && err.code === 'NOT_SUPPORTED') throw new UsageError(err.message);

@@ -129,6 +129,12 @@ export function symbols(rest: string[], args: ParsedArgs, io: CliIo): number {
       `note: ${blockName(b.name, b.db)} has optimized access: its members have no byte, bit or address; ` +
         'they are read and written by name over s7plus:// (S7CommPlus), not over s7:// or fetchwrite://\n',
     );
+  printSymbolRows(table, args, io);
+  return EXIT.OK;
+}
+
+/** A table's rows on stdout as `plcwire symbols` prints them: aligned text, --json or --csv. */
+export function printSymbolRows(table: SymbolTable, args: ParsedArgs, io: CliIo): void {
   const rows = table.entries.map(rowOf);
   if (args.flags.has('json')) {
     io.stdout.write(`${toJson(rows)}\n`);
@@ -146,7 +152,6 @@ export function symbols(rest: string[], args: ParsedArgs, io: CliIo): number {
     ]);
     for (const line of alignedTable([['name', 'address', 'type', 'byte', 'bit'], ...cells])) io.stdout.write(`${line}\n`);
   }
-  return EXIT.OK;
 }
 
 /**

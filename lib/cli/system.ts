@@ -1,6 +1,7 @@
 /**
- * The S7 system commands: info, szl, diag, clock, blocks, cpu (the S7Client
- * services) and doctor (lib/s7/doctor/). Control (cpu, clock --set) is
+ * The system commands: info and blocks (whatever the URL's client offers: the
+ * S7Client's services, the S7CommPlus client's CPU state and data blocks),
+ * szl, diag, clock, cpu (S7 only) and doctor (lib/s7/doctor/). Control (cpu, clock --set) is
  * refused before connecting unless the URL says control=true, and needs
  * --yes from a script or for a PLC that is not this machine.
  */
@@ -19,9 +20,12 @@ import {
   decodeSzlIds,
   type SzlList,
 } from '../s7/codec/szl';
-import { endpointName, isLoopback, parseUrl, type S7Endpoint } from '../url';
+import { createClient, type AnyClient } from '../connect';
+import type { RequestOptions } from '../types';
+import { endpointName, isLoopback, parseUrl, type Endpoint, type S7Endpoint } from '../url';
 import { UsageError, intFlag, stringFlag, withTimeout, type ParsedArgs } from './args';
 import { EXIT, confirm, withClient, type CliIo } from './io';
+import { passwordOption } from './s7plus';
 import { symbolOptions } from './symbols';
 import { toJson, valueToText } from './values';
 import { hex4 } from '../values/text';
@@ -33,6 +37,31 @@ function s7Endpoint(rest: string[], what: string, args: ParsedArgs): S7Endpoint 
   const endpoint = withTimeout(parseUrl(url), args);
   if (endpoint.protocol !== 's7') throw new UsageError(`${what} speaks S7 only: give an s7:// URL`);
   return endpoint;
+}
+
+/** The endpoint of the first positional, any protocol: the command then asks its client what it offers. */
+function anyEndpoint(rest: string[], what: string, args: ParsedArgs): Endpoint {
+  const url = rest[0];
+  if (url === undefined) throw new UsageError(`${what} needs a PLC url`);
+  return withTimeout(parseUrl(url), args);
+}
+
+/** The services info and blocks look for on a client; each is optional, asked of the client, not of its protocol. */
+interface SystemServices {
+  info?(options?: RequestOptions): Promise<object>;
+  cpuState?(options?: RequestOptions): Promise<unknown>;
+  certificate?: { fingerprint: string; subject: string; validFrom: string; validTo: string } | undefined;
+  listBlocks?(options?: RequestOptions): Promise<Record<string, number>>;
+  dataBlocks?(options?: RequestOptions): Promise<{ number: number; name: string }[]>;
+}
+
+/** The URL's client (with the password of an s7plus:// URL), unconnected, seen through the services it may offer. */
+function systemClient(endpoint: Endpoint, args: ParsedArgs): AnyClient & SystemServices {
+  return createClient(endpoint, passwordOption(endpoint, args)) as AnyClient & SystemServices;
+}
+
+function notOffered(endpoint: Endpoint, what: string): PlcError {
+  return new PlcError('NOT_SUPPORTED', `${endpointName(endpoint)}: the ${endpoint.protocol}:// client cannot ${what}`);
 }
 
 function extra(rest: string[], from: number): void {
@@ -63,15 +92,23 @@ async function checkControl(endpoint: S7Endpoint, args: ParsedArgs, io: CliIo, w
 }
 
 export async function info(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
-  const endpoint = s7Endpoint(rest, 'info', args);
+  const endpoint = anyEndpoint(rest, 'info', args);
   extra(rest, 1);
-  const i = await run(endpoint, io, (c) => c.info({ signal: io.signal }));
+  const client = systemClient(endpoint, args);
+  const { info: full, cpuState } = client;
+  if (!full && !cpuState) throw notOffered(endpoint, 'tell the CPU state or identity'); // before connecting
+  const json: Record<string, unknown> = await withClient(client, io, async () => {
+    if (full) return { ...(await full.call(client, { signal: io.signal })) };
+    // What the client has: the state, and the certificate of its TLS session (S7CommPlus).
+    const state = await cpuState!.call(client, { signal: io.signal });
+    const cert = client.certificate;
+    return { state, ...(cert ? { certificate: cert } : {}) };
+  });
   // The state as the library and the PLC say it (RUN, STOP), as TIA Portal shows it.
-  const json = { ...i };
   print(io, args, json, () =>
     Object.entries(json)
       .filter(([, v]) => v !== undefined)
-      .map(([k, v]) => `${k}: ${k === 'protection' ? toJson(v) : typeof v === 'string' ? v : valueToText(v)}`),
+      .map(([k, v]) => `${k}: ${k === 'protection' || k === 'certificate' ? toJson(v) : typeof v === 'string' ? v : valueToText(v)}`),
   );
   return EXIT.OK;
 }
@@ -169,7 +206,7 @@ export async function clock(rest: string[], args: ParsedArgs, io: CliIo): Promis
 }
 
 export async function blocks(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
-  const endpoint = s7Endpoint(rest, 'blocks', args);
+  const endpoint = anyEndpoint(rest, 'blocks', args);
   extra(rest, 3);
   const typeText = rest[1]?.toUpperCase();
   if (typeText !== undefined && !Object.prototype.hasOwnProperty.call(BLOCK_TYPES, typeText)) {
@@ -179,14 +216,39 @@ export async function blocks(rest: string[], args: ParsedArgs, io: CliIo): Promi
   const numberText = rest[2];
   if (numberText !== undefined && (!/^\d+$/.test(numberText) || Number(numberText) > 65535))
     throw new UsageError(`"${numberText}" is not a block number 0..65535`);
+  const client = systemClient(endpoint, args);
+  if (client instanceof S7Client) return s7Blocks(client, type, numberText, args, io);
+  const { dataBlocks } = client;
+  if (!dataBlocks) throw notOffered(endpoint, 'list blocks');
+  if (numberText !== undefined) throw notOffered(endpoint, 'read block information');
+  if (type !== undefined && type !== 'DB') throw notOffered(endpoint, `list ${type} blocks (only data blocks)`);
+  const list = await withClient(client, io, () => dataBlocks.call(client, { signal: io.signal }));
+  if (type === 'DB') {
+    const numbers = list.map((b) => b.number);
+    print(io, args, { type, numbers }, () => [numbers.length === 0 ? 'no DB blocks' : `DB: ${numbers.join(' ')}`]);
+  } else {
+    // The data blocks with their names: what S7CommPlus tells (no counts of code blocks).
+    print(io, args, { DB: list }, () => (list.length === 0 ? ['no DB blocks'] : list.map((b) => `DB${b.number}  ${b.name}`)));
+  }
+  return EXIT.OK;
+}
+
+async function s7Blocks(
+  client: S7Client,
+  type: BlockType | undefined,
+  numberText: string | undefined,
+  args: ParsedArgs,
+  io: CliIo,
+): Promise<number> {
+  const run = <R>(work: (c: S7Client) => Promise<R>) => withClient(client, io, () => work(client));
   if (type === undefined) {
-    const counts = await run(endpoint, io, (c) => c.listBlocks({ signal: io.signal }));
+    const counts = await run((c) => c.listBlocks({ signal: io.signal }));
     print(io, args, counts, () => Object.entries(counts).map(([t, n]) => `${t}: ${n}`));
   } else if (numberText === undefined) {
-    const numbers = await run(endpoint, io, (c) => c.listBlocksOfType(type, { signal: io.signal }));
+    const numbers = await run((c) => c.listBlocksOfType(type, { signal: io.signal }));
     print(io, args, { type, numbers }, () => [numbers.length === 0 ? `no ${type} blocks` : `${type}: ${numbers.join(' ')}`]);
   } else {
-    const info = await run(endpoint, io, (c) => c.blockInfo(type, Number(numberText), { signal: io.signal }));
+    const info = await run((c) => c.blockInfo(type, Number(numberText), { signal: io.signal }));
     print(io, args, info, () => Object.entries(info).map(([k, v]) => `${k}: ${typeof v === 'string' ? v : valueToText(v)}`));
   }
   return EXIT.OK;

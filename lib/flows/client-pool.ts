@@ -30,6 +30,8 @@ export interface PoolSymbols {
   key: string;
   table?: SymbolTable;
   strict?: boolean;
+  /** s7plus: the PLC's password (a Node-RED credential), handed to the client only. */
+  password?: string;
 }
 
 /** How the link is doing, as its owners show it. */
@@ -170,7 +172,10 @@ export class ClientPool<C extends PoolClient = AnyClient> {
       );
     }
     if (!link) {
-      const client = this.create(endpoint, symbols.table ? { symbols: symbols.table, strictSymbols: !!symbols.strict } : {});
+      const client = this.create(endpoint, {
+        ...(symbols.table ? { symbols: symbols.table, strictSymbols: !!symbols.strict } : {}),
+        ...(symbols.password !== undefined ? { password: symbols.password } : {}),
+      });
       link = new PooledLink(this, key, url, endpoint, symbols.key, client);
       this.links.set(key, link);
     }

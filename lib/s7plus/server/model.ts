@@ -148,7 +148,7 @@ function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], 
         rid: dbAccessArea(summary.db),
         type,
         root: layout.root,
-        length: summary.length,
+        length: layout.length,
       }),
     );
   });

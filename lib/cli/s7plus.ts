@@ -1,0 +1,87 @@
+/**
+ * S7CommPlus on the command line: the PLC's password and `plcwire browse`.
+ *
+ * The password of an s7plus:// connection comes from the PLCWIRE_PASSWORD
+ * environment variable or from the first line of `--password-file FILE`;
+ * never from the URL (the URL parser refuses `password=`) or a flag's value
+ * (`--password` is refused: every user of the machine sees a command line).
+ * It goes to the client as ConnectOptions.password and nowhere else: no
+ * message of this file quotes it.
+ */
+import type { AnyClient, ConnectOptions } from '../connect';
+import { PlcError } from '../errors';
+import type { SymbolTable } from '../symbols/model';
+import type { RequestOptions } from '../types';
+import { parseUrl, type Endpoint } from '../url';
+import { UsageError, stringFlag, withTimeout, type ParsedArgs } from './args';
+import { readInputFile } from './files';
+import { EXIT, withClient, type CliIo } from './io';
+import { printSymbolRows } from './symbols';
+import { createClient } from '../connect';
+
+/** The environment variable that gives an s7plus:// connection its password. */
+const PASSWORD_ENV = 'PLCWIRE_PASSWORD';
+
+/**
+ * The password option of `endpoint`: `--password-file` (its first line, the
+ * line end trimmed) before PLCWIRE_PASSWORD; none for a URL that is not
+ * s7plus:// (the file given with one is a usage error: nothing would use it).
+ */
+export function passwordOption(
+  endpoint: Endpoint,
+  args: ParsedArgs,
+  env: NodeJS.ProcessEnv = process.env,
+): Pick<ConnectOptions, 'password'> {
+  const file = stringFlag(args, 'password-file');
+  if (args.flags.has('password-file') && file === undefined) throw new UsageError('--password-file needs a file name');
+  if (endpoint.protocol !== 's7plus') {
+    if (file !== undefined)
+      throw new UsageError(`--password-file is for s7plus:// URLs (S7CommPlus); ${endpoint.protocol}:// has no password`);
+    return {};
+  }
+  if (file !== undefined) return { password: passwordFromFile(file) };
+  const fromEnv = env[PASSWORD_ENV];
+  return fromEnv === undefined || fromEnv === '' ? {} : { password: fromEnv };
+}
+
+function passwordFromFile(file: string): string {
+  let text: string;
+  try {
+    text = readInputFile(file).toString('utf8');
+  } catch (err) {
+    // Why (no such file, no permission) and the file's name; nothing of its content.
+    throw new UsageError(`--password-file: ${(err as Error).message}`);
+  }
+  const first = text.replace(/^\uFEFF/, '').split(/\r?\n/, 1)[0] ?? '';
+  if (first === '') throw new UsageError(`--password-file ${file}: its first line is empty (the password is the first line)`);
+  return first;
+}
+
+/** A client that reads the PLC's own symbol table (S7CommPlus). */
+interface Browsing {
+  browse(options?: RequestOptions): Promise<SymbolTable>;
+}
+
+function canBrowse(client: AnyClient): client is AnyClient & Browsing {
+  return typeof (client as Partial<Browsing>).browse === 'function';
+}
+
+/** `plcwire browse <url> [--json]`: the PLC's tags as `plcwire symbols` lists compiled ones. */
+export async function browse(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
+  const url = rest[0];
+  if (url === undefined) throw new UsageError('browse needs an s7plus:// url');
+  if (rest.length > 1) throw new UsageError(`unexpected argument "${rest[1]}"`);
+  if (args.flags.has('csv') && args.flags.has('json')) throw new UsageError('give --json or --csv, not both');
+  const endpoint = withTimeout(parseUrl(url), args);
+  if (endpoint.protocol !== 's7plus') {
+    throw new UsageError(
+      `browse asks the PLC for its tags over S7CommPlus: give an s7plus:// URL (for ${endpoint.protocol}://, list the sources with plcwire symbols)`,
+    );
+  }
+  const client = createClient(endpoint, passwordOption(endpoint, args));
+  // Asked of the client, not of the protocol: a client without browse() says so before connecting.
+  if (!canBrowse(client)) throw new PlcError('NOT_SUPPORTED', `${url.split('?')[0]}: this client cannot browse the PLC yet`);
+  const table = await withClient(client, io, (c) => (c as AnyClient & Browsing).browse({ signal: io.signal }));
+  printSymbolRows(table, args, io);
+  return EXIT.OK;
+}

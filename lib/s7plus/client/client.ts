@@ -1,0 +1,141 @@
+/**
+ * S7PlusClient: S7CommPlus to an S7-1200/1500 on the shared link layer
+ * (BaseClient: supervisor, tag cache, per-tag results, write safety). The
+ * session (session.ts) owns the TLS socket over the COTP tunnel, numbers
+ * every request and keeps one in flight; the handshake (handshake.ts) opens
+ * it; close() ends the session with a DeleteObject before the link goes.
+ *
+ * The password (ConnectOptions.password) lives in a private field: it is in
+ * no property, no JSON, no inspect() output, no error and no log line.
+ */
+import { S7_TAG_SYNTAX } from '../../address';
+import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
+import { ConnectionError, isLinkError, PlcError } from '../../errors';
+import type { Driver } from '../../link/driver';
+import type { Protocol, RequestOptions, Tag } from '../../types';
+import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../url';
+import { openS7PlusSession } from './handshake';
+import { readTags, writeTags, type Limits } from './io';
+import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
+import type { S7PlusSession, S7PlusWireCounters } from './session';
+import type { PeerCertificate } from './tls';
+
+export type { PeerCertificate } from './tls';
+export type { CpuState, S7PlusDataBlock } from './services';
+
+/** A client's options: ClientOptions and the PLC's password. */
+export interface S7PlusClientOptions extends Partial<ClientOptions> {
+  /** For the PLC's protection levels that need one (legitimation). */
+  password?: string;
+}
+
+/** The `insecure` event of a connection with `insecure=true`: which certificate it accepted unchecked. */
+interface InsecureEvent {
+  certificate: PeerCertificate;
+  message: string;
+}
+
+/** A clean close waits this long at most for the PLC to answer the DeleteObject. */
+const GOODBYE_MS = 2000;
+
+export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
+  readonly protocol: Protocol = 's7plus';
+  readonly endpoint: S7PlusEndpoint;
+  /** Counters of the wire, cumulative over reconnects. */
+  readonly stats: S7PlusWireCounters = { requestsSent: 0, bytesSent: 0, bytesReceived: 0, ignored: 0 };
+  /** The PLC's certificate on the live TLS connection; undefined without one. */
+  certificate: PeerCertificate | undefined;
+  readonly #password: string | undefined;
+  /** Items per request: the URL's maxItems or 20, lowered when the PLC refuses a request as too large. */
+  private itemLimit: number;
+  private readonly limits: Limits = {
+    maxItems: () => this.itemLimit,
+    refused: (items) => this.learnItemLimit(items),
+  };
+
+  protected readonly driver: Driver<S7PlusSession, Tag> = {
+    syntax: S7_TAG_SYNTAX,
+    openSession: (signal) => this.openSession(signal),
+    readValues: (session, tags, signal) => readTags(session, tags, this.limits, signal),
+    readTags: async (session, tags, signal) => {
+      const { values, errors } = await readTags(session, tags, this.limits, signal);
+      return toResults(values, errors);
+    },
+    writeTags: (session, items, signal) => writeTags(session, items, this.limits, signal),
+    noBlockLength: 'S7CommPlus reads data blocks by their own layout: there is no PUT/GET layout to check',
+    isLinkError,
+  };
+
+  constructor(endpoint: S7PlusEndpoint, options: S7PlusClientOptions = {}) {
+    const { password, ...rest } = options;
+    super(endpointOptions(S7PLUS_URLS.name(endpoint), endpoint, rest));
+    this.endpoint = endpoint;
+    this.#password = password;
+    this.itemLimit = endpoint.maxItems ?? S7PLUS_DEFAULT_MAX_ITEMS;
+  }
+
+  /** The most items this client puts into one request. */
+  get maxItems(): number {
+    return this.itemLimit;
+  }
+
+  /** The PLC refused a request of `items` items as a whole: requests carry half as many from now on (the `itemLimit` event). */
+  private learnItemLimit(items: number): void {
+    const limit = Math.max(1, Math.floor(items / 2));
+    if (limit >= this.itemLimit) return;
+    const was = this.itemLimit;
+    this.itemLimit = limit;
+    this.emit('itemLimit', { limit, was });
+  }
+
+  /** The CPU's operating state: RUN, STOP or UNKNOWN (theCPUexecUnit). */
+  cpuState(options: RequestOptions = {}): Promise<CpuState> {
+    return this.withSession((s) => cpuState(s, options.signal));
+  }
+
+  /** The data blocks of the PLC's program (standard and optimized), by number, with their names. */
+  dataBlocks(options: RequestOptions = {}): Promise<S7PlusDataBlock[]> {
+    return this.withSession((s) => dataBlocks(s, options.signal));
+  }
+
+  /** Runs `fn` on the live session; NOT_CONNECTED when there is none. */
+  private async withSession<R>(fn: (session: S7PlusSession) => Promise<R>): Promise<R> {
+    const session = this.session;
+    if (!session?.alive) throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (the link is ${this.state})`);
+    return fn(session);
+  }
+
+  /** Ends the PLC's session (DeleteObject, at most 2 s), then closes as every client does. Always resolves. */
+  override async close(): Promise<void> {
+    const session = this.session;
+    if (session?.alive) await session.goodbye(Math.min(this.timeout, GOODBYE_MS));
+    return super.close();
+  }
+
+  private async openSession(signal: AbortSignal): Promise<S7PlusSession> {
+    if (this.#password !== undefined) {
+      // Legitimation is not there yet: a connection that would silently lack the rights the password gives is worse than none.
+      throw new PlcError('NOT_SUPPORTED', `${this.name}: a password (legitimation) is not supported over S7CommPlus yet`);
+    }
+    const opened = await openS7PlusSession(this.endpoint, {
+      name: this.name,
+      timeout: this.timeout,
+      maxQueued: this.maxQueued,
+      signal,
+      stats: this.stats,
+      lossError: (cause) => this.lossError(cause),
+      lost: (session, err) => this.sessionLost(session, err),
+      insecure: (certificate) => this.warnInsecure(certificate),
+    });
+    this.certificate = opened.certificate;
+    return opened.session;
+  }
+
+  private warnInsecure(certificate: PeerCertificate): void {
+    const message =
+      `${this.name}: insecure=true: the PLC's certificate is accepted unchecked (SHA-256 ${certificate.fingerprint}, ` +
+      `subject ${certificate.subject}); pin it with fingerprint=${certificate.fingerprint}`;
+    if (this.listenerCount('insecure') > 0) this.emit('insecure', { certificate, message } satisfies InsecureEvent);
+    else process.emitWarning(message, 'PlcwireInsecureWarning');
+  }
+}

@@ -1,0 +1,171 @@
+/**
+ * The S7CommPlus handshake as steps (s7commplus (MIT), connection.py,
+ * connect): TCP → COTP CR/CC with the S7CommPlus TSAPs → InitSSL → TLS
+ * (unless tls=false) → CreateObject of a ServerSession → session setup (the
+ * ServerSessionVersion echoed) → IntegrityIds on (over TLS). Each step says
+ * in words what failed; a failure leaves no socket behind.
+ */
+import type { Duplex } from 'node:stream';
+import { abortError, ConnectionError, PlcError, toPlcError } from '../../errors';
+import type { S7PlusEndpoint } from '../url';
+import { encodeFrames, S7pFrameReader } from '../codec/frame';
+import {
+  decodeCreateObjectResponse,
+  decodeInitSslResponse,
+  encodeCreateObjectRequest,
+  encodeInitSslRequest,
+  sessionCreateRequest,
+  sessionInfo,
+} from '../codec/session';
+import { decodeSetMultiVariablesResponse, encodeSetMultiVariablesRequest, sessionSetupRequest } from '../codec/variables';
+import { FunctionCode, Ids, ProtocolVersion } from '../constants';
+import { S7PlusSession, type S7PlusWireCounters, type S7PlusWiring } from './session';
+import { startTls, TrustRefusal, type PeerCertificate } from './tls';
+import { openTunnel } from './tunnel';
+
+/** How the client names itself in the session's CreateObject (the PLC shows it among its connections). */
+const CLIENT_NAME = 'plcwire';
+
+export interface OpenOptions extends Omit<S7PlusWiring, 'timeout'> {
+  timeout: number;
+  signal: AbortSignal;
+  stats: S7PlusWireCounters;
+  /** Told the PLC's certificate of a connection that trusts any (`insecure=true`): the client warns. */
+  insecure?(certificate: PeerCertificate): void;
+}
+
+/** What a connection was opened with: its session, and the PLC's certificate over TLS. */
+export interface Opened {
+  session: S7PlusSession;
+  certificate: PeerCertificate | undefined;
+}
+
+export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Promise<Opened> {
+  const tunnel = await openTunnel(e, o);
+  let stream: Duplex = tunnel;
+  let session: S7PlusSession | undefined;
+  let step: Step = 'InitSSL';
+  try {
+    // InitSSL goes in plain text with sequence number 0, before TLS.
+    await initSsl(tunnel, o);
+    let certificate: PeerCertificate | undefined;
+    if (e.tls) {
+      step = 'TLS';
+      const started = await startTls(tunnel, e, o);
+      stream = started.socket;
+      certificate = started.certificate;
+      if (e.insecure) o.insecure?.(certificate);
+    }
+    session = new S7PlusSession(
+      stream,
+      { sessionId: Ids.ObjectNullServerSession, version: ProtocolVersion.V1, nextSeq: 1 },
+      { name: o.name, timeout: o.timeout, maxQueued: o.maxQueued, lossError: o.lossError, lost: o.lost },
+      o.stats,
+    );
+    const signal = o.signal;
+    step = 'CreateObject';
+    const createAnswer = await session.request(
+      FunctionCode.CreateObject,
+      (sequence) => encodeCreateObjectRequest(sessionCreateRequest(sequence, { name: CLIENT_NAME })),
+      { integrity: false, signal },
+    );
+    const created = sessionInfo(decodeCreateObjectResponse(createAnswer).body);
+    const spoken = session.answerVersion;
+    if (!e.tls && spoken !== ProtocolVersion.V1) {
+      throw new ConnectionError(
+        'CONNECT_FAILED',
+        `${o.name} speaks S7CommPlus V${spoken} and wants it over TLS (tls=false asks for plain V1): drop tls=false` +
+          ' (the PLC needs "secure PG/HMI communication" on), or use s7:// with standard-access data blocks',
+      );
+    }
+    if (created.serverSessionVersion === undefined) {
+      throw new ConnectionError(
+        'CONNECT_FAILED',
+        `${o.name} gave no ServerSessionVersion when the session was created: the session cannot be set up`,
+      );
+    }
+    session.sessionId = created.sessionId;
+    if (e.tls) session.version = ProtocolVersion.V2;
+    const version = created.serverSessionVersion;
+    step = 'session setup';
+    const setup = decodeSetMultiVariablesResponse(
+      await session.request(
+        FunctionCode.SetMultiVariables,
+        (sequence, sessionId) => encodeSetMultiVariablesRequest(sessionSetupRequest(sequence, sessionId, version)),
+        { version: ProtocolVersion.V2, integrity: false, signal },
+      ),
+      { integrity: false },
+    );
+    if (setup.body.returnValue !== 0n) {
+      throw new ConnectionError('CONNECT_FAILED', `${o.name} refused the session setup (0x${setup.body.returnValue.toString(16)})`, {
+        plcCode: Number(setup.body.returnValue & 0xffffn),
+      });
+    }
+    if (e.tls) session.startIntegrity();
+    return { session, certificate };
+  } catch (err) {
+    if (session) session.destroy();
+    stream.destroy();
+    tunnel.destroy();
+    if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
+    const e2 = toPlcError(err, 'CONNECT_FAILED');
+    if (e2.code !== 'PROTOCOL_ERROR' && e2.code !== 'CLOSED' && e2.code !== 'CONNECTION_LOST' && e2.code !== 'CONNECT_FAILED') throw e2;
+    if (e2 instanceof TrustRefusal || (e2.code === 'CONNECT_FAILED' && step !== 'TLS' && step !== 'CreateObject')) throw e2;
+    const what = e2.message.startsWith(o.name) ? e2.message.slice(o.name.length).replace(/^:?\s*/, '') : e2.message;
+    throw new ConnectionError('CONNECT_FAILED', `${o.name}: ${step} failed: ${what}${hint(e, step)}`, { cause: e2 });
+  }
+}
+
+/** The handshake's steps after the COTP connection, for messages. */
+type Step = 'InitSSL' | 'TLS' | 'CreateObject' | 'session setup';
+
+/** What a failure at `step` most likely means, for the URL it used. */
+function hint(e: S7PlusEndpoint, step: Step): string {
+  if (step === 'TLS' && e.tls) {
+    return ' (a PLC without secure PG/HMI communication speaks plain S7CommPlus: tls=false reaches it, without encryption)';
+  }
+  if (step === 'CreateObject' && !e.tls) return ' (a PLC with secure PG/HMI communication on wants TLS after InitSSL: drop tls=false)';
+  return '';
+}
+
+/** InitSSL → its answer, on the plain tunnel (connection.py, _init_ssl); the deadline is the connect's. */
+export function initSsl(tunnel: Duplex, o: { name: string; signal: AbortSignal }): Promise<void> {
+  const cutter = new S7pFrameReader();
+  return new Promise<void>((resolve, reject) => {
+    const done = (err?: PlcError) => {
+      tunnel.off('data', onData);
+      tunnel.off('error', onError);
+      tunnel.off('close', onClose);
+      o.signal.removeEventListener('abort', onAbort);
+      if (err) reject(err);
+      else resolve();
+    };
+    const onData = (chunk: Buffer) => {
+      try {
+        const [m] = cutter.push(chunk);
+        if (!m) return;
+        const answer = decodeInitSslResponse(m.data);
+        if (answer.header.sequence !== 0) {
+          return done(new PlcError('PROTOCOL_ERROR', `${o.name} answered InitSSL with sequence ${answer.header.sequence}`));
+        }
+        done();
+      } catch (err) {
+        done(toPlcError(err, 'PROTOCOL_ERROR'));
+      }
+    };
+    const onError = (err: Error) => done(new ConnectionError('CONNECT_FAILED', `${o.name}: ${err.message}`, { cause: err }));
+    const onClose = () =>
+      done(
+        new ConnectionError(
+          'CONNECT_FAILED',
+          `${o.name} closed the connection at InitSSL: the CPU may not speak S7CommPlus (an S7-300/400: use s7://)`,
+        ),
+      );
+    const onAbort = () => done(abortError(`connecting to ${o.name}`, o.signal));
+    tunnel.on('data', onData);
+    tunnel.on('error', onError);
+    tunnel.on('close', onClose);
+    o.signal.addEventListener('abort', onAbort, { once: true });
+    tunnel.write(encodeFrames(ProtocolVersion.V1, encodeInitSslRequest(0)));
+  });
+}

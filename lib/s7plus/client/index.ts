@@ -1,0 +1,1 @@
+export { S7PlusClient } from './client';

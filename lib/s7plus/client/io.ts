@@ -1,0 +1,246 @@
+/**
+ * Reads and writes by address over S7CommPlus: a standard DB's bytes by
+ * access area and the classic-blob LIDs (DB number, byte offset, byte
+ * count), and the I, Q and M areas by their native objects; values decoded
+ * and encoded with the S7 value rules (lib/values), so DB10.DBW2 gives over
+ * s7plus:// what it gives over s7://. Items go in requests of at most the
+ * item limit; each item's own refusal is its tag's result. Layouts from
+ * s7commplus (MIT), client.py (_build_read_payload, _build_area_read_payload,
+ * _build_write_payload).
+ */
+import { PlcError, toPlcError, type TagResult } from '../../errors';
+import type { ReadValues } from '../../link/driver';
+import type { PlcValue, Tag } from '../../types';
+import { decodeTag, encodeTag } from '../../values';
+import {
+  blobValue,
+  classicBlobAddress,
+  decodeGetMultiVariablesResponse,
+  decodeSetMultiVariablesResponse,
+  encodeGetMultiVariablesRequest,
+  encodeSetMultiVariablesRequest,
+  readRequest,
+  writeRequest,
+  type ItemAddress,
+} from '../codec/variables';
+import type { PValue } from '../codec/pvalue';
+import { FunctionCode, Ids, ITEM_ERROR_UNRESOLVED } from '../constants';
+import type { S7PlusSession } from './session';
+
+/** The native objects of the I, Q and M areas (s7commplus (MIT), protocol.py Ids.NATIVE_THE_*_AREA_RID). */
+const AREA_OBJECT: Partial<Record<Tag['area'], number>> = {
+  I: Ids.NativeTheIAreaRID,
+  Q: Ids.NativeTheQAreaRID,
+  M: Ids.NativeTheMAreaRID,
+};
+
+/** Where a tag's bytes are, as an item address; a PlcError for an area S7CommPlus does not reach by address. */
+function itemAddress(tag: Tag): ItemAddress | PlcError {
+  if (tag.area === 'DB') return classicBlobAddress(tag.dbNumber, tag.byteOffset, tag.byteLength);
+  const area = AREA_OBJECT[tag.area];
+  if (area === undefined) {
+    return new PlcError(
+      'NOT_SUPPORTED',
+      `${tag.address}: S7CommPlus reaches data blocks and the I, Q and M areas by address, not ${tag.area}`,
+      {
+        tag: tag.address,
+      },
+    );
+  }
+  return {
+    symbolCrc: 0,
+    accessArea: area,
+    accessSubArea: Ids.ControllerAreaValueActual,
+    lids: [Ids.LidClassicBlob, tag.byteOffset, tag.byteLength],
+  };
+}
+
+/** The PLC's refusal of one item, in words with its code (0x8104: it has no such object, e.g. no such DB or offset). */
+function itemError(tag: Tag, code: bigint): PlcError {
+  if (code === ITEM_ERROR_UNRESOLVED) {
+    return new PlcError('OBJECT_DOES_NOT_EXIST', `${tag.address}: the PLC has no such item (no such data block or area, or past its end)`, {
+      tag: tag.address,
+      plcCode: Number(code),
+    });
+  }
+  return new PlcError('PLC_ERROR', `${tag.address}: the PLC refused the item (0x${code.toString(16)})`, {
+    tag: tag.address,
+    plcCode: Number(code & 0xffffn),
+  });
+}
+
+function bytesOf(v: PValue): Buffer | undefined {
+  const blob = v.value as { data?: unknown } | undefined;
+  return blob && Buffer.isBuffer(blob.data) ? blob.data : undefined;
+}
+
+/** What the client gives the reads and writes: the item limit, and how to learn a lower one. */
+export interface Limits {
+  maxItems(): number;
+  /** The PLC refused a request of `items` items as a whole, or reset the connection on it: the limit goes below it. */
+  refused(items: number): void;
+}
+
+/**
+ * Sends a request of `items` items; a PLC that drops the connection on it
+ * (PLCSIM is reported to reset on requests past about 1 kB) has shown its
+ * limit too: it is lowered before the link error goes on, so the request
+ * after the reconnect is smaller.
+ */
+async function sized(session: S7PlusSession, items: number, limits: Limits, send: () => Promise<Buffer>): Promise<Buffer> {
+  try {
+    return await send();
+  } catch (err) {
+    if (items > 1 && (err as PlcError).code === 'CONNECTION_LOST') limits.refused(items);
+    throw err;
+  }
+}
+
+function chunks(indexes: number[], size: number): number[][] {
+  const out: number[][] = [];
+  for (let at = 0; at < indexes.length; at += size) out.push(indexes.slice(at, at + size));
+  return out;
+}
+
+/** One value per tag, in order, in the fewest requests the item limit allows; a tag's own failure is its error. */
+export async function readTags(session: S7PlusSession, tags: readonly Tag[], limits: Limits, signal?: AbortSignal): Promise<ReadValues> {
+  const values: PlcValue[] = new Array<PlcValue>(tags.length);
+  let errors: (PlcError | undefined)[] | undefined;
+  const fail = (i: number, err: PlcError) => ((errors ??= new Array<PlcError | undefined>(tags.length))[i] = err);
+  const addresses: (ItemAddress | undefined)[] = tags.map((tag, i) => {
+    const a = itemAddress(tag);
+    if (a instanceof PlcError) return void fail(i, a);
+    return a;
+  });
+  let pending = addresses.flatMap((a, i) => (a ? [i] : []));
+  while (pending.length > 0) {
+    const size = limits.maxItems();
+    const retry: number[] = [];
+    for (const chunk of chunks(pending, size)) {
+      const answer = await sized(session, chunk.length, limits, () =>
+        session.request(
+          FunctionCode.GetMultiVariables,
+          (sequence, sessionId, integrityId) =>
+            encodeGetMultiVariablesRequest({
+              ...readRequest(
+                sequence,
+                sessionId,
+                chunk.map((i) => addresses[i]!),
+              ),
+              ...(integrityId === undefined ? {} : { integrityId }),
+            }),
+          { signal },
+        ),
+      );
+      const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
+      if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
+        if (chunk.length > 1) {
+          limits.refused(chunk.length);
+          retry.push(...chunk);
+          continue;
+        }
+        fail(chunk[0]!, itemError(tags[chunk[0]!]!, body.returnValue));
+        continue;
+      }
+      chunk.forEach((i, k) => {
+        const tag = tags[i]!;
+        const value = body.values.get(k + 1);
+        const code = body.errors.get(k + 1);
+        if (value) {
+          const data = bytesOf(value);
+          if (!data)
+            return fail(
+              i,
+              new PlcError(
+                'PROTOCOL_ERROR',
+                `${tag.address}: the PLC answered a value of type 0x${value.type.toString(16)}, not the bytes asked for`,
+                { tag: tag.address },
+              ),
+            );
+          try {
+            values[i] = decodeTag(tag, data, 0);
+          } catch (err) {
+            fail(i, err as PlcError);
+          }
+        } else
+          fail(
+            i,
+            code !== undefined
+              ? itemError(tag, code)
+              : new PlcError('PROTOCOL_ERROR', `${tag.address}: the PLC did not answer this item`, { tag: tag.address }),
+          );
+      });
+    }
+    pending = retry;
+  }
+  return { values, errors };
+}
+
+/** One result per item, in order. A BOOL is refused: a classic-blob write is whole bytes, and would overwrite the byte's other bits. */
+export async function writeTags(
+  session: S7PlusSession,
+  items: readonly { tag: Tag; value: unknown }[],
+  limits: Limits,
+  signal?: AbortSignal,
+): Promise<TagResult<void>[]> {
+  const results: TagResult<void>[] = items.map(() => ({ ok: true, value: undefined }));
+  const ready: { i: number; address: ItemAddress; value: PValue }[] = [];
+  items.forEach(({ tag, value }, i) => {
+    if (tag.type === 'BOOL') {
+      results[i] = {
+        ok: false,
+        error: new PlcError('NOT_SUPPORTED', `${tag.address}: S7CommPlus writes whole bytes by address; write the bit by name`, {
+          tag: tag.address,
+        }),
+      };
+      return;
+    }
+    const address = itemAddress(tag);
+    if (address instanceof PlcError) return void (results[i] = { ok: false, error: address });
+    try {
+      ready.push({ i, address, value: blobValue(encodeTag(tag, value)) });
+    } catch (err) {
+      results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
+    }
+  });
+  let pending = ready;
+  while (pending.length > 0) {
+    const size = limits.maxItems();
+    const retry: typeof ready = [];
+    for (let at = 0; at < pending.length; at += size) {
+      const chunk = pending.slice(at, at + size);
+      const answer = await sized(session, chunk.length, limits, () =>
+        session.request(
+          FunctionCode.SetMultiVariables,
+          (sequence, sessionId, integrityId) =>
+            encodeSetMultiVariablesRequest({
+              ...writeRequest(
+                sequence,
+                sessionId,
+                chunk.map((c) => c.address),
+                chunk.map((c) => c.value),
+              ),
+              ...(integrityId === undefined ? {} : { integrityId }),
+            }),
+          { signal },
+        ),
+      );
+      const { body } = decodeSetMultiVariablesResponse(answer, { integrity: session.integrityOn });
+      if (body.returnValue !== 0n && body.errors.size === 0) {
+        if (chunk.length > 1) {
+          limits.refused(chunk.length);
+          retry.push(...chunk);
+          continue;
+        }
+        results[chunk[0]!.i] = { ok: false, error: itemError(items[chunk[0]!.i]!.tag, body.returnValue) };
+        continue;
+      }
+      chunk.forEach((c, k) => {
+        const code = body.errors.get(k + 1);
+        if (code !== undefined) results[c.i] = { ok: false, error: itemError(items[c.i]!.tag, code) };
+      });
+    }
+    pending = retry;
+  }
+  return results;
+}
