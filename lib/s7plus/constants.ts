@@ -350,3 +350,5 @@ export const RemoteTsap = {
   es: 'SIMATIC-ROOT-ES',
   pg: 'SIMATIC-ROOT-PG',
 } as const;
+/** The calling TSAP of an S7CommPlus client. s7commplus (MIT), protocol.py S7COMMPLUS_LOCAL_TSAP. */
+export const LOCAL_TSAP = 0x0600;

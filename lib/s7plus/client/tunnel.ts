@@ -10,8 +10,8 @@
 import type * as net from 'node:net';
 import { abortError, ConnectionError, type PlcError, toPlcError } from '../../errors';
 import { openTcp } from '../../link/tcp';
-import { decodeCotp } from '../../s7/codec/cotp';
-import { checkTpkt } from '../../s7/codec/tpkt';
+import { decodeCotp } from '../../iso/cotp';
+import { checkTpkt } from '../../iso/tpkt';
 import { CotpTunnel } from '../transport/tunnel';
 import { LOCAL_TSAP, RemoteTsap as REMOTE_TSAP } from '../constants';
 import type { S7PlusRole } from '../url';
