@@ -41,8 +41,10 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   const port = await flags.listen(() => server.listen(), 'port');
   say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
   const url = `s7://${hostPart(host)}:${port}?${REACH[profile].query}`;
-  if (symbols) for (const line of servedBlocks(symbols)) say(line);
-  say(`try: plcwire read "${url}" ${symbols ? flags.tryByName(symbols) : REACH[profile].addresses}`);
+  // What PUT/GET serves is told from the sources' own table, in which an optimized block has no length.
+  const shown = s7plus ? (flags.source() ?? symbols) : symbols;
+  if (shown) for (const line of servedBlocks(shown)) say(line);
+  say(`try: plcwire read "${url}" ${shown ? flags.tryByName(shown) : REACH[profile].addresses}`);
   if (s7plus?.fingerprint) {
     const protectedNote = s7plus.password === undefined ? '' : ', protected: writes need the password';
     say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}${protectedNote}`);
