@@ -10,10 +10,13 @@
 import { expect } from 'chai';
 import { duplexPair, type Duplex } from 'node:stream';
 import { ConnectionError, PlcError } from '../lib/errors';
+import { createClient } from '../lib/connect';
 import { encodeFrames, S7pFrameReader } from '../lib/s7plus/codec/frame';
+import { encodeInitSslResponse } from '../lib/s7plus/codec/session';
 import { decodeUVlq32, encodeUVlq32 } from '../lib/s7plus/codec/vlq';
 import { FunctionCode, ProtocolVersion } from '../lib/s7plus/constants';
 import { S7PlusSession, type Encode } from '../lib/s7plus/client/session';
+import { cotpAccept, countingServer } from './support/s7plus-tls';
 import { until } from './support/wait';
 
 interface Seen {
@@ -271,5 +274,74 @@ describe('s7plus client: the session', () => {
     const err = await rejection(p);
     expect(err).to.be.instanceOf(ConnectionError);
     expect(err.code).to.equal('CLOSED');
+  });
+});
+
+describe('s7plus client: a handshake that stops', () => {
+  /** A PLC that confirms COTP and answers InitSSL, then reads everything and answers nothing. */
+  async function mute() {
+    const seen: Buffer[] = [];
+    const plc = await countingServer((socket) => {
+      socket.on('error', () => {});
+      void cotpAccept(socket).then(() => {
+        const reader = new S7pFrameReader();
+        socket.on('data', (chunk: Buffer) => {
+          // Each COTP DT carries one S7CommPlus frame here: skip TPKT (4) and DT (3).
+          for (const m of reader.push(chunk.subarray(7))) {
+            seen.push(m.data);
+            if (m.data.readUInt16BE(3) === FunctionCode.InitSsl) {
+              const answer = encodeFrames(
+                1,
+                encodeInitSslResponse({
+                  header: { functionCode: FunctionCode.InitSsl, sequence: 0, transportFlags: 0 },
+                  body: { returnValue: 0n },
+                }),
+              );
+              socket.write(Buffer.concat([Buffer.from([3, 0, 0, 7 + answer.length, 2, 0xf0, 0x80]), answer]));
+            }
+          }
+        });
+        socket.resume();
+      });
+    });
+    return { ...plc, seen };
+  }
+
+  it('close() during the CreateObject ends the connect at once, with no connection left', async () => {
+    const plc = await mute();
+    const client = createClient(`s7plus://127.0.0.1:${plc.port}?tls=false&timeout=20000`);
+    client.on('error', () => {});
+    const connecting = client.connect().then(
+      () => undefined,
+      (err: PlcError) => err,
+    );
+    await until(() => plc.seen.some((d) => d.readUInt16BE(3) === FunctionCode.CreateObject), 10_000, 'the CreateObject');
+    const started = Date.now();
+    await client.close();
+    const err = await connecting;
+    expect(Date.now() - started, 'not at the 20 s timeout').to.be.below(2000);
+    expect(err).to.be.instanceOf(PlcError);
+    expect(['CLOSED', 'ABORTED']).to.include(err!.code);
+    for (let i = 0; i < 200 && (await plc.open()) > 0; i++) await new Promise((r) => setTimeout(r, 10));
+    expect(await plc.open()).to.equal(0);
+    plc.server.close();
+  });
+
+  it('a CreateObject never answered fails at the timeout, with no connection left', async () => {
+    const plc = await mute();
+    const client = createClient(`s7plus://127.0.0.1:${plc.port}?tls=false&timeout=300`);
+    client.on('error', () => {});
+    let err: PlcError | undefined;
+    try {
+      await client.connect();
+    } catch (e) {
+      err = e as PlcError;
+    }
+    expect(err).to.be.instanceOf(PlcError);
+    expect(err!.code).to.equal('TIMEOUT');
+    await client.close();
+    for (let i = 0; i < 200 && (await plc.open()) > 0; i++) await new Promise((r) => setTimeout(r, 10));
+    expect(await plc.open()).to.equal(0);
+    plc.server.close();
   });
 });

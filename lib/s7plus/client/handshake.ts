@@ -6,7 +6,7 @@
  * in words what failed; a failure leaves no socket behind.
  */
 import type { Duplex } from 'node:stream';
-import { abortError, ConnectionError, PlcError, toPlcError } from '../../errors';
+import { abortError, ConnectionError, PlcError, TimeoutError, toPlcError } from '../../errors';
 import type { S7PlusEndpoint } from '../url';
 import { encodeFrames, S7pFrameReader } from '../codec/frame';
 import {
@@ -45,6 +45,13 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
   let stream: Duplex = tunnel;
   let session: S7PlusSession | undefined;
   let step: Step = 'InitSSL';
+  // close() or the connect deadline during a step ends it at once, whatever that step waits for.
+  const abandon = () => {
+    session?.destroy();
+    stream.destroy();
+    tunnel.destroy();
+  };
+  o.signal.addEventListener('abort', abandon, { once: true });
   try {
     // InitSSL goes in plain text with sequence number 0, before TLS.
     await initSsl(tunnel, o);
@@ -102,6 +109,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       });
     }
     if (e.tls) session.startIntegrity();
+    if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
     return { session, certificate };
   } catch (err) {
     if (session) session.destroy();
@@ -109,10 +117,13 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     tunnel.destroy();
     if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
     const e2 = toPlcError(err, 'CONNECT_FAILED');
+    if (e2 instanceof TimeoutError) throw new TimeoutError(`${step} failed: ${e2.message}`, { cause: e2 });
     if (e2.code !== 'PROTOCOL_ERROR' && e2.code !== 'CLOSED' && e2.code !== 'CONNECTION_LOST' && e2.code !== 'CONNECT_FAILED') throw e2;
     if (e2 instanceof TrustRefusal || (e2.code === 'CONNECT_FAILED' && step !== 'TLS' && step !== 'CreateObject')) throw e2;
     const what = e2.message.startsWith(o.name) ? e2.message.slice(o.name.length).replace(/^:?\s*/, '') : e2.message;
     throw new ConnectionError('CONNECT_FAILED', `${o.name}: ${step} failed: ${what}${hint(e, step)}`, { cause: e2 });
+  } finally {
+    o.signal.removeEventListener('abort', abandon);
   }
 }
 
