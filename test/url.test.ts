@@ -41,6 +41,25 @@ describe('url: parseUrl', () => {
     expect((err as PlcError).message).not.to.include('s3cret');
   });
 
+  it('never repeats a password given as a URL parameter, whatever else is wrong with the URL', () => {
+    for (const url of [
+      's7://10.0.0.2?rack=0&slot=1&password=hunter2',
+      's7://10.0.0.2?Password=hunter2&bogus=1',
+      'fetchwrite://10.0.0.2?pwd=hunter2&fetchPort=x',
+      's7plus://10.0.0.2?password=hunter2&bogus=1',
+    ]) {
+      let err: unknown;
+      try {
+        parseUrl(url);
+      } catch (e) {
+        err = e;
+      }
+      expect(err, url).to.be.instanceOf(PlcError);
+      expect((err as PlcError).code, url).to.equal('INVALID_URL');
+      expect((err as PlcError).message, url).not.to.include('hunter2');
+    }
+  });
+
   it('reads TSAPs in hex, the connection type, PDU, timeout and an IPv6 host', () => {
     const e = parseUrl('s7://[::1]:1102?localTsap=1000&remoteTsap=4D57&type=OP&pdu=240&timeout=250');
     expect(e).to.include({

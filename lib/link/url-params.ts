@@ -91,7 +91,18 @@ export function hostPart(host: string): string {
 }
 
 export function urlError(url: string, problem: string): PlcError {
-  return new PlcError('INVALID_URL', `invalid PLC URL "${url}": ${problem}`);
+  return new PlcError('INVALID_URL', `invalid PLC URL "${redactUrl(url)}": ${problem}`);
+}
+
+/**
+ * A URL as an error may show it: the value of any parameter that looks like a
+ * secret (password, passwd, pwd, secret, token) and a "user:password@" part
+ * replaced by ***, so a password typed into a URL never reaches a log.
+ */
+function redactUrl(url: string): string {
+  return url
+    .replace(/\/\/[^/@?#]*@/, '//***@')
+    .replace(/([?&;](?:[^=&#]*(?:pass|pwd|secret|token)[^=&#]*)=)[^&#]*/gi, '$1***');
 }
 
 /** What every endpoint carries, whatever its protocol (`readOnly`, `allow`, `strictSymbols`). */
