@@ -93,7 +93,7 @@ describe('s7plus client against the s7commplus emulator', function () {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${pin}&timeout=5000`);
       await client.connect();
       expect(client.state).to.equal('connected');
-      expect(client.certificate?.fingerprint).to.equal(cert.fingerprint.toLowerCase());
+      expect(client.certificate?.fingerprint).to.equal(cert.fingerprint.toUpperCase());
       expect(client.certificate?.subject).to.contain('plcwire test PLC');
       const session = (client as unknown as { session: { integrityIds: unknown; version: number } }).session;
       expect(session.integrityIds).to.deep.equal({ read: 0, write: 0 });
@@ -181,9 +181,9 @@ describe('s7plus client against the s7commplus emulator', function () {
     it('refuses a certificate the pin does not match before any S7CommPlus request, showing the pin that would match', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${'0'.repeat(64)}&timeout=5000`);
       const err = await connectError(client);
-      expect(err.code).to.equal('CONNECT_FAILED');
-      expect(err.message).to.contain('is not the one fingerprint= pins');
-      expect(err.message).to.contain(`fingerprint=${cert.fingerprint.toLowerCase()}`);
+      expect(err.code).to.equal('CERTIFICATE_UNTRUSTED');
+      expect(err.message).to.contain('is not the pinned one');
+      expect(err.message).to.contain(`fingerprint=${cert.fingerprint.toUpperCase()}`);
       expect(err.message).to.contain('plcwire test PLC');
       expect(client.stats.requestsSent).to.equal(0);
       await client.close();
@@ -193,8 +193,9 @@ describe('s7plus client against the s7commplus emulator', function () {
     it('refuses a certificate nothing in the URL trusts, and says how to pin it', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?timeout=5000`);
       const err = await connectError(client);
-      expect(err.message).to.contain('nothing in the URL trusts');
-      expect(err.message).to.match(/valid .* to /);
+      expect(err.code).to.equal('CERTIFICATE_UNTRUSTED');
+      expect(err.message).to.contain('nothing in the URL pins it');
+      expect(err.message).to.match(/fingerprint=[0-9A-F]{64}/);
       expect(client.stats.requestsSent).to.equal(0);
       await client.close();
       await noConnections(peer);
@@ -206,7 +207,7 @@ describe('s7plus client against the s7commplus emulator', function () {
       client.on('insecure', (e: { message: string }) => warnings.push(e.message));
       await client.connect();
       expect(warnings).to.have.length(1);
-      expect(warnings[0]).to.contain(`fingerprint=${cert.fingerprint.toLowerCase()}`);
+      expect(warnings[0]).to.contain(`fingerprint=${cert.fingerprint.toUpperCase()}`);
       await client.close();
     });
 

@@ -66,6 +66,7 @@ export function exitCode(err: unknown): number {
       return EXIT.INTERRUPTED;
     case 'TIMEOUT':
     case 'PROTOCOL_ERROR':
+    case 'CERTIFICATE_UNTRUSTED': // the PLC's TLS certificate refused before any data: the connection failed
       return EXIT.CONNECTION;
     default:
       return EXIT.TAG_ERROR;

@@ -18,9 +18,9 @@ import { openS7PlusSession } from './handshake';
 import { readTags, writeTags, type Limits } from './io';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';
-import type { PeerCertificate } from './tls';
+import type { PeerCertificate } from './handshake';
 
-export type { PeerCertificate } from './tls';
+export type { PeerCertificate } from './handshake';
 export type { CpuState, S7PlusDataBlock } from './services';
 
 /** A client's options: ClientOptions and the PLC's password. */

@@ -20,8 +20,22 @@ import {
 import { decodeSetMultiVariablesResponse, encodeSetMultiVariablesRequest, sessionSetupRequest } from '../codec/variables';
 import { FunctionCode, Ids, ProtocolVersion } from '../constants';
 import { S7PlusSession, type S7PlusWireCounters, type S7PlusWiring } from './session';
-import { startTls, TrustRefusal, type PeerCertificate } from './tls';
+import { startTls } from '../transport/handshake';
+import type { CertificateInfo } from '../transport/trust';
 import { openTunnel } from './tunnel';
+
+/** The PLC's certificate of a TLS connection, as the client tells it (`client.certificate`, the `insecure` event). */
+export interface PeerCertificate {
+  /** SHA-256 of the DER certificate, 64 upper-case hex digits: the `fingerprint=` that pins it. */
+  fingerprint: string;
+  subject: string;
+  validFrom: string;
+  validTo: string;
+}
+
+function peerCertificate(c: CertificateInfo): PeerCertificate {
+  return { fingerprint: c.fingerprint, subject: c.subject, validFrom: c.notBefore.toISOString(), validTo: c.notAfter.toISOString() };
+}
 
 /** How the client names itself in the session's CreateObject (the PLC shows it among its connections). */
 const CLIENT_NAME = 'plcwire';
@@ -58,10 +72,16 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     let certificate: PeerCertificate | undefined;
     if (e.tls) {
       step = 'TLS';
-      const started = await startTls(tunnel, e, o);
+      // The transport's TLS step: the trust decision before any S7CommPlus byte, never a plain-text fallback.
+      const trust = {
+        ...(e.fingerprint ? { fingerprint: e.fingerprint } : {}),
+        ...(e.ca ? { ca: e.ca } : {}),
+        ...(e.insecure ? { insecure: true } : {}),
+      };
+      const started = await startTls(tunnel, { trust, host: e.host, timeout: o.timeout, signal: o.signal });
       stream = started.socket;
-      certificate = started.certificate;
-      if (e.insecure) o.insecure?.(certificate);
+      certificate = peerCertificate(started.certificate);
+      if (started.warning !== undefined) o.insecure?.(certificate);
     }
     session = new S7PlusSession(
       stream,
@@ -119,7 +139,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     const e2 = toPlcError(err, 'CONNECT_FAILED');
     if (e2 instanceof TimeoutError) throw new TimeoutError(`${step} failed: ${e2.message}`, { cause: e2 });
     if (e2.code !== 'PROTOCOL_ERROR' && e2.code !== 'CLOSED' && e2.code !== 'CONNECTION_LOST' && e2.code !== 'CONNECT_FAILED') throw e2;
-    if (e2 instanceof TrustRefusal || (e2.code === 'CONNECT_FAILED' && step !== 'TLS' && step !== 'CreateObject')) throw e2;
+    if (e2.code === 'CONNECT_FAILED' && step !== 'TLS' && step !== 'CreateObject') throw e2;
     const what = e2.message.startsWith(o.name) ? e2.message.slice(o.name.length).replace(/^:?\s*/, '') : e2.message;
     throw new ConnectionError('CONNECT_FAILED', `${o.name}: ${step} failed: ${what}${hint(e, step)}`, { cause: e2 });
   } finally {
