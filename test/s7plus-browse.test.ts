@@ -1,0 +1,143 @@
+/**
+ * client.browse() and reads and writes by name over s7plus:// against our
+ * simulator (issue #25): the browsed table gives the names and types the
+ * compiled sources give, the PLC's byte and bit of standard members equal
+ * our layout's, optimized members have none; names read and write by LID,
+ * a struct as an object, an unknown name fails with suggestions.
+ */
+import { expect } from 'chai';
+import { createClient } from '../lib/connect';
+import type { S7PlusClient } from '../lib/s7plus/client';
+import { S7Server } from '../lib/s7/server';
+import { S7PlusService } from '../lib/s7plus/server';
+import { generateCertificate } from '../lib/s7plus/transport/cert';
+import { compileSymbols } from '../lib/symbols';
+import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
+
+describe('S7CommPlus browse and names (our client, our simulator)', function () {
+  this.timeout(30000);
+  let server: S7Server;
+  let service: S7PlusService;
+  let client: S7PlusClient;
+
+  before(async () => {
+    const cert = await generateCertificate();
+    service = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key } });
+    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    await server.listen();
+    client = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`) as S7PlusClient;
+    await client.connect();
+  });
+  after(async () => {
+    await client?.close();
+    await server?.close();
+  });
+
+  it('browses every entry the compiled sources give: names, types, kinds, children; standard offsets equal, optimized null', async () => {
+    const browsed = await client.browse();
+    const compiled = compileSymbols(SOURCES, { db: DB_NUMBERS });
+    expect(browsed.entries.map((e) => e.name)).to.deep.equal(compiled.entries.map((e) => e.name));
+    compiled.entries.forEach((c) => {
+      const b = browsed.lookup(c.name)!;
+      // The type object does not carry the UDT's name: an instance of "Valve" is browsed as STRUCT.
+      const type = c.type.replace(/"Valve"/g, 'STRUCT');
+      expect({
+        name: b.name,
+        type: b.type,
+        kind: b.kind,
+        byte: b.byte,
+        bit: b.bit,
+        address: b.address,
+        children: b.children,
+      }).to.deep.equal({
+        name: c.name,
+        type,
+        kind: c.kind,
+        byte: c.byte,
+        bit: c.bit,
+        address: c.address,
+        children: c.children,
+      });
+      expect(b.access!.area).to.equal(0x8a0e0000 + c.db!);
+      expect(b.access!.lids.length).to.be.greaterThan(0);
+    });
+    expect(browsed.lookup('"Recipe".Step')).to.include({ byte: null, bit: null, address: null, type: 'INT' });
+    expect(browsed.lookup('"Tank".Count')).to.include({ byte: 4, address: 'DB1.DBW4:INT' });
+    expect(browsed.lookup('"Tank".Motor.Speed')!.access!.lids).to.deep.equal([0x0f, 0x0a]);
+    expect(browsed.blocks.map((b) => [b.name, b.db, b.optimized === true, b.length])).to.deep.equal(
+      compiled.blocks.map((b) => [b.name, b.db, b.optimized === true, b.length]),
+    );
+    expect(await client.browse()).to.equal(browsed);
+  });
+
+  it('reads optimized and standard members by name, a struct as an object', async () => {
+    const values = await client.read([
+      '"Recipe".Target',
+      '"Recipe".Step',
+      '"Tank".Level',
+      '"Tank".Name',
+      '"Tank".Temps',
+      '"Tank".Motor',
+      '"Tank".Running',
+    ]);
+    expect(values).to.deep.equal({
+      '"Recipe".Target': 80,
+      '"Recipe".Step': 3,
+      '"Tank".Level': 12.5,
+      '"Tank".Name': 'abc',
+      '"Tank".Temps': [0, 21.5, 0],
+      '"Tank".Motor': { Speed: 1500, On: false },
+      '"Tank".Running': true,
+    });
+    expect(await client.read(['"Recipe".Inlet'])).to.deep.equal({ '"Recipe".Inlet': { Open: false, Position: 0 } });
+  });
+
+  it('writes by name (optimized, standard, a BOOL, a struct) and reads the values back', async () => {
+    await client.write({ '"Recipe".Step': 9, '"Recipe".Done': true, '"Tank".Name': 'xyz', '"Recipe".Inlet': { Open: true, Position: -4 } });
+    expect(await client.read(['"Recipe".Step', '"Recipe".Done', '"Tank".Name', '"Recipe".Inlet.Position', '"Tank".Count'])).to.deep.equal({
+      '"Recipe".Step': 9,
+      '"Recipe".Done': true,
+      '"Tank".Name': 'xyz',
+      '"Recipe".Inlet.Position': -4,
+      '"Tank".Count': 7,
+    });
+    // The same bytes by address (the standard DB): the write went where the name is.
+    await client.write({ '"Tank".Count': 11 });
+    expect(await client.read(['DB1.DBW4'])).to.deep.equal({ 'DB1.DBW4': 11 });
+  });
+
+  it('a name the PLC does not have fails with INVALID_ADDRESS naming it and the closest names, never another value', async () => {
+    const err = await client.read(['"Recipe".Stepp']).catch((e: Error) => e);
+    expect(err).to.include({ code: 'TAG_ERRORS' });
+    expect((err as Error).message)
+      .to.include('unknown name "Recipe".Stepp')
+      .and.include('did you mean "Recipe".Step');
+    const detailed = await client.readDetailed(['"Recipe".Step', '"Nope".X']);
+    expect(detailed['"Recipe".Step']).to.include({ ok: true });
+    const nope = detailed['"Nope".X']!;
+    expect(nope.ok).to.equal(false);
+    expect(!nope.ok && nope.error).to.include({ code: 'INVALID_ADDRESS' });
+  });
+
+  it('readOnly and a write allow-list by name hold as for s7://', async () => {
+    const ro = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`, {
+      readOnly: true,
+    }) as S7PlusClient;
+    const allow = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`, {
+      allow: ['"Recipe".Inlet'],
+    }) as S7PlusClient;
+    try {
+      await ro.connect();
+      await allow.connect();
+      expect(String(await ro.write({ '"Recipe".Step': 1 }).catch((e: Error) => e))).to.include('the connection is read-only');
+      expect(String(await allow.write({ '"Recipe".Step': 1 }).catch((e: Error) => e))).to.include(
+        "not in the connection's write allow-list",
+      );
+      await allow.write({ '"Recipe".Inlet.Position': 5 });
+      expect(await allow.read(['"Recipe".Inlet.Position'])).to.deep.equal({ '"Recipe".Inlet.Position': 5 });
+    } finally {
+      await ro.close();
+      await allow.close();
+    }
+  });
+});
