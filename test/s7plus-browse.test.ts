@@ -13,6 +13,7 @@ import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { compileSymbols } from '../lib/symbols';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
+import { requireS7CommPlus, startS7CommPlusServer, stopS7CommPlusPeers, type S7CommPlusPeerServer } from './support/s7commplus-peer';
 
 describe('S7CommPlus browse and names (our client, our simulator)', function () {
   this.timeout(30000);
@@ -138,6 +139,81 @@ describe('S7CommPlus browse and names (our client, our simulator)', function () 
     } finally {
       await ro.close();
       await allow.close();
+    }
+  });
+
+  it('names go in requests of at most maxItems items: a struct of 4 members and 2 more names in 3 requests of 2', async () => {
+    const small = createClient(
+      `s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000&maxItems=2`,
+    ) as S7PlusClient;
+    try {
+      await small.connect();
+      await small.browse();
+      const before = small.stats.requestsSent;
+      const values = await small.read(['"Tank".Valves', '"Tank".Count', '"Recipe".Target']);
+      expect(values['"Tank".Valves']).to.have.length(2);
+      expect(small.stats.requestsSent - before).to.equal(3);
+    } finally {
+      await small.close();
+    }
+  });
+
+  it('a given symbols table (the compiled sources) works: its optimized names through the browse, its standard ones by address', async () => {
+    const symbols = compileSymbols(SOURCES, { db: DB_NUMBERS });
+    const withTable = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`, {
+      symbols,
+    }) as S7PlusClient;
+    try {
+      await withTable.connect();
+      await withTable.write({ '"Recipe".Target': 42.5, '"Tank".Level': 3.25 });
+      expect(await withTable.read(['"Recipe".Target', '"Tank".Level', '"Tank".Motor'])).to.deep.equal({
+        '"Recipe".Target': 42.5,
+        '"Tank".Level': 3.25,
+        '"Tank".Motor': { Speed: 1500, On: false },
+      });
+    } finally {
+      await withTable.close();
+    }
+  });
+
+  it('the browsed table is kept per connection: a new connection browses again', async () => {
+    const first = await client.browse();
+    expect(await client.browse()).to.equal(first);
+    const back = new Promise<void>((resolve) => client.once('connected', () => resolve()));
+    server.dropConnections();
+    await back;
+    const second = await client.browse();
+    expect(second).to.not.equal(first);
+    expect(second.entries.map((e) => e.name)).to.deep.equal(first.entries.map((e) => e.name));
+  });
+});
+
+describe('S7CommPlus browse against the s7commplus emulator (its browse offers nothing)', function () {
+  this.timeout(60_000);
+  let peer: S7CommPlusPeerServer;
+  before(async function () {
+    const python = requireS7CommPlus(this);
+    peer = await startS7CommPlusServer(python, { dbs: [{ number: 1, size: 64, variables: { count: ['DInt', 4] } }], version: 1 });
+  });
+  after(async () => {
+    await peer?.stop();
+    await stopS7CommPlusPeers();
+  });
+
+  it('gives a table without error; a name then fails with INVALID_ADDRESS, addresses still read', async () => {
+    const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=5000`) as S7PlusClient;
+    try {
+      await client.connect();
+      const table = await client.browse();
+      expect(table.entries).to.deep.equal([]);
+      expect(table.blocks).to.deep.equal([]);
+      const detailed = await client.readDetailed(['"Nothing".Here', 'DB1.DBD4:DINT']);
+      const missing = detailed['"Nothing".Here']!;
+      expect(missing.ok).to.equal(false);
+      expect(!missing.ok && missing.error).to.include({ code: 'INVALID_ADDRESS' });
+      expect(detailed['DB1.DBD4:DINT']).to.include({ ok: true });
+    } finally {
+      await client.close();
     }
   });
 });

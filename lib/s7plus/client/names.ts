@@ -29,7 +29,7 @@ import {
   type ItemAddress,
 } from '../codec/variables';
 import { DataType, FunctionCode, Ids } from '../constants';
-import { readTags, writeTags, type Limits } from './io';
+import { readTags, sized, writeTags, type Limits } from './io';
 import type { S7PlusSession } from './session';
 
 /** A tag that stands for a name of the PLC's program (resolved at the read or write). */
@@ -171,16 +171,19 @@ function resolve(table: SymbolTable, tag: NamedTag): SymbolEntry | PlcError {
   return entry;
 }
 
-async function requestChunks<R>(
+/** Sends `count` items in requests of at most the item limit (io.ts `sized`: a reset on a large request lowers it). */
+async function requestChunks(
   session: S7PlusSession,
   count: number,
   limits: Limits,
-  send: (from: number, to: number) => Promise<R>,
-): Promise<R[]> {
-  const out: R[] = [];
-  for (let at = 0; at < count; at += limits.maxItems()) out.push(await send(at, Math.min(count, at + limits.maxItems())));
-  void session;
-  return out;
+  send: (from: number, to: number) => Promise<Buffer>,
+  take: (from: number, to: number, answer: Buffer) => void,
+): Promise<void> {
+  for (let at = 0; at < count;) {
+    const to = Math.min(count, at + limits.maxItems());
+    take(at, to, await sized(session, to - at, limits, () => send(at, to)));
+    at = to;
+  }
 }
 
 /** Values of addresses and names, in order; each tag's own failure is its error. */
@@ -218,17 +221,18 @@ export async function readMixed(
   }
   const leaf = new Map<string, PlcValue>();
   const failed = new Map<string, PlcError>();
-  await requestChunks(session, leaves.length, limits, async (from, to) => {
-    const chunk = leaves.slice(from, to);
-    const answer = await session.request(
+  const send = (from: number, to: number) =>
+    session.request(
       FunctionCode.GetMultiVariables,
       (sequence, sessionId, integrityId) =>
         encodeGetMultiVariablesRequest({
-          ...readRequest(sequence, sessionId, chunk.map(itemOf)),
+          ...readRequest(sequence, sessionId, leaves.slice(from, to).map(itemOf)),
           ...(integrityId === undefined ? {} : { integrityId }),
         }),
       { signal },
     );
+  await requestChunks(session, leaves.length, limits, send, (from, to, answer) => {
+    const chunk = leaves.slice(from, to);
     const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
     chunk.forEach((e, k) => {
       const v = body.values.get(k + 1);
@@ -322,22 +326,23 @@ export async function writeMixed(
       results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
     }
   });
-  await requestChunks(session, ready.length, limits, async (from, to) => {
-    const chunk = ready.slice(from, to);
-    const answer = await session.request(
+  const send = (from: number, to: number) =>
+    session.request(
       FunctionCode.SetMultiVariables,
       (sequence, sessionId, integrityId) =>
         encodeSetMultiVariablesRequest({
           ...writeRequest(
             sequence,
             sessionId,
-            chunk.map((c) => c.address),
-            chunk.map((c) => c.value),
+            ready.slice(from, to).map((c) => c.address),
+            ready.slice(from, to).map((c) => c.value),
           ),
           ...(integrityId === undefined ? {} : { integrityId }),
         }),
       { signal },
     );
+  await requestChunks(session, ready.length, limits, send, (from, to, answer) => {
+    const chunk = ready.slice(from, to);
     const { body } = decodeSetMultiVariablesResponse(answer, { integrity: session.integrityOn });
     chunk.forEach((c, k) => {
       const code = body.errors.get(k + 1) ?? (body.returnValue !== 0n ? body.returnValue : undefined);
