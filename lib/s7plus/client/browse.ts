@@ -28,6 +28,8 @@ import type { S7PlusSession } from './session';
 
 /** Where a browsed declaration "stands": the PLC, not a file. */
 const AT: SourcePosition = Object.freeze({ file: 'PLC', line: 0, column: 0 });
+/** The most elements of an array the symbol compiler lays out (lib/symbols/layout.ts). */
+const MAX_ELEMENTS = 65535;
 
 const TYPE_OF: Readonly<Record<number, DataTypeName>> = Object.freeze({
   [SoftDataType.Bool]: 'BOOL',
@@ -259,6 +261,9 @@ function declare(
   if (m.dims) {
     // Elements: LIDs <member>.<0-based index>, and for an element of an array of structs 1 before its member's LID.
     const count = m.dims.reduce((n, d) => n * (d.high - d.low + 1), 1);
+    // The symbol compiler lays out arrays up to 65535 elements; a larger count is no program this client can name.
+    if (!(count >= 1 && count <= MAX_ELEMENTS))
+      throw new PlcError('PROTOCOL_ERROR', `S7CommPlus browse: ${name} is an array of ${count} elements, more than ${MAX_ELEMENTS}`);
     const element = m.structRid !== undefined ? undefined : elementary();
     let elementType: TypeRef | undefined = element;
     for (let k = 0; k < count; k++) {
