@@ -12,6 +12,12 @@ import { S7Server } from '../lib/s7/server';
 import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { compileSymbols } from '../lib/symbols';
+import { browseTable } from '../lib/s7plus/client/browse';
+import type { S7PlusSession } from '../lib/s7plus/client/session';
+import { decodeExploreRequest, encodeExploreResponse } from '../lib/s7plus/codec/explore';
+import { newObject, type PObject } from '../lib/s7plus/codec/object';
+import { encodeGetMultiVariablesResponse } from '../lib/s7plus/codec/variables';
+import { DataType, dbAccessArea, ElementId, FunctionCode, Ids, SoftDataType } from '../lib/s7plus/constants';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
 import { requireS7CommPlus, startS7CommPlusServer, stopS7CommPlusPeers, type S7CommPlusPeerServer } from './support/s7commplus-peer';
 
@@ -215,5 +221,77 @@ describe('S7CommPlus browse against the s7commplus emulator (its browse offers n
     } finally {
       await client.close();
     }
+  });
+});
+
+/** A session that answers an Explore of the program with one DB, LID 1 with RID 0x92000001, and the type info with `vartype` (raw list bytes). */
+function hostileSession(vartype: Buffer, varname: Buffer): S7PlusSession {
+  const header = { functionCode: 0, sequence: 1, transportFlags: 0 };
+  const db = newObject({ relationId: dbAccessArea(1), classId: Ids.DBClassRID }, [
+    [Ids.ObjectVariableTypeName, { flags: 0, type: DataType.WString, value: 'Evil' }],
+    [Ids.BlockBlockNumber, { flags: 0, type: DataType.UDInt, value: 1 }],
+  ]);
+  const type: PObject = {
+    ...newObject({ relationId: 0x92000001, classId: 0 }),
+    members: [
+      { kind: 'list', tag: ElementId.VartypeList, raw: vartype },
+      { kind: 'list', tag: ElementId.VarnameList, raw: varname },
+    ],
+  };
+  const fake = {
+    integrityOn: false,
+    alive: true,
+    request(fn: number, encode: (sequence: number, sessionId: number, integrityId?: number) => Buffer): Promise<Buffer> {
+      if (fn === FunctionCode.GetMultiVariables)
+        return Promise.resolve(
+          encodeGetMultiVariablesResponse({
+            header,
+            body: { returnValue: 0n, values: new Map([[1, { flags: 0, type: DataType.RID, value: 0x92000001 }]]), errors: new Map() },
+          }),
+        );
+      const { body } = decodeExploreRequest(encode(1, 1), { integrity: false });
+      const objects = body.exploreId === Ids.ObjectOmsTypeInfoContainer ? [type] : [db];
+      return Promise.resolve(encodeExploreResponse({ header, body: { returnValue: 0n, objects } }));
+    },
+  };
+  return fake as unknown as S7PlusSession;
+}
+
+/** A vartype list of one element (LID 0xA, an INT at offset 0 of a standard block, or what `element` gives) and its name list. */
+function lists(element: Buffer, name = 'X'): [Buffer, Buffer] {
+  const block = Buffer.concat([Buffer.alloc(4), element]);
+  const len = Buffer.alloc(2);
+  len.writeUInt16BE(block.length);
+  const n = Buffer.concat([Buffer.from([name.length]), Buffer.from(name), Buffer.from([0])]);
+  const nlen = Buffer.alloc(2);
+  nlen.writeUInt16BE(n.length);
+  return [Buffer.concat([len, block, Buffer.alloc(2)]), Buffer.concat([nlen, n, Buffer.alloc(2)])];
+}
+
+function element(soft: number, oi: number, info: Buffer, classic = true): Buffer {
+  const head = Buffer.alloc(12);
+  head.writeUInt32LE(0xa, 0);
+  head[8] = soft;
+  head.writeUInt16BE(oi << 12, 9);
+  head[11] = classic ? 0x08 : 0;
+  return Buffer.concat([head, info]);
+}
+
+describe('S7CommPlus browse of a hostile PLC', () => {
+  it('a well-formed type object browses (the fake PLC is right), one too short or an array of 2^32-1 elements is a PROTOCOL_ERROR', async () => {
+    const table = await browseTable(hostileSession(...lists(element(SoftDataType.Int, 8, Buffer.from([0, 0, 0, 0])))));
+    expect(table.entries.map((e) => [e.name, e.type, e.address, e.access?.lids])).to.deep.equal([
+      ['"Evil".X', 'INT', 'DB1.DBW0:INT', [0xa]],
+    ]);
+    // The PLC's own offset wins over our layout rules (which would place the only member at 0).
+    const moved = await browseTable(hostileSession(...lists(element(SoftDataType.Int, 8, Buffer.from([0, 0, 6, 0])))));
+    expect(moved.lookup('"Evil".X')).to.include({ byte: 6, address: 'DB1.DBW6:INT' });
+    const short = await browseTable(hostileSession(...lists(element(SoftDataType.Int, 9, Buffer.from([0, 0]))))).catch((e: Error) => e);
+    expect(short).to.include({ code: 'PROTOCOL_ERROR' });
+    const info = Buffer.alloc(20);
+    info.writeUInt32LE(0xffffffff, 16);
+    const huge = await browseTable(hostileSession(...lists(element(SoftDataType.Int, 10, info)))).catch((e: Error) => e);
+    expect(huge).to.include({ code: 'PROTOCOL_ERROR' });
+    expect((huge as Error).message).to.include('4294967295 elements');
   });
 });
