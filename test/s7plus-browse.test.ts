@@ -295,3 +295,104 @@ describe('S7CommPlus browse of a hostile PLC', () => {
     expect((huge as Error).message).to.include('4294967295 elements');
   });
 });
+
+const ALL_TYPES = `DATA_BLOCK "All"
+{ S7_Optimized_Access := 'TRUE' }
+VERSION : 0.1
+NON_RETAIN
+   STRUCT
+      b : Bool; by : Byte; c : Char; w : Word; i : Int; dw : DWord; di : DInt; r : Real; d : Date; tod : Time_Of_Day;
+      t : Time; s5 : S5Time; dt : Date_And_Time; s : String[8]; lr : LReal; uli : ULInt; li : LInt; lw : LWord;
+      usi : USInt; ui : UInt; udi : UDInt; si : SInt; wc : WChar; ws : WString[6]; lt : LTime; dtl : DTL;
+   END_STRUCT;
+BEGIN
+END_DATA_BLOCK
+`;
+
+describe('S7CommPlus names of every elementary type (an optimized DB)', function () {
+  this.timeout(30000);
+  let server: S7Server;
+  let client: S7PlusClient;
+  before(async () => {
+    const cert = await generateCertificate();
+    const service = new S7PlusService({
+      sources: [{ name: 'All.db', content: ALL_TYPES }],
+      db: { All: 3 },
+      tls: { cert: cert.cert, key: cert.key },
+    });
+    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    await server.listen();
+    client = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`) as S7PlusClient;
+    await client.connect();
+  });
+  after(async () => {
+    await client?.close();
+    await server?.close();
+  });
+
+  it('each written by name reads back by name with its JS value; a value of the wrong kind is refused, nothing written', async () => {
+    const values: Record<string, unknown> = {
+      b: true,
+      by: 0xab,
+      c: 'Z',
+      w: 0x1234,
+      i: -1234,
+      dw: 0xdeadbeef,
+      di: -123456,
+      r: 1.5,
+      d: new Date(Date.UTC(2024, 0, 2)),
+      tod: 3600000,
+      t: -5000,
+      s5: 2000,
+      dt: new Date(Date.UTC(2024, 5, 7, 8, 9, 10, 120)),
+      s: 'hello',
+      lr: 3.14159,
+      uli: 2n ** 63n,
+      li: -(2n ** 40n),
+      lw: 0x0123456789abcdefn,
+      usi: 200,
+      ui: 60000,
+      udi: 4000000000,
+      si: -100,
+      wc: 'é',
+      ws: 'grüße',
+      lt: 1234567890123n,
+      dtl: new Date(Date.UTC(2024, 1, 29, 23, 59, 58, 500)),
+    };
+    const table = await client.browse();
+    expect(Object.keys(values).map((k) => table.lookup(`"All".${k}`)?.type)).to.deep.equal([
+      'BOOL',
+      'BYTE',
+      'CHAR',
+      'WORD',
+      'INT',
+      'DWORD',
+      'DINT',
+      'REAL',
+      'DATE',
+      'TIME_OF_DAY',
+      'TIME',
+      'S5TIME',
+      'DATE_AND_TIME',
+      'STRING[8]',
+      'LREAL',
+      'ULINT',
+      'LINT',
+      'LWORD',
+      'USINT',
+      'UINT',
+      'UDINT',
+      'SINT',
+      'WCHAR',
+      'WSTRING[6]',
+      'LTIME',
+      'DTL',
+    ]);
+    const named = Object.fromEntries(Object.entries(values).map(([k, v]) => [`"All".${k}`, v]));
+    await client.write(named);
+    expect(await client.read(Object.keys(named))).to.deep.equal(named);
+    const wrong = await client.writeDetailed({ '"All".i': 'abc', '"All".b': 1 });
+    expect(Object.values(wrong).map((r) => (r.ok ? 'ok' : r.error.code))).to.deep.equal(['INVALID_VALUE', 'INVALID_VALUE']);
+    expect(await client.read(['"All".i', '"All".b'])).to.deep.equal({ '"All".i': -1234, '"All".b': true });
+  });
+});
