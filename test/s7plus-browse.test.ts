@@ -12,6 +12,7 @@ import { S7Server } from '../lib/s7/server';
 import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { compileSymbols } from '../lib/symbols';
+import type { SymbolEntry } from '../lib/symbols/model';
 import { browseTable } from '../lib/s7plus/client/browse';
 import type { S7PlusSession } from '../lib/s7plus/client/session';
 import { decodeExploreRequest, encodeExploreResponse } from '../lib/s7plus/codec/explore';
@@ -304,6 +305,12 @@ NON_RETAIN
       b : Bool; by : Byte; c : Char; w : Word; i : Int; dw : DWord; di : DInt; r : Real; d : Date; tod : Time_Of_Day;
       t : Time; s5 : S5Time; dt : Date_And_Time; s : String[8]; lr : LReal; uli : ULInt; li : LInt; lw : LWord;
       usi : USInt; ui : UInt; udi : UDInt; si : SInt; wc : WChar; ws : WString[6]; lt : LTime; dtl : DTL;
+      grid : Array[1..2, 0..2] of Int;
+      flags : Array[0..9] of Bool;
+      steps : Array[1..2] of Struct
+         temp : Real;
+         names : Array[0..1] of String[4];
+      END_STRUCT;
    END_STRUCT;
 BEGIN
 END_DATA_BLOCK
@@ -391,8 +398,48 @@ describe('S7CommPlus names of every elementary type (an optimized DB)', function
     const named = Object.fromEntries(Object.entries(values).map(([k, v]) => [`"All".${k}`, v]));
     await client.write(named);
     expect(await client.read(Object.keys(named))).to.deep.equal(named);
+    const compiled = compileSymbols([{ name: 'All.db', content: ALL_TYPES }], { db: { All: 3 } });
+    expect(table.entries.map((e) => [e.name, e.type, e.children])).to.deep.equal(compiled.entries.map((e) => [e.name, e.type, e.children]));
+    expect(table.lookup('"All".grid[2,1]')!.access!.lids).to.deep.equal([0xa + 26, 4]);
+    expect(table.lookup('"All".steps[2].names[1]')!.access!.lids).to.deep.equal([0xa + 28, 1, 1, 0xb, 1]);
+    const arrays = {
+      '"All".grid': [1, 2, 3, 4, 5, 6],
+      '"All".flags': [true, false, true, false, false, false, false, false, false, true],
+      '"All".steps': [
+        { temp: 1.5, names: ['ab', 'cd'] },
+        { temp: -2, names: ['', 'wxyz'] },
+      ],
+    };
+    await client.write(arrays);
+    expect(await client.read(Object.keys(arrays))).to.deep.equal(arrays);
+    expect(await client.read(['"All".grid[2,1]', '"All".flags[9]', '"All".steps[2].names[1]'])).to.deep.equal({
+      '"All".grid[2,1]': 5,
+      '"All".flags[9]': true,
+      '"All".steps[2].names[1]': 'wxyz',
+    });
     const wrong = await client.writeDetailed({ '"All".i': 'abc', '"All".b': 1 });
     expect(Object.values(wrong).map((r) => (r.ok ? 'ok' : r.error.code))).to.deep.equal(['INVALID_VALUE', 'INVALID_VALUE']);
     expect(await client.read(['"All".i', '"All".b'])).to.deep.equal({ '"All".i': -1234, '"All".b': true });
+  });
+
+  it('the same block with standard access: the byte, bit and address as the PLC gives them of every entry equal the compiled ones', async () => {
+    const source = [{ name: 'All.db', content: ALL_TYPES.replace("'TRUE'", "'FALSE'") }];
+    const cert = await generateCertificate();
+    const service = new S7PlusService({ sources: source, db: { All: 3 }, tls: { cert: cert.cert, key: cert.key } });
+    const standard = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    await standard.listen();
+    const c = createClient(`s7plus://127.0.0.1:${standard.port}?fingerprint=${service.fingerprint!}&timeout=10000`) as S7PlusClient;
+    try {
+      await c.connect();
+      const table = await c.browse();
+      const compiled = compileSymbols(source, { db: { All: 3 } });
+      const shape = (e: SymbolEntry) => [e.name, e.type, e.byte, e.bit, e.address];
+      expect(table.entries.map(shape)).to.deep.equal(compiled.entries.map(shape));
+      expect(table.lookup('"All".dtl')).to.include({ address: compiled.lookup('"All".dtl')!.address });
+      expect(table.blocks[0]).to.include({ length: compiled.blocks[0]!.length });
+    } finally {
+      await c.close();
+      await standard.close();
+    }
   });
 });
