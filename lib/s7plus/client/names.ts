@@ -89,13 +89,21 @@ function unknownName(table: SymbolTable, name: string): PlcError {
   return new PlcError('INVALID_ADDRESS', `unknown name ${name} on the PLC${hint}`, { tag: name });
 }
 
+/** Leaves per struct or array entry, worked out once per browsed table (a poll reads the same names again and again). */
+const LEAVES = new WeakMap<SymbolEntry, readonly SymbolEntry[]>();
+
 /** The elementary entries of an entry (itself when elementary), in order. */
-function leavesOf(table: SymbolTable, entry: SymbolEntry): SymbolEntry[] {
+function leavesOf(table: SymbolTable, entry: SymbolEntry): readonly SymbolEntry[] {
   if (entry.kind === 'elementary') return [entry];
-  return (entry.children ?? []).flatMap((c) => {
-    const child = table.lookup(c);
-    return child ? leavesOf(table, child) : [];
-  });
+  let leaves = LEAVES.get(entry);
+  if (!leaves) {
+    leaves = (entry.children ?? []).flatMap((c) => {
+      const child = table.lookup(c);
+      return child ? leavesOf(table, child) : [];
+    });
+    LEAVES.set(entry, leaves);
+  }
+  return leaves;
 }
 
 function itemOf(entry: SymbolEntry): ItemAddress {
