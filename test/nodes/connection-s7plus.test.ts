@@ -7,11 +7,10 @@
  */
 import { expect } from 'chai';
 import { S7Server } from '../../lib/s7/server';
-import { S7PlusClient } from '../../lib/s7plus/client';
 import { S7PlusService } from '../../lib/s7plus/server';
 import { generateCertificate } from '../../lib/s7plus/transport/cert';
 import { DB_NUMBERS, SOURCES } from '../fixtures/s7plus';
-import { ALL_NODES, helper, until } from './support';
+import { ALL_NODES, helper, Recorder, until } from './support';
 
 const SECRET = 'n0de-red-Secret!';
 
@@ -107,20 +106,53 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       expect(res.body).to.include({ ok: false, code: 'INVALID_URL' });
     });
 
-    it('answers the table in the shape of the sources compile (blocks, entries, types, errors)', async function () {
+    it('answers the table in the shape of the sources compile (blocks, entries, types, errors)', async () => {
       await helper.load(ALL_NODES, []);
       const res = await helper.request().post('/plcwire/s7plus/browse').send({ url }).expect(200);
-      if (typeof (S7PlusClient.prototype as { browse?: unknown }).browse !== 'function') {
-        // This build's client has no browse(): the answer says so, and nothing is left open.
-        expect(res.body).to.include({ ok: false, code: 'NOT_SUPPORTED' });
-        await until(() => server.connectionCount === 0, 3000, 'no connection left');
-        return this.skip();
-      }
       expect(res.body.ok, JSON.stringify(res.body)).to.equal(true);
       expect(res.body).to.have.keys(['ok', 'blocks', 'entries', 'types', 'errors']);
       const step = res.body.entries.find((e: { name: string }) => e.name === '"Recipe".Step');
       expect(step).to.include({ type: 'INT', address: null });
       await until(() => server.connectionCount === 0, 3000, 'no connection left');
+    });
+  });
+
+  describe('read and write nodes by name (no sources: the PLC browsed)', () => {
+    it('a write node writes a member of the optimized block and a struct by name; a read node reads them back', async () => {
+      const at = { z: 'tab', x: 100, y: 100 };
+      await helper.load(ALL_NODES, [
+        { id: 'tab', type: 'tab', label: 'plcwire' },
+        { id: 'c1', type: 'plcwire-connection', name: 'press', url },
+        { id: 'w1', type: 'plcwire-write', ...at, connection: 'c1', tags: [], wires: [['wout']] },
+        { id: 'wout', type: 'helper', ...at },
+        {
+          id: 'r1',
+          type: 'plcwire-read',
+          ...at,
+          connection: 'c1',
+          interval: 0,
+          output: 'object',
+          tags: [
+            { name: 'step', address: '"Recipe".Step' },
+            { name: 'inlet', address: '"Recipe".Inlet' },
+          ],
+          wires: [['rout']],
+        },
+        { id: 'rout', type: 'helper', ...at },
+      ]);
+      const conn = helper.getNode('c1');
+      await until(() => conn.linkStatus.state === 'connected', 10000, 'connected');
+      const written = new Recorder(helper.getNode('wout'));
+      helper.getNode('w1').receive({ payload: { '"Recipe".Step': 12, '"Recipe".Inlet': { Open: true, Position: 7 } } });
+      const ack = await written.next(() => true, 10000, 'the write acknowledged');
+      expect(
+        Object.values(ack.results).every((r: any) => r.ok),
+        JSON.stringify(ack.results),
+      ).to.equal(true);
+      const read = new Recorder(helper.getNode('rout'));
+      helper.getNode('r1').receive({});
+      const msg = await read.next(() => true, 10000, 'the read');
+      expect(msg.payload).to.deep.equal({ step: 12, inlet: { Open: true, Position: 7 } });
     });
   });
 });

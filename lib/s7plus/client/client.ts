@@ -8,14 +8,16 @@
  * The password (ConnectOptions.password) lives in a private field: it is in
  * no property, no JSON, no inspect() output, no error and no log line.
  */
-import { S7_TAG_SYNTAX } from '../../address';
 import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
 import { ConnectionError, isLinkError, PlcError } from '../../errors';
 import type { Driver } from '../../link/driver';
+import type { SymbolTable } from '../../symbols/model';
 import type { Protocol, RequestOptions, Tag } from '../../types';
 import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../url';
 import { openS7PlusSession } from './handshake';
-import { readTags, writeTags, type Limits } from './io';
+import { browseTable } from './browse';
+import type { Limits } from './io';
+import { plusSyntax, readMixed, writeMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';
 import type { PeerCertificate } from './handshake';
@@ -53,15 +55,20 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     refused: (items) => this.learnItemLimit(items),
   };
 
-  protected readonly driver: Driver<S7PlusSession, Tag> = {
-    syntax: S7_TAG_SYNTAX,
-    openSession: (signal) => this.openSession(signal),
-    readValues: (session, tags, signal) => readTags(session, tags, this.limits, signal),
-    readTags: async (session, tags, signal) => {
-      const { values, errors } = await readTags(session, tags, this.limits, signal);
+  /** The browsed table of the live session (browse()); a new session browses again. */
+  private browsed: { session: S7PlusSession; table: Promise<SymbolTable> } | undefined;
+
+  protected readonly driver: Driver<S7PlusSession, Tag>;
+  private readonly baseDriver = {
+    openSession: (signal: AbortSignal) => this.openSession(signal),
+    readValues: (session: S7PlusSession, tags: readonly Tag[], signal?: AbortSignal) =>
+      readMixed(session, tags, this.limits, () => this.tableOf(session, signal), signal),
+    readTags: async (session: S7PlusSession, tags: readonly Tag[], signal?: AbortSignal) => {
+      const { values, errors } = await readMixed(session, tags, this.limits, () => this.tableOf(session, signal), signal);
       return toResults(values, errors);
     },
-    writeTags: (session, items, signal) => writeTags(session, items, this.limits, signal),
+    writeTags: (session: S7PlusSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal) =>
+      writeMixed(session, items, this.limits, () => this.tableOf(session, signal), signal),
     noBlockLength: 'S7CommPlus reads data blocks by their own layout: there is no PUT/GET layout to check',
     isLinkError,
   };
@@ -69,6 +76,7 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   constructor(endpoint: S7PlusEndpoint, options: S7PlusClientOptions = {}) {
     const { password, ...rest } = options;
     super(endpointOptions(S7PLUS_URLS.name(endpoint), endpoint, rest));
+    this.driver = { syntax: plusSyntax(rest.symbols), ...this.baseDriver };
     this.endpoint = endpoint;
     this.#password = password;
     this.itemLimit = endpoint.maxItems ?? S7PLUS_DEFAULT_MAX_ITEMS;
@@ -96,6 +104,29 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   /** The data blocks of the PLC's program (standard and optimized), by number, with their names. */
   dataBlocks(options: RequestOptions = {}): Promise<S7PlusDataBlock[]> {
     return this.withSession((s) => dataBlocks(s, options.signal));
+  }
+
+  /**
+   * The PLC's data blocks as a symbol table (lib/symbols/model.ts): names as
+   * TIA writes them, IEC types, each entry's S7CommPlus access path, and the
+   * byte and bit of standard blocks' members as the PLC gives them. Browsed
+   * once per connection; a reconnect browses again.
+   */
+  browse(options: RequestOptions = {}): Promise<SymbolTable> {
+    return this.withSession((s) => this.tableOf(s, options.signal));
+  }
+
+  private tableOf(session: S7PlusSession, signal?: AbortSignal): Promise<SymbolTable> {
+    if (this.browsed?.session !== session) {
+      const table = browseTable(session, signal);
+      const browsed = { session, table };
+      this.browsed = browsed;
+      // A failed browse is not kept: the next read tries again.
+      table.catch(() => {
+        if (this.browsed === browsed) this.browsed = undefined;
+      });
+    }
+    return this.browsed!.table;
   }
 
   /** Runs `fn` on the live session; NOT_CONNECTED when there is none. */

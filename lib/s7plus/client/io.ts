@@ -87,7 +87,7 @@ export interface Limits {
  * limit too: it is lowered before the link error goes on, so the request
  * after the reconnect is smaller.
  */
-async function sized(session: S7PlusSession, items: number, limits: Limits, send: () => Promise<Buffer>): Promise<Buffer> {
+export async function sized(session: S7PlusSession, items: number, limits: Limits, send: () => Promise<Buffer>): Promise<Buffer> {
   try {
     return await send();
   } catch (err) {

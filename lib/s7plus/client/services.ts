@@ -20,7 +20,7 @@ export interface S7PlusDataBlock {
 }
 
 /** An Explore of `exploreId` (with these attributes): the objects of the answer; a refusal is a PlcError. */
-async function explore(
+export async function explore(
   session: S7PlusSession,
   exploreId: number,
   attributes: number[],
