@@ -85,10 +85,10 @@ describe('editor in Chromium: the connection dialog on s7plus://', function () {
       expect(await page.inputValue('#node-config-plcwire-fingerprint')).to.equal('');
 
       await page.click('#node-config-plcwire-pin');
-      expect(await page.inputValue('#node-config-plcwire-fingerprint')).to.equal(service.fingerprint!.toLowerCase());
+      expect(await page.inputValue('#node-config-plcwire-fingerprint')).to.equal(service.fingerprint!);
       await page.waitForFunction(
         (fp) => (globalThis as any).document.querySelector('#node-config-input-url').value.includes(`fingerprint=${fp}`),
-        service.fingerprint!.toLowerCase(),
+        service.fingerprint!,
         { timeout: 5_000 },
       );
       expect(await page.isVisible('#node-config-plcwire-pin')).to.equal(false);

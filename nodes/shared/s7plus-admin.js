@@ -17,8 +17,8 @@
 const plc = require('../..');
 const symbols = require('../../dist/lib/flows/symbol-config');
 const { openTunnel } = require('../../dist/lib/s7plus/client/tunnel');
-const { initSsl } = require('../../dist/lib/s7plus/client/handshake');
-const { startTls } = require('../../dist/lib/s7plus/client/tls');
+const { initSsl, peerCertificate } = require('../../dist/lib/s7plus/client/handshake');
+const { startTls } = require('../../dist/lib/s7plus/transport/handshake');
 
 /** The longest either request may take. */
 const DEADLINE_MS = 15000;
@@ -57,13 +57,14 @@ async function peekCertificate(endpoint, signal) {
   try {
     await initSsl(tunnel, { name, signal });
     // insecure: take any certificate, to show it; the socket is closed at once, the session never starts.
-    const { socket, certificate } = await startTls(
-      tunnel,
-      { ...endpoint, fingerprint: undefined, ca: undefined, insecure: true },
-      { name, signal },
-    );
+    const { socket, certificate } = await startTls(tunnel, {
+      trust: { insecure: true },
+      host: endpoint.host,
+      timeout: endpoint.timeout,
+      signal,
+    });
     socket.destroy();
-    return certificate;
+    return peerCertificate(certificate);
   } finally {
     tunnel.destroy();
   }

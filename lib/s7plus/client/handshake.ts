@@ -33,7 +33,7 @@ export interface PeerCertificate {
   validTo: string;
 }
 
-function peerCertificate(c: CertificateInfo): PeerCertificate {
+export function peerCertificate(c: CertificateInfo): PeerCertificate {
   return { fingerprint: c.fingerprint, subject: c.subject, validFrom: c.notBefore.toISOString(), validTo: c.notAfter.toISOString() };
 }
 
