@@ -173,7 +173,7 @@ describe('freeport master against simulated stations, in-process (@serialport/bi
     expect(await client.read(['ST5,REAL0'])).to.deep.equal({ 'ST5,REAL0': 10 });
   });
 
-  it('a reply that comes after its timeout is never taken for the next request (another station\'s data passed as good)', async () => {
+  it("a reply that comes after its timeout is never taken for the next request (another station's data passed as good)", async () => {
     // Every reply 150 ms late with a timeout of 100: station 6's reply to a timed-out attempt
     // would arrive while the next request (its retry, then station 7's) waits for its own.
     bus.faults.replyDelayMs = 150;

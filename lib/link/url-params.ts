@@ -100,9 +100,7 @@ export function urlError(url: string, problem: string): PlcError {
  * replaced by ***, so a password typed into a URL never reaches a log.
  */
 function redactUrl(url: string): string {
-  return url
-    .replace(/\/\/[^/@?#]*@/, '//***@')
-    .replace(/([?&;](?:[^=&#]*(?:pass|pwd|secret|token)[^=&#]*)=)[^&#]*/gi, '$1***');
+  return url.replace(/\/\/[^/@?#]*@/, '//***@').replace(/([?&;](?:[^=&#]*(?:pass|pwd|secret|token)[^=&#]*)=)[^&#]*/gi, '$1***');
 }
 
 /** What every endpoint carries, whatever its protocol (`readOnly`, `allow`, `strictSymbols`). */
