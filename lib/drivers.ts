@@ -96,7 +96,11 @@ export const DRIVERS = Object.freeze({
     symbols: true,
     blockLength: false,
     // Its simulator is the S7 one's (S7CommPlus on the same port as PUT/GET, as a CPU serves it) once that serves it.
-    serve: (flags) => Promise.reject(flags.usage('no S7CommPlus simulator yet: `plcwire serve s7` serves PUT/GET only')),
+    // As on a CPU, S7CommPlus is served by the S7 simulator of an S7-1200/1500 on the PUT/GET port (the called TSAP decides).
+    serve: (flags) =>
+      Promise.reject(
+        flags.usage('S7CommPlus is served on the PUT/GET port by `plcwire serve s7 --profile s7-1500` (or s7-1200) with --source'),
+      ),
   }),
 }) satisfies { readonly [P in Protocol]: DriverEntry<{ readonly protocol: P }, PlcClient> };
 
