@@ -8,18 +8,8 @@
 // (`s7plus`, S7-1200/1500 over TLS, with its TLS faults) is one more entry
 // here, plus its simulator kind in server-worker.js, once that driver lands.
 const { plcTable } = require('../lib/fleet');
-
-/** mulberry32: small, fast, good enough to draw a schedule from. */
-function prng(seed) {
-  let a = seed >>> 0;
-  return () => {
-    a = (a + 0x6d2b79f5) >>> 0;
-    let t = a;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
-}
+// mulberry32: small, fast, good enough to draw a schedule from (the benchmark tables' generator).
+const { prng } = require('../lib/tables');
 
 /** Every fault of issue #26 (S7comm, FETCH/WRITE and freeport; the TLS ones come with s7plus). */
 const FAULTS = {

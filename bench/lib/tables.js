@@ -119,4 +119,4 @@ function firstMismatch(tags, values) {
   return undefined;
 }
 
-module.exports = { TABLES, table, image, firstMismatch, DB1_SIZE, STRING_LENGTH };
+module.exports = { TABLES, table, image, firstMismatch, prng, DB1_SIZE, STRING_LENGTH };
