@@ -88,6 +88,26 @@ describe('flows: client pool', () => {
     expect(p.size).to.equal(1);
   });
 
+  it('refuses a second owner with another password (or none) with SETTINGS_CONFLICT, never showing either password', () => {
+    const { pool: p, made } = pool();
+    const url = 's7plus://10.0.0.5?insecure=true';
+    const link = p.acquire(url, { name: 'line 1' }, { key: '', password: 'first-Secret' });
+    expect(p.acquire(url, { name: 'line 2' }, { key: '', password: 'first-Secret' })).to.equal(link);
+    for (const password of ['other-Secret', undefined]) {
+      let err: (Error & { code?: string }) | undefined;
+      try {
+        p.acquire(url, { name: 'line 3' }, { key: '', ...(password !== undefined ? { password } : {}) });
+      } catch (e) {
+        err = e as Error & { code?: string };
+      }
+      expect(err?.code).to.equal('SETTINGS_CONFLICT');
+      expect(err?.message).to.match(/another password|no password here/);
+      expect(err?.message).to.not.include('Secret');
+    }
+    expect(made).to.have.length(1);
+    expect(link.owners.size).to.equal(2);
+  });
+
   it('refuses an allow-list that differs, shown as the list', () => {
     const { pool: p } = pool();
     p.acquire(`${URL}&allow=DB1,M0.0`, {});

@@ -7,6 +7,7 @@
  * SETTINGS_CONFLICT, since one client has one set of them and a node would
  * write (or resolve a name) under the other owner's rules.
  */
+import { createHmac, randomBytes } from 'node:crypto';
 import { EventEmitter } from 'node:events';
 import { createClient, type AnyClient, type ConnectOptions } from '../connect';
 import { PlcError } from '../errors';
@@ -144,6 +145,10 @@ function connectionName(owner: PoolOwner | undefined, url: string): string {
 
 export class ClientPool<C extends PoolClient = AnyClient> {
   private readonly links = new Map<string, PooledLink<C>>();
+  /** Which password each link's client was given, as a keyed digest (never the password): a second owner must give the same. */
+  private readonly passwords = new WeakMap<PooledLink<C>, string>();
+  /** The digest's key, random per pool, so the digest is no password hash that could be tried offline. */
+  private readonly digestKey = randomBytes(32);
 
   constructor(private readonly create: ClientFactory<C> = createClient as unknown as ClientFactory<C>) {}
 
@@ -171,6 +176,13 @@ export class ClientPool<C extends PoolClient = AnyClient> {
         `${withoutCredentials(url)} is a valid URL, but it reaches the same PLC as connection ${other}, whose link is already open, with ${sourcesDifference(link.symbolsKey, symbols.key)}; connections to one PLC share one link: give both the same sources, block numbers and strictness, or use one connection node`,
       );
     }
+    const password = symbols.password === undefined ? '' : createHmac('sha256', this.digestKey).update(symbols.password).digest('hex');
+    if (link && (this.passwords.get(link) ?? '') !== password) {
+      throw new PlcError(
+        'SETTINGS_CONFLICT',
+        `${withoutCredentials(url)} is a valid URL, but it reaches the same PLC as connection ${other}, whose link is already open, with ${password === '' ? 'no password here and one there' : (this.passwords.get(link) ?? '') === '' ? 'a password here and none there' : 'another password'}; connections to one PLC share one link (and its login): give both the same password, or use one connection node`,
+      );
+    }
     if (!link) {
       const client = this.create(endpoint, {
         ...(symbols.table ? { symbols: symbols.table, strictSymbols: !!symbols.strict } : {}),
@@ -178,6 +190,7 @@ export class ClientPool<C extends PoolClient = AnyClient> {
       });
       link = new PooledLink(this, key, url, endpoint, symbols.key, client);
       this.links.set(key, link);
+      if (password !== '') this.passwords.set(link, password);
     }
     link.owners.add(owner);
     return link;
