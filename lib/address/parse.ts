@@ -136,6 +136,16 @@ export function parseAddress(address: string): Tag {
   );
 }
 
+/** Whether `text` is an absolute address (parseAddress takes it): a text that is not is a tag name, or a mistake. */
+export function isAddress(text: string): boolean {
+  try {
+    parseAddress(text);
+    return true;
+  } catch {
+    return false;
+  }
+}
+
 /**
  * What to do about a tag name given where only addresses are known: the
  * same words serve the library (connect(url, { symbols })), the command line

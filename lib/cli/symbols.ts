@@ -6,7 +6,7 @@
  * with --source; --db numbers the blocks of TIA sources, which do not carry
  * their numbers.
  */
-import { parseAddress } from '../address';
+import { isAddress } from '../address';
 import type { AnyClient, ConnectOptions } from '../connect';
 import { ValueError } from '../errors';
 import { compileSymbols } from '../symbols/compile';
@@ -184,7 +184,7 @@ export function structValueFromText(
   text: string,
 ): { value: unknown } | undefined {
   // Text that parses as an address is that address, as the client reads it (lib/client/base.ts).
-  if (!table || parses(target)) return undefined;
+  if (!table || isAddress(target)) return undefined;
   const resolved = resolveSymbol(table, target, (address) => client.tag(address));
   if (!resolved?.shape) return undefined;
   let json: unknown;
@@ -199,15 +199,6 @@ export function structValueFromText(
   const value = typedJson(resolved.shape, json);
   expandWrite(resolved.shape, value);
   return { value };
-}
-
-function parses(address: string): boolean {
-  try {
-    parseAddress(address);
-    return true;
-  } catch {
-    return false;
-  }
 }
 
 /**

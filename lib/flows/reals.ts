@@ -6,7 +6,7 @@
  * library's read results keep the float32's exact value: docs/performance.md,
  * "REAL values", has the measurement that decided it.
  */
-import { parseAddress } from '../address';
+import { isAddress } from '../address';
 import type { SymbolTable } from '../symbols/model';
 import { resolveSymbol, type SymbolShape } from '../symbols/resolve';
 import type { DriverTag } from '../link/driver';
@@ -45,15 +45,6 @@ function ofShape<T>(shape: SymbolShape<T>): Convert | undefined {
   };
 }
 
-function parses(address: string): boolean {
-  try {
-    parseAddress(address);
-    return true;
-  } catch {
-    return false;
-  }
-}
-
 /**
  * How to show what a read of `target` returns: a function when it holds a
  * REAL (an address of type REAL, a REAL name, a STRUCT with REAL members),
@@ -65,7 +56,7 @@ export function realsForPeople(
   table: SymbolTable | undefined,
   target: string,
 ): Convert | undefined {
-  if (table && !parses(target)) {
+  if (table && !isAddress(target)) {
     const resolved = resolveSymbol(table, target, (address) => client.tag(address) as DriverTag);
     if (resolved?.shape) return ofShape(resolved.shape);
   }
