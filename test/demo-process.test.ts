@@ -5,7 +5,9 @@
  */
 import { expect } from 'chai';
 import { startPlant, type Plant } from '../lib/plant/plant';
-import { DemoProcess, MOTOR, THERMAL, type ProcessSnapshot } from '../lib/plant/process';
+import { DemoProcess, MOTOR, SETPOINT_BAND, THERMAL, type ProcessSnapshot } from '../lib/plant/process';
+import { DRIVE_CURRENT, TANK_SYMBOLS } from '../lib/plant/tank';
+import { connect } from '../lib/connect';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
@@ -214,5 +216,79 @@ describe('demo process: the program of the simulated CPU, it runs only in RUN', 
       while (now === held && Date.now() < deadline) now = await level();
       expect(now).to.not.equal(held);
     });
+  });
+});
+
+describe('demo process: the optimized DB "Tank" (DB2), served by name over S7CommPlus', function () {
+  this.timeout(20000);
+  let plant: Plant;
+  before(async () => {
+    plant = await startPlant({ ports: { s7: 0, fetch: 0, write: 0, freeport: 0 } });
+    plant.process.stop();
+  });
+  after(async () => {
+    await plant?.close();
+  });
+
+  it('keeps the phase, the drive and the level of the last five seconds in step with DB1', () => {
+    const db = plant.memory.area('DB', 1)!;
+    setRun(db, true);
+    const seen = run(plant.process, 12);
+    const last = seen.at(-1)!;
+    const tank = plant.tank.snapshot();
+    expect(tank.drive).to.deep.equal({
+      running: last.running,
+      speed: last.speed,
+      current: Math.fround(DRIVE_CURRENT.idle + (DRIVE_CURRENT.full * last.speed) / MOTOR.fullSpeed),
+    });
+    expect(last.speed).to.equal(MOTOR.fullSpeed);
+    // Newest first, one a second: the level at the end of each of the last five whole seconds.
+    const perSecond = seen.filter((_, i) => (i + 1) % STEPS_PER_S === 0).map((x) => x.level);
+    expect(tank.levels).to.deep.equal(perSecond.slice(-5).reverse());
+    expect(tank.phase).to.equal(last.level > seen.at(-2)!.level ? 'Filling' : 'Draining');
+    setRun(db, false);
+    const stopped = run(plant.process, 3).at(-1)!;
+    expect(stopped.speed).to.equal(0);
+    expect(plant.tank.snapshot().drive).to.deep.equal({ running: false, speed: 0, current: 0 });
+  });
+
+  it('says Draining from the top of the tank (90 %) and Filling again from its bottom (10 %)', () => {
+    const turns: { phase: string; level: number }[] = [];
+    for (let i = 0; i < 90 * STEPS_PER_S; i++) {
+      const { level } = plant.process.step();
+      const phase = plant.tank.snapshot().phase;
+      if (turns.at(-1)?.phase !== phase) turns.push({ phase, level });
+    }
+    const later = turns.slice(1);
+    expect(later.map((t) => t.phase).slice(0, 2)).to.have.members(['Filling', 'Draining']);
+    for (const t of later) {
+      if (t.phase === 'Draining') expect(t.level).to.be.at.least(90);
+      else expect(t.level).to.be.at.most(10);
+    }
+  });
+
+  it('switches the heater around "Tank".Setpoint: a setpoint written by name over s7plus:// moves the band the temperature holds', async () => {
+    const client = await connect(plant.urls.s7plus);
+    try {
+      expect(await client.read([TANK_SYMBOLS.setpoint])).to.deep.equal({
+        [TANK_SYMBOLS.setpoint]: (THERMAL.heaterOnBelow + THERMAL.heaterOffAbove) / 2,
+      });
+      await client.write({ [TANK_SYMBOLS.setpoint]: 30 });
+      expect(plant.tank.snapshot().setpoint).to.equal(30);
+      run(plant.process, 120); // settle into the new band
+      const temps = run(plant.process, 180).map((x) => x.temperature);
+      expect(Math.min(...temps)).to.be.within(30 - SETPOINT_BAND - 0.1, 30 - SETPOINT_BAND + 0.5);
+      expect(Math.max(...temps)).to.be.within(30 + SETPOINT_BAND - 0.5, 30 + SETPOINT_BAND + 0.1);
+      // What the process keeps is what a client reads by name.
+      const read = await client.read([TANK_SYMBOLS.phase, '"Tank".Drive', TANK_SYMBOLS.levels]);
+      const tank = plant.tank.snapshot();
+      expect(read).to.deep.equal({
+        [TANK_SYMBOLS.phase]: tank.phase,
+        '"Tank".Drive': { Running: false, Speed: 0, Current: 0 },
+        [TANK_SYMBOLS.levels]: tank.levels,
+      });
+    } finally {
+      await client.close();
+    }
   });
 });

@@ -78,16 +78,22 @@ describe('demo plant: DB1 as a TIA source', () => {
     expect(blank.area('DB', 1)!.subarray(0, 20).toString('hex')).to.equal(dataBlockImages(table).get(1)!.toString('hex'));
   });
 
-  it('the demo plant serves DB1 as the source declares it, 20 bytes, and no other data block, to S7 and FETCH/WRITE alike', async () => {
+  it('the demo plant serves DB1 as the source declares it, 20 bytes, to S7 and FETCH/WRITE alike; beside it only the optimized DB2 "Tank", which PUT/GET refuses', async () => {
     const plant = await startPlant({ ports: { s7: 0, fetch: 0, write: 0, freeport: 0 } });
+    const s7 = await connect(plant.urls.s7);
     try {
       plant.process.stop();
-      expect(plant.memory.dataBlockNumbers()).to.deep.equal([1]);
+      expect(plant.memory.dataBlockNumbers()).to.deep.equal([1, 2]);
       expect(plant.memory.area('DB', 1)!.length).to.equal(20);
+      expect([...plant.s7plus.model.optimizedDbs]).to.deep.equal([2]);
+      const r = await s7.readDetailed(['DB1.DBW12:INT', 'DB2.DBB0:BYTE']);
+      expect(r['DB1.DBW12:INT']!.ok).to.equal(true);
+      expect(r['DB2.DBB0:BYTE']!.ok, 'DB2 over PUT/GET').to.equal(false);
       expect(plant.symbols.blocks).to.deep.equal(compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS }).blocks);
       // The CP serves the CPU's memory.
       expect(plant.fetchwrite.memory).to.equal(plant.memory);
     } finally {
+      await s7.close();
       await plant.close();
     }
   });

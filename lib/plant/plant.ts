@@ -5,18 +5,25 @@
  *
  * The S7-1200 holds the data blocks its program was downloaded with: DB1
  * compiled from the plant's source (PLANT_SOURCE, lib/plant/source.ts), 20
- * bytes holding its start values, and no other DB. The CP (FETCH/WRITE)
- * serves the same memory, as a CP in the CPU's rack does.
+ * bytes holding its start values, and DB2 "Tank" with optimized access
+ * (TANK_SOURCE), which PUT/GET refuses and S7CommPlus serves by name. As a
+ * CPU with secure PG/HMI communication it speaks S7CommPlus over TLS on the
+ * PUT/GET port, with a certificate made at start: its fingerprint pins the
+ * s7plus:// URL (`urls.s7plus`). The CP (FETCH/WRITE) serves the same
+ * memory, as a CP in the CPU's rack does.
  */
 import { FetchWriteServer } from '../fetchwrite/server';
 import { FreeportBus } from '../freeport/bus';
 import { hostPart } from '../link/url-params';
 import { S7Server } from '../s7/server';
+import { S7PlusService } from '../s7plus/server';
+import { generateCertificate } from '../s7plus/transport/cert';
 import type { PlcMemory } from '../sim/memory';
 import { compileSymbols } from '../symbols';
 import type { SymbolTable } from '../symbols/model';
 import { DemoProcess } from './process';
-import { PLANT_DB_NUMBERS, PLANT_SOURCE } from './source';
+import { PLANT_DB_NUMBERS, PLANT_SOURCE, TANK_DB_NUMBERS, TANK_SOURCE } from './source';
+import { TankBlock } from './tank';
 
 export interface PlantPorts {
   s7: number;
@@ -35,11 +42,16 @@ export interface Plant {
   /** The plant's source compiled: what the demo flow's connections and `--symbols` read by name. */
   symbols: SymbolTable;
   process: DemoProcess;
+  /** The optimized DB "Tank" (DB2) as the process keeps it. */
+  tank: TankBlock;
   s7: S7Server;
+  /** The S7-1200's S7CommPlus side: its model (the blocks by name) and its certificate's SHA-256 `fingerprint`. */
+  s7plus: S7PlusService;
   fetchwrite: FetchWriteServer;
   freeport: FreeportBus;
   ports: PlantPorts;
-  urls: { s7: string; fetchwrite: string; freeport: string };
+  /** `s7plus` carries the certificate's fingerprint: the pin a client needs to trust the simulator. */
+  urls: { s7: string; s7plus: string; fetchwrite: string; freeport: string };
   close(): Promise<void>;
 }
 
@@ -47,10 +59,18 @@ export async function startPlant(options: { host?: string; ports?: Partial<Plant
   const host = options.host ?? '127.0.0.1';
   const want = { ...DEMO_PORTS, ...options.ports };
   const symbols = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
-  const s7 = new S7Server({ host, port: want.s7, profile: 's7-1200', symbols });
+  const certificate = await generateCertificate({ commonName: 'plcwire demo S7-1200', keyType: 'ec' });
+  const s7plus = new S7PlusService({
+    sources: [PLANT_SOURCE, TANK_SOURCE],
+    db: { ...PLANT_DB_NUMBERS, ...TANK_DB_NUMBERS },
+    tls: { cert: certificate.cert, key: certificate.key },
+  });
+  // The memory is the S7CommPlus program's: DB1 as `symbols` places it, DB2 in the simulator's own layout.
+  const s7 = new S7Server({ host, port: want.s7, profile: 's7-1200', s7plus });
   const memory = s7.memory;
+  const tank = new TankBlock(memory, s7plus.model.table);
   // The process is the S7-1200's program: it stops with the CPU (the other links see the same memory held).
-  const process = new DemoProcess(memory, options.periodMs ?? 100, s7.cpu);
+  const process = new DemoProcess(memory, options.periodMs ?? 100, s7.cpu, tank);
   const fetchwrite = new FetchWriteServer({ host, fetchPort: want.fetch, writePort: want.write, memory });
   const freeport = new FreeportBus({ stations: [DEMO_STATIONS.level, DEMO_STATIONS.parts] });
   const closeAll = async () => {
@@ -76,12 +96,15 @@ export async function startPlant(options: { host?: string; ports?: Partial<Plant
       memory,
       symbols,
       process,
+      tank,
       s7,
+      s7plus,
       fetchwrite,
       freeport,
       ports,
       urls: {
         s7: `s7://${h}:${ports.s7}?rack=0&slot=1`,
+        s7plus: `s7plus://${h}:${ports.s7}?fingerprint=${s7plus.fingerprint!}`,
         fetchwrite: `fetchwrite://${h}?fetchPort=${ports.fetch}&writePort=${ports.write}`,
         freeport: `freeport+tcp://${h}:${ports.freeport}`,
       },

@@ -26,8 +26,14 @@
  *
  * DB1 is the data block "Plant" of lib/plant/source.ts (PLANT_SOURCE): the
  * same members by name (DEMO_SYMBOLS), which compile to these addresses.
+ *
+ * Given the optimized DB "Tank" (DB2, lib/plant/tank.ts) the process keeps it
+ * too: the phase, the drive's running, speed and current, the level of the
+ * last five seconds; and its thermostat switches around "Tank".Setpoint, the
+ * operator's setpoint (THERMAL's limits are those of its start value, 42.5 °C).
  */
 import type { PlcMemory } from '../sim/memory';
+import type { TankBlock } from './tank';
 
 /** The CPU the program runs on: S7Server#cpu (or anything with its RUN/STOP mode). */
 export interface ProgramCpu {
@@ -88,6 +94,9 @@ export const MOTOR = Object.freeze({ fullSpeed: 1450, rampUp: 600, rampDown: 900
  */
 export const THERMAL = Object.freeze({ ambient: 20, heaterOnBelow: 35, heaterOffAbove: 50, heaterRate: 1, motorRate: 0.15, loss: 0.02 });
 
+/** How far below and above "Tank".Setpoint the thermostat switches (half THERMAL's band). */
+export const SETPOINT_BAND = (THERMAL.heaterOffAbove - THERMAL.heaterOnBelow) / 2;
+
 export class DemoProcess {
   private timer: NodeJS.Timeout | undefined;
   private ticks = 0;
@@ -97,6 +106,7 @@ export class DemoProcess {
     private readonly memory: PlcMemory,
     private readonly periodMs = 100,
     private readonly cpu?: ProgramCpu,
+    private readonly tank?: TankBlock,
   ) {}
 
   start(): this {
@@ -105,6 +115,7 @@ export class DemoProcess {
       // The source's start values (PLANT_SOURCE) where the memory was not built from it: a blank DB1.
       if (db.readFloatBE(0) === 0) db.writeFloatBE(20, 0);
       if (db.readFloatBE(16) === 0) db.writeFloatBE(THERMAL.ambient, 16);
+      this.tank?.startLevels(db.readFloatBE(0));
       this.timer = setInterval(() => this.step(), this.periodMs);
       this.timer.unref();
     }
@@ -148,14 +159,29 @@ export class DemoProcess {
 
     let temperature = db.readFloatBE(16);
     let heater = (db[4]! & HEATER) !== 0;
-    if (temperature < THERMAL.heaterOnBelow) heater = true;
-    else if (temperature > THERMAL.heaterOffAbove) heater = false;
+    const [onBelow, offAbove] = this.thermostat();
+    if (temperature < onBelow) heater = true;
+    else if (temperature > offAbove) heater = false;
     const rise =
       (heater ? THERMAL.heaterRate : 0) + (THERMAL.motorRate * speed) / MOTOR.fullSpeed - THERMAL.loss * (temperature - THERMAL.ambient);
     temperature += rise * dt;
     db.writeFloatBE(temperature, 16);
     db[4] = (db[4]! & ~(RUNNING | HEATER)) | (running ? RUNNING : 0) | (heater ? HEATER : 0);
+    this.tank?.update({
+      filling: this.filling,
+      speed,
+      fullSpeed: MOTOR.fullSpeed,
+      level,
+      shiftLevels: this.ticks % Math.max(1, Math.round(1 / dt)) === 0,
+    });
     return this.snapshot();
+  }
+
+  /** The thermostat's limits: around the operator's setpoint in "Tank" when there is one (and it is a number), else THERMAL's. */
+  private thermostat(): [number, number] {
+    const setpoint = this.tank?.setpoint;
+    if (setpoint === undefined || !Number.isFinite(setpoint)) return [THERMAL.heaterOnBelow, THERMAL.heaterOffAbove];
+    return [setpoint - SETPOINT_BAND, setpoint + SETPOINT_BAND];
   }
 
   snapshot(): ProcessSnapshot {

@@ -46,3 +46,44 @@ END_DATA_BLOCK
 
 /** The DB number of each block of PLANT_SOURCE (a TIA source does not carry it): the `db` option of compileSymbols. */
 export const PLANT_DB_NUMBERS: Readonly<Record<string, number>> = Object.freeze({ Plant: 1 });
+
+/**
+ * The demo plant's optimized DB "Tank" (DB2): what the program keeps about the
+ * tank and its feed drive, and the operator's setpoint, in a block with
+ * Optimized block access as TIA Portal V17+ creates it by default. Its members
+ * have no offsets: PUT/GET refuses the block, S7CommPlus (`s7plus://`) reads
+ * and writes it by name, browsed from the PLC, no source file needed. The
+ * simulator lays it out for its own storage only (lib/s7plus/server/model.ts);
+ * the demo process finds its members by name there (lib/plant/tank.ts).
+ */
+export const TANK_SOURCE: SymbolSource = Object.freeze({
+  name: 'Tank.db',
+  content: `DATA_BLOCK "Tank"
+{ S7_Optimized_Access := 'TRUE' }
+AUTHOR : plcwire
+FAMILY : Demo
+NAME : Tank
+VERSION : 0.1
+NON_RETAIN
+//Demo plant: the tank's phase, the operator's temperature setpoint, the feed drive and the level of the last seconds. Optimized access: read by name over S7CommPlus.
+   VAR 
+      Phase : String[16] := 'Filling';   // What the tank does: Filling or Draining
+      Setpoint : Real := 42.5;   // Temperature setpoint in °C, from the operator; the thermostat switches the heater 7.5 °C below and above it
+      Drive : Struct   // The feed motor's drive
+         Running : Bool;   // Motor turns (speed > 0)
+         Speed : Int;   // Actual speed in rpm
+         Current : Real;   // Motor current in A: 0 stopped, 1.2 A turning plus 4.3 A at full speed
+      END_STRUCT;
+      Levels : Array[0..4] of Real;   // Tank level in % of the last five seconds, newest first
+   END_VAR
+
+
+BEGIN
+
+END_DATA_BLOCK
+
+`,
+});
+
+/** The DB number of the optimized block TANK_SOURCE. */
+export const TANK_DB_NUMBERS: Readonly<Record<string, number>> = Object.freeze({ Tank: 2 });
