@@ -29,6 +29,7 @@ const path = require('node:path');
 const { PITCH, STALE, LIVE } = require('./flow-nodes');
 const { intro, dashboard, connections, s7Panel, linkPanel, errorsAndStyle } = require('./panels');
 const { cpuPanel } = require('./cpu-panel');
+const { plusConnection, plusPanel } = require('./plus-panel');
 
 /** The demo plant's DB1 source as a connection node keeps it (the file's text: its BOM and CRLFs are TIA's, not the source's). */
 const PLANT_SOURCE = Object.freeze({
@@ -41,16 +42,24 @@ const PLANT_SOURCE = Object.freeze({
 /** A TIA source does not carry its DB number: the connection node gives it. */
 const PLANT_DB_NUMBERS = Object.freeze([{ block: 'Plant', db: 1 }]);
 
-/** The first row of each panel, top to bottom: S7, its CPU, CP, S7-200, errors and CSS. */
-const TOPS = Object.freeze({ s7: 140, cpu: 140 + 13 * PITCH, fw: 140 + 24 * PITCH, fp: 140 + 29 * PITCH, errors: 140 + 34 * PITCH });
+/** The first row of each panel, top to bottom: S7, its CPU, CP, S7-200, S7CommPlus, errors and CSS. */
+const TOPS = Object.freeze({
+  s7: 140,
+  cpu: 140 + 13 * PITCH,
+  fw: 140 + 24 * PITCH,
+  fp: 140 + 29 * PITCH,
+  plus: 140 + 34 * PITCH,
+  errors: 140 + 41 * PITCH,
+});
 
-/** @param {{ s7: string, fetchwrite: string, freeport: string }} urls */
+/** @param {{ s7: string, s7plus: string, fetchwrite: string, freeport: string }} urls */
 function demoFlow(urls) {
   const symbols = () => ({ symbolSources: [{ ...PLANT_SOURCE }], dbNumbers: PLANT_DB_NUMBERS.map((d) => ({ ...d })) });
   return [
     ...intro(),
     ...dashboard(),
     ...connections(urls, symbols),
+    plusConnection(urls.s7plus),
     ...s7Panel(TOPS.s7),
     ...cpuPanel(TOPS.cpu),
     // FETCH/WRITE: the same DB1 through the CP, by the same names (the CP serves the CPU's data blocks).
@@ -79,13 +88,20 @@ function demoFlow(urls) {
       },
       TOPS.fp,
     ),
+    // S7CommPlus: the S7-1200's optimized DB "Tank" by name, browsed from the PLC (no source file), over TLS.
+    ...plusPanel(TOPS.plus),
     ...errorsAndStyle(TOPS.errors),
   ];
 }
 
-/** The demo plant's default URLs (`npx plcwire demo`). */
+/**
+ * The demo plant's default URLs (`npx plcwire demo`). The s7plus one carries no fingerprint: the simulator makes
+ * its certificate at start, so a flow saved from these URLs (the Dashboard 2 example) pins it with Get certificate;
+ * `npm start` gives the running plant's URLs, pinned.
+ */
 const DEMO_URLS = Object.freeze({
   s7: 's7://127.0.0.1:10102?rack=0&slot=1',
+  s7plus: 's7plus://127.0.0.1:10102',
   fetchwrite: 'fetchwrite://127.0.0.1?fetchPort=12000&writePort=12001',
   freeport: 'freeport+tcp://127.0.0.1:14001',
 });

@@ -339,12 +339,19 @@ describe('plcwire CLI', function () {
   });
 
   describe('the installed binary', () => {
-    it('demo prints try: lines that work as printed (by address and, from the shipped Plant.db, by name), until Ctrl-C', async () => {
+    it('demo prints try: lines that work as printed (by address; from the shipped Plant.db, by name; the optimized DB browsed and by name over s7plus://), until Ctrl-C', async () => {
       const demo = run(['demo']);
       try {
         await until(() => /^Ctrl-C stops\.$/m.test(demo.output().out), 20000, 'the demo prints what to try');
         const lines = [...demo.output().out.matchAll(/^ {2}npx plcwire (.+)$/gm)].map((m) => m[1]!);
         expect(lines.some((l) => l.includes('"Plant".Level') && l.includes('--symbols'))).to.equal(true);
+        // The S7CommPlus lines: pinned by the printed fingerprint, never insecure, no source file.
+        const plus = lines.filter((l) => l.includes('s7plus://'));
+        expect(plus.map((l) => l.split(' ')[0])).to.deep.equal(['browse', 'watch', 'write']);
+        for (const l of plus)
+          expect(l)
+            .to.match(/\?fingerprint=[0-9A-F]{64}"/)
+            .and.not.match(/insecure|--symbols/);
         for (const line of lines) {
           // As a user pastes it into a shell; `watch` runs until Ctrl-C, so the same arguments are read once.
           const command = line.replace(/^watch /, 'read ');
@@ -355,7 +362,12 @@ describe('plcwire CLI', function () {
           child.stderr.on('data', (d: Buffer) => (err += d.toString()));
           const [code] = await once(child, 'exit');
           expect(code, `${command}\n${err}`).to.equal(0);
-          expect(out, command).to.match(/ = /);
+          // browse lists the PLC's names with their types; read and write show name = value.
+          if (command.startsWith('browse '))
+            expect(out, command)
+              .to.match(/^"Tank"\.Setpoint\s+REAL\b/m)
+              .and.match(/^"Tank"\.Levels\[4\]\s/m);
+          else expect(out, command).to.match(/ = /);
         }
       } finally {
         demo.child.kill('SIGINT');

@@ -14,7 +14,9 @@ import * as vm from 'node:vm';
 import { formatAddress, parseAddress } from '../lib/address';
 import { parseUrl, S7_CPU_PRESETS } from '../lib/url';
 import { DEMO_SYMBOLS, DEMO_TAGS } from '../lib/plant/process';
-import { PLANT_DB_NUMBERS, PLANT_SOURCE } from '../lib/plant/source';
+import { PLANT_DB_NUMBERS, PLANT_SOURCE, TANK_DB_NUMBERS, TANK_SOURCE } from '../lib/plant/source';
+import { TANK_DB, TANK_SYMBOLS } from '../lib/plant/tank';
+import { buildPlusModel } from '../lib/s7plus/server/model';
 import { compileSymbols } from '../lib/symbols';
 import { dashboardProblems, drawnBoxes, layoutProblems, placementOf, type FlowNode } from './support/flow-layout';
 
@@ -156,7 +158,7 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
   });
 
   it("every widget fed by a link is marked stale by that link's watchdog, and only by it", () => {
-    const links = { s7: 's7.read', fw: 'fw.read', fp: 'fp.read' };
+    const links = { s7: 's7.read', fw: 'fw.read', fp: 'fp.read', plus: 'plus.read' };
     const widgetsOf = (read: string): Set<string> => {
       // Everything downstream of the read node, through routing and shaping nodes.
       const seen = new Set<string>();
@@ -220,6 +222,43 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
     expect(run({ payload: { state: 'stop' } }, context)).to.deep.equal([{ enabled: false }, { enabled: true }]);
     expect(run({ payload: { state: 'startup' } }, context)).to.deep.equal([{ enabled: false }, { enabled: false }]);
     expect(run({ payload: { state: 'run' } }, context)).to.deep.equal([{ enabled: true }, { enabled: false }]);
+  });
+
+  it('the S7CommPlus group: the optimized DB read by names the PLC knows, no source file, the setpoint slider writing "Tank".Setpoint without echoing the polled value back', () => {
+    expect(node('ui.g.plus').name)
+      .to.match(/optimized DB/)
+      .and.match(/S7CommPlus/);
+    const conn = node('conn.plus');
+    expect(conn).to.not.have.property('symbolSources');
+    // The simulator's own model: what a browse of the S7-1200 answers.
+    const model = buildPlusModel([PLANT_SOURCE, TANK_SOURCE], { db: { ...PLANT_DB_NUMBERS, ...TANK_DB_NUMBERS } });
+    const tags = node('plus.read').tags as { name: string; address: string }[];
+    const types = tags.map((t) => model.table.lookup(t.address)?.kind);
+    expect(types, 'every name is a member of "Tank"').to.deep.equal(['elementary', 'elementary', 'struct', 'array']);
+    expect(tags.every((t) => model.table.lookup(t.address)!.db === TANK_DB && model.optimizedDbs.has(TANK_DB))).to.equal(true);
+    const slider = node('ui.plus.setpoint');
+    expect(slider).to.include({ type: 'ui-slider', passthru: false, topic: TANK_SYMBOLS.setpoint, topicType: 'str' });
+    expect(slider.wires).to.deep.equal([['plus.write']]);
+    expect(node('plus.write')).to.include({ type: 'plcwire-write', connection: 'conn.plus' });
+    const route = node('plus.route');
+    const setpoint = (route.rules as { v: string }[]).findIndex((r) => r.v === 'setpoint');
+    expect((route.wires as string[][])[setpoint]).to.deep.equal(['ui.plus.setpoint']);
+    expect(tags[setpoint]!.address).to.equal(TANK_SYMBOLS.setpoint);
+  });
+
+  it('the S7CommPlus URL: pinned by the fingerprint the plant gives, never insecure; without one (the example saved from DEMO_URLS) it pins nothing and trusts nothing', () => {
+    const fingerprint = 'AB'.repeat(32);
+    const pinned = demoFlow({ ...(DEMO_URLS as object), s7plus: `s7plus://127.0.0.1:10102?fingerprint=${fingerprint}` });
+    const endpoint = parseUrl(String(pinned.find((n) => n.id === 'conn.plus')!.url)) as {
+      protocol: string;
+      fingerprint?: string;
+      insecure?: boolean;
+      tls?: boolean;
+    };
+    expect(endpoint).to.include({ protocol: 's7plus', fingerprint: fingerprint.toLowerCase() });
+    expect(endpoint.insecure ?? false).to.equal(false);
+    const bare = parseUrl(String(node('conn.plus').url)) as { fingerprint?: string; insecure?: boolean; tls?: boolean };
+    expect([bare.fingerprint, bare.insecure ?? false, bare.tls ?? true]).to.deep.equal([undefined, false, true]);
   });
 
   it("the S7 connection's CPU preset is S7-1200, and its URL addresses the CPU as that preset does (rack and slot)", () => {
