@@ -27,6 +27,7 @@ const EXAMPLES = path.join(ROOT, 'examples');
 const { demoFlow, DEMO_URLS } = require(path.join(ROOT, 'demo/flows.js')) as { demoFlow(urls: object): any[]; DEMO_URLS: any };
 const mqtt = require('mqtt');
 const MQTT_EXAMPLE = 'MQTT gateway - publish tags, guarded writes.json';
+const S7PLUS_EXAMPLE = 'S7CommPlus optimized DB by name.json';
 
 interface Demo {
   editor: string;
@@ -75,6 +76,8 @@ describe('examples: each imported into the running `npm start` demo and deployed
   let broker: TestBroker;
   let ports: { s7: number; fetch: number; write: number; freeport: number; mqtt: number };
   let comms: any;
+  /** The S7-1200's certificate fingerprint as the connection dialog's Get certificate shows it (from the runtime). */
+  let pinned: string;
   /** Every node status the runtime published, by node id, as the editor hears them (its comms socket, topic status/<id>). */
   const statusOf: Record<string, { text?: string; fill?: string; shape?: string }[]> = {};
 
@@ -98,6 +101,11 @@ describe('examples: each imported into the running `npm start` demo and deployed
       }
     });
     comms.send(JSON.stringify({ subscribe: 'status/#' }));
+    // An s7plus:// connection in an example trusts no certificate: a user presses Get certificate and Pin, as here.
+    const cert = await api(demo.editor, 'POST', 'plcwire/s7plus/certificate', { url: `s7plus://127.0.0.1:${s7}` });
+    expect(cert.ok, JSON.stringify(cert)).to.equal(true);
+    pinned = cert.fingerprint;
+    expect(pinned).to.equal(demo.plant.s7plus.fingerprint);
   });
   after(async () => {
     comms?.close();
@@ -122,8 +130,10 @@ describe('examples: each imported into the running `npm start` demo and deployed
   function imported(f: string, i: number): { nodes: any[]; plcwire: string[]; polls: string[] } {
     const flow = JSON.parse(fs.readFileSync(path.join(EXAMPLES, f), 'utf8')) as any[];
     const tab = `ex${i}.tab`;
+    // Get certificate, Pin: the dialog adds the fingerprint to an s7plus:// URL without one (nodes/connection.html buildUrl).
+    const pin = (url: string) => (/^s7plus:\/\/[^?]*$/.test(url) ? `${url}?fingerprint=${pinned}` : url);
     const port = (url: string) =>
-      url
+      pin(url)
         .replace(':10102', `:${ports.s7}`)
         .replace('fetchPort=12000', `fetchPort=${ports.fetch}`)
         .replace('writePort=12001', `writePort=${ports.write}`)
@@ -218,6 +228,26 @@ describe('examples: each imported into the running `npm start` demo and deployed
     }
   }
 
+  /**
+   * The S7CommPlus example: its poll reads the optimized DB "Tank" by name with the values the plant's process keeps
+   * (no source file: the names are the PLC's), and its inject writes "Tank".Setpoint by name into the PLC.
+   */
+  async function optimizedByName(): Promise<void> {
+    const latest = async () => ((await globalContext('plcwireValues')) ?? {})['s7plus.read']?.at(-1);
+    const first = await latest();
+    expect(first).to.have.keys(['phase', 'setpoint', 'drive', 'levels']);
+    expect(first.setpoint).to.equal(demo.plant.tank.snapshot().setpoint);
+    expect(first.phase).to.be.oneOf(['Filling', 'Draining']);
+    expect(first.drive).to.have.keys(['Running', 'Speed', 'Current']);
+    expect(first.levels).to.have.length(5);
+    for (const v of first.levels) expect(v).to.be.within(0, 100);
+    await api(demo.editor, 'POST', 'inject/s7plus.inject.setpoint');
+    await eventually(async () => expect(demo.plant.tank.snapshot().setpoint).to.equal(45), 15_000, '"Tank".Setpoint written in the PLC');
+    await eventually(async () => expect((await latest()).setpoint).to.equal(45), 15_000, 'the poll reading the new setpoint');
+    await api(demo.editor, 'POST', 'inject/s7plus.inject.back');
+    await eventually(async () => expect(demo.plant.tank.snapshot().setpoint).to.equal(42.5), 15_000, 'the setpoint back at 42.5');
+  }
+
   const up = (s: any) => s.fill === 'green' || (s.fill === 'yellow' && s.shape === 'dot');
 
   for (const [i, f] of files.entries()) {
@@ -253,6 +283,7 @@ describe('examples: each imported into the running `npm start` demo and deployed
         'a value from every poll',
       );
       if (f === MQTT_EXAMPLE) await mqttGateway();
+      if (f === S7PLUS_EXAMPLE) await optimizedByName();
       if (f === 'S7 PLC control.json') {
         await api(demo.editor, 'POST', 'inject/ctlex.inject.state');
         await eventually(
