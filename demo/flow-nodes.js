@@ -186,9 +186,12 @@ const watchdog = (prefix, seconds, y, widgets) => [
   fn(`${prefix}.mark`, 'mark stale', `return { class: msg.payload === 'stale' ? '${STALE}' : '${LIVE}' };`, 1, X.shape, y, [widgets]),
 ];
 
-/** A link's state lamp `ui.link.<prefix>` from its read node's status: the lamp's colour is the status fill. */
-const linkLamp = (prefix, name, readId, g, order, y) => [
-  { id: `st.${prefix}`, type: 'status', name, scope: [readId], ...at(X.source, y), wires: [[`st.text.${prefix}`]] },
+/**
+ * A link's state lamp `ui.link.<prefix>` from its read node's status: the lamp's colour is the status fill.
+ * `name` labels the lamp and the status node, unless `short` names the status node (the editor's source column is narrow).
+ */
+const linkLamp = (prefix, name, readId, g, order, y, short = name) => [
+  { id: `st.${prefix}`, type: 'status', name: short, scope: [readId], ...at(X.source, y), wires: [[`st.text.${prefix}`]] },
   change(
     `st.text.${prefix}`,
     'status to lamp',

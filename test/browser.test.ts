@@ -32,7 +32,10 @@ interface Demo {
   dashboard: string;
   plant: {
     memory: { area(a: string, db?: number): Buffer | undefined };
-    urls: { s7: string };
+    urls: { s7: string; s7plus: string };
+    tank: {
+      snapshot(): { phase: string; setpoint: number; drive: { running: boolean; speed: number; current: number }; levels: number[] };
+    };
     s7: {
       faults: { refuseConnections: boolean; dropConnections(): void };
       state: string;
@@ -169,6 +172,12 @@ const S7_WIDGETS = [
 ];
 const CP_WIDGETS = ['plcwire-ui-fw-level', 'plcwire-ui-fw-parts'];
 const S7_200_WIDGETS = ['plcwire-ui-fp-level', 'plcwire-ui-fp-parts'];
+const PLUS_WIDGETS = ['plcwire-ui-plus-phase', 'plcwire-setpoint', 'plcwire-ui-plus-drive', 'plcwire-ui-plus-levels'];
+
+/** The text of the first element matching `selector`, '' when there is none. */
+function textOf(page: Page, selector: string): Promise<string> {
+  return page.evaluate((sel) => ((globalThis as any).document.querySelector(sel)?.innerText ?? '') as string, selector);
+}
 
 /** The CPU panel's Stop and Start buttons: whether each is enabled. */
 function cpuButtons(page: Page): Promise<{ stop: boolean; start: boolean }> {
@@ -521,6 +530,82 @@ describe('browser: the npm start demo in headless Chromium', function () {
     );
   });
 
+  it('the optimized DB over S7CommPlus has its own group, titled so, with the values the S7-1200 holds in DB2 "Tank", changing live', async () => {
+    const group = page.locator('.nrdb-ui-group', { hasText: 'optimized DB "Tank" over S7CommPlus' });
+    await group.first().waitFor({ state: 'visible', timeout: 15_000 });
+    await page.waitForFunction(
+      () => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-link-plus .plcwire-lamp')?.className ?? ''),
+      undefined,
+      { timeout: 20_000 },
+    );
+    // "Tank".Levels, an array read whole: five levels, newest first, and they move with the tank.
+    const levels = async () => (await textOf(page, '.plcwire-ui-plus-levels')).match(/\d+\.\d/g) ?? [];
+    await page.waitForFunction(
+      () => ((globalThis as any).document.querySelector('.plcwire-ui-plus-levels')?.innerText ?? '').match(/\d+\.\d/g)?.length === 5,
+      undefined,
+      { timeout: 15_000 },
+    );
+    const first = (await levels()).join();
+    await page.waitForFunction(
+      (before) =>
+        (((globalThis as any).document.querySelector('.plcwire-ui-plus-levels')?.innerText ?? '').match(/\d+\.\d/g) ?? []).join() !==
+        before,
+      first,
+      { timeout: 15_000 },
+    );
+    // What the page shows is what the PLC holds: the phase, and the newest level of the history within a poll of it.
+    expect(await textOf(page, '.plcwire-ui-plus-phase')).to.match(/Filling|Draining/);
+    const deadline = Date.now() + 15_000;
+    for (;;) {
+      const tank = demo.plant.tank.snapshot();
+      const phase = await textOf(page, '.plcwire-ui-plus-phase');
+      const drive = await textOf(page, '.plcwire-ui-plus-drive');
+      const shownLevels = (await levels()).map(Number);
+      const same =
+        phase.includes(tank.phase) &&
+        drive.includes(`${tank.drive.speed} rpm`) &&
+        shownLevels.every((v, i) => Math.abs(v - tank.levels[i]!) <= 0.05);
+      if (same) break;
+      if (Date.now() > deadline)
+        throw new Error(`the page shows ${phase} / ${drive} / ${shownLevels.join()}, the PLC holds ${JSON.stringify(tank)}`);
+      await page.waitForTimeout(200);
+    }
+    for (const c of PLUS_WIDGETS) expect(await staleOf(page, c), c).to.equal(false);
+  });
+
+  it('the setpoint slider writes "Tank".Setpoint to the S7-1200 by name over S7CommPlus, and follows the PLC when another client changes it', async () => {
+    const field = page.locator('.plcwire-setpoint input[type=number], .plcwire-setpoint input[type=text]').first();
+    await page.waitForFunction(
+      () =>
+        Number(
+          (globalThis as any).document.querySelector('.plcwire-setpoint input[type=number], .plcwire-setpoint input[type=text]')?.value,
+        ) === 42.5,
+      undefined,
+      { timeout: 15_000 },
+    );
+    await field.fill('47.5');
+    await field.press('Enter');
+    await until(() => demo.plant.tank.snapshot().setpoint === 47.5, 10_000, '"Tank".Setpoint written from the dashboard');
+    // Another client (an HMI) writes it: the slider shows the PLC's value.
+    const hmi = createClient(demo.plant.urls.s7plus);
+    try {
+      await hmi.connect();
+      await hmi.write({ '"Tank".Setpoint': 40 });
+      await page.waitForFunction(
+        () =>
+          Number(
+            (globalThis as any).document.querySelector('.plcwire-setpoint input[type=number], .plcwire-setpoint input[type=text]')?.value,
+          ) === 40,
+        undefined,
+        { timeout: 10_000 },
+      );
+      expect(demo.plant.tank.snapshot().setpoint, 'the polled value is not written back').to.equal(40);
+      await hmi.write({ '"Tank".Setpoint': 42.5 });
+    } finally {
+      await hmi.close();
+    }
+  });
+
   it('BOOLs are lamps: Motor running lights while DB1.DBX4.1 is set, Heater on shows DB1.DBX4.2, and no true/false text', async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
     const lit = (cls: string) =>
@@ -797,14 +882,16 @@ describe('browser: the npm start demo in headless Chromium', function () {
     }
   });
 
-  it("an S7 link that goes down greys out its widgets as stale within seconds, the other links' stay live, and all recover", async () => {
-    for (const c of [...S7_WIDGETS, ...CP_WIDGETS, ...S7_200_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
+  it("an S7 link that goes down greys out its widgets as stale within seconds (S7comm and S7CommPlus: one CPU), the other links' stay live, and all recover", async () => {
+    for (const c of [...S7_WIDGETS, ...PLUS_WIDGETS, ...CP_WIDGETS, ...S7_200_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
     const faults = demo.plant.s7.faults;
     faults.refuseConnections = true;
     faults.dropConnections();
     try {
       // The watchdog fires 2 s after the last value (S7 polls every 500 ms).
       await waitForStale(page, S7_WIDGETS, true, 8_000);
+      // The S7CommPlus link is polled every second, its watchdog fires after 3 s.
+      await waitForStale(page, PLUS_WIDGETS, true, 10_000);
       for (const c of [...CP_WIDGETS, ...S7_200_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
       const link = await page.evaluate(
         () => (globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? '',
@@ -815,6 +902,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     }
     // Reconnected on the backoff schedule, the first values clear the mark.
     await waitForStale(page, S7_WIDGETS, false, 30_000);
+    await waitForStale(page, PLUS_WIDGETS, false, 30_000);
     await page.waitForFunction(
       () => /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-link-s7 .plcwire-lamp')?.className ?? ''),
       undefined,
@@ -828,7 +916,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     try {
       // The watchdog fires 3 s after the last value (the CP is polled every second).
       await waitForStale(page, CP_WIDGETS, true, 15_000);
-      for (const c of S7_WIDGETS) expect(await staleOf(page, c), c).to.equal(false);
+      for (const c of [...S7_WIDGETS, ...PLUS_WIDGETS]) expect(await staleOf(page, c), c).to.equal(false);
     } finally {
       faults.silent = false;
     }

@@ -41,7 +41,15 @@ export const NODE_HEIGHT = 30;
 /** How far a node's status (dot and text) reaches below its box: drawn 3 px under it, 14 px high. */
 export const STATUS_BELOW = 20;
 /** Types that show a status under the node while the flow runs. */
-const SHOWS_STATUS = new Set(['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'ui-switch', 'trigger']);
+const SHOWS_STATUS = new Set([
+  'plcwire-read',
+  'plcwire-write',
+  'plcwire-heartbeat',
+  'plcwire-control',
+  'ui-switch',
+  'ui-slider',
+  'trigger',
+]);
 
 /**
  * Node buttons the editor draws beside a node's body (editor-client view.js: a
