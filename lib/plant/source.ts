@@ -28,7 +28,7 @@ RETAIN
       Level : Real := 20.0;   // Tank level in %; fills at 4 %/s up to 90 %, drains at 3 %/s down to 10 %
       MotorRun : Bool;   // Run command from the operator (dashboard switch, HMI)
       MotorRunning : Bool;   // Motor turns (speed > 0)
-      Heater : Bool;   // Tank heater, switched by the thermostat: on below 35 °C, off above 50 °C
+      Heater : Bool;   // Tank heater, switched by the thermostat 7.5 °C below and above the operator's setpoint ("Tank".Setpoint, 42.5 °C at start: on below 35 °C, off above 50 °C)
       MotorSpeed : Int;   // Actual speed in rpm; ramps up at 600 rpm/s to 1450, down at 900 rpm/s
       Parts : DInt;   // Parts made: +1 every 500 ms while the motor turns
       PlcHeartbeat : Int;   // PLC life sign: +1 every 500 ms in RUN, 0..32767
