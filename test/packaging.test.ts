@@ -227,7 +227,12 @@ describe('packaging: Flow Library scorecard, offline, on the packed tarball', fu
 
 /** Markdown without fenced code blocks and inline code, where links are not links. */
 function proseOf(markdown: string): string {
-  return markdown.replace(/^(```|~~~)[^\n]*\n[\s\S]*?^\1[^\n]*$/gm, '').replace(/`[^`\n]*`/g, '');
+  return withoutFences(markdown).replace(/`[^`\n]*`/g, '');
+}
+
+/** The Markdown without its fenced code blocks (a `# comment` in a shell block is no heading). */
+function withoutFences(markdown: string): string {
+  return markdown.replace(/^(```|~~~)[^\n]*\n[\s\S]*?^\1[^\n]*$/gm, '');
 }
 
 /** Sources of the images a Markdown file shows: `![alt](src)` and `<img src="…">`. */
@@ -242,7 +247,8 @@ function imageSources(markdown: string): string[] {
 function headingAnchors(markdown: string): Set<string> {
   const anchors = new Set<string>();
   const seen = new Map<string, number>();
-  for (const m of proseOf(markdown).matchAll(/^#{1,6}\s+(.+?)\s*#*\s*$/gm)) {
+  // A heading's code span is part of its anchor ("From `plcwire browse` to …": #from-plcwire-browse-to-…), its backticks are not.
+  for (const m of withoutFences(markdown).matchAll(/^#{1,6}\s+(.+?)\s*#*\s*$/gm)) {
     const base = m[1]!
       .toLowerCase()
       .replace(/[^\p{L}\p{N}\s_-]/gu, '')

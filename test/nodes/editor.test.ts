@@ -160,7 +160,7 @@ describe('nodes: examples', function () {
       expect(flow[0].name, f).to.match(/npx plcwire (serve (s7|fetchwrite|freeport)|demo)/);
       for (const n of flow) if (n.type === 'plcwire-connection') urls.add(n.url.split(':')[0]);
     }
-    expect([...urls].sort()).to.deep.equal(['fetchwrite', 'freeport+tcp', 's7']);
+    expect([...urls].sort()).to.deep.equal(['fetchwrite', 'freeport+tcp', 's7', 's7plus']);
   });
 
   for (const f of files) {
