@@ -21,8 +21,13 @@
  * the simulated PLCs are built from the same source (lib/plant/source.ts).
  * Freeport stations have no data blocks: they keep their addresses.
  *
+ * The S7-1200's optimized DB "Tank" has no offsets and no source on the
+ * connection: its own s7plus:// connection (TLS, pinned by the fingerprint
+ * of the certificate the plant made at start) reads it by the names the PLC
+ * answers a browse with, and its setpoint slider writes by name (plus-panel.js).
+ *
  * The flow is put together from small parts: node builders in flow-nodes.js,
- * the panels in panels.js and cpu-panel.js, the dashboard's CSS in dashboard.css.
+ * the panels in panels.js, cpu-panel.js and plus-panel.js, the dashboard's CSS in dashboard.css.
  */
 const fs = require('node:fs');
 const path = require('node:path');
