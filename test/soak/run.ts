@@ -34,14 +34,15 @@ function once(client: PlcClient, event: string, ms: number): Promise<void> {
 async function main(): Promise<void> {
   const plant = await startPlant({ ports: { s7: 0, fetch: 0, write: 0, freeport: 0 }, periodMs: 1000 });
   plant.process.stop();
-  // The plant's DB1 is its 20-byte source; the polls get a DB of their own, as if downloaded beside it.
-  plant.memory.createDataBlock(2, 1024);
-  const db2 = plant.memory.area('DB', 2)!;
+  // The plant's DB1 is its 20-byte source and DB2 its optimized "Tank" (refused over PUT/GET); the polls get a DB of
+  // their own, as if downloaded beside them.
+  plant.memory.createDataBlock(3, 1024);
+  const db3 = plant.memory.area('DB', 3)!;
   const rows: string[] = [];
   let failed = false;
   for (const [name, url, tags] of [
-    ['S7', plant.urls.s7, Array.from({ length: 20 }, (_, i) => `DB2,INT${100 + i * 2}`)],
-    ['FETCH/WRITE', plant.urls.fetchwrite, Array.from({ length: 20 }, (_, i) => `DB2,INT${100 + i * 2}`)],
+    ['S7', plant.urls.s7, Array.from({ length: 20 }, (_, i) => `DB3,INT${100 + i * 2}`)],
+    ['FETCH/WRITE', plant.urls.fetchwrite, Array.from({ length: 20 }, (_, i) => `DB3,INT${100 + i * 2}`)],
     ['freeport (tcp)', plant.urls.freeport, ['ST5,DWORD0']],
   ] as const) {
     const polls = name.startsWith('freeport') ? Math.min(POLLS, 5_000) : POLLS;
@@ -51,7 +52,7 @@ async function main(): Promise<void> {
     const heap0 = heapMiB();
     const started = Date.now();
     for (let i = 0; i < polls; i++) {
-      db2.writeInt16BE(i & 0x7fff, 100);
+      db3.writeInt16BE(i & 0x7fff, 100);
       const v = await client.read(tags);
       if (name !== 'freeport (tcp)' && v[tags[0]!] !== (i & 0x7fff)) {
         failed = true;
