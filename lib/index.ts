@@ -153,5 +153,6 @@ export { parseFreeportAddress, type FreeportTag } from './freeport/address';
 
 export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess, type MemoryFault } from './sim/memory';
 export { DemoProcess, DEMO_SYMBOLS, DEMO_TAGS, type ProcessSnapshot } from './plant/process';
-export { PLANT_DB_NUMBERS, PLANT_SOURCE } from './plant/source';
+export { PLANT_DB_NUMBERS, PLANT_SOURCE, TANK_DB_NUMBERS, TANK_SOURCE } from './plant/source';
+export { TankBlock, TANK_SYMBOLS, type TankSnapshot } from './plant/tank';
 export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './plant/plant';
