@@ -13,6 +13,7 @@ const { CountingProxy } = require('./lib/proxy');
 const { TABLES, table, image } = require('./lib/tables');
 const { CLIENT_NAMES } = require('./lib/clients');
 const { plcwire, DIST } = require('./lib/peers');
+const { s7plusSection } = require('./s7plus');
 
 const args = process.argv.slice(2);
 const opt = (name, dflt) => {
@@ -31,6 +32,9 @@ const tableNames = TABLES.map((t) => t.name).filter((n) => {
   const only = opt('tables');
   return !only || only.split(',').some((x) => n.startsWith(`${x} `));
 });
+const SECTIONS = ['comparison', 'latency', 'load', 's7plus'];
+const sections = opt('sections', SECTIONS.join(',')).split(',');
+for (const s of sections) if (!SECTIONS.includes(s)) throw new Error(`--sections: no section "${s}" (${SECTIONS.join(', ')})`);
 const SERVERS = [
   // snap7's server serves at most 20 items a job, and the anchors fill a job up to the PDU: every client
   // asks for PDU 240 there (at most 19 items a job). Ours sends at most 20 (its default maxItems) anywhere.
@@ -300,9 +304,10 @@ async function main() {
   console.log(
     `plcwire benchmark — Node ${process.version}, ${require('node:os').cpus()[0].model}, ${require('node:os').cpus().length} CPUs`,
   );
-  await comparison();
-  await latencyModel();
-  await serverLoad();
+  if (sections.includes('comparison')) await comparison();
+  if (sections.includes('latency')) await latencyModel();
+  if (sections.includes('load')) await serverLoad();
+  if (sections.includes('s7plus')) await s7plusSection({ durationMs: DURATION_MS, rounds: ROUNDS, countPolls: COUNT_POLLS });
   console.log(`\n(${((Date.now() - t0) / 1000).toFixed(0)} s)`);
 }
 

@@ -1,6 +1,8 @@
 'use strict';
-// The three clients behind one shape, each through its documented API:
+// The three S7 clients behind one shape, each through its documented API:
 //   open({ port, pdu, addresses }) → { read(): Promise<Record<address, value>>, close() }
+// and our S7CommPlus client ('ours-s7plus': open({ port, fingerprint, maxItems, addresses }),
+// with requests() counting the requests it sent).
 // LOADERS[name]() requires the library, so a worker can load code before it
 // takes its memory baseline (memory per tag then counts tags, not code).
 const { once } = require('node:events');
@@ -12,6 +14,14 @@ const CLIENTS = {
     const plc = await connect(`s7://127.0.0.1:${port}?rack=0&slot=1&pdu=${pdu}&timeout=10000`);
     plc.on('error', () => undefined);
     return { read: () => plc.read(addresses), close: () => plc.close() };
+  },
+
+  async 'ours-s7plus'({ port, fingerprint, maxItems, addresses }) {
+    const { connect } = plcwire();
+    const limit = maxItems ? `&maxItems=${maxItems}` : '';
+    const plc = await connect(`s7plus://127.0.0.1:${port}?fingerprint=${fingerprint}&timeout=10000${limit}`);
+    plc.on('error', () => undefined);
+    return { read: () => plc.read(addresses), close: () => plc.close(), requests: () => plc.stats.requestsSent };
   },
 
   async nodes7({ port, pdu, addresses }) {
@@ -56,8 +66,12 @@ const CLIENTS = {
 
 const LOADERS = {
   ours: () => plcwire(),
+  'ours-s7plus': () => plcwire(),
   nodes7: () => peer('nodes7'),
   'st-one': () => peer('@st-one-io/nodes7'),
 };
 
-module.exports = { CLIENTS, LOADERS, CLIENT_NAMES: Object.keys(CLIENTS) };
+/** The S7 clients the comparison tables put side by side. */
+const CLIENT_NAMES = ['ours', 'nodes7', 'st-one'];
+
+module.exports = { CLIENTS, LOADERS, CLIENT_NAMES };

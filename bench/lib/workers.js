@@ -15,18 +15,19 @@ function ask(child, msg) {
   });
 }
 
-/** Starts a server worker of `kind`; resolves with its port and `fill`/`stop`. */
+/** Starts a server worker of `kind`; resolves with its port (and what else it answers) and `fill`/`stop`. */
 async function startServer(kind, extra = {}) {
   const child = fork(path.join(BENCH, 'server-worker.js'), [], { serialization: 'advanced', stdio: 'inherit' });
-  let port;
+  let started;
   try {
-    ({ port } = await ask(child, { op: 'start', kind, ...extra }));
+    started = await ask(child, { op: 'start', kind, ...extra });
   } catch (err) {
     child.kill();
     throw err;
   }
+  const { ok: _ok, ...answer } = started;
   return {
-    port,
+    ...answer,
     fill: (db1) => ask(child, { op: 'fill', db1 }),
     stop: () =>
       new Promise((resolve) => {
@@ -43,6 +44,7 @@ async function runClient(job, proxy) {
     execArgv: ['--expose-gc'],
     stdio: 'inherit',
   });
+  let counted;
   return new Promise((resolve) => {
     const timer = setTimeout(() => {
       child.kill();
@@ -52,16 +54,18 @@ async function runClient(job, proxy) {
       if (m.counting) {
         proxy.reset();
         child.send({ go: true });
+      } else if (m.counted) {
+        counted = {
+          pdusPerPoll: proxy.jobs / job.countPolls,
+          bytesPerPoll: (proxy.bytesToServer + proxy.bytesToClient) / job.countPolls,
+          maxItems: proxy.maxItemsPerJob,
+          plusPerPoll: perPoll(proxy.plus, job.countPolls),
+        };
+        child.send({ go: true });
       } else {
         clearTimeout(timer);
         if (!m.ok) return resolve({ error: m.error });
-        const r = m.result;
-        if (job.countPolls) {
-          r.pdusPerPoll = proxy.jobs / job.countPolls;
-          r.bytesPerPoll = (proxy.bytesToServer + proxy.bytesToClient) / job.countPolls;
-          r.maxItems = proxy.maxItemsPerJob;
-        }
-        resolve(r);
+        resolve({ ...m.result, ...counted });
       }
     });
     child.on('exit', (code) => {
@@ -72,4 +76,9 @@ async function runClient(job, proxy) {
   });
 }
 
-module.exports = { ask, startServer, runClient };
+/** The proxy's S7CommPlus counters divided by `polls`. */
+function perPoll(counters, polls) {
+  return Object.fromEntries(Object.entries(counters).map(([k, v]) => [k, v / polls]));
+}
+
+module.exports = { ask, startServer, runClient, perPoll };
