@@ -29,12 +29,18 @@ const WARM_POLLS = 200;
 /** The issue's targets: polls/s against the Python client's, CPU per poll against our PUT/GET path's. */
 const TARGETS = { pollsVsPython: 10, cpuVsS7: 1.5 };
 
-/** A Python that imports the s7commplus version the interop tests use (the venv's, else python3's), or why there is none. */
+/**
+ * A Python that imports the s7commplus version the interop tests use (the venv's, else python3's), or why
+ * there is none. PLCWIRE_BENCH_PYTHON names the only one to try (another venv; or none, to see the table without it).
+ */
 function findPython() {
   const { S7COMMPLUS_VERSION } = require(path.join(ROOT, 'test/support/install-peers.js'));
   const probe = 'import importlib.metadata as m, s7commplus; print(m.version("s7commplus"))';
   const tried = [];
-  for (const python of [...(fs.existsSync(VENV_PYTHON) ? [VENV_PYTHON] : []), 'python3']) {
+  const candidates = process.env.PLCWIRE_BENCH_PYTHON
+    ? [process.env.PLCWIRE_BENCH_PYTHON]
+    : [...(fs.existsSync(VENV_PYTHON) ? [VENV_PYTHON] : []), 'python3'];
+  for (const python of candidates) {
     const r = spawnSync(python, ['-c', probe], { encoding: 'utf8', timeout: 30_000 });
     const version = r.status === 0 ? r.stdout.trim() : undefined;
     if (version === S7COMMPLUS_VERSION) return { python };
@@ -159,8 +165,10 @@ async function s7plusSection({ durationMs, rounds, countPolls }) {
       proxy,
       named,
     );
-  const [oursNamed, python, s7, plusStd] = await bestOf(rounds, [
+  const [oursNamed, transport, python, s7, plusStd] = await bestOf(rounds, [
     ourJob('ours-s7plus', named, plus),
+    // The floor: the transport alone, no value decoded (the proxy's counts are taken on decoded polls only).
+    ourJob('ours-s7plus-transport', named, { ...plus, countPolls: 0 }),
     found.python ? pythonJob : async () => ({ client: 'python', error: found.reason }),
     ourJob('ours', standard, { pdu: 960 }),
     ourJob('ours-s7plus', standard, plus),
@@ -186,6 +194,7 @@ async function s7plusSection({ durationMs, rounds, countPolls }) {
     header,
     [
       row('ours (s7plus://, by name)', oursNamed, ownCount),
+      row('  its transport alone (floor)', transport, ownCount),
       row('s7commplus 0.3.0 (Python)', python, () => '–'),
       [
         'ours/s7commplus',
