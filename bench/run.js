@@ -307,7 +307,8 @@ async function main() {
   if (sections.includes('comparison')) await comparison();
   if (sections.includes('latency')) await latencyModel();
   if (sections.includes('load')) await serverLoad();
-  if (sections.includes('s7plus')) await s7plusSection({ durationMs: DURATION_MS, rounds: ROUNDS, countPolls: COUNT_POLLS });
+  if (sections.includes('s7plus'))
+    await s7plusSection({ durationMs: DURATION_MS, rounds: ROUNDS, countPolls: COUNT_POLLS, warmPolls: QUICK ? 100 : 500 });
   console.log(`\n(${((Date.now() - t0) / 1000).toFixed(0)} s)`);
 }
 
