@@ -8,10 +8,12 @@
 //   node bench/run.js [--quick] [--clients ours,nodes7,st-one] [--tables 10,100] [--duration ms] [--latency ms]
 const { fork } = require('node:child_process');
 const path = require('node:path');
+const { ask, startServer, runClient } = require('./lib/workers');
 const { CountingProxy } = require('./lib/proxy');
 const { TABLES, table, image } = require('./lib/tables');
 const { CLIENT_NAMES } = require('./lib/clients');
 const { plcwire, DIST } = require('./lib/peers');
+const { s7plusSection } = require('./s7plus');
 
 const args = process.argv.slice(2);
 const opt = (name, dflt) => {
@@ -30,75 +32,15 @@ const tableNames = TABLES.map((t) => t.name).filter((n) => {
   const only = opt('tables');
   return !only || only.split(',').some((x) => n.startsWith(`${x} `));
 });
+const SECTIONS = ['comparison', 'latency', 'load', 's7plus'];
+const sections = opt('sections', SECTIONS.join(',')).split(',');
+for (const s of sections) if (!SECTIONS.includes(s)) throw new Error(`--sections: no section "${s}" (${SECTIONS.join(', ')})`);
 const SERVERS = [
   // snap7's server serves at most 20 items a job, and the anchors fill a job up to the PDU: every client
   // asks for PDU 240 there (at most 19 items a job). Ours sends at most 20 (its default maxItems) anywhere.
   { kind: 'ours', label: 'plcwire simulator', pdu: 960 },
   { kind: 'snap7', label: 'snap7 server', pdu: 240 },
 ];
-
-function ask(child, msg) {
-  return new Promise((resolve, reject) => {
-    child.once('message', (m) => (m.ok === false ? reject(new Error(m.error)) : resolve(m)));
-    child.send(msg);
-  });
-}
-
-async function startServer(kind, extra = {}) {
-  const child = fork(path.join(__dirname, 'server-worker.js'), [], { serialization: 'advanced', stdio: 'inherit' });
-  let port;
-  try {
-    ({ port } = await ask(child, { op: 'start', kind, ...extra }));
-  } catch (err) {
-    child.kill();
-    throw err;
-  }
-  return {
-    port,
-    fill: (db1) => ask(child, { op: 'fill', db1 }),
-    stop: () =>
-      new Promise((resolve) => {
-        child.once('exit', resolve);
-        child.send({ op: 'stop' });
-      }),
-  };
-}
-
-/** Runs one client job in a fresh process; a proxy counts its PDUs and bytes when asked. */
-async function runClient(job, proxy) {
-  const child = fork(path.join(__dirname, 'client-worker.js'), [], {
-    serialization: 'advanced',
-    execArgv: ['--expose-gc'],
-    stdio: 'inherit',
-  });
-  return new Promise((resolve) => {
-    const timer = setTimeout(() => {
-      child.kill();
-      resolve({ error: 'timed out' });
-    }, 60_000);
-    child.on('message', (m) => {
-      if (m.counting) {
-        proxy.reset();
-        child.send({ go: true });
-      } else {
-        clearTimeout(timer);
-        if (!m.ok) return resolve({ error: m.error });
-        const r = m.result;
-        if (job.countPolls) {
-          r.pdusPerPoll = proxy.jobs / job.countPolls;
-          r.bytesPerPoll = (proxy.bytesToServer + proxy.bytesToClient) / job.countPolls;
-          r.maxItems = proxy.maxItemsPerJob;
-        }
-        resolve(r);
-      }
-    });
-    child.on('exit', (code) => {
-      clearTimeout(timer);
-      resolve({ error: `exited with ${code}` });
-    });
-    child.send(job);
-  });
-}
 
 /** The first of `files` under DIST that exists (a build from before lib/s7/plan/ has the bound in lib/s7/planner.js). */
 function requireFirst(files) {
@@ -362,9 +304,11 @@ async function main() {
   console.log(
     `plcwire benchmark — Node ${process.version}, ${require('node:os').cpus()[0].model}, ${require('node:os').cpus().length} CPUs`,
   );
-  await comparison();
-  await latencyModel();
-  await serverLoad();
+  if (sections.includes('comparison')) await comparison();
+  if (sections.includes('latency')) await latencyModel();
+  if (sections.includes('load')) await serverLoad();
+  if (sections.includes('s7plus'))
+    await s7plusSection({ durationMs: DURATION_MS, rounds: ROUNDS, countPolls: COUNT_POLLS, warmPolls: QUICK ? 100 : 500 });
   console.log(`\n(${((Date.now() - t0) / 1000).toFixed(0)} s)`);
 }
 

@@ -2,9 +2,14 @@
 // One S7 server in its own process, so its CPU never competes with the
 // client under test. Driven over IPC by bench/run.js:
 //   { op: 'start', kind: 'ours'|'snap7', profile?, latencyMs? } → { port }
+//   { op: 'start', kind: 'plus' } → { port, fingerprint }: our simulator of an S7-1500 serving
+//     S7CommPlus over TLS too (a certificate generated here), the S7CommPlus benchmark's program
+//     (bench/lib/s7plus-program.js) in its memory
 //   { op: 'fill', db1 } → {}        { op: 'stop' } → exits
 const net = require('node:net');
-const { peer, plcwire } = require('./lib/peers');
+const path = require('node:path');
+const { peer, plcwire, DIST } = require('./lib/peers');
+const { program } = require('./lib/s7plus-program');
 const { DB1_SIZE } = require('./lib/tables');
 
 let server;
@@ -30,7 +35,14 @@ async function start(msg) {
     if (!server.StartTo('127.0.0.1')) throw new Error(`snap7 server did not start on ${port}`);
     return { port };
   }
-  const { S7Server, PlcMemory } = plcwire();
+  const { S7Server, PlcMemory, S7PlusService } = plcwire();
+  if (kind === 'plus') {
+    const { generateCertificate } = require(path.join(DIST, 'lib/s7plus/transport/cert.js'));
+    const cert = await generateCertificate({ commonName: 'plcwire benchmark' });
+    const service = new S7PlusService({ ...program(), tls: { cert: cert.cert, key: cert.key } });
+    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    return { port: await server.listen(), fingerprint: service.fingerprint };
+  }
   const memory = new PlcMemory({ dataBlocks: { 1: DB1_SIZE } });
   const options = { port: 0, memory };
   if (msg.profile) options.profile = msg.profile;

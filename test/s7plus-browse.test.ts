@@ -195,6 +195,58 @@ describe('S7CommPlus browse and names (our client, our simulator)', function () 
   });
 });
 
+/** An optimized DB "Line" whose members are declared in `order`, each with its start value. */
+function lineSource(order: readonly [name: string, value: number][]): { name: string; content: string }[] {
+  const members = order.map(([name, value]) => `      ${name} : Int := ${value};`).join('\n');
+  const content = `DATA_BLOCK "Line"\n{ S7_Optimized_Access := 'TRUE' }\nVERSION : 0.1\nNON_RETAIN\n   STRUCT\n${members}\n   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n`;
+  return [{ name: 'Line.db', content }];
+}
+
+describe('S7CommPlus names polled as one list (the read plan)', function () {
+  this.timeout(30000);
+  const servers: S7Server[] = [];
+  after(async () => {
+    for (const s of servers) await s.close();
+  });
+
+  it('a list read again after a reconnect to a changed program reads by the new LIDs, never the old plan', async () => {
+    const cert = await generateCertificate();
+    const tls = { cert: cert.cert, key: cert.key };
+    const serve = async (order: readonly [string, number][], port = 0) => {
+      const s = new S7Server({ port, profile: 's7-1500', s7plus: new S7PlusService({ sources: lineSource(order), db: { Line: 3 }, tls }) });
+      servers.push(s);
+      await s.listen();
+      return s;
+    };
+    const first = await serve([
+      ['Speed', 10],
+      ['Count', 20],
+    ]);
+    const client = createClient(`s7plus://127.0.0.1:${first.port}?fingerprint=${cert.fingerprint}&timeout=5000`) as S7PlusClient;
+    client.on('error', () => undefined);
+    try {
+      await client.connect();
+      const list = ['"Line".Count', '"Line".Speed'];
+      expect(await client.read(list)).to.deep.equal({ '"Line".Count': 20, '"Line".Speed': 10 });
+      expect(await client.read(list)).to.deep.equal({ '"Line".Count': 20, '"Line".Speed': 10 });
+      // A download in between: the same names, declared the other way round (Count now has Speed's LID) and a new value.
+      const back = new Promise<void>((resolve) => client.once('connected', () => resolve()));
+      await first.close();
+      await serve(
+        [
+          ['Count', 21],
+          ['Speed', 11],
+        ],
+        first.port,
+      );
+      await back;
+      expect(await client.read(list)).to.deep.equal({ '"Line".Count': 21, '"Line".Speed': 11 });
+    } finally {
+      await client.close();
+    }
+  });
+});
+
 describe('S7CommPlus browse against the s7commplus emulator (its browse offers nothing)', function () {
   this.timeout(60_000);
   let peer: S7CommPlusPeerServer;

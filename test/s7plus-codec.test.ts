@@ -34,6 +34,7 @@ import {
   type StructMember,
   type StructValue,
 } from '../lib/s7plus/codec/pvalue';
+import { Writer } from '../lib/s7plus/codec/bytes';
 import {
   decodeSVlq32,
   decodeSVlq64,
@@ -43,6 +44,7 @@ import {
   encodeSVlq64,
   encodeUVlq32,
   encodeUVlq64,
+  uvlq32Length,
 } from '../lib/s7plus/codec/vlq';
 
 const hex = (s: string) => Buffer.from(s.replace(/\s+/g, ''), 'hex');
@@ -156,6 +158,23 @@ describe('S7CommPlus codec', () => {
           expect(decodeSVlq64(encodeSVlq64(s), 0).value).to.equal(s);
         }),
       );
+    });
+
+    it("the Writer's UVLQ32 (written in place) is encodeUVlq32's bytes, at every length boundary, after other bytes and past its first buffer", () => {
+      const w = new Writer();
+      const expected: Buffer[] = [];
+      for (const [v] of u32) {
+        w.u8(0xee).uvlq32(v);
+        expected.push(Buffer.from([0xee]), encodeUVlq32(v));
+      }
+      for (const v of [0x7f, 0x80, 0x3fff, 0x4000, 0x1fffff, 0x200000, 0xfffffff, 0x10000000, 0xffffffff]) {
+        expect(uvlq32Length(v), `${v}`).to.equal(encodeUVlq32(v).length);
+        w.uvlq32(v);
+        expected.push(encodeUVlq32(v));
+      }
+      expect(w.toBuffer().toString('hex')).to.equal(Buffer.concat(expected).toString('hex'));
+      expect(() => new Writer().uvlq32(2 ** 32)).to.throw(RangeError);
+      expect(() => new Writer().uvlq32(1.5)).to.throw(RangeError);
     });
 
     it('refuses to encode a value outside the width (a caller bug, RangeError)', () => {

@@ -182,6 +182,11 @@ describe('S7CommPlus simulator (issue #25)', function () {
       expect(at([0x11, 1, 2, 0xb])).to.equal(undefined);
       expect(at([0x12])).to.equal(undefined);
       expect(at([0x10, 3])).to.equal(undefined);
+      // The LID gives the member's index (no search): below the first LID or past the last names nothing.
+      expect(at([0x9])).to.equal(undefined);
+      expect(at([0])).to.equal(undefined);
+      expect(at([0xf, 0x9])).to.equal(undefined);
+      expect(at([0xf, 0xc])).to.equal(undefined);
     });
   });
 

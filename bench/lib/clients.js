@@ -1,10 +1,13 @@
 'use strict';
-// The three clients behind one shape, each through its documented API:
+// The three S7 clients behind one shape, each through its documented API:
 //   open({ port, pdu, addresses }) → { read(): Promise<Record<address, value>>, close() }
+// and our S7CommPlus client ('ours-s7plus': open({ port, fingerprint, maxItems, addresses }),
+// with requests() counting the requests it sent).
 // LOADERS[name]() requires the library, so a worker can load code before it
 // takes its memory baseline (memory per tag then counts tags, not code).
 const { once } = require('node:events');
-const { peer, plcwire } = require('./peers');
+const path = require('node:path');
+const { peer, plcwire, DIST } = require('./peers');
 
 const CLIENTS = {
   async ours({ port, pdu, addresses }) {
@@ -12,6 +15,53 @@ const CLIENTS = {
     const plc = await connect(`s7://127.0.0.1:${port}?rack=0&slot=1&pdu=${pdu}&timeout=10000`);
     plc.on('error', () => undefined);
     return { read: () => plc.read(addresses), close: () => plc.close() };
+  },
+
+  async 'ours-s7plus'({ port, fingerprint, maxItems, addresses }) {
+    const { connect } = plcwire();
+    const limit = maxItems ? `&maxItems=${maxItems}` : '';
+    const plc = await connect(`s7plus://127.0.0.1:${port}?fingerprint=${fingerprint}&timeout=10000${limit}`);
+    plc.on('error', () => undefined);
+    return { read: () => plc.read(addresses), close: () => plc.close(), requests: () => plc.stats.requestsSent };
+  },
+
+  /**
+   * Our S7CommPlus transport alone, the floor under 'ours-s7plus': the same session (TLS in the COTP
+   * tunnel, sequence numbers, integrity ids, one request in flight) sends the same GetMultiVariables
+   * requests by LID, built from the browse once, and leaves the answers undecoded. The first read() is
+   * a real one (checked by the worker); the others are the floor's.
+   */
+  async 'ours-s7plus-transport'({ port, fingerprint, maxItems, addresses }) {
+    const { connect } = plcwire();
+    const v = require(path.join(DIST, 'lib/s7plus/codec/variables.js'));
+    const { FunctionCode, Ids } = require(path.join(DIST, 'lib/s7plus/constants.js'));
+    const plc = await connect(`s7plus://127.0.0.1:${port}?fingerprint=${fingerprint}&timeout=10000&maxItems=${maxItems}`);
+    plc.on('error', () => undefined);
+    const table = await plc.browse();
+    const items = addresses.map((a) => {
+      const { area, lids } = table.lookup(a).access;
+      return { symbolCrc: 0, accessArea: area, accessSubArea: Ids.DBValueActual, lids: [...lids] };
+    });
+    const chunks = [];
+    for (let at = 0; at < items.length; at += maxItems) chunks.push(items.slice(at, at + maxItems));
+    const raw = async () => {
+      // The client's live session (BaseClient's `session`): what its reads go through.
+      const session = plc.session;
+      for (const chunk of chunks) {
+        await session.request(FunctionCode.GetMultiVariables, (sequence, sessionId, integrityId) =>
+          v.encodeGetMultiVariablesRequest({
+            ...v.readRequest(sequence, sessionId, chunk),
+            ...(integrityId === undefined ? {} : { integrityId }),
+          }),
+        );
+      }
+    };
+    let first = true;
+    return {
+      read: () => (first ? ((first = false), plc.read(addresses)) : raw()),
+      close: () => plc.close(),
+      requests: () => plc.stats.requestsSent,
+    };
   },
 
   async nodes7({ port, pdu, addresses }) {
@@ -56,8 +106,13 @@ const CLIENTS = {
 
 const LOADERS = {
   ours: () => plcwire(),
+  'ours-s7plus': () => plcwire(),
+  'ours-s7plus-transport': () => plcwire(),
   nodes7: () => peer('nodes7'),
   'st-one': () => peer('@st-one-io/nodes7'),
 };
 
-module.exports = { CLIENTS, LOADERS, CLIENT_NAMES: Object.keys(CLIENTS) };
+/** The S7 clients the comparison tables put side by side. */
+const CLIENT_NAMES = ['ours', 'nodes7', 'st-one'];
+
+module.exports = { CLIENTS, LOADERS, CLIENT_NAMES };

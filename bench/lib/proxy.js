@@ -4,10 +4,48 @@
 // 0x04) and the bytes of those jobs and of every frame the server sends back
 // after the handshake. It works for any client, so every library is counted
 // the same way.
+//
+// S7CommPlus over TLS travels as TLS records inside COTP data (DT) frames,
+// so its requests cannot be read: the proxy counts, from the client to the
+// server, the TLS application-data records (content type 23, reassembled
+// from the DT payloads, which may cut a record anywhere) and the COTP data
+// units (DT frames with the EOT bit: one per write the client's COTP layer
+// makes). A client that sends each S7CommPlus request as one TLS record
+// (ours does; bench/run.js prints our own count beside it) sends one record
+// per request. `plus` holds these counters and the bytes of all frames both
+// ways since the last reset.
 const net = require('node:net');
 
 const TPKT_HEADER = 4;
 const COTP_DT = 3;
+const COTP_DT_CODE = 0xf0;
+const COTP_EOT = 0x80;
+/** The S7CommPlus frame's first byte (before InitSSL the protocol travels in plain text). */
+const S7P_START = 0x72;
+const TLS_RECORD_HEADER = 5;
+const TLS_APPLICATION_DATA = 23;
+
+/** TLS records cut from a byte stream (the DT payloads of one direction), each's content type to `onRecord`. */
+class TlsRecordCounter {
+  constructor(onRecord) {
+    this.pending = Buffer.alloc(0);
+    this.onRecord = onRecord;
+  }
+  push(chunk) {
+    this.pending = this.pending.length ? Buffer.concat([this.pending, chunk]) : chunk;
+    while (this.pending.length >= TLS_RECORD_HEADER) {
+      const len = TLS_RECORD_HEADER + this.pending.readUInt16BE(3);
+      if (this.pending.length < len) break;
+      this.onRecord(this.pending[0]);
+      this.pending = this.pending.subarray(len);
+    }
+  }
+}
+
+/** The counters of S7CommPlus traffic since the last reset. */
+function plusCounters() {
+  return { tlsRecords: 0, dataUnits: 0, plainMessages: 0, bytesToServer: 0, bytesToClient: 0 };
+}
 
 class FrameCounter {
   constructor(onFrame) {
@@ -51,6 +89,7 @@ class CountingProxy {
     this.bytesToClient = 0;
     this.maxItemsPerJob = 0;
     this.items = 0;
+    this.plus = plusCounters();
   }
   listen() {
     return new Promise((resolve) => this.server.listen(0, '127.0.0.1', () => resolve(this.server.address().port)));
@@ -61,7 +100,25 @@ class CountingProxy {
     upstream.setNoDelay(true);
     this.sockets.add(client).add(upstream);
     let counting = false; // after the setup communication ack
+    let plus; // this connection speaks S7CommPlus: its first DT payload does not start an S7 PDU
+    let tls = false; // its DT payloads are TLS records (after InitSSL)
+    const records = new TlsRecordCounter((type) => {
+      if (type === TLS_APPLICATION_DATA) this.plus.tlsRecords++;
+    });
     const up = new FrameCounter((f) => {
+      this.plus.bytesToServer += f.length;
+      const dt = f.length > TPKT_HEADER + COTP_DT && f[5] === COTP_DT_CODE;
+      if (dt && plus === undefined) plus = f[TPKT_HEADER + COTP_DT] !== 0x32;
+      if (dt && plus) {
+        const payload = f.subarray(TPKT_HEADER + COTP_DT);
+        if (f[6] & COTP_EOT) this.plus.dataUnits++;
+        if (!tls && payload[0] === S7P_START) this.plus.plainMessages++;
+        else {
+          tls = true;
+          records.push(payload);
+        }
+        return;
+      }
       const h = s7Header(f);
       if (!h || h.rosctr !== 1) return;
       if (h.fn === 0xf0) return;
@@ -75,6 +132,7 @@ class CountingProxy {
       this.bytesToServer += f.length;
     });
     const down = new FrameCounter((f) => {
+      this.plus.bytesToClient += f.length;
       if (counting) this.bytesToClient += f.length;
     });
     client.on('data', (d) => {

@@ -132,7 +132,7 @@ const WIDTH: Readonly<Record<number, [number, 'u' | 's' | 'f']>> = Object.freeze
 });
 
 /** A leaf's value from the PValue the PLC answered: a BLOB as the member's standard bytes, a typed value by its wire type. */
-function valueOf(entry: SymbolEntry, v: PValue): PlcValue {
+function valueOf(entry: SymbolEntry, shape: TagShape, v: PValue): PlcValue {
   const x = v.value;
   if (v.type === DataType.Bool && typeof x === 'boolean') return x;
   if ((v.type === DataType.WString || v.type === DataType.S7String) && typeof x === 'string') return x;
@@ -153,7 +153,7 @@ function valueOf(entry: SymbolEntry, v: PValue): PlcValue {
   // A typed value narrower than the member (a BYTE sent as USInt for a CHAR) is its low bytes.
   const want = entry.size;
   if (bytes.length < want && !entry.dataType?.includes('STRING')) bytes = Buffer.concat([Buffer.alloc(want - bytes.length), bytes]);
-  return decodeTag(shapeOf(entry), bytes, 0);
+  return decodeTag(shape, bytes, 0);
 }
 
 /** A struct's or array's value from its leaves' values (by name). */
@@ -194,6 +194,45 @@ async function requestChunks(
   }
 }
 
+/**
+ * What a read of one tag list by name needs from the browsed table, worked
+ * out once per list and table (a poll reads the same names again and again):
+ * which tags are addresses, each name's entry (or why not) and the range of
+ * its elementary members in `leaves`, each leaf's item address and shape.
+ */
+interface NamedPlan {
+  readonly table: SymbolTable;
+  readonly addressed: readonly number[];
+  readonly wanted: readonly { readonly i: number; readonly entry: SymbolEntry; readonly from: number; readonly to: number }[];
+  readonly unresolved: readonly { readonly i: number; readonly error: PlcError }[];
+  readonly leaves: readonly SymbolEntry[];
+  readonly items: readonly ItemAddress[];
+  readonly shapes: readonly TagShape[];
+}
+
+/** Plans by tag list: the client hands the same array back for the same list (client/base.ts ReadList), so a poll finds its plan. */
+const PLANS = new WeakMap<readonly Tag[], NamedPlan>();
+
+function planOf(tags: readonly Tag[], table: SymbolTable): NamedPlan {
+  const known = PLANS.get(tags);
+  if (known?.table === table) return known;
+  const addressed: number[] = [];
+  const wanted: { i: number; entry: SymbolEntry; from: number; to: number }[] = [];
+  const unresolved: { i: number; error: PlcError }[] = [];
+  const leaves: SymbolEntry[] = [];
+  tags.forEach((tag, i) => {
+    if (!isNamed(tag)) return void addressed.push(i);
+    const entry = resolve(table, tag);
+    if (entry instanceof PlcError) return void unresolved.push({ i, error: entry });
+    const from = leaves.length;
+    leaves.push(...leavesOf(table, entry));
+    wanted.push({ i, entry, from, to: leaves.length });
+  });
+  const plan: NamedPlan = { table, addressed, wanted, unresolved, leaves, items: leaves.map(itemOf), shapes: leaves.map(shapeOf) };
+  PLANS.set(tags, plan);
+  return plan;
+}
+
 /** Values of addresses and names, in order; each tag's own failure is its error. */
 export async function readMixed(
   session: S7PlusSession,
@@ -202,11 +241,12 @@ export async function readMixed(
   table: () => Promise<SymbolTable>,
   signal?: AbortSignal,
 ): Promise<ReadValues> {
-  const named = tags.flatMap((t, i) => (isNamed(t) ? [i] : []));
-  if (named.length === 0) return readTags(session, tags, limits, signal);
+  if (!tags.some(isNamed)) return readTags(session, tags, limits, signal);
   const values: PlcValue[] = new Array<PlcValue>(tags.length);
   const errors: (PlcError | undefined)[] = new Array<PlcError | undefined>(tags.length);
-  const addressed = tags.flatMap((t, i) => (isNamed(t) ? [] : [i]));
+  const t = await table();
+  const plan = planOf(tags, t);
+  const { addressed, leaves } = plan;
   if (addressed.length > 0) {
     const r = await readTags(
       session,
@@ -216,55 +256,51 @@ export async function readMixed(
     );
     addressed.forEach((i, k) => ((values[i] = r.values[k]!), (errors[i] = r.errors?.[k])));
   }
-  const t = await table();
-  const leaves: SymbolEntry[] = [];
-  const wanted: { i: number; entry: SymbolEntry }[] = [];
-  for (const i of named) {
-    const entry = resolve(t, tags[i] as NamedTag);
-    if (entry instanceof PlcError) errors[i] = entry;
-    else {
-      wanted.push({ i, entry });
-      leaves.push(...leavesOf(t, entry));
-    }
-  }
-  const leaf = new Map<string, PlcValue>();
-  const failed = new Map<string, PlcError>();
+  for (const { i, error } of plan.unresolved) errors[i] = error;
+  // Each leaf's value, or its error, by its index in plan.leaves.
+  const leafValues = new Array<PlcValue>(leaves.length);
+  let failed: (PlcError | undefined)[] | undefined;
   const send = (from: number, to: number) =>
     session.request(
       FunctionCode.GetMultiVariables,
       (sequence, sessionId, integrityId) =>
         encodeGetMultiVariablesRequest({
-          ...readRequest(sequence, sessionId, leaves.slice(from, to).map(itemOf)),
+          ...readRequest(sequence, sessionId, plan.items.slice(from, to) as ItemAddress[]),
           ...(integrityId === undefined ? {} : { integrityId }),
         }),
       { signal },
     );
   await requestChunks(session, leaves.length, limits, send, (from, to, answer) => {
-    const chunk = leaves.slice(from, to);
     const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
-    chunk.forEach((e, k) => {
-      const v = body.values.get(k + 1);
+    for (let k = from; k < to; k++) {
+      const e = leaves[k]!;
+      const v = body.values.get(k - from + 1);
       if (!v) {
-        const code = body.errors.get(k + 1) ?? body.returnValue;
-        failed.set(
-          e.name,
-          new PlcError('OBJECT_DOES_NOT_EXIST', `${e.name}: the PLC refused it (0x${code.toString(16)}); was its program changed?`, {
-            tag: e.name,
-          }),
+        const code = body.errors.get(k - from + 1) ?? body.returnValue;
+        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = new PlcError(
+          'OBJECT_DOES_NOT_EXIST',
+          `${e.name}: the PLC refused it (0x${code.toString(16)}); was its program changed?`,
+          { tag: e.name },
         );
-        return;
+        continue;
       }
       try {
-        leaf.set(e.name, valueOf(e, v));
+        leafValues[k] = valueOf(e, plan.shapes[k]!, v);
       } catch (err) {
-        failed.set(e.name, toPlcError(err, 'PROTOCOL_ERROR'));
+        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = toPlcError(err, 'PROTOCOL_ERROR');
       }
-    });
+    }
   });
-  for (const { i, entry } of wanted) {
-    const bad = leavesOf(t, entry).find((e) => failed.has(e.name));
-    if (bad) errors[i] = failed.get(bad.name);
-    else values[i] = assemble(t, entry, leaf) as PlcValue;
+  for (const { i, entry, from, to } of plan.wanted) {
+    let bad: PlcError | undefined;
+    if (failed) for (let k = from; !bad && k < to; k++) bad = failed[k];
+    if (bad) errors[i] = bad;
+    else if (entry.kind === 'elementary') values[i] = leafValues[from]!;
+    else {
+      const leaf = new Map<string, PlcValue>();
+      for (let k = from; k < to; k++) leaf.set(leaves[k]!.name, leafValues[k]!);
+      values[i] = assemble(t, entry, leaf) as PlcValue;
+    }
   }
   return { values, errors: errors.some((e) => e) ? errors : undefined };
 }

@@ -4,7 +4,17 @@
  * reading and where.
  */
 import { ProtocolError } from '../../errors';
-import { decodeSVlq32, decodeSVlq64, decodeUVlq32, decodeUVlq64, encodeSVlq32, encodeSVlq64, encodeUVlq32, encodeUVlq64 } from './vlq';
+import {
+  decodeSVlq32,
+  decodeSVlq64,
+  decodeUVlq32,
+  decodeUVlq64,
+  encodeSVlq32,
+  encodeSVlq64,
+  encodeUVlq64,
+  uvlq32Length,
+  writeUVlq32,
+} from './vlq';
 
 export class Reader {
   offset: number;
@@ -132,7 +142,9 @@ export class Writer {
     return this;
   }
   uvlq32(v: number): this {
-    return this.bytes(encodeUVlq32(v));
+    this.room(uvlq32Length(v));
+    this.len = writeUVlq32(this.buf, this.len, v);
+    return this;
   }
   svlq32(v: number): this {
     return this.bytes(encodeSVlq32(v));

@@ -22,16 +22,32 @@ function truncated(offset: number): ProtocolError {
   return new ProtocolError(`S7CommPlus: truncated VLQ at offset ${offset}`);
 }
 
-export function encodeUVlq32(value: number): Buffer {
+/** Bytes the UVLQ32 of `value` takes, the shortest form (as s7commplus and TIA write it); a RangeError outside 0..2^32-1. */
+export function uvlq32Length(value: number): number {
   if (!Number.isInteger(value) || value < 0 || value > 0xffffffff) throw new RangeError(`UVLQ32 out of range: ${value}`);
-  let n = 1;
-  for (let v = value; v >= 0x80; v = Math.floor(v / 128)) n++;
-  const out = Buffer.allocUnsafe(n);
+  return value < 0x80 ? 1 : value < 0x4000 ? 2 : value < 0x200000 ? 3 : value < 0x10000000 ? 4 : 5;
+}
+
+/**
+ * Writes the UVLQ32 of `value` into `out` at `offset` (room for
+ * uvlq32Length(value) bytes) and returns the offset after it: the Writer's
+ * way, without a Buffer per value (a 50-item request has 300 of them).
+ */
+export function writeUVlq32(out: Uint8Array, offset: number, value: number): number {
+  const n = uvlq32Length(value);
+  // value fits 32 bits unsigned, so `>>> 7` shifts it exactly.
   let v = value;
-  for (let i = n - 1; i >= 0; i--) {
-    out[i] = (v % 128) | (i === n - 1 ? 0 : 0x80);
-    v = Math.floor(v / 128);
+  out[offset + n - 1] = v & 0x7f;
+  for (let i = n - 2; i >= 0; i--) {
+    v >>>= 7;
+    out[offset + i] = (v & 0x7f) | 0x80;
   }
+  return offset + n;
+}
+
+export function encodeUVlq32(value: number): Buffer {
+  const out = Buffer.allocUnsafe(uvlq32Length(value));
+  writeUVlq32(out, 0, value);
   return out;
 }
 

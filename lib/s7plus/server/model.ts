@@ -198,8 +198,9 @@ export function resolveLids(db: PlusDb, lids: readonly number[]): LayoutNode | u
   let i = 0;
   while (i < lids.length) {
     if (!type || !struct) return undefined;
-    const index = type.members.findIndex((m) => m.lid === lids[i]);
-    if (index < 0) return undefined;
+    // Members carry LIDs FIRST_LID, FIRST_LID + 1, … in order (TypeBuilder): the LID gives the index, no search.
+    const index = lids[i]! - FIRST_LID;
+    if (type.members[index]?.lid !== lids[i]) return undefined;
     type = type.members[index]!.type;
     node = struct.members[index]?.node;
     if (!node) return undefined;

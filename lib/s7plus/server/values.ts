@@ -45,7 +45,11 @@ export function readNode(node: LayoutNode, image: Buffer): Buffer {
   const [type] = typed;
   if (type === DataType.UDInt) return Buffer.concat([Buffer.from([0x00, type]), encodeUVlq32(raw.readUInt32BE(0))]);
   if (type === DataType.DInt) return Buffer.concat([Buffer.from([0x00, type]), encodeSVlq32(raw.readInt32BE(0))]);
-  return Buffer.concat([Buffer.from([0x00, type]), raw]);
+  const out = Buffer.allocUnsafe(2 + raw.length);
+  out[0] = 0x00;
+  out[1] = type;
+  raw.copy(out, 2);
+  return out;
 }
 
 const FIXED: Readonly<Record<number, number>> = Object.freeze({
