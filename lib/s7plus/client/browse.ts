@@ -18,11 +18,11 @@ import { PlcError } from '../../errors';
 import { compileDeclarations } from '../../symbols/compile';
 import { elementIndex, memberRef } from '../../symbols/layout';
 import { NameIndex } from '../../symbols/names';
-import type { DataBlockDecl, MemberDecl, SourcePosition, SymbolEntry, SymbolTable, TypeRef } from '../../symbols/model';
+import type { DataBlockDecl, MemberDecl, SourcePosition, SymbolEntry, SymbolTable, SymbolTableRow, TypeRef } from '../../symbols/model';
 import type { DataTypeName } from '../../types';
-import { walkObjects, type PObject } from '../codec/object';
+import { attributeOf, walkObjects, type PObject } from '../codec/object';
 import { decodeGetMultiVariablesResponse, encodeGetMultiVariablesRequest, readRequest } from '../codec/variables';
-import { dbAccessArea, ElementId, FunctionCode, Ids, SoftDataType } from '../constants';
+import { AreaTypeInfoRID, dbAccessArea, ElementId, FunctionCode, Ids, SoftDataType } from '../constants';
 import { dataBlocks, explore } from './services';
 import type { S7PlusSession } from './session';
 
@@ -281,16 +281,94 @@ function declare(
   return { name: m.name, type, attributes: {}, comment: '', at: AT };
 }
 
-/** The PLC's data blocks as a symbol table (see the file's comment). */
+/**
+ * Each type object's VariableTypeStructModificationTime (attribute 529), by RID, where the PLC reports one: what a
+ * download changes (s7commplus (MIT) client.py _type_info_times; PLCSIM Advanced and a CPU 1215C report it).
+ */
+export type TypeTimes = ReadonlyMap<number, bigint>;
+
+function timesOf(objects: PObject[]): Map<number, bigint> {
+  const times = new Map<number, bigint>();
+  for (const o of walkObjects(objects)) {
+    const v = attributeOf(o, Ids.VariableTypeStructModificationTime)?.value;
+    if (typeof v === 'bigint' || typeof v === 'number') times.set(o.relationId >>> 0, BigInt(v));
+  }
+  return times;
+}
+
+/**
+ * The type objects' modification times now: one Explore of the type-info container asking for attribute 529 only,
+ * which the PLC answers with each type object's head and time (about 20 bytes a type). Undefined when the PLC refuses
+ * the question (the program cannot be watched this way; a link error still throws).
+ */
+export async function typeTimes(session: S7PlusSession, signal?: AbortSignal): Promise<TypeTimes | undefined> {
+  try {
+    return timesOf(await explore(session, Ids.ObjectOmsTypeInfoContainer, [Ids.VariableTypeStructModificationTime], 'its types', signal));
+  } catch (err) {
+    if (err instanceof PlcError && (err.code === 'PLC_ERROR' || err.code === 'OBJECT_DOES_NOT_EXIST')) return undefined;
+    throw err;
+  }
+}
+
+/** True when two sets of modification times differ: a type object changed, came or went. */
+export function timesDiffer(a: TypeTimes, b: TypeTimes): boolean {
+  if (a.size !== b.size) return true;
+  for (const [rid, time] of a) if (b.get(rid) !== time) return true;
+  return false;
+}
+
+/** The I, Q and M areas: the type object holding the tag table's names of each. */
+const TAG_AREAS: readonly { area: 'I' | 'Q' | 'M'; rid: number; typeRid: number }[] = Object.freeze([
+  { area: 'I', rid: Ids.NativeTheIAreaRID, typeRid: AreaTypeInfoRID.I },
+  { area: 'Q', rid: Ids.NativeTheQAreaRID, typeRid: AreaTypeInfoRID.Q },
+  { area: 'M', rid: Ids.NativeTheMAreaRID, typeRid: AreaTypeInfoRID.M },
+]);
+
+/**
+ * The PLC tag table's names in the I, Q and M areas as the rows a tag table export gives (name, address), so the
+ * symbol compiler makes the entries a compiled tag table gives; a tag without a standard offset or of a type this
+ * client does not read is left out (it has no address to give).
+ */
+function tagRows(types: Map<number, TypeObject>, lids: Map<string, number[]>, areas: Map<string, number>): SymbolTableRow[] {
+  const rows: SymbolTableRow[] = [];
+  for (const { area, rid, typeRid } of TAG_AREAS) {
+    for (const m of types.get(typeRid)?.members ?? []) {
+      const type = TYPE_OF[m.soft];
+      if (m.byte === undefined || m.dims || m.structRid !== undefined || !type) continue;
+      const address = formatAddress({
+        area,
+        dbNumber: 0,
+        byteOffset: m.byte,
+        bitOffset: m.bit ?? 0,
+        type,
+        count: 1,
+        isArray: false,
+        stringLength: m.stringLength,
+      });
+      const name = `"${m.name}"`;
+      lids.set(key(name), [m.lid]);
+      areas.set(key(name), rid);
+      rows.push({ name: m.name, address, dataType: type, comment: '', at: AT });
+    }
+  }
+  return rows;
+}
+
+/** The PLC's data blocks and tag table as a symbol table (see the file's comment). */
 export async function browseTable(session: S7PlusSession, signal?: AbortSignal): Promise<SymbolTable> {
+  return (await browseProgram(session, signal)).table;
+}
+
+/** The browsed table and the type objects' modification times it was browsed at (one Explore gives both). */
+export async function browseProgram(session: S7PlusSession, signal?: AbortSignal): Promise<{ table: SymbolTable; times: TypeTimes }> {
   const blocks = await dataBlocks(session, signal);
-  if (blocks.length === 0) return tableOf([], new Map(), new Map());
-  const rids = await typeRids(
+  const rids = blocks.length === 0 ? new Map<number, number>() : await typeRids(
     session,
     blocks.map((b) => b.number),
     signal,
   );
-  const types = typeObjects(await explore(session, Ids.ObjectOmsTypeInfoContainer, [], 'its types', signal));
+  const container = await explore(session, Ids.ObjectOmsTypeInfoContainer, [], 'its types', signal);
+  const types = typeObjects(container);
   const decls: DataBlockDecl[] = [];
   const facts: Facts = { lids: new Map(), place: new Map() };
   const areas = new Map<string, number>();
@@ -313,16 +391,18 @@ export async function browseTable(session: S7PlusSession, signal?: AbortSignal):
       at: AT,
     });
   }
-  return tableOf(decls, facts.lids, facts.place, areas);
+  const rows = tagRows(types, facts.lids, areas);
+  return { table: tableOf(decls, rows, facts.lids, facts.place, areas), times: timesOf(container) };
 }
 
 function tableOf(
   decls: DataBlockDecl[],
+  rows: SymbolTableRow[],
   lids: Map<string, number[]>,
   place: Map<string, { byte: number; bit: number | null }>,
-  areas: Map<string, number> = new Map(),
+  areas: Map<string, number>,
 ): SymbolTable {
-  const compiled = compileDeclarations(decls, [], {});
+  const compiled = compileDeclarations(decls, rows, {});
   const entries = compiled.entries.map((e): SymbolEntry => {
     const blockKey = key(e.name.slice(0, e.name.indexOf('"', 1) + 1));
     const area = areas.get(blockKey) ?? dbAccessArea(e.db ?? 0);

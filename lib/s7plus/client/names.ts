@@ -106,8 +106,10 @@ function leavesOf(table: SymbolTable, entry: SymbolEntry): readonly SymbolEntry[
   return leaves;
 }
 
+/** A name's item: its block's access area with DBValueActual, or an I, Q, M tag's area object with ControllerAreaValueActual. */
 function itemOf(entry: SymbolEntry): ItemAddress {
-  return { symbolCrc: 0, accessArea: entry.access!.area, accessSubArea: Ids.DBValueActual, lids: [...entry.access!.lids] };
+  const subArea = entry.area === 'DB' ? Ids.DBValueActual : Ids.ControllerAreaValueActual;
+  return { symbolCrc: 0, accessArea: entry.access!.area, accessSubArea: subArea, lids: [...entry.access!.lids] };
 }
 
 function shapeOf(entry: SymbolEntry): TagShape {
@@ -194,12 +196,24 @@ async function requestChunks(
   }
 }
 
+/**
+ * The PLC's program as the names see it: the browsed table, and the check after a read by name whether the program
+ * changed since (client/program.ts): true when it did, and the table is then browsed again.
+ */
+export interface Program {
+  table(): Promise<SymbolTable>;
+  changed(): Promise<boolean>;
+}
+
+/** Reads of a program that keeps changing give up after this many attempts. */
+const MAX_ATTEMPTS = 3;
+
 /** Values of addresses and names, in order; each tag's own failure is its error. */
 export async function readMixed(
   session: S7PlusSession,
   tags: readonly Tag[],
   limits: Limits,
-  table: () => Promise<SymbolTable>,
+  program: Program,
   signal?: AbortSignal,
 ): Promise<ReadValues> {
   const named = tags.flatMap((t, i) => (isNamed(t) ? [i] : []));
@@ -216,7 +230,39 @@ export async function readMixed(
     );
     addressed.forEach((i, k) => ((values[i] = r.values[k]!), (errors[i] = r.errors?.[k])));
   }
-  const t = await table();
+  // A value read by LID counts only when the program had not changed by the time it came: the check runs after the
+  // read, so a download before or during it is seen, and the names are read again through the new table.
+  for (let attempt = 1; ; attempt++) {
+    await readNamed(session, tags, named, await program.table(), limits, values, errors, signal);
+    if (!(await program.changed())) break;
+    if (attempt === MAX_ATTEMPTS) {
+      for (const i of named) {
+        values[i] = undefined as unknown as PlcValue;
+        errors[i] = new PlcError('LAYOUT_MISMATCH', `${tags[i]!.address}: the PLC's program changed during each of ${MAX_ATTEMPTS} reads`, {
+          tag: tags[i]!.address,
+        });
+      }
+      break;
+    }
+  }
+  return { values, errors: errors.some((e) => e) ? errors : undefined };
+}
+
+/** Reads the named tags `named` through table `t` into `values` / `errors` (each slot overwritten). */
+async function readNamed(
+  session: S7PlusSession,
+  tags: readonly Tag[],
+  named: readonly number[],
+  t: SymbolTable,
+  limits: Limits,
+  values: PlcValue[],
+  errors: (PlcError | undefined)[],
+  signal?: AbortSignal,
+): Promise<void> {
+  for (const i of named) {
+    values[i] = undefined as unknown as PlcValue;
+    errors[i] = undefined;
+  }
   const leaves: SymbolEntry[] = [];
   const wanted: { i: number; entry: SymbolEntry }[] = [];
   for (const i of named) {
@@ -266,7 +312,6 @@ export async function readMixed(
     if (bad) errors[i] = failed.get(bad.name);
     else values[i] = assemble(t, entry, leaf) as PlcValue;
   }
-  return { values, errors: errors.some((e) => e) ? errors : undefined };
 }
 
 /** The leaves of a write: each elementary member with its value (a struct's from the object's members, an array's by index). */
@@ -304,7 +349,7 @@ export async function writeMixed(
   session: S7PlusSession,
   items: readonly { tag: Tag; value: unknown }[],
   limits: Limits,
-  table: () => Promise<SymbolTable>,
+  program: Program,
   signal?: AbortSignal,
 ): Promise<TagResult<void>[]> {
   if (!items.some((it) => isNamed(it.tag))) return writeTags(session, items, limits, signal);
@@ -319,7 +364,9 @@ export async function writeMixed(
     );
     addressed.forEach((i, k) => (results[i] = r[k]!));
   }
-  const t = await table();
+  // A write by a stale LID would land in another member: the program is checked first (browsed again if it changed).
+  await program.changed();
+  const t = await program.table();
   const ready: { i: number; address: ItemAddress; value: PValue; name: string }[] = [];
   items.forEach(({ tag, value }, i) => {
     if (!isNamed(tag)) return;
