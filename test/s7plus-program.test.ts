@@ -1,0 +1,219 @@
+/**
+ * The whole program over s7plus:// against our simulator (issue #25): the PLC
+ * tag table's I/Q/M names in the browse, in the model a compiled tag table
+ * gives, read and written by name; and a download (the simulator's reload)
+ * while a client polls by name: the change is noticed by the type objects'
+ * modification times, the table browsed again, a removed name fails typed,
+ * a moved one reads its own value, and no poll returns another member's value.
+ */
+import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+import { createClient } from '../lib/connect';
+import type { PlcError } from '../lib/errors';
+import type { S7PlusClient } from '../lib/s7plus/client';
+import type { ProgramChange } from '../lib/s7plus/client/program';
+import { S7Server } from '../lib/s7/server';
+import { S7PlusService } from '../lib/s7plus/server';
+import { generateCertificate } from '../lib/s7plus/transport/cert';
+import { compileSymbols } from '../lib/symbols';
+import type { SymbolSource } from '../lib/symbols/model';
+import { Ids } from '../lib/s7plus/constants';
+import { DB_NUMBERS, S7PLUS_FIXTURES, SOURCES } from './fixtures/s7plus';
+
+const TAGS: SymbolSource = { name: 'PLC tags.csv', content: fs.readFileSync(path.join(S7PLUS_FIXTURES, 'PLC tags.csv'), 'utf8') };
+
+/** Resolves with the first event `name` of `client`, or rejects after `ms`. */
+function nextEvent<T>(client: S7PlusClient, name: string, ms: number): Promise<T> {
+  return new Promise<T>((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`no ${name} event within ${ms} ms`)), ms);
+    client.once(name, (value: T) => {
+      clearTimeout(timer);
+      resolve(value);
+    });
+  });
+}
+
+describe('S7CommPlus browse of the PLC tag table (I/Q/M names)', function () {
+  this.timeout(30000);
+  let server: S7Server;
+  let service: S7PlusService;
+  let client: S7PlusClient;
+
+  before(async () => {
+    const cert = await generateCertificate();
+    service = new S7PlusService({ sources: [...SOURCES, TAGS], db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key } });
+    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    await server.listen();
+    client = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`) as S7PlusClient;
+    await client.connect();
+  });
+  after(async () => {
+    await client?.close();
+    await server?.close();
+  });
+
+  it('gives each tag as the compiled tag table does (name, type, area, byte, bit, address), reached by its area object and LID', async () => {
+    const browsed = await client.browse();
+    const compiled = compileSymbols([...SOURCES, TAGS], { db: DB_NUMBERS });
+    const tags = compiled.entries.filter((e) => e.db === null);
+    expect(tags.map((e) => e.name)).to.deep.equal(['"Start_Button"', '"Motor on"', '"Speed setpoint"', '"Temperature"']);
+    for (const c of tags) {
+      const b = browsed.lookup(c.name)!;
+      expect(b, c.name).to.not.equal(undefined);
+      const pick = (e: typeof c) => ({ name: e.name, type: e.type, kind: e.kind, area: e.area, db: e.db, byte: e.byte, bit: e.bit, address: e.address });
+      expect(pick(b)).to.deep.equal(pick(c));
+    }
+    expect(browsed.lookup('"Start_Button"')!.access).to.deep.equal({ area: Ids.NativeTheIAreaRID, lids: [0xa] });
+    expect(browsed.lookup('"Motor on"')!.access!.area).to.equal(Ids.NativeTheQAreaRID);
+    expect(browsed.lookup('"Temperature"')!.access).to.deep.equal({ area: Ids.NativeTheMAreaRID, lids: [0xb] });
+    // Every DB entry is still there as before.
+    expect(browsed.entries.filter((e) => e.db !== null).map((e) => e.name)).to.deep.equal(
+      compiled.entries.filter((e) => e.db !== null).map((e) => e.name),
+    );
+  });
+
+  it('reads a tag by name as the PLC holds it, and writes by name what an address then reads', async () => {
+    server.memory.writeBit('I', 0, 0, 0, true);
+    server.memory.write('M', 0, 20, Buffer.from([0x41, 0xac, 0x00, 0x00])); // 21.5
+    expect(await client.read(['"Start_Button"', 'Start_Button', '"Temperature"'])).to.deep.equal({
+      '"Start_Button"': true,
+      Start_Button: true,
+      '"Temperature"': 21.5,
+    });
+    await client.write({ '"Speed setpoint"': -1234, '"Motor on"': true });
+    expect(await client.read(['MW10:INT', 'Q0.1'])).to.deep.equal({ 'MW10:INT': -1234, 'Q0.1': true });
+    expect(server.memory.area('M')!.readInt16BE(10)).to.equal(-1234);
+    server.memory.writeBit('I', 0, 0, 0, false);
+    expect(await client.read(['"Start_Button"'])).to.deep.equal({ '"Start_Button"': false });
+  });
+
+  it('a name the tag table does not have fails INVALID_ADDRESS with the closest names', async () => {
+    const err = (await client.read(['"Start_Buton"']).catch((e: Error) => e)) as PlcError;
+    expect(err.message).to.match(/Start_Buton/);
+    const detailed = await client.readDetailed(['"Start_Buton"']);
+    const r = detailed['"Start_Buton"']!;
+    expect(r.ok).to.equal(false);
+    if (!r.ok) {
+      expect(r.error.code).to.equal('INVALID_ADDRESS');
+      expect(r.error.message).to.include('"Start_Button"');
+    }
+  });
+});
+
+/** Sources of a program with an optimized DB "Prog" (DB5) and a standard DB "Std" (DB6). */
+function program(prog: string, std: string): SymbolSource[] {
+  return [
+    { name: 'Prog.db', content: `DATA_BLOCK "Prog"\n{ S7_Optimized_Access := 'TRUE' }\nVERSION : 0.1\n   STRUCT\n${prog}   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n` },
+    { name: 'Std.db', content: `DATA_BLOCK "Std"\n{ S7_Optimized_Access := 'FALSE' }\nVERSION : 0.1\n   STRUCT\n${std}   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n` },
+  ];
+}
+const NUMBERS = { Prog: 5, Std: 6 };
+const V1 = program('      A : Int := 1;\n      B : Int := 2;\n      C : Int := 3;\n', '      X : Int := 10;\n      Y : Int := 20;\n');
+// A removed from Prog (B and C take other LIDs), Y moved before X in Std (other bytes and LIDs).
+const V2 = program('      B : Int := 2;\n      C : Int := 3;\n', '      Y : Int := 20;\n      X : Int := 10;\n');
+
+describe('S7CommPlus program change (a download while a client polls by name)', function () {
+  this.timeout(30000);
+  let server: S7Server;
+  let service: S7PlusService;
+  let client: S7PlusClient;
+
+  beforeEach(async () => {
+    const cert = await generateCertificate();
+    service = new S7PlusService({ sources: V1, db: NUMBERS, tls: { cert: cert.cert, key: cert.key } });
+    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    await server.listen();
+    client = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`) as S7PlusClient;
+    await client.connect();
+  });
+  afterEach(async () => {
+    await client?.close();
+    await server?.close();
+  });
+
+  it('the removed name fails typed, the moved ones read their own values, no poll returns a shifted value', async () => {
+    const names = ['"Prog".A', '"Prog".B', '"Prog".C', '"Std".X', '"Std".Y'];
+    const expected: Record<string, number> = { '"Prog".A': 1, '"Prog".B': 2, '"Prog".C': 3, '"Std".X': 10, '"Std".Y': 20 };
+    expect(await client.read(names)).to.deep.equal(expected);
+    const seen: { name: string; value: unknown }[] = [];
+    const failures: PlcError[] = [];
+    let stop = false;
+    let changeSeen = false;
+    let pollsAfter = 0;
+    const changed = nextEvent<ProgramChange>(client, 'programChanged', 10000);
+    const poll = (async () => {
+      while (!stop) {
+        const afterChange = changeSeen;
+        const r = await client.readDetailed(names);
+        for (const [name, result] of Object.entries(r)) {
+          if (result.ok) seen.push({ name, value: result.value });
+          else failures.push(result.error as PlcError);
+        }
+        if (afterChange) pollsAfter++;
+      }
+    })();
+    // Let a few polls go by on the old program, then download the new one (each poll is several requests).
+    await new Promise<void>((resolve) => {
+      const wait = () => (seen.length >= 10 ? resolve() : setImmediate(wait));
+      wait();
+    });
+    service.reload(V2, server.memory);
+    const change = await changed;
+    changeSeen = true;
+    // Polls after the change has been seen: the table browsed again.
+    await new Promise<void>((resolve, reject) => {
+      const deadline = setTimeout(() => reject(new Error('no poll after the change within 10 s')), 10000);
+      const wait = () => (pollsAfter >= 3 ? (clearTimeout(deadline), resolve()) : setImmediate(wait));
+      wait();
+    });
+    stop = true;
+    await poll;
+    expect(change.before.lookup('"Prog".A')).to.not.equal(undefined);
+    expect(change.after.lookup('"Prog".A')).to.equal(undefined);
+    // Every value any poll returned is that name's own, before and after the download.
+    for (const { name, value } of seen) expect(value, name).to.equal(expected[name]);
+    // The only failure is the removed name, typed and named.
+    expect(failures.length).to.be.greaterThan(0);
+    for (const f of failures) {
+      expect(f.code).to.equal('INVALID_ADDRESS');
+      expect(f.tag).to.equal('"Prog".A');
+    }
+    // The moved members are at their new places: Std.Y first (byte 0), Std.X at byte 2.
+    const after = await client.browse();
+    expect(after.lookup('"Std".Y')!.byte).to.equal(0);
+    expect(after.lookup('"Std".X')!.byte).to.equal(2);
+    expect(await client.read(['"Prog".B', '"Prog".C', '"Std".X', '"Std".Y', 'DB6.DBW0:INT'])).to.deep.equal({
+      '"Prog".B': 2,
+      '"Prog".C': 3,
+      '"Std".X': 10,
+      '"Std".Y': 20,
+      'DB6.DBW0:INT': 20,
+    });
+  });
+
+  it('a write after the download lands in the member named, not in the one that had its LID', async () => {
+    expect(await client.read(['"Prog".B'])).to.deep.equal({ '"Prog".B': 2 });
+    service.reload(V2, server.memory);
+    await client.write({ '"Prog".B': 222 });
+    expect(await client.read(['"Prog".B', '"Prog".C'])).to.deep.equal({ '"Prog".B': 222, '"Prog".C': 3 });
+  });
+
+  it('a reload that changes nothing keeps the times, the table and the memory; the check costs one request per read', async () => {
+    await client.write({ '"Std".X': 77, '"Prog".C': 33 });
+    let changes = 0;
+    client.on('programChanged', () => changes++);
+    const before = await client.browse();
+    service.reload(V1, server.memory);
+    const sent = client.stats.requestsSent;
+    expect(await client.read(['"Std".X', '"Prog".C'])).to.deep.equal({ '"Std".X': 77, '"Prog".C': 33 });
+    // One GetMultiVariables of the two names, one Explore of the type objects' times.
+    expect(client.stats.requestsSent - sent).to.equal(2);
+    expect(changes).to.equal(0);
+    expect(await client.browse()).to.equal(before);
+    // Addresses alone are not checked: the program does not move them.
+    const sent2 = client.stats.requestsSent;
+    await client.read(['DB6.DBW0:INT']);
+    expect(client.stats.requestsSent - sent2).to.equal(1);
+  });
+});
