@@ -7,7 +7,10 @@
  * a moved one reads its own value, and no poll returns another member's value.
  */
 import { expect } from 'chai';
+import { spawn } from 'node:child_process';
+import { once } from 'node:events';
 import * as fs from 'node:fs';
+import * as os from 'node:os';
 import * as path from 'node:path';
 import { createClient } from '../lib/connect';
 import type { PlcError } from '../lib/errors';
@@ -20,19 +23,10 @@ import { compileSymbols } from '../lib/symbols';
 import type { SymbolSource } from '../lib/symbols/model';
 import { Ids } from '../lib/s7plus/constants';
 import { DB_NUMBERS, S7PLUS_FIXTURES, SOURCES } from './fixtures/s7plus';
+import { until, waitFor } from './support/wait';
 
 const TAGS: SymbolSource = { name: 'PLC tags.csv', content: fs.readFileSync(path.join(S7PLUS_FIXTURES, 'PLC tags.csv'), 'utf8') };
 
-/** Resolves with the first event `name` of `client`, or rejects after `ms`. */
-function nextEvent<T>(client: S7PlusClient, name: string, ms: number): Promise<T> {
-  return new Promise<T>((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`no ${name} event within ${ms} ms`)), ms);
-    client.once(name, (value: T) => {
-      clearTimeout(timer);
-      resolve(value);
-    });
-  });
-}
 
 describe('S7CommPlus browse of the PLC tag table (I/Q/M names)', function () {
   this.timeout(30000);
@@ -141,7 +135,7 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     let stop = false;
     let changeSeen = false;
     let pollsAfter = 0;
-    const changed = nextEvent<ProgramChange>(client, 'programChanged', 10000);
+    const changed = waitFor<ProgramChange>(client, 'programChanged', 10000);
     const poll = (async () => {
       while (!stop) {
         const afterChange = changeSeen;
@@ -154,19 +148,12 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
       }
     })();
     // Let a few polls go by on the old program, then download the new one (each poll is several requests).
-    await new Promise<void>((resolve) => {
-      const wait = () => (seen.length >= 10 ? resolve() : setImmediate(wait));
-      wait();
-    });
+    await until(() => seen.length >= 10, 10000, 'two polls');
     service.reload(V2, server.memory);
     const change = await changed;
     changeSeen = true;
     // Polls after the change has been seen: the table browsed again.
-    await new Promise<void>((resolve, reject) => {
-      const deadline = setTimeout(() => reject(new Error('no poll after the change within 10 s')), 10000);
-      const wait = () => (pollsAfter >= 3 ? (clearTimeout(deadline), resolve()) : setImmediate(wait));
-      wait();
-    });
+    await until(() => pollsAfter >= 3, 10000, 'three polls after the change');
     stop = true;
     await poll;
     expect(change.before.lookup('"Prog".A')).to.not.equal(undefined);
@@ -215,5 +202,47 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     const sent2 = client.stats.requestsSent;
     await client.read(['DB6.DBW0:INT']);
     expect(client.stats.requestsSent - sent2).to.equal(1);
+  });
+});
+
+describe('plcwire serve s7 loads its program again (SIGHUP, a --source file changed)', function () {
+  this.timeout(60000);
+  const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
+
+  it('a changed source file is a download the connected client notices; SIGHUP loads again, unchanged; a broken file keeps the program', async () => {
+    const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-program-'));
+    const write = (sources: SymbolSource[]) => sources.forEach((f) => fs.writeFileSync(path.join(tmp, f.name), f.content as string));
+    write(V1);
+    const args = ['serve', 's7', '--profile', 's7-1500', '--port', '0', '--source', 'Prog.db', '--source', 'Std.db', '--db', 'Prog=5', '--db', 'Std=6'];
+    const child = spawn(process.execPath, [BIN, ...args], { cwd: tmp, stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    child.stdout.on('data', (d: Buffer) => (out += d.toString()));
+    child.stderr.on('data', (d: Buffer) => (out += d.toString()));
+    const exited = once(child, 'exit');
+    let client: S7PlusClient | undefined;
+    try {
+      await until(() => /Ctrl-C stops/.test(out), 20000, 'the simulator to start');
+      const url = /(s7plus:\/\/\S+)/.exec(out)![1]!;
+      client = createClient(`${url}&timeout=10000`) as S7PlusClient;
+      await client.connect();
+      expect(await client.read(['"Prog".A', '"Prog".C'])).to.deep.equal({ '"Prog".A': 1, '"Prog".C': 3 });
+      write(V2);
+      await until(() => /program loaded again \(.*Prog\.db changed\): \d+ type objects new or changed/.test(out), 10000, 'the reload');
+      const r = await client.readDetailed(['"Prog".A', '"Prog".C']);
+      expect(r['"Prog".C']).to.deep.equal({ ok: true, value: 3 });
+      expect(r['"Prog".A']!.ok).to.equal(false);
+      if (!r['"Prog".A']!.ok) expect(r['"Prog".A']!.error.code).to.equal('INVALID_ADDRESS');
+      child.kill('SIGHUP');
+      await until(() => /program loaded again \(SIGHUP\): unchanged/.test(out), 10000, 'the reload on SIGHUP');
+      fs.writeFileSync(path.join(tmp, 'Prog.db'), 'DATA_BLOCK "Prog"\n   STRUCT\n      B : NoSuchType;\n');
+      await until(() => /program not loaded again \(.*Prog\.db changed\): .*the CPU keeps its program/.test(out), 10000, 'the refused reload');
+      expect(await client.read(['"Prog".B'])).to.deep.equal({ '"Prog".B': 2 });
+      expect(child.exitCode).to.equal(null);
+    } finally {
+      await client?.close();
+      if (child.exitCode === null) child.kill('SIGTERM');
+      await exited;
+      fs.rmSync(tmp, { recursive: true, force: true });
+    }
   });
 });

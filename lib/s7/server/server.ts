@@ -193,6 +193,7 @@ export class S7Server extends EventEmitter {
 
   private accept(socket: net.Socket): void {
     socket.setNoDelay(true);
+    const plus = this.plus;
     const conn: Connection = {
       socket,
       // The socket's chunks are ours: frames are cut from them without a copy.
@@ -204,7 +205,10 @@ export class S7Server extends EventEmitter {
         pduSize: this.profile.pduSize,
         missingDb: undefined,
         s5CountersTimers: this.profile.s5CountersTimers !== false,
-        optimizedDb: this.plus?.model.optimizedDbs,
+        // Asked at each job: a reload of the S7CommPlus program (a download) may make a DB optimized.
+        get optimizedDb() {
+          return plus?.model.optimizedDbs;
+        },
       },
       services: newServiceSession(),
       maxJobs: 1,
