@@ -186,6 +186,17 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     expect(await client.read(['"Prog".B', '"Prog".C'])).to.deep.equal({ '"Prog".B': 222, '"Prog".C': 3 });
   });
 
+  it('a block renamed with its layout unchanged: the new name is found through the block list, the old one then fails typed', async () => {
+    expect(await client.read(['"Std".X'])).to.deep.equal({ '"Std".X': 10 });
+    const renamed = V1.map((f) => (f.name === 'Std.db' ? { name: 'Level.db', content: (f.content as string).replace('"Std"', '"Level"') } : f));
+    service.reload(renamed, server.memory, { Prog: 5, Level: 6 });
+    // The types' times did not change (same layouts): the unknown name has the block list asked.
+    expect(await client.read(['"Level".X'])).to.deep.equal({ '"Level".X': 10 });
+    const r = await client.readDetailed(['"Std".X']);
+    expect(r['"Std".X']!.ok).to.equal(false);
+    if (!r['"Std".X']!.ok) expect(r['"Std".X']!.error.code).to.equal('INVALID_ADDRESS');
+  });
+
   it('a reload that changes nothing keeps the times, the table and the memory; the check costs one request per read', async () => {
     await client.write({ '"Std".X': 77, '"Prog".C': 33 });
     let changes = 0;

@@ -359,8 +359,21 @@ export async function browseTable(session: S7PlusSession, signal?: AbortSignal):
   return (await browseProgram(session, signal)).table;
 }
 
+/** A browsed program: the table, the type objects' modification times and the block list it was browsed at. */
+export interface BrowsedTable {
+  table: SymbolTable;
+  times: TypeTimes;
+  /** The data blocks' numbers and names, in words (what a rename changes when no layout does). */
+  blocks: string;
+}
+
+/** The data block list in words: number and name of each. */
+export function blockWords(blocks: readonly { number: number; name: string }[]): string {
+  return blocks.map((b) => `${b.number} ${b.name}`).join('\n');
+}
+
 /** The browsed table and the type objects' modification times it was browsed at (one Explore gives both). */
-export async function browseProgram(session: S7PlusSession, signal?: AbortSignal): Promise<{ table: SymbolTable; times: TypeTimes }> {
+export async function browseProgram(session: S7PlusSession, signal?: AbortSignal): Promise<BrowsedTable> {
   const blocks = await dataBlocks(session, signal);
   const rids = blocks.length === 0 ? new Map<number, number>() : await typeRids(
     session,
@@ -392,7 +405,7 @@ export async function browseProgram(session: S7PlusSession, signal?: AbortSignal
     });
   }
   const rows = tagRows(types, facts.lids, areas);
-  return { table: tableOf(decls, rows, facts.lids, facts.place, areas), times: timesOf(container) };
+  return { table: tableOf(decls, rows, facts.lids, facts.place, areas), times: timesOf(container), blocks: blockWords(blocks) };
 }
 
 function tableOf(

@@ -202,7 +202,8 @@ async function requestChunks(
  */
 export interface Program {
   table(): Promise<SymbolTable>;
-  changed(): Promise<boolean>;
+  /** `unknownName`: the read had a name the table does not have (a renamed block keeps its types' times). */
+  changed(unknownName?: boolean): Promise<boolean>;
 }
 
 /** Reads of a program that keeps changing give up after this many attempts. */
@@ -233,8 +234,10 @@ export async function readMixed(
   // A value read by LID counts only when the program had not changed by the time it came: the check runs after the
   // read, so a download before or during it is seen, and the names are read again through the new table.
   for (let attempt = 1; ; attempt++) {
-    await readNamed(session, tags, named, await program.table(), limits, values, errors, signal);
-    if (!(await program.changed())) break;
+    const t = await program.table();
+    await readNamed(session, tags, named, t, limits, values, errors, signal);
+    const unknown = named.some((i) => t.lookup(tags[i]!.address) === undefined);
+    if (!(await program.changed(unknown))) break;
     if (attempt === MAX_ATTEMPTS) {
       for (const i of named) {
         values[i] = undefined as unknown as PlcValue;
@@ -365,7 +368,8 @@ export async function writeMixed(
     addressed.forEach((i, k) => (results[i] = r[k]!));
   }
   // A write by a stale LID would land in another member: the program is checked first (browsed again if it changed).
-  await program.changed();
+  const known = await program.table();
+  await program.changed(items.some((it) => isNamed(it.tag) && known.lookup(it.tag.address) === undefined));
   const t = await program.table();
   const ready: { i: number; address: ItemAddress; value: PValue; name: string }[] = [];
   items.forEach(({ tag, value }, i) => {

@@ -10,9 +10,13 @@
  * the container asks all of them at once).
  */
 import type { SymbolTable } from '../../symbols/model';
-import { browseProgram, timesDiffer, typeTimes, type TypeTimes } from './browse';
+import { blockWords, browseProgram, timesDiffer, typeTimes, type BrowsedTable } from './browse';
 import type { Program } from './names';
+import { dataBlocks } from './services';
 import type { S7PlusSession } from './session';
+
+/** The block list is asked again for an unknown name at most this often (as s7commplus's auto refresh: 10 s). */
+const BLOCK_LIST_MS = 10_000;
 
 /** What a check found: the table of the program before and after, and the type objects whose times differ. */
 export interface ProgramChange {
@@ -21,9 +25,11 @@ export interface ProgramChange {
 }
 
 export class BrowsedProgram implements Program {
-  private browsed: Promise<{ table: SymbolTable; times: TypeTimes }> | undefined;
+  private browsed: Promise<BrowsedTable> | undefined;
   /** False once the PLC refused the question for the times: nothing to watch, the table stays as browsed. */
   private watchable = true;
+  /** When the block list was last asked for an unknown name. */
+  private blockListAt = -Infinity;
 
   constructor(
     private readonly session: S7PlusSession,
@@ -36,7 +42,7 @@ export class BrowsedProgram implements Program {
     return this.current().then((b) => b.table);
   }
 
-  private current(): Promise<{ table: SymbolTable; times: TypeTimes }> {
+  private current(): Promise<BrowsedTable> {
     if (!this.browsed) {
       const browsed = browseProgram(this.session, this.signal);
       this.browsed = browsed;
@@ -47,17 +53,25 @@ export class BrowsedProgram implements Program {
     return this.browsed;
   }
 
-  /** True when the program changed since the table was browsed; the table is then browsed again. One request. */
-  async changed(): Promise<boolean> {
-    if (!this.watchable) return false;
+  /**
+   * True when the program changed since the table was browsed; the table is then browsed again. One request; with
+   * `unknownName` (a name the table does not have: a block renamed keeps its layout and its times) the block list
+   * too, at most every 10 s.
+   */
+  async changed(unknownName = false): Promise<boolean> {
     const browsed = this.current();
     const seen = await browsed;
-    const now = await typeTimes(this.session, this.signal);
-    if (now === undefined) {
-      this.watchable = false;
-      return false;
+    let differs = false;
+    if (this.watchable) {
+      const now = await typeTimes(this.session, this.signal);
+      if (now === undefined) this.watchable = false;
+      else differs = timesDiffer(seen.times, now);
     }
-    if (!timesDiffer(seen.times, now)) return false;
+    if (!differs && unknownName && Date.now() - this.blockListAt >= BLOCK_LIST_MS) {
+      this.blockListAt = Date.now();
+      differs = blockWords(await dataBlocks(this.session, this.signal)) !== seen.blocks;
+    }
+    if (!differs) return false;
     // Unless another check browsed again meanwhile, the table goes and is browsed again.
     if (this.browsed === browsed) {
       this.browsed = undefined;
