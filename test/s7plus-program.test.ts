@@ -197,6 +197,25 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     if (!r['"Std".X']!.ok) expect(r['"Std".X']!.error.code).to.equal('INVALID_ADDRESS');
   });
 
+  it('a PUT/GET connection open across the download refuses a DB the download made optimized', async () => {
+    const s7 = createClient(`s7://127.0.0.1:${server.port}?rack=0&slot=1&timeout=5000`);
+    try {
+      await s7.connect();
+      expect(await s7.read(['DB6.DBW0:INT'])).to.deep.equal({ 'DB6.DBW0:INT': 10 });
+      service.reload(
+        V1.map((f) => ({ ...f, content: (f.content as string).replace("'FALSE'", "'TRUE'") })),
+        server.memory,
+      );
+      const r = await s7.readDetailed(['DB6.DBW0:INT']);
+      expect(r['DB6.DBW0:INT']!.ok).to.equal(false);
+      // Over S7CommPlus the block is still there, by name, now without an address (a program change: browsed again).
+      expect(await client.read(['"Std".X'])).to.deep.equal({ '"Std".X': 10 });
+      expect((await client.browse()).lookup('"Std".X')!.address).to.equal(null);
+    } finally {
+      await s7.close();
+    }
+  });
+
   it('a reload that changes nothing keeps the times, the table and the memory; the check costs one request per read', async () => {
     await client.write({ '"Std".X': 77, '"Prog".C': 33 });
     let changes = 0;

@@ -193,7 +193,6 @@ export class S7Server extends EventEmitter {
 
   private accept(socket: net.Socket): void {
     socket.setNoDelay(true);
-    const plus = this.plus;
     const conn: Connection = {
       socket,
       // The socket's chunks are ours: frames are cut from them without a copy.
@@ -205,10 +204,7 @@ export class S7Server extends EventEmitter {
         pduSize: this.profile.pduSize,
         missingDb: undefined,
         s5CountersTimers: this.profile.s5CountersTimers !== false,
-        // Asked at each job: a reload of the S7CommPlus program (a download) may make a DB optimized.
-        get optimizedDb() {
-          return plus?.model.optimizedDbs;
-        },
+        optimizedDb: this.plus?.optimizedDbs,
       },
       services: newServiceSession(),
       maxJobs: 1,

@@ -46,6 +46,8 @@ export interface PlusLink {
 
 export class S7PlusService {
   private current: PlusModel;
+  /** The running program's optimized DBs (PUT/GET refuses them): one set, refilled by reload(), that connections keep. */
+  readonly optimizedDbs = new Set<number>();
   private readonly db: CompileOptions['db'] | undefined;
   /** SHA-256 of the certificate (DER), 64 upper-case hex digits; undefined in plain text. */
   readonly fingerprint: string | undefined;
@@ -59,6 +61,7 @@ export class S7PlusService {
   constructor(options: S7PlusOptions) {
     this.db = options.db;
     this.current = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
+    for (const n of this.current.optimizedDbs) this.optimizedDbs.add(n);
     this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
     this.password = options.password;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
@@ -103,6 +106,8 @@ export class S7PlusService {
       }
     }
     this.current = after;
+    this.optimizedDbs.clear();
+    for (const n of after.optimizedDbs) this.optimizedDbs.add(n);
     return after;
   }
 

@@ -231,8 +231,10 @@ function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], 
   const seen = new Map<PlusType, string>();
   const typeLayouts = new Map<number, string>();
   const times = new Map<number, bigint>();
+  // A block's access (standard or optimized) is part of its type object's layout: it decides its members' offsets.
+  const access = new Map(dbs.map((d) => [d.type, d.optimized ? ' optimized' : ' standard']));
   for (const type of [...builder.types, ...areas.map((a) => a.type)]) {
-    const layout = layoutOf(type, seen);
+    const layout = layoutOf(type, seen) + (access.get(type) ?? '');
     typeLayouts.set(type.rid, layout);
     const before = previous?.times.get(type.rid);
     times.set(type.rid, before !== undefined && previous?.layouts.get(type.rid) === layout ? before : nextTime());
