@@ -115,11 +115,7 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
    * that the program changed (a download: the `programChanged` event).
    */
   browse(options: RequestOptions = {}): Promise<SymbolTable> {
-    return this.withSession((s) => this.tableOf(s));
-  }
-
-  private tableOf(session: S7PlusSession): Promise<SymbolTable> {
-    return this.programOf(session).table();
+    return this.withSession((s) => this.programOf(s).table(options.signal));
   }
 
   /**

@@ -10,10 +10,13 @@
  * the container asks all of them at once).
  */
 import type { SymbolTable } from '../../symbols/model';
-import { blockWords, browseProgram, timesDiffer, typeTimes, type BrowsedTable } from './browse';
+import { PlcError } from '../../errors';
+import { Ids } from '../constants';
+import { blockWords, browseProgram, type BrowsedTable } from './browse';
 import type { Program } from './names';
-import { dataBlocks } from './services';
+import { dataBlocks, explore } from './services';
 import type { S7PlusSession } from './session';
+import { timesOf, type TypeTimes } from './typeinfo';
 
 /** The block list is asked again for an unknown name at most this often (as s7commplus's auto refresh: 10 s). */
 const BLOCK_LIST_MS = 10_000;
@@ -34,17 +37,16 @@ export class BrowsedProgram implements Program {
   constructor(
     private readonly session: S7PlusSession,
     private readonly onChange: (change: ProgramChange) => void,
-    private readonly signal?: AbortSignal,
   ) {}
 
-  /** The browsed table (browsed at the first call; a failed browse is tried again at the next). */
-  table(): Promise<SymbolTable> {
-    return this.current().then((b) => b.table);
+  /** The browsed table (browsed at the first call, with its `signal`; a failed browse is tried again at the next). */
+  table(signal?: AbortSignal): Promise<SymbolTable> {
+    return this.current(signal).then((b) => b.table);
   }
 
-  private current(): Promise<BrowsedTable> {
+  private current(signal?: AbortSignal): Promise<BrowsedTable> {
     if (!this.browsed) {
-      const browsed = browseProgram(this.session, this.signal);
+      const browsed = browseProgram(this.session, signal);
       this.browsed = browsed;
       browsed.catch(() => {
         if (this.browsed === browsed) this.browsed = undefined;
@@ -63,13 +65,13 @@ export class BrowsedProgram implements Program {
     const seen = await browsed;
     let differs = false;
     if (this.watchable) {
-      const now = await typeTimes(this.session, this.signal);
+      const now = await typeTimes(this.session);
       if (now === undefined) this.watchable = false;
       else differs = timesDiffer(seen.times, now);
     }
     if (!differs && unknownName && Date.now() - this.blockListAt >= BLOCK_LIST_MS) {
       this.blockListAt = Date.now();
-      differs = blockWords(await dataBlocks(this.session, this.signal)) !== seen.blocks;
+      differs = blockWords(await dataBlocks(this.session)) !== seen.blocks;
     }
     if (!differs) return false;
     // Unless another check browsed again meanwhile, the table goes and is browsed again.
@@ -80,4 +82,25 @@ export class BrowsedProgram implements Program {
     }
     return true;
   }
+}
+
+/**
+ * The type objects' modification times now: one Explore of the type-info container asking for attribute 529 only,
+ * which the PLC answers with each type object's head and time (about 20 bytes a type). Undefined when the PLC refuses
+ * the question (the program cannot be watched this way; a link error still throws).
+ */
+export async function typeTimes(session: S7PlusSession, signal?: AbortSignal): Promise<TypeTimes | undefined> {
+  try {
+    return timesOf(await explore(session, Ids.ObjectOmsTypeInfoContainer, [Ids.VariableTypeStructModificationTime], 'its types', signal));
+  } catch (err) {
+    if (err instanceof PlcError && (err.code === 'PLC_ERROR' || err.code === 'OBJECT_DOES_NOT_EXIST')) return undefined;
+    throw err;
+  }
+}
+
+/** True when two sets of modification times differ: a type object changed, came or went. */
+export function timesDiffer(a: TypeTimes, b: TypeTimes): boolean {
+  if (a.size !== b.size) return true;
+  for (const [rid, time] of a) if (b.get(rid) !== time) return true;
+  return false;
 }
