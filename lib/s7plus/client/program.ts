@@ -89,7 +89,7 @@ export class BrowsedProgram implements Program {
  * which the PLC answers with each type object's head and time (about 20 bytes a type). Undefined when the PLC refuses
  * the question (the program cannot be watched this way; a link error still throws).
  */
-export async function typeTimes(session: S7PlusSession, signal?: AbortSignal): Promise<TypeTimes | undefined> {
+async function typeTimes(session: S7PlusSession, signal?: AbortSignal): Promise<TypeTimes | undefined> {
   try {
     return timesOf(await explore(session, Ids.ObjectOmsTypeInfoContainer, [Ids.VariableTypeStructModificationTime], 'its types', signal));
   } catch (err) {
@@ -99,7 +99,7 @@ export async function typeTimes(session: S7PlusSession, signal?: AbortSignal): P
 }
 
 /** True when two sets of modification times differ: a type object changed, came or went. */
-export function timesDiffer(a: TypeTimes, b: TypeTimes): boolean {
+function timesDiffer(a: TypeTimes, b: TypeTimes): boolean {
   if (a.size !== b.size) return true;
   for (const [rid, time] of a) if (b.get(rid) !== time) return true;
   return false;
