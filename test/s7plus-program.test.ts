@@ -27,7 +27,6 @@ import { until, waitFor } from './support/wait';
 
 const TAGS: SymbolSource = { name: 'PLC tags.csv', content: fs.readFileSync(path.join(S7PLUS_FIXTURES, 'PLC tags.csv'), 'utf8') };
 
-
 describe('S7CommPlus browse of the PLC tag table (I/Q/M names)', function () {
   this.timeout(30000);
   let server: S7Server;
@@ -55,7 +54,16 @@ describe('S7CommPlus browse of the PLC tag table (I/Q/M names)', function () {
     for (const c of tags) {
       const b = browsed.lookup(c.name)!;
       expect(b, c.name).to.not.equal(undefined);
-      const pick = (e: typeof c) => ({ name: e.name, type: e.type, kind: e.kind, area: e.area, db: e.db, byte: e.byte, bit: e.bit, address: e.address });
+      const pick = (e: typeof c) => ({
+        name: e.name,
+        type: e.type,
+        kind: e.kind,
+        area: e.area,
+        db: e.db,
+        byte: e.byte,
+        bit: e.bit,
+        address: e.address,
+      });
       expect(pick(b)).to.deep.equal(pick(c));
     }
     expect(browsed.lookup('"Start_Button"')!.access).to.deep.equal({ area: Ids.NativeTheIAreaRID, lids: [0xa] });
@@ -98,8 +106,14 @@ describe('S7CommPlus browse of the PLC tag table (I/Q/M names)', function () {
 /** Sources of a program with an optimized DB "Prog" (DB5) and a standard DB "Std" (DB6). */
 function program(prog: string, std: string): SymbolSource[] {
   return [
-    { name: 'Prog.db', content: `DATA_BLOCK "Prog"\n{ S7_Optimized_Access := 'TRUE' }\nVERSION : 0.1\n   STRUCT\n${prog}   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n` },
-    { name: 'Std.db', content: `DATA_BLOCK "Std"\n{ S7_Optimized_Access := 'FALSE' }\nVERSION : 0.1\n   STRUCT\n${std}   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n` },
+    {
+      name: 'Prog.db',
+      content: `DATA_BLOCK "Prog"\n{ S7_Optimized_Access := 'TRUE' }\nVERSION : 0.1\n   STRUCT\n${prog}   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n`,
+    },
+    {
+      name: 'Std.db',
+      content: `DATA_BLOCK "Std"\n{ S7_Optimized_Access := 'FALSE' }\nVERSION : 0.1\n   STRUCT\n${std}   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n`,
+    },
   ];
 }
 const NUMBERS = { Prog: 5, Std: 6 };
@@ -132,12 +146,12 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     expect(await client.read(names)).to.deep.equal(expected);
     const seen: { name: string; value: unknown }[] = [];
     const failures: PlcError[] = [];
-    let stop = false;
+    const state = { stop: false };
     let changeSeen = false;
     let pollsAfter = 0;
     const changed = waitFor<ProgramChange>(client, 'programChanged', 10000);
     const poll = (async () => {
-      while (!stop) {
+      while (!state.stop) {
         const afterChange = changeSeen;
         const r = await client.readDetailed(names);
         for (const [name, result] of Object.entries(r)) {
@@ -154,7 +168,7 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     changeSeen = true;
     // Polls after the change has been seen: the table browsed again.
     await until(() => pollsAfter >= 3, 10000, 'three polls after the change');
-    stop = true;
+    state.stop = true;
     await poll;
     expect(change.before.lookup('"Prog".A')).to.not.equal(undefined);
     expect(change.after.lookup('"Prog".A')).to.equal(undefined);
@@ -188,7 +202,9 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
 
   it('a block renamed with its layout unchanged: the new name is found through the block list, the old one then fails typed', async () => {
     expect(await client.read(['"Std".X'])).to.deep.equal({ '"Std".X': 10 });
-    const renamed = V1.map((f) => (f.name === 'Std.db' ? { name: 'Level.db', content: (f.content as string).replace('"Std"', '"Level"') } : f));
+    const renamed = V1.map((f) =>
+      f.name === 'Std.db' ? { name: 'Level.db', content: (f.content as string).replace('"Std"', '"Level"') } : f,
+    );
     service.reload(renamed, server.memory, { Prog: 5, Level: 6 });
     // The types' times did not change (same layouts): the unknown name has the block list asked.
     expect(await client.read(['"Level".X'])).to.deep.equal({ '"Level".X': 10 });
@@ -243,7 +259,22 @@ describe('plcwire serve s7 loads its program again (SIGHUP, a --source file chan
     const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-program-'));
     const write = (sources: SymbolSource[]) => sources.forEach((f) => fs.writeFileSync(path.join(tmp, f.name), f.content as string));
     write(V1);
-    const args = ['serve', 's7', '--profile', 's7-1500', '--port', '0', '--source', 'Prog.db', '--source', 'Std.db', '--db', 'Prog=5', '--db', 'Std=6'];
+    const args = [
+      'serve',
+      's7',
+      '--profile',
+      's7-1500',
+      '--port',
+      '0',
+      '--source',
+      'Prog.db',
+      '--source',
+      'Std.db',
+      '--db',
+      'Prog=5',
+      '--db',
+      'Std=6',
+    ];
     const child = spawn(process.execPath, [BIN, ...args], { cwd: tmp, stdio: ['ignore', 'pipe', 'pipe'] });
     let out = '';
     child.stdout.on('data', (d: Buffer) => (out += d.toString()));
@@ -265,7 +296,11 @@ describe('plcwire serve s7 loads its program again (SIGHUP, a --source file chan
       child.kill('SIGHUP');
       await until(() => /program loaded again \(SIGHUP\): unchanged/.test(out), 10000, 'the reload on SIGHUP');
       fs.writeFileSync(path.join(tmp, 'Prog.db'), 'DATA_BLOCK "Prog"\n   STRUCT\n      B : NoSuchType;\n');
-      await until(() => /program not loaded again \(.*Prog\.db changed\): .*the CPU keeps its program/.test(out), 10000, 'the refused reload');
+      await until(
+        () => /program not loaded again \(.*Prog\.db changed\): .*the CPU keeps its program/.test(out),
+        10000,
+        'the refused reload',
+      );
       expect(await client.read(['"Prog".B'])).to.deep.equal({ '"Prog".B': 2 });
       expect(child.exitCode).to.equal(null);
     } finally {
