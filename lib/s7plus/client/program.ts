@@ -21,7 +21,7 @@ import { timesOf, type TypeTimes } from './typeinfo';
 /** The block list is asked again for an unknown name at most this often (as s7commplus's auto refresh: 10 s). */
 const BLOCK_LIST_MS = 10_000;
 
-/** What a check found: the table of the program before and after, and the type objects whose times differ. */
+/** What a check found: the browsed table of the program before the download and after it (the `programChanged` event). */
 export interface ProgramChange {
   readonly before: SymbolTable;
   readonly after: SymbolTable;
