@@ -227,7 +227,10 @@ async function s7plusSection({ durationMs, rounds, countPolls, warmPolls }) {
     ],
     1,
   );
-  const fewest = Math.ceil(named.length / ITEM_LIMIT);
+  // The reads the item limit allows, and the one small Explore after a read by name that tells whether the PLC's
+  // program changed since the table was browsed (lib/s7plus/client/program.ts): a stale LID is never read as good.
+  const reads = Math.ceil(named.length / ITEM_LIMIT);
+  const fewest = reads + 1;
   const vsPython = ratio(oursNamed.pollsPerSecond, python.pollsPerSecond);
   const cpuVsS7 = ratio(plusStd.cpuMsPerPoll, s7.cpuMsPerPoll);
   const namedCpuVsS7 = ratio(oursNamed.cpuMsPerPoll, s7.cpuMsPerPoll);
@@ -249,7 +252,7 @@ async function s7plusSection({ durationMs, rounds, countPolls, warmPolls }) {
       ],
       [`  (by name in the optimized DB against s7:// on the standard DB)`, times(namedCpuVsS7), ''],
       [
-        `requests per poll: ${named.length} names at ${ITEM_LIMIT} per request = ${fewest}`,
+        `requests per poll: ${named.length} names at ${ITEM_LIMIT} per request = ${reads}, and the program check = ${fewest}`,
         `${fmt(requests[0], 1)} (ours) / ${fmt(requests[1], 1)} (proxy)`,
         verdict(requests.every(measured) ? requests.every((n) => n === fewest) : undefined),
       ],

@@ -12,6 +12,7 @@
  */
 import { expect } from 'chai';
 import { spawn } from 'node:child_process';
+import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { S7Client } from '../lib/s7/client';
 import { S7Server, type S7RefusedEvent } from '../lib/s7/server';
@@ -128,6 +129,48 @@ describe('S7CommPlus simulator and the s7commplus Python client over TLS (issue 
       expect(await c.read(['DB1.DBW4:INT'])).to.deep.equal({ 'DB1.DBW4:INT': 4321 });
     } finally {
       await c.close();
+    }
+  });
+
+  it('its browse gives the tag table under IArea/QArea/MArea with their addresses and reads them; it notices our reload as a program change', async () => {
+    const cert = await generateCertificate();
+    const tags = { name: 'PLC tags.csv', content: fs.readFileSync(path.join(S7PLUS_FIXTURES, 'PLC tags.csv'), 'utf8') };
+    const plus = new S7PlusService({ sources: [...SOURCES, tags], db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key } });
+    const sim = new S7Server({ port: 0, profile: 's7-1500', s7plus: plus });
+    await sim.listen();
+    const peer = openS7CommPlusClient(python);
+    try {
+      sim.memory.writeBit('I', 0, 0, 0, true);
+      sim.memory.write('M', 0, 10, Buffer.from([0x04, 0xd2])); // 1234
+      await peer.ok({ op: 'connect', port: sim.port, tls: true, fingerprint: plus.fingerprint! });
+      const browsed = (await peer.ok({ op: 'browse' })) as Browsed[];
+      const areaTags = browsed
+        .filter((b) => /^(IArea|QArea|MArea)\./.test(b.name))
+        .map((b) => [b.name, b.access_sequence, b.data_type, b.nonopt_address, b.nonopt_bitoffset]);
+      expect(areaTags).to.deep.equal([
+        ['IArea.Start_Button', '50.A', 'BOOL', 0, 0],
+        ['QArea.Motor on', '51.A', 'BOOL', 0, 1],
+        ['MArea.Speed setpoint', '52.A', 'INT', 10, 0],
+        ['MArea.Temperature', '52.B', 'REAL', 20, 0],
+      ]);
+      const read = (await peer.ok({ op: 'read_tags', names: ['IArea.Start_Button', 'MArea.Speed setpoint'] })) as { decoded: unknown }[];
+      expect(read.map((r) => r.decoded)).to.deep.equal([true, 1234]);
+      expect(await peer.ok({ op: 'refresh_if_changed' })).to.equal(false);
+      plus.reload(
+        [
+          ...SOURCES.map((f) =>
+            f.name === 'Recipe.db' ? { ...f, content: f.content.replace('Step : Int := 3;', 'Step : DInt := 3;') } : f,
+          ),
+          tags,
+        ],
+        sim.memory,
+      );
+      expect(await peer.ok({ op: 'refresh_if_changed' })).to.equal(true);
+      const after = (await peer.ok({ op: 'browse' })) as Browsed[];
+      expect(after.find((b) => b.name === 'Recipe.Step')!.data_type).to.equal('DINT');
+    } finally {
+      await peer.close();
+      await sim.close();
     }
   });
 

@@ -100,7 +100,9 @@ example:
        plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
        plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
 Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reaches it.
-  --source file      serve the data blocks of these DB sources, at their declared lengths with their start values
+  --source file      serve the data blocks of these DB sources, at their declared lengths with their start values;
+                     for s7-1200/1500 also a TIA tag table (.xlsx, .csv): its I/Q/M names over s7plus://. Editing a
+                     --source file, or SIGHUP, loads the program again, as a download (clients browse again)
 example:
   plcwire serve s7 --port 10102 --profile s7-1200 --source Plant.db --db Plant=1`,
   demo: `usage: plcwire demo

@@ -40,6 +40,7 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
     int: (flag, fallback, min, max) => intFlag(args, flag, fallback, min, max),
     source: () => symbolsFlag(args, 'source'),
     sourceFiles: () => sourceFilesFlag(args, 'source'),
+    sourcePaths: () => listFlag(args, 'source'),
     hasSource: () => args.lists.has('source'),
     tryByName: (table) => tryByName(table, args),
     usage: (message) => new UsageError(message),

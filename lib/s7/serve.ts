@@ -3,7 +3,7 @@ import { hostPart } from '../link/url-params';
 import type { MemoryLayout } from '../sim/memory';
 import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
 import { S7Server, type S7Profile } from './server';
-import { servePlus } from '../s7plus/server/serve';
+import { reloadOnChange, servePlus } from '../s7plus/server/serve';
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
 
@@ -50,7 +50,14 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
     say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}${protectedNote}`);
     say(`  s7plus://${hostPart(host)}:${port}?fingerprint=${s7plus.fingerprint}`);
   }
-  return { close: () => server.close() };
+  // A download: the program loaded again on SIGHUP or when a --source file changes.
+  const stopWatching = s7plus && flags.hasSource() ? reloadOnChange(s7plus, server.memory, flags) : undefined;
+  return {
+    close: () => {
+      stopWatching?.();
+      return server.close();
+    },
+  };
 }
 
 function loadLayout(flags: ServeFlags, file: string | undefined): MemoryLayout | undefined {

@@ -289,6 +289,15 @@ export const Ids = {
   LidClassicBlob: 3,
 } as const;
 
+/**
+ * The type objects of the I, Q and M areas in the type-info container: their
+ * members are the PLC tag table's names (LID, software type, byte and bit in
+ * the area), read with the area's native object (80, 81, 82) as access area
+ * and ControllerAreaValueActual. s7commplus (MIT), client.py _browse_layout;
+ * thomas-v2/S7CommPlusDriver (facts only), S7CommPlusConnection.cs Browse.
+ */
+export const AreaTypeInfoRID = Object.freeze({ I: 0x90010000, Q: 0x90020000, M: 0x90030000 });
+
 /** The access area of DB `db` (1..65535). s7commplus (MIT), protocol.py DB_ACCESS_AREA_BASE. */
 export function dbAccessArea(db: number): number {
   return (Ids.DBAccessAreaBase + (db & 0xffff)) >>> 0;

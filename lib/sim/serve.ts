@@ -19,6 +19,8 @@ export interface ServeFlags {
   source(): SymbolTable | undefined;
   /** The --source files read but not compiled, with the --db numbers; undefined without --source. */
   sourceFiles(): { sources: SymbolSource[]; db: Record<string, number> } | undefined;
+  /** The --source file names as given (a simulator that reloads its program watches them). */
+  sourcePaths(): string[];
   /** True when --source was given (also when it names no file). */
   hasSource(): boolean;
   /** The read command that reads the first member of the sources by name. */

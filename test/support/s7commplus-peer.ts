@@ -391,7 +391,7 @@ export type PeerOp =
       password?: string;
       connectionType?: 'hmi' | 'es' | 'pg';
     }
-  | { op: 'list_datablocks' | 'browse' | 'get_cpu_state' | 'disconnect' }
+  | { op: 'list_datablocks' | 'browse' | 'get_cpu_state' | 'refresh_if_changed' | 'disconnect' }
   | { op: 'read_tags'; names: readonly string[] }
   | { op: 'write_tag'; name: string; value: string }
   | { op: 'write_tags'; values: Readonly<Record<string, string>> }

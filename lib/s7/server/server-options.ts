@@ -43,7 +43,9 @@ export interface S7ServerOptions {
 
 /** The S7CommPlus side the simulator hands connections to (lib/s7plus/server S7PlusService). */
 interface S7PlusEndpoint {
-  readonly model: { readonly table: SymbolTable; readonly optimizedDbs: ReadonlySet<number> };
+  readonly model: { readonly table: SymbolTable };
+  /** The program's optimized DBs, which PUT/GET refuses; asked at each job (a reload of the program may change them). */
+  readonly optimizedDbs: ReadonlySet<number>;
   /** True when a COTP CR calls an S7CommPlus TSAP. */
   claims(frame: Buffer): boolean;
   /** Confirms the CR `frame` on `socket` and serves the connection from `cpu`; `hostile` reports a frame that breaks the protocol (the simulator then drops the connection). */

@@ -204,7 +204,7 @@ export class S7Server extends EventEmitter {
         pduSize: this.profile.pduSize,
         missingDb: undefined,
         s5CountersTimers: this.profile.s5CountersTimers !== false,
-        optimizedDb: this.plus?.model.optimizedDbs,
+        optimizedDb: this.plus?.optimizedDbs,
       },
       services: newServiceSession(),
       maxJobs: 1,

@@ -1,196 +1,38 @@
 /**
- * client.browse(): the PLC's data blocks as a symbol table in the shape
- * compiled sources give (lib/symbols/model.ts). The block list comes from
- * an Explore of thePLCProgram, each block's type object RID from its LID 1,
- * the members (LID, software type, offsets, names) from an Explore of the
- * type-info container. The members become declarations that the symbol
- * compiler names and types as it does a source's, so lookup() and suggest()
- * behave alike; each entry gets its S7CommPlus access path (area and LIDs),
- * and a standard block's members the byte and bit the PLC gives.
+ * client.browse(): the PLC's data blocks and tag table as a symbol table in
+ * the shape compiled sources give (lib/symbols/model.ts). The block list
+ * comes from an Explore of thePLCProgram, each block's type object RID from
+ * its LID 1, the members (LID, software type, offsets, names) from an
+ * Explore of the type-info container (typeinfo.ts). The members become
+ * declarations that the symbol compiler names and types as it does a
+ * source's, so lookup() and suggest() behave alike; each entry gets its
+ * S7CommPlus access path (area and LIDs), and a standard block's members the
+ * byte and bit the PLC gives. The I, Q and M areas' type objects (0x90010000,
+ * 0x90020000, 0x90030000) hold the PLC tag table's names: they become the
+ * rows a tag table export gives, read by the area's object (80, 81, 82) and
+ * the tag's LID.
  *
- * Layouts: s7commplus (MIT), typeinfo.py (parse_vartype_list,
- * parse_offset_info in its numbering 8..14, the classic flag 0x08 and the
- * bit offsets of bitoffsetinfo), client.py (_read_typeinfo_rid: LID 1 of a
- * block answers its type object's RID).
+ * Layouts: s7commplus (MIT), client.py (_read_typeinfo_rid: LID 1 of a block
+ * answers its type object's RID; _browse_layout: the areas' type objects);
+ * thomas-v2/S7CommPlusDriver (LGPL, facts only), S7CommPlusConnection.cs
+ * Browse (the same areas and type-info RIDs).
  */
 import { formatAddress } from '../../address';
 import { PlcError } from '../../errors';
 import { compileDeclarations } from '../../symbols/compile';
 import { elementIndex, memberRef } from '../../symbols/layout';
 import { NameIndex } from '../../symbols/names';
-import type { DataBlockDecl, MemberDecl, SourcePosition, SymbolEntry, SymbolTable, TypeRef } from '../../symbols/model';
-import type { DataTypeName } from '../../types';
-import { walkObjects, type PObject } from '../codec/object';
+import type { DataBlockDecl, MemberDecl, SourcePosition, SymbolEntry, SymbolTable, SymbolTableRow, TypeRef } from '../../symbols/model';
 import { decodeGetMultiVariablesResponse, encodeGetMultiVariablesRequest, readRequest } from '../codec/variables';
-import { dbAccessArea, ElementId, FunctionCode, Ids, SoftDataType } from '../constants';
+import { AreaTypeInfoRID, dbAccessArea, FunctionCode, Ids } from '../constants';
 import { dataBlocks, explore } from './services';
 import type { S7PlusSession } from './session';
+import { timesOf, TYPE_OF, typeObjects, type Member, type TypeObject, type TypeTimes } from './typeinfo';
 
 /** Where a browsed declaration "stands": the PLC, not a file. */
 const AT: SourcePosition = Object.freeze({ file: 'PLC', line: 0, column: 0 });
 /** The most elements of an array the symbol compiler lays out (lib/symbols/layout.ts). */
 const MAX_ELEMENTS = 65535;
-
-const TYPE_OF: Readonly<Record<number, DataTypeName>> = Object.freeze({
-  [SoftDataType.Bool]: 'BOOL',
-  [SoftDataType.Byte]: 'BYTE',
-  [SoftDataType.Char]: 'CHAR',
-  [SoftDataType.Word]: 'WORD',
-  [SoftDataType.Int]: 'INT',
-  [SoftDataType.DWord]: 'DWORD',
-  [SoftDataType.DInt]: 'DINT',
-  [SoftDataType.Real]: 'REAL',
-  [SoftDataType.Date]: 'DATE',
-  [SoftDataType.TimeOfDay]: 'TIME_OF_DAY',
-  [SoftDataType.Time]: 'TIME',
-  [SoftDataType.S5Time]: 'S5TIME',
-  [SoftDataType.DateAndTime]: 'DATE_AND_TIME',
-  [SoftDataType.String]: 'STRING',
-  [SoftDataType.LReal]: 'LREAL',
-  [SoftDataType.ULInt]: 'ULINT',
-  [SoftDataType.LInt]: 'LINT',
-  [SoftDataType.LWord]: 'LWORD',
-  [SoftDataType.USInt]: 'USINT',
-  [SoftDataType.UInt]: 'UINT',
-  [SoftDataType.UDInt]: 'UDINT',
-  [SoftDataType.SInt]: 'SINT',
-  [SoftDataType.WChar]: 'WCHAR',
-  [SoftDataType.WString]: 'WSTRING',
-  [SoftDataType.LTime]: 'LTIME',
-  [SoftDataType.DTL]: 'DTL',
-});
-
-/** One member of a type object, as its vartype element and name give it. */
-interface Member {
-  name: string;
-  lid: number;
-  soft: number;
-  /** Offset in a standard block (classic), from the start of its struct; undefined in an optimized one. */
-  byte?: number;
-  bit?: number;
-  stringLength: number;
-  /** Arrays: bounds per dimension, outermost first. */
-  dims?: { low: number; high: number }[];
-  /** Structs and arrays of structs: the RID of the struct's type object. */
-  structRid?: number;
-}
-
-interface TypeObject {
-  members: Member[];
-}
-
-/** Reads the vartype elements (typeinfo.py parse_vartype_element / parse_offset_info). */
-function vartypes(raw: Buffer): Omit<Member, 'name'>[] {
-  const out: Omit<Member, 'name'>[] = [];
-  let at = 0;
-  let first = true;
-  for (;;) {
-    const len = raw.readUInt16BE(at);
-    at += 2;
-    if (len === 0) return out;
-    const end = at + len;
-    if (first) {
-      at += 4;
-      first = false;
-    }
-    while (at < end) {
-      const lid = raw.readUInt32LE(at);
-      const soft = raw[at + 8]!;
-      const flags = raw.readUInt16BE(at + 9);
-      const bitInfo = raw[at + 11]!;
-      at += 12;
-      const oi = (flags >> 12) & 0x0f;
-      const classic = (bitInfo & 0x08) !== 0;
-      const m: Omit<Member, 'name'> = { lid, soft, stringLength: 0 };
-      const bit = soft === SoftDataType.Bool ? (classic ? (bitInfo & 0x70) >> 4 : flags & 7) : undefined;
-      const place = (nonopt: number) => {
-        if (!classic) return;
-        m.byte = nonopt;
-        if (bit !== undefined) m.bit = bit;
-      };
-      switch (oi) {
-        case 8:
-          place(raw.readUInt16LE(at + 2));
-          at += 4;
-          break;
-        case 9:
-          m.stringLength = raw.readUInt16LE(at);
-          place(raw.readUInt32LE(at + 8));
-          at += 12;
-          break;
-        case 10:
-        case 11:
-        case 13:
-        case 14: {
-          m.stringLength = raw.readUInt16LE(at);
-          place(raw.readUInt32LE(at + 8));
-          const low = raw.readInt32LE(at + 12);
-          const count = raw.readUInt32LE(at + 16);
-          at += 20;
-          if (oi === 10 || oi === 13) m.dims = [{ low, high: low + count - 1 }];
-          else {
-            const dims: { low: number; high: number }[] = [];
-            for (let i = 0; i < 6; i++) {
-              const c = raw.readUInt32LE(at + 24 + 4 * i);
-              if (c > 0) dims.push({ low: raw.readInt32LE(at + 4 * i), high: raw.readInt32LE(at + 4 * i) + c - 1 });
-            }
-            // Index 0 is the dimension that runs fastest: the last one written.
-            m.dims = dims.reverse();
-            at += 48;
-          }
-          if (oi === 13 || oi === 14) {
-            m.structRid = raw.readUInt32LE(at + 8);
-            at += 28;
-          }
-          break;
-        }
-        case 12:
-          place(raw.readUInt32LE(at + 8));
-          m.structRid = raw.readUInt32LE(at + 12);
-          at += 32;
-          break;
-        default:
-          throw new PlcError('PROTOCOL_ERROR', `S7CommPlus browse: offset info ${oi} of LID ${lid} is not one this client reads`);
-      }
-      out.push(m);
-    }
-  }
-}
-
-/** The names of the varname list: length byte, UTF-8 bytes, a 0 (typeinfo.py VarnameList). */
-function varnames(raw: Buffer): string[] {
-  const names: string[] = [];
-  let at = 0;
-  for (let len = raw.readUInt16BE(at); len !== 0; len = raw.readUInt16BE(at)) {
-    const end = at + 2 + len;
-    at += 2;
-    while (at < end) {
-      const n = raw[at]!;
-      names.push(raw.toString('utf8', at + 1, at + 1 + n));
-      at += n + 2;
-    }
-  }
-  return names;
-}
-
-function typeObjects(objects: PObject[]): Map<number, TypeObject> {
-  const types = new Map<number, TypeObject>();
-  for (const o of walkObjects(objects)) {
-    const lists = o.members.filter((m) => m.kind === 'list');
-    const vt = lists.find((l) => l.tag === ElementId.VartypeList);
-    const vn = lists.find((l) => l.tag === ElementId.VarnameList);
-    if (!vt || !vn) continue;
-    try {
-      const elements = vartypes(vt.raw);
-      const names = varnames(vn.raw);
-      types.set(o.relationId >>> 0, { members: elements.map((e, i) => ({ ...e, name: names[i] ?? `LID${e.lid}` })) });
-    } catch (err) {
-      if (err instanceof PlcError) throw err;
-      throw new PlcError('PROTOCOL_ERROR', `S7CommPlus browse: the type object 0x${o.relationId.toString(16)} is cut short`);
-    }
-  }
-  return types;
-}
 
 /** The RID of each block's type object: LID 1 of the block, all blocks in one request. */
 async function typeRids(session: S7PlusSession, numbers: number[], signal?: AbortSignal): Promise<Map<number, number>> {
@@ -281,16 +123,74 @@ function declare(
   return { name: m.name, type, attributes: {}, comment: '', at: AT };
 }
 
-/** The PLC's data blocks as a symbol table (see the file's comment). */
+/** The I, Q and M areas: the type object holding the tag table's names of each. */
+const TAG_AREAS: readonly { area: 'I' | 'Q' | 'M'; rid: number; typeRid: number }[] = Object.freeze([
+  { area: 'I', rid: Ids.NativeTheIAreaRID, typeRid: AreaTypeInfoRID.I },
+  { area: 'Q', rid: Ids.NativeTheQAreaRID, typeRid: AreaTypeInfoRID.Q },
+  { area: 'M', rid: Ids.NativeTheMAreaRID, typeRid: AreaTypeInfoRID.M },
+]);
+
+/**
+ * The PLC tag table's names in the I, Q and M areas as the rows a tag table export gives (name, address), so the
+ * symbol compiler makes the entries a compiled tag table gives; a tag without a standard offset or of a type this
+ * client does not read is left out (it has no address to give).
+ */
+function tagRows(types: Map<number, TypeObject>, lids: Map<string, number[]>, areas: Map<string, number>): SymbolTableRow[] {
+  const rows: SymbolTableRow[] = [];
+  for (const { area, rid, typeRid } of TAG_AREAS) {
+    for (const m of types.get(typeRid)?.members ?? []) {
+      const type = TYPE_OF[m.soft];
+      if (m.byte === undefined || m.dims || m.structRid !== undefined || !type) continue;
+      const address = formatAddress({
+        area,
+        dbNumber: 0,
+        byteOffset: m.byte,
+        bitOffset: m.bit ?? 0,
+        type,
+        count: 1,
+        isArray: false,
+        stringLength: m.stringLength,
+      });
+      const name = `"${m.name}"`;
+      lids.set(key(name), [m.lid]);
+      areas.set(key(name), rid);
+      rows.push({ name: m.name, address, dataType: type, comment: '', at: AT });
+    }
+  }
+  return rows;
+}
+
+/** The PLC's data blocks and tag table as a symbol table (see the file's comment). */
 export async function browseTable(session: S7PlusSession, signal?: AbortSignal): Promise<SymbolTable> {
+  return (await browseProgram(session, signal)).table;
+}
+
+/** A browsed program: the table, the type objects' modification times and the block list it was browsed at. */
+export interface BrowsedTable {
+  table: SymbolTable;
+  times: TypeTimes;
+  /** The data blocks' numbers and names, in words (what a rename changes when no layout does). */
+  blocks: string;
+}
+
+/** The data block list in words: number and name of each. */
+export function blockWords(blocks: readonly { number: number; name: string }[]): string {
+  return blocks.map((b) => `${b.number} ${b.name}`).join('\n');
+}
+
+/** The browsed table and the type objects' modification times it was browsed at (one Explore gives both). */
+export async function browseProgram(session: S7PlusSession, signal?: AbortSignal): Promise<BrowsedTable> {
   const blocks = await dataBlocks(session, signal);
-  if (blocks.length === 0) return tableOf([], new Map(), new Map());
-  const rids = await typeRids(
-    session,
-    blocks.map((b) => b.number),
-    signal,
-  );
-  const types = typeObjects(await explore(session, Ids.ObjectOmsTypeInfoContainer, [], 'its types', signal));
+  const rids =
+    blocks.length === 0
+      ? new Map<number, number>()
+      : await typeRids(
+          session,
+          blocks.map((b) => b.number),
+          signal,
+        );
+  const container = await explore(session, Ids.ObjectOmsTypeInfoContainer, [], 'its types', signal);
+  const types = typeObjects(container);
   const decls: DataBlockDecl[] = [];
   const facts: Facts = { lids: new Map(), place: new Map() };
   const areas = new Map<string, number>();
@@ -313,16 +213,18 @@ export async function browseTable(session: S7PlusSession, signal?: AbortSignal):
       at: AT,
     });
   }
-  return tableOf(decls, facts.lids, facts.place, areas);
+  const rows = tagRows(types, facts.lids, areas);
+  return { table: tableOf(decls, rows, facts.lids, facts.place, areas), times: timesOf(container), blocks: blockWords(blocks) };
 }
 
 function tableOf(
   decls: DataBlockDecl[],
+  rows: SymbolTableRow[],
   lids: Map<string, number[]>,
   place: Map<string, { byte: number; bit: number | null }>,
-  areas: Map<string, number> = new Map(),
+  areas: Map<string, number>,
 ): SymbolTable {
-  const compiled = compileDeclarations(decls, [], {});
+  const compiled = compileDeclarations(decls, rows, {});
   const entries = compiled.entries.map((e): SymbolEntry => {
     const blockKey = key(e.name.slice(0, e.name.indexOf('"', 1) + 1));
     const area = areas.get(blockKey) ?? dbAccessArea(e.db ?? 0);

@@ -15,7 +15,7 @@ import type { SymbolTable } from '../../symbols/model';
 import type { Protocol, RequestOptions, Tag } from '../../types';
 import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../url';
 import { openS7PlusSession } from './handshake';
-import { browseTable } from './browse';
+import { BrowsedProgram } from './program';
 import type { Limits } from './io';
 import { plusSyntax, readMixed, writeMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
@@ -55,20 +55,20 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     refused: (items) => this.learnItemLimit(items),
   };
 
-  /** The browsed table of the live session (browse()); a new session browses again. */
-  private browsed: { session: S7PlusSession; table: Promise<SymbolTable> } | undefined;
+  /** The program of the live session (browse(), the program check); a new session browses again. */
+  private program: { session: S7PlusSession; program: BrowsedProgram } | undefined;
 
   protected readonly driver: Driver<S7PlusSession, Tag>;
   private readonly baseDriver = {
     openSession: (signal: AbortSignal) => this.openSession(signal),
     readValues: (session: S7PlusSession, tags: readonly Tag[], signal?: AbortSignal) =>
-      readMixed(session, tags, this.limits, () => this.tableOf(session, signal), signal),
+      readMixed(session, tags, this.limits, this.programOf(session), signal),
     readTags: async (session: S7PlusSession, tags: readonly Tag[], signal?: AbortSignal) => {
-      const { values, errors } = await readMixed(session, tags, this.limits, () => this.tableOf(session, signal), signal);
+      const { values, errors } = await readMixed(session, tags, this.limits, this.programOf(session), signal);
       return toResults(values, errors);
     },
     writeTags: (session: S7PlusSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal) =>
-      writeMixed(session, items, this.limits, () => this.tableOf(session, signal), signal),
+      writeMixed(session, items, this.limits, this.programOf(session), signal),
     noBlockLength: 'S7CommPlus reads data blocks by their own layout: there is no PUT/GET layout to check',
     isLinkError,
   };
@@ -109,24 +109,25 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   /**
    * The PLC's data blocks as a symbol table (lib/symbols/model.ts): names as
    * TIA writes them, IEC types, each entry's S7CommPlus access path, and the
-   * byte and bit of standard blocks' members as the PLC gives them. Browsed
-   * once per connection; a reconnect browses again.
+   * byte and bit of standard blocks' members as the PLC gives them, and the
+   * PLC tag table's I, Q and M names. Browsed once per connection (a
+   * reconnect browses again) and again when a read or write by name finds
+   * that the program changed (a download: the `programChanged` event).
    */
   browse(options: RequestOptions = {}): Promise<SymbolTable> {
-    return this.withSession((s) => this.tableOf(s, options.signal));
+    return this.withSession((s) => this.programOf(s).table(options.signal));
   }
 
-  private tableOf(session: S7PlusSession, signal?: AbortSignal): Promise<SymbolTable> {
-    if (this.browsed?.session !== session) {
-      const table = browseTable(session, signal);
-      const browsed = { session, table };
-      this.browsed = browsed;
-      // A failed browse is not kept: the next read tries again.
-      table.catch(() => {
-        if (this.browsed === browsed) this.browsed = undefined;
-      });
+  /**
+   * The session's program: its table browsed once, checked after each read by name (and before each write) with one
+   * request for the type objects' modification times; a download is the `programChanged` event and a new table.
+   */
+  private programOf(session: S7PlusSession): BrowsedProgram {
+    if (this.program?.session !== session) {
+      const program = new BrowsedProgram(session, (change) => this.emit('programChanged', change));
+      this.program = { session, program };
     }
-    return this.browsed!.table;
+    return this.program.program;
   }
 
   /** Runs `fn` on the live session; NOT_CONNECTED when there is none. */

@@ -16,10 +16,9 @@ import type { ReadValues, TagSyntax } from '../../link/driver';
 import { canonicalName, splitSymbol } from '../../symbols/names';
 import type { SymbolEntry, SymbolTable } from '../../symbols/model';
 import type { PlcValue, Tag } from '../../types';
-import { decodeTag, encodeTag, type TagShape } from '../../values';
+import type { TagShape } from '../../values';
 import type { PValue } from '../codec/pvalue';
 import {
-  blobValue,
   decodeGetMultiVariablesResponse,
   decodeSetMultiVariablesResponse,
   encodeGetMultiVariablesRequest,
@@ -28,8 +27,9 @@ import {
   writeRequest,
   type ItemAddress,
 } from '../codec/variables';
-import { DataType, FunctionCode, Ids } from '../constants';
+import { FunctionCode } from '../constants';
 import { readTags, sized, writeTags, type Limits } from './io';
+import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } from './name-values';
 import type { S7PlusSession } from './session';
 
 /** A tag that stands for a name of the PLC's program (resolved at the read or write). */
@@ -89,87 +89,6 @@ function unknownName(table: SymbolTable, name: string): PlcError {
   return new PlcError('INVALID_ADDRESS', `unknown name ${name} on the PLC${hint}`, { tag: name });
 }
 
-/** Leaves per struct or array entry, worked out once per browsed table (a poll reads the same names again and again). */
-const LEAVES = new WeakMap<SymbolEntry, readonly SymbolEntry[]>();
-
-/** The elementary entries of an entry (itself when elementary), in order. */
-function leavesOf(table: SymbolTable, entry: SymbolEntry): readonly SymbolEntry[] {
-  if (entry.kind === 'elementary') return [entry];
-  let leaves = LEAVES.get(entry);
-  if (!leaves) {
-    leaves = (entry.children ?? []).flatMap((c) => {
-      const child = table.lookup(c);
-      return child ? leavesOf(table, child) : [];
-    });
-    LEAVES.set(entry, leaves);
-  }
-  return leaves;
-}
-
-function itemOf(entry: SymbolEntry): ItemAddress {
-  return { symbolCrc: 0, accessArea: entry.access!.area, accessSubArea: Ids.DBValueActual, lids: [...entry.access!.lids] };
-}
-
-function shapeOf(entry: SymbolEntry): TagShape {
-  return { address: entry.name, type: entry.dataType!, count: 1, isArray: false, stringLength: entry.stringLength, bitOffset: 0 };
-}
-
-const WIDTH: Readonly<Record<number, [number, 'u' | 's' | 'f']>> = Object.freeze({
-  [DataType.USInt]: [1, 'u'],
-  [DataType.Byte]: [1, 'u'],
-  [DataType.SInt]: [1, 's'],
-  [DataType.UInt]: [2, 'u'],
-  [DataType.Word]: [2, 'u'],
-  [DataType.Int]: [2, 's'],
-  [DataType.UDInt]: [4, 'u'],
-  [DataType.DWord]: [4, 'u'],
-  [DataType.DInt]: [4, 's'],
-  [DataType.Real]: [4, 'f'],
-  [DataType.LReal]: [8, 'f'],
-  [DataType.ULInt]: [8, 'u'],
-  [DataType.LWord]: [8, 'u'],
-  [DataType.LInt]: [8, 's'],
-});
-
-/** A leaf's value from the PValue the PLC answered: a BLOB as the member's standard bytes, a typed value by its wire type. */
-function valueOf(entry: SymbolEntry, shape: TagShape, v: PValue): PlcValue {
-  const x = v.value;
-  if (v.type === DataType.Bool && typeof x === 'boolean') return x;
-  if ((v.type === DataType.WString || v.type === DataType.S7String) && typeof x === 'string') return x;
-  let bytes: Buffer | undefined;
-  if (x && typeof x === 'object' && 'data' in x && Buffer.isBuffer(x.data)) bytes = x.data;
-  const width = WIDTH[v.type];
-  if (!bytes && width && (typeof x === 'number' || typeof x === 'bigint')) {
-    const [n, kind] = width;
-    bytes = Buffer.alloc(n);
-    if (kind === 'f') n === 4 ? bytes.writeFloatBE(Number(x)) : bytes.writeDoubleBE(Number(x));
-    else if (n === 8) kind === 's' ? bytes.writeBigInt64BE(BigInt(x)) : bytes.writeBigUInt64BE(BigInt.asUintN(64, BigInt(x)));
-    else kind === 's' ? bytes.writeIntBE(Number(x), 0, n) : bytes.writeUIntBE(Number(x), 0, n);
-  }
-  if (!bytes)
-    throw new PlcError('PROTOCOL_ERROR', `${entry.name}: the PLC answered a value of wire type 0x${v.type.toString(16)}`, {
-      tag: entry.name,
-    });
-  // A typed value narrower than the member (a BYTE sent as USInt for a CHAR) is its low bytes.
-  const want = entry.size;
-  if (bytes.length < want && !entry.dataType?.includes('STRING')) bytes = Buffer.concat([Buffer.alloc(want - bytes.length), bytes]);
-  return decodeTag(shape, bytes, 0);
-}
-
-/** A struct's or array's value from its leaves' values (by name). */
-function assemble(table: SymbolTable, entry: SymbolEntry, leaf: Map<string, PlcValue>): unknown {
-  if (entry.kind === 'elementary') return leaf.get(entry.name);
-  const children = (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
-  if (entry.kind === 'array') return children.map((c) => assemble(table, c, leaf));
-  return Object.fromEntries(children.map((c) => [memberKey(entry, c), assemble(table, c, leaf)]));
-}
-
-/** A member's key in its struct's object: its name as declared (quotes off). */
-function memberKey(parent: SymbolEntry, child: SymbolEntry): string {
-  const rest = child.name.slice(parent.name.length + 1);
-  return rest.startsWith('"') && rest.endsWith('"') ? rest.slice(1, -1) : rest;
-}
-
 /** What a named tag stands for: the entry, or why not. */
 function resolve(table: SymbolTable, tag: NamedTag): SymbolEntry | PlcError {
   const entry = table.lookup(tag.address);
@@ -195,14 +114,69 @@ async function requestChunks(
 }
 
 /**
- * What a read of one tag list by name needs from the browsed table, worked
- * out once per list and table (a poll reads the same names again and again):
- * which tags are addresses, each name's entry (or why not) and the range of
- * its elementary members in `leaves`, each leaf's item address and shape.
+ * The PLC's program as the names see it: the browsed table, and the check after a read by name whether the program
+ * changed since (client/program.ts): true when it did, and the table is then browsed again.
+ */
+export interface Program {
+  table(): Promise<SymbolTable>;
+  /** `unknownName`: the read had a name the table does not have (a renamed block keeps its types' times). */
+  changed(unknownName?: boolean): Promise<boolean>;
+}
+
+/** Reads of a program that keeps changing give up after this many attempts. */
+const MAX_ATTEMPTS = 3;
+
+/** Values of addresses and names, in order; each tag's own failure is its error. */
+export async function readMixed(
+  session: S7PlusSession,
+  tags: readonly Tag[],
+  limits: Limits,
+  program: Program,
+  signal?: AbortSignal,
+): Promise<ReadValues> {
+  const named = tags.flatMap((t, i) => (isNamed(t) ? [i] : []));
+  if (named.length === 0) return readTags(session, tags, limits, signal);
+  const values: PlcValue[] = new Array<PlcValue>(tags.length);
+  const errors: (PlcError | undefined)[] = new Array<PlcError | undefined>(tags.length);
+  const addressed = tags.flatMap((t, i) => (isNamed(t) ? [] : [i]));
+  if (addressed.length > 0) {
+    const r = await readTags(
+      session,
+      addressed.map((i) => tags[i]!),
+      limits,
+      signal,
+    );
+    addressed.forEach((i, k) => ((values[i] = r.values[k]!), (errors[i] = r.errors?.[k])));
+  }
+  // A value read by LID counts only when the program had not changed by the time it came: the check runs after the
+  // read, so a download before or during it is seen, and the names are read again through the new table.
+  for (let attempt = 1; ; attempt++) {
+    const t = await program.table();
+    await readNamed(session, tags, named, t, limits, values, errors, signal);
+    const unknown = named.some((i) => t.lookup(tags[i]!.address) === undefined);
+    if (!(await program.changed(unknown))) break;
+    if (attempt === MAX_ATTEMPTS) {
+      for (const i of named) {
+        values[i] = undefined as unknown as PlcValue;
+        errors[i] = new PlcError('LAYOUT_MISMATCH', `${tags[i]!.address}: the PLC's program changed during each of ${MAX_ATTEMPTS} reads`, {
+          tag: tags[i]!.address,
+        });
+      }
+      break;
+    }
+  }
+  return { values, errors: errors.some((e) => e) ? errors : undefined };
+}
+
+/**
+ * What a read of one tag list by name needs from a browsed table, worked out
+ * once per list and table (a poll reads the same names again and again):
+ * each name's entry (or why not) and the range of its elementary members in
+ * `leaves`, each leaf's item address and shape. A new table (a reconnect, a
+ * program change) makes a new plan.
  */
 interface NamedPlan {
   readonly table: SymbolTable;
-  readonly addressed: readonly number[];
   readonly wanted: readonly { readonly i: number; readonly entry: SymbolEntry; readonly from: number; readonly to: number }[];
   readonly unresolved: readonly { readonly i: number; readonly error: PlcError }[];
   readonly leaves: readonly SymbolEntry[];
@@ -213,49 +187,44 @@ interface NamedPlan {
 /** Plans by tag list: the client hands the same array back for the same list (client/base.ts ReadList), so a poll finds its plan. */
 const PLANS = new WeakMap<readonly Tag[], NamedPlan>();
 
-function planOf(tags: readonly Tag[], table: SymbolTable): NamedPlan {
+function planOf(tags: readonly Tag[], named: readonly number[], table: SymbolTable): NamedPlan {
   const known = PLANS.get(tags);
   if (known?.table === table) return known;
-  const addressed: number[] = [];
   const wanted: { i: number; entry: SymbolEntry; from: number; to: number }[] = [];
   const unresolved: { i: number; error: PlcError }[] = [];
   const leaves: SymbolEntry[] = [];
-  tags.forEach((tag, i) => {
-    if (!isNamed(tag)) return void addressed.push(i);
-    const entry = resolve(table, tag);
-    if (entry instanceof PlcError) return void unresolved.push({ i, error: entry });
+  for (const i of named) {
+    const entry = resolve(table, tags[i] as NamedTag);
+    if (entry instanceof PlcError) {
+      unresolved.push({ i, error: entry });
+      continue;
+    }
     const from = leaves.length;
     leaves.push(...leavesOf(table, entry));
     wanted.push({ i, entry, from, to: leaves.length });
-  });
-  const plan: NamedPlan = { table, addressed, wanted, unresolved, leaves, items: leaves.map(itemOf), shapes: leaves.map(shapeOf) };
+  }
+  const plan: NamedPlan = { table, wanted, unresolved, leaves, items: leaves.map(itemOf), shapes: leaves.map(shapeOf) };
   PLANS.set(tags, plan);
   return plan;
 }
 
-/** Values of addresses and names, in order; each tag's own failure is its error. */
-export async function readMixed(
+/** Reads the named tags `named` through table `t` into `values` / `errors` (each slot overwritten). */
+async function readNamed(
   session: S7PlusSession,
   tags: readonly Tag[],
+  named: readonly number[],
+  t: SymbolTable,
   limits: Limits,
-  table: () => Promise<SymbolTable>,
+  values: PlcValue[],
+  errors: (PlcError | undefined)[],
   signal?: AbortSignal,
-): Promise<ReadValues> {
-  if (!tags.some(isNamed)) return readTags(session, tags, limits, signal);
-  const values: PlcValue[] = new Array<PlcValue>(tags.length);
-  const errors: (PlcError | undefined)[] = new Array<PlcError | undefined>(tags.length);
-  const t = await table();
-  const plan = planOf(tags, t);
-  const { addressed, leaves } = plan;
-  if (addressed.length > 0) {
-    const r = await readTags(
-      session,
-      addressed.map((i) => tags[i]!),
-      limits,
-      signal,
-    );
-    addressed.forEach((i, k) => ((values[i] = r.values[k]!), (errors[i] = r.errors?.[k])));
+): Promise<void> {
+  for (const i of named) {
+    values[i] = undefined as unknown as PlcValue;
+    errors[i] = undefined;
   }
+  const plan = planOf(tags, named, t);
+  const { leaves } = plan;
   for (const { i, error } of plan.unresolved) errors[i] = error;
   // Each leaf's value, or its error, by its index in plan.leaves.
   const leafValues = new Array<PlcValue>(leaves.length);
@@ -285,7 +254,7 @@ export async function readMixed(
         continue;
       }
       try {
-        leafValues[k] = valueOf(e, plan.shapes[k]!, v);
+        leafValues[k] = valueOf(e, v, plan.shapes[k]);
       } catch (err) {
         (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = toPlcError(err, 'PROTOCOL_ERROR');
       }
@@ -302,37 +271,6 @@ export async function readMixed(
       values[i] = assemble(t, entry, leaf) as PlcValue;
     }
   }
-  return { values, errors: errors.some((e) => e) ? errors : undefined };
-}
-
-/** The leaves of a write: each elementary member with its value (a struct's from the object's members, an array's by index). */
-function writeLeaves(table: SymbolTable, entry: SymbolEntry, value: unknown, out: { entry: SymbolEntry; value: unknown }[]): void {
-  if (entry.kind === 'elementary') return void out.push({ entry, value });
-  const children = (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
-  if (entry.kind === 'array') {
-    if (!Array.isArray(value) || value.length !== children.length)
-      throw new PlcError('INVALID_VALUE', `${entry.name} is ${entry.type}: write an array of ${children.length} values`, {
-        tag: entry.name,
-      });
-    children.forEach((c, k) => writeLeaves(table, c, value[k], out));
-    return;
-  }
-  if (value === null || typeof value !== 'object' || Array.isArray(value))
-    throw new PlcError('INVALID_VALUE', `${entry.name} is a ${entry.type}: write an object of its members`, { tag: entry.name });
-  for (const c of children) {
-    const k = memberKey(entry, c);
-    if (!(k in value)) throw new PlcError('INVALID_VALUE', `${entry.name}: the value has no member ${k}`, { tag: entry.name });
-    writeLeaves(table, c, (value as Record<string, unknown>)[k], out);
-  }
-}
-
-function pvalueOf(entry: SymbolEntry, value: unknown): PValue {
-  if (entry.dataType === 'BOOL') {
-    if (typeof value !== 'boolean')
-      throw new PlcError('INVALID_VALUE', `${entry.name} is a BOOL: write true or false`, { tag: entry.name });
-    return { flags: 0, type: DataType.Bool, value };
-  }
-  return blobValue(encodeTag(shapeOf(entry), value));
 }
 
 /** One result per item, in order: addresses by io.ts, names by LID. */
@@ -340,7 +278,7 @@ export async function writeMixed(
   session: S7PlusSession,
   items: readonly { tag: Tag; value: unknown }[],
   limits: Limits,
-  table: () => Promise<SymbolTable>,
+  program: Program,
   signal?: AbortSignal,
 ): Promise<TagResult<void>[]> {
   if (!items.some((it) => isNamed(it.tag))) return writeTags(session, items, limits, signal);
@@ -355,7 +293,10 @@ export async function writeMixed(
     );
     addressed.forEach((i, k) => (results[i] = r[k]!));
   }
-  const t = await table();
+  // A write by a stale LID would land in another member: the program is checked first (browsed again if it changed).
+  const known = await program.table();
+  await program.changed(items.some((it) => isNamed(it.tag) && known.lookup(it.tag.address) === undefined));
+  const t = await program.table();
   const ready: { i: number; address: ItemAddress; value: PValue; name: string }[] = [];
   items.forEach(({ tag, value }, i) => {
     if (!isNamed(tag)) return;

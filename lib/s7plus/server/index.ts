@@ -12,6 +12,7 @@ import type { PlcMemory } from '../../sim/memory';
 import type { CompileOptions, SymbolSource } from '../../symbols/model';
 import { fingerprint256 } from '../transport/cert';
 import { PlusConnection } from './connection';
+import { dataBlockImages } from '../../symbols/memory';
 import { buildPlusModel, type PlusModel } from './model';
 import { isS7PlusRequest } from './tsap';
 
@@ -44,7 +45,10 @@ export interface PlusLink {
 }
 
 export class S7PlusService {
-  readonly model: PlusModel;
+  private current: PlusModel;
+  /** The running program's optimized DBs (PUT/GET refuses them): one set, refilled by reload(), that connections keep. */
+  readonly optimizedDbs = new Set<number>();
+  private readonly db: CompileOptions['db'] | undefined;
   /** SHA-256 of the certificate (DER), 64 upper-case hex digits; undefined in plain text. */
   readonly fingerprint: string | undefined;
   private readonly secureContext: tls.SecureContext | undefined;
@@ -55,7 +59,9 @@ export class S7PlusService {
   readonly password: string | undefined;
 
   constructor(options: S7PlusOptions) {
-    this.model = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
+    this.db = options.db;
+    this.current = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
+    for (const n of this.current.optimizedDbs) this.optimizedDbs.add(n);
     this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
     this.password = options.password;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
@@ -70,6 +76,41 @@ export class S7PlusService {
     }
   }
 
+  /** The program the CPU runs now (reload() replaces it). */
+  get model(): PlusModel {
+    return this.current;
+  }
+
+  /**
+   * A download: the program of `sources` (with `db`, else the numbers given at construction) replaces the running
+   * one, as TIA's download does on a CPU. Type objects whose layout is unchanged keep their modification time
+   * (attribute 529), changed and new ones get a later one: what clients see as the program change. With `memory`
+   * (the S7 simulator's), a data block whose layout is unchanged keeps its bytes, a new or changed one holds what its
+   * sources give after a download, one no longer in the program is deleted; the I, Q and M areas are kept. Sources
+   * that do not compile are a SourceError and the running program stays.
+   */
+  reload(sources: readonly SymbolSource[], memory?: PlcMemory, db: CompileOptions['db'] = this.db): PlusModel {
+    const before = this.current;
+    const after = buildPlusModel(sources, db ? { db } : {}, before);
+    if (memory) {
+      const images = dataBlockImages(after.table);
+      const layoutOf = (m: PlusModel, number: number) => {
+        const d = m.dbs.find((x) => x.number === number);
+        return d && `${d.length} ${m.layouts.get(d.type.rid)}`;
+      };
+      for (const number of memory.dataBlockNumbers()) if (!images.has(number)) memory.deleteDataBlock(number);
+      for (const [number, image] of images) {
+        if (memory.area('DB', number) && layoutOf(before, number) === layoutOf(after, number)) continue;
+        memory.createDataBlock(number, image.length);
+        image.copy(memory.area('DB', number)!);
+      }
+    }
+    this.current = after;
+    this.optimizedDbs.clear();
+    for (const n of after.optimizedDbs) this.optimizedDbs.add(n);
+    return after;
+  }
+
   /** True when a COTP CR asks for S7CommPlus. */
   claims(frame: Buffer): boolean {
     return isS7PlusRequest(frame);
@@ -82,9 +123,18 @@ export class S7PlusService {
     cpu: { readonly memory: PlcMemory; readonly state: 'RUN' | 'STOP' },
     hostile: (err: Error) => void,
   ): PlusLink {
+    const service = this;
     return new PlusConnection(
       {
-        cpu: { model: this.model, memory: cpu.memory, mode: () => cpu.state, maxItems: this.maxItems },
+        cpu: {
+          // A reload replaces the program under running sessions, as a download does on a CPU.
+          get model() {
+            return service.current;
+          },
+          memory: cpu.memory,
+          mode: () => cpu.state,
+          maxItems: this.maxItems,
+        },
         secureContext: this.secureContext,
         session: { maxRequestBytes: this.maxRequestBytes, newSessionId: () => this.nextSession++, password: this.password },
         send: (bytes) => socket.write(bytes),

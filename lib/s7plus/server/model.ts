@@ -19,9 +19,9 @@ import { parseBlockSource } from '../../symbols/source-parser';
 import { readSymbolTable } from '../../symbols/symbol-files';
 import { SourceError } from '../../errors';
 import type { BlockDecl, CompileOptions, SymbolSource, SymbolTable, SymbolTableRow } from '../../symbols/model';
-import type { StructNode } from '../../symbols/layout-nodes';
+import type { ElementaryNode, StructNode } from '../../symbols/layout-nodes';
 import type { DataTypeName } from '../../types';
-import { dbAccessArea, SoftDataType } from '../constants';
+import { AreaTypeInfoRID, dbAccessArea, Ids, SoftDataType } from '../constants';
 
 /** The LID of the first member of a block or struct. */
 const FIRST_LID = 0xa;
@@ -62,13 +62,32 @@ export interface PlusDb {
   readonly length: number;
 }
 
+/** A process image area (I, Q or M) with the PLC tag table's names in it, as a CPU serves it. */
+export interface PlusArea {
+  readonly area: 'I' | 'Q' | 'M';
+  /** Its native object, the access area of its items: 80, 81, 82. */
+  readonly rid: number;
+  /** Its type object (0x90010000, 0x90020000, 0x90030000): one member per tag, at its byte and bit in the area. */
+  readonly type: PlusType;
+}
+
 export interface PlusModel {
   /** The compiled table of every block, optimized ones laid out by the standard rules (the simulator's storage). */
   readonly table: SymbolTable;
   readonly dbs: readonly PlusDb[];
-  /** Every type object, for the type-info container. */
+  /** Every type object of the blocks, for the type-info container. */
   readonly types: readonly PlusType[];
+  /** The I, Q and M areas with the tag table's names (each area's type object is in the container too). */
+  readonly areas: readonly PlusArea[];
   readonly optimizedDbs: ReadonlySet<number>;
+  /**
+   * Each type object's VariableTypeStructModificationTime (attribute 529), by RID:
+   * when its layout last changed. A reload keeps the time of a type whose layout
+   * is the same and gives a changed or new one a later time.
+   */
+  readonly times: ReadonlyMap<number, bigint>;
+  /** Each type object's layout in words (what a reload compares). */
+  readonly layouts: ReadonlyMap<number, string>;
 }
 
 const SOFT_OF: Readonly<Partial<Record<DataTypeName, number>>> = Object.freeze({
@@ -107,18 +126,74 @@ function softOf(type: DataTypeName): number {
 
 const BLOCK_SOURCES = /\.(db|udt|scl|awl)$/i;
 
-/** Builds the model from source files (as `--source` gives them) and block numbers (as `--db` gives them). Throws SourceError. */
-export function buildPlusModel(sources: readonly SymbolSource[], options: CompileOptions = {}): PlusModel {
+/**
+ * Builds the model from source files (as `--source` gives them) and block numbers (as `--db` gives them). Throws SourceError.
+ * `previous`: the model these sources replace (a reload, the simulator's download): type objects whose layout is
+ * unchanged keep their modification time, the others get a later one.
+ */
+export function buildPlusModel(sources: readonly SymbolSource[], options: CompileOptions = {}, previous?: PlusModel): PlusModel {
   const blocks: BlockDecl[] = [];
   const rows: SymbolTableRow[] = [];
   for (const source of sources) {
     if (BLOCK_SOURCES.test(source.name)) blocks.push(...parseBlockSource(source));
     else rows.push(...readSymbolTable(source));
   }
-  return modelOf(blocks, rows, options);
+  return modelOf(blocks, rows, options, previous);
 }
 
-function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], options: CompileOptions): PlusModel {
+/** The last modification time given, so that every change gets a later one even within a millisecond. */
+let lastTime = 0n;
+
+/** A modification time: microseconds since 1970, later than any given before. */
+function nextTime(): bigint {
+  const now = BigInt(Date.now()) * 1000n;
+  lastTime = now > lastTime ? now : lastTime + 1n;
+  return lastTime;
+}
+
+/** A type object's layout in words: its members' names, LIDs, types, places and the layouts of their struct types. */
+function layoutOf(type: PlusType, seen: Map<PlusType, string>): string {
+  const known = seen.get(type);
+  if (known !== undefined) return known;
+  const text = JSON.stringify(
+    type.members.map((m) => [m.name, m.lid, m.soft, m.byte, m.bit, m.node.size, m.node.typeText, m.type ? layoutOf(m.type, seen) : null]),
+  );
+  seen.set(type, text);
+  return text;
+}
+
+/** The native objects of the I, Q and M areas and their type objects (s7commplus (MIT) client.py _browse_layout). */
+const AREAS: readonly { area: 'I' | 'Q' | 'M'; rid: number; typeRid: number }[] = Object.freeze([
+  { area: 'I', rid: Ids.NativeTheIAreaRID, typeRid: AreaTypeInfoRID.I },
+  { area: 'Q', rid: Ids.NativeTheQAreaRID, typeRid: AreaTypeInfoRID.Q },
+  { area: 'M', rid: Ids.NativeTheMAreaRID, typeRid: AreaTypeInfoRID.M },
+]);
+
+/** The tag table's names of each area as members of its type object: LIDs from 0xA in the table's order, each at its byte and bit. */
+function areasOf(table: SymbolTable): PlusArea[] {
+  return AREAS.map(({ area, rid, typeRid }) => {
+    const members = table.entries
+      .filter((e) => e.area === area && e.db === null && e.kind === 'elementary' && e.dataType !== undefined && e.byte !== null)
+      .map((e, i): PlusMember => {
+        const node: ElementaryNode = {
+          kind: 'elementary',
+          byte: e.byte!,
+          bit: e.bit,
+          size: e.size,
+          typeText: e.type,
+          dataType: e.dataType!,
+          stringLength: e.stringLength,
+          at: e.at ?? { file: '', line: 0, column: 0 },
+        };
+        const name = e.name.startsWith('"') && e.name.endsWith('"') ? e.name.slice(1, -1) : e.name;
+        return Object.freeze({ name, lid: FIRST_LID + i, byte: e.byte!, bit: e.bit, node, soft: softOf(e.dataType!) });
+      });
+    const size = members.reduce((n, m) => Math.max(n, m.byte + m.node.size), 0);
+    return Object.freeze({ area, rid, type: Object.freeze({ rid: typeRid, size, members: Object.freeze(members) }) });
+  });
+}
+
+function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], options: CompileOptions, previous?: PlusModel): PlusModel {
   const optimizedDecls = new Set(blocks.filter((b) => b.kind === 'db' && b.optimized));
   // Standard rules for every block: the optimized ones get a storage layout that only the simulator sees.
   const standard = blocks.map((b) => (b.kind === 'db' && b.optimized ? { ...b, optimized: false } : b));
@@ -152,7 +227,27 @@ function modelOf(blocks: readonly BlockDecl[], rows: readonly SymbolTableRow[], 
       }),
     );
   });
-  return Object.freeze({ table, dbs: Object.freeze(dbs), types: Object.freeze(builder.types), optimizedDbs });
+  const areas = areasOf(table);
+  const seen = new Map<PlusType, string>();
+  const typeLayouts = new Map<number, string>();
+  const times = new Map<number, bigint>();
+  // A block's access (standard or optimized) is part of its type object's layout: it decides its members' offsets.
+  const access = new Map(dbs.map((d) => [d.type, d.optimized ? ' optimized' : ' standard']));
+  for (const type of [...builder.types, ...areas.map((a) => a.type)]) {
+    const layout = layoutOf(type, seen) + (access.get(type) ?? '');
+    typeLayouts.set(type.rid, layout);
+    const before = previous?.times.get(type.rid);
+    times.set(type.rid, before !== undefined && previous?.layouts.get(type.rid) === layout ? before : nextTime());
+  }
+  return Object.freeze({
+    table,
+    dbs: Object.freeze(dbs),
+    types: Object.freeze(builder.types),
+    areas: Object.freeze(areas),
+    optimizedDbs,
+    times,
+    layouts: typeLayouts,
+  });
 }
 
 /** Gives each struct its type object; instances of one UDT share one. */
@@ -217,4 +312,9 @@ export function resolveLids(db: PlusDb, lids: readonly number[]): LayoutNode | u
     struct = node.kind === 'struct' ? node : undefined;
   }
   return node;
+}
+
+/** The tag an area's LID names (one LID: the member of the area's type object), or undefined. */
+export function resolveAreaLid(area: PlusArea, lids: readonly number[]): PlusMember | undefined {
+  return lids.length === 1 ? area.type.members.find((m) => m.lid === lids[0]) : undefined;
 }

@@ -1,8 +1,11 @@
 /**
  * The S7CommPlus side of `plcwire serve s7` for an S7-1200/1500 profile:
  * the certificate given with --tls-cert/--tls-key, or one generated at start
- * (the package ships no private key), and the program from --source.
+ * (the package ships no private key), and the program from --source, loaded
+ * again (a download) on SIGHUP or when a --source file changes.
  */
+import * as fs from 'node:fs';
+import type { PlcMemory } from '../../sim/memory';
 import type { ServeFlags } from '../../sim/serve';
 import { generateCertificate } from '../transport/cert';
 import { S7PlusService } from './index';
@@ -43,4 +46,44 @@ export async function servePlus(flags: ServeFlags, profile: string): Promise<S7P
     }
     throw err;
   }
+}
+
+/** How often a --source file's size and time are looked at (fs.watchFile: also sees a file an editor replaced). */
+const WATCH_MS = 500;
+
+/**
+ * Loads the --source files again into `service` (S7PlusService.reload: a download) on SIGHUP and when one of them
+ * changes, and says what changed; sources that do not compile leave the running program and say why. Returns the
+ * function that stops watching.
+ */
+export function reloadOnChange(service: S7PlusService, memory: PlcMemory, flags: ServeFlags): () => void {
+  const reload = (why: string) => {
+    try {
+      const files = flags.sourceFiles();
+      const before = service.model;
+      const after = service.reload(files?.sources ?? [], memory, files?.db);
+      const changed = [...after.times].filter(([rid, time]) => before.times.get(rid) !== time).length;
+      const gone = [...before.times.keys()].filter((rid) => !after.times.has(rid)).length;
+      flags.say(
+        changed + gone === 0
+          ? `program loaded again (${why}): unchanged`
+          : `program loaded again (${why}): ${changed} type objects new or changed, ${gone} gone; clients browse again`,
+      );
+    } catch (err) {
+      flags.say(`program not loaded again (${why}): ${(err as Error).message}; the CPU keeps its program`);
+    }
+  };
+  const onHangup = () => reload('SIGHUP');
+  process.on('SIGHUP', onHangup);
+  const watched = flags.sourcePaths().map((file) => {
+    const listener = (now: fs.Stats, was: fs.Stats) => {
+      if (now.mtimeMs !== was.mtimeMs || now.size !== was.size) reload(`${file} changed`);
+    };
+    fs.watchFile(file, { interval: WATCH_MS, persistent: false }, listener);
+    return { file, listener };
+  });
+  return () => {
+    process.off('SIGHUP', onHangup);
+    for (const { file, listener } of watched) fs.unwatchFile(file, listener);
+  };
 }

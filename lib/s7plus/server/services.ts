@@ -7,13 +7,14 @@
  * (MIT) client.py (the request builders and answer parsers), server.py.
  */
 import type { PlcMemory } from '../../sim/memory';
+import type { AreaName } from '../../types';
 import { ProtocolError } from '../../errors';
 import type { LayoutNode } from '../../symbols/layout-nodes';
 import { DataType, ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
 import { Reader, Writer } from '../codec/bytes';
 import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
-import { resolveLids, type PlusDb, type PlusModel } from './model';
-import { blockList, cpuExecUnit, typeInfoContainer } from './typeinfo';
+import { resolveAreaLid, resolveLids, type PlusDb, type PlusModel } from './model';
+import { blockList, cpuExecUnit, isTypeObject, typeInfoContainer, typeObjectAttributes } from './typeinfo';
 import { blob, readNode, readPValue, writeNode } from './values';
 
 /** What a handler needs of the CPU. */
@@ -43,8 +44,20 @@ export function explore(cpu: CpuSide, body: Buffer): Buffer {
   const ok = (objects: Buffer) => Buffer.concat([encodeUVlq64(0n), objects, Buffer.alloc(4)]);
   if (id === Ids.NativeThePlcProgramRID) return ok(blockList(cpu.model));
   if (id === Ids.NativeTheCpuExecUnitRID) return ok(cpuExecUnit(cpu.mode() === 'RUN' ? OperatingState.Run : OperatingState.Stop));
-  if (id === Ids.ObjectOmsTypeInfoContainer) return ok(typeInfoContainer(cpu.model));
+  if (id === Ids.ObjectOmsTypeInfoContainer) return ok(typeInfoContainer(cpu.model, exploreAttributes(r)));
+  // One type object for its modification time (s7commplus (MIT) client.py _read_type_info_time).
+  if (isTypeObject(cpu.model, id)) return ok(typeObjectAttributes(cpu.model, id, exploreAttributes(r)));
   return Buffer.concat([encodeUVlq64(EXPLORE_NO_SUCH_OBJECT), Buffer.alloc(8)]);
+}
+
+/** The attribute ids an Explore asks for, after its id (codec/explore.ts: request id, three flags, filter count, count, ids). */
+function exploreAttributes(r: Reader): number[] {
+  r.uvlq32();
+  r.bytes(3, 'the Explore flags');
+  if (r.u8('the filter count') !== 0) return [];
+  const count = r.uvlq32();
+  if (count > r.remaining) throw new ProtocolError(`S7CommPlus: Explore names ${count} attributes in ${r.remaining} bytes`);
+  return Array.from({ length: count }, () => r.uvlq32());
 }
 
 /**
@@ -73,9 +86,17 @@ function readAddresses(r: Reader, cpu: CpuSide): ItemAddress[] {
   return items;
 }
 
-/** Where an item lands: a node of a DB, a byte range of a standard DB, the type object's RID (LID 1), or nothing. */
+/** Where an item lands: a node of a DB or area, a byte range of a standard DB or area, the type object's RID (LID 1), or nothing. */
 type Target =
-  { kind: 'node'; db: PlusDb; node: LayoutNode } | { kind: 'range'; db: number; byte: number; size: number } | { kind: 'rid'; rid: number };
+  | { kind: 'node'; area: AreaName; db: number; node: LayoutNode }
+  | { kind: 'range'; area: AreaName; db: number; byte: number; size: number }
+  | { kind: 'rid'; rid: number };
+
+/** A range of bytes by the classic-blob LIDs (marker, byte, count) within `length` bytes. */
+function range(lids: readonly number[], area: AreaName, db: number, length: number): Target | undefined {
+  const [, byte, size] = lids as [number, number, number];
+  return byte + size <= length && size > 0 ? { kind: 'range', area, db, byte, size } : undefined;
+}
 
 /** The model's DBs by access area, made once per model: every item of every read looks its DB up. */
 const DBS_BY_AREA = new WeakMap<PlusModel, ReadonlyMap<number, PlusDb>>();
@@ -90,19 +111,24 @@ function dbOf(model: PlusModel, area: number): PlusDb | undefined {
 }
 
 function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
+  const lids = item.lids;
+  const blob = lids.length === 3 && lids[0] === Ids.LidClassicBlob;
+  const area = cpu.model.areas.find((a) => a.rid === item.area);
+  if (area) {
+    // I, Q, M: by address (the classic blob) or a tag table name by its LID.
+    if (item.subArea !== Ids.ControllerAreaValueActual) return undefined;
+    if (blob) return range(lids, area.area, 0, cpu.memory.area(area.area)?.length ?? 0);
+    const tag = resolveAreaLid(area, lids);
+    return tag ? { kind: 'node', area: area.area, db: 0, node: tag.node } : undefined;
+  }
   if ((item.area & 0xffff0000) >>> 0 !== Ids.DBAccessAreaBase || item.subArea !== Ids.DBValueActual) return undefined;
   const db = dbOf(cpu.model, item.area);
   if (!db) return undefined;
-  const lids = item.lids;
   if (lids.length === 1 && lids[0] === 1) return { kind: 'rid', rid: db.type.rid };
-  if (lids.length === 3 && lids[0] === Ids.LidClassicBlob) {
-    // By address: standard DBs only; an optimized one has no offsets to give.
-    if (db.optimized) return undefined;
-    const [, byte, size] = lids as [number, number, number];
-    return byte + size <= db.length && size > 0 ? { kind: 'range', db: db.number, byte, size } : undefined;
-  }
+  // By address: standard DBs only; an optimized one has no offsets to give.
+  if (blob) return db.optimized ? undefined : range(lids, 'DB', db.number, db.length);
   const node = resolveLids(db, lids);
-  return node ? { kind: 'node', db, node } : undefined;
+  return node ? { kind: 'node', area: 'DB', db: db.number, node } : undefined;
 }
 
 function itemList(results: readonly (Buffer | undefined)[]): Buffer {
@@ -123,8 +149,8 @@ export function itemValue(cpu: CpuSide, item: ItemAddress): Buffer | undefined {
   const t = target(cpu, item);
   if (!t) return undefined;
   if (t.kind === 'rid') return Buffer.concat([Buffer.from([0x00, DataType.RID]), u32be(t.rid)]);
-  const image = cpu.memory.area('DB', t.kind === 'node' ? t.db.number : t.db);
-  if (!image) return undefined;
+  const image = cpu.memory.area(t.area, t.db);
+  if (!image || (t.kind === 'node' ? t.node.byte + t.node.size : t.byte + t.size) > image.length) return undefined;
   return t.kind === 'node' ? readNode(t.node, image) : blob(Buffer.from(image.subarray(t.byte, t.byte + t.size)));
 }
 
@@ -157,9 +183,10 @@ export function setMultiVariables(cpu: CpuSide, body: Buffer, mayWrite: boolean)
     let ok = false;
     // Without the password (read access) every write is refused.
     if (!mayWrite) ok = false;
-    else if (raw && t?.kind === 'node') ok = writeNode(t.node, cpu.memory, t.db.number, raw);
-    else if (raw && t?.kind === 'range' && raw.length === t.size) {
-      cpu.memory.write('DB', t.db, t.byte, raw);
+    else if (raw && t?.kind === 'node' && cpu.memory.check(t.area, t.db, t.node.byte, t.node.size) === undefined)
+      ok = writeNode(t.node, cpu.memory, t.area, t.db, raw);
+    else if (raw && t?.kind === 'range' && raw.length === t.size && cpu.memory.check(t.area, t.db, t.byte, t.size) === undefined) {
+      cpu.memory.write(t.area, t.db, t.byte, raw);
       ok = true;
     }
     if (!ok) errors.push(encodeUVlq32(i + 1), encodeUVlq64(ITEM_ERROR_UNRESOLVED));

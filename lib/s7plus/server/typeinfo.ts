@@ -8,7 +8,7 @@
  */
 import type { ArrayNode } from '../../symbols/layout-nodes';
 import { DataType, ElementId, Ids, SoftDataType } from '../constants';
-import { encodeSVlq32, encodeUVlq32 } from '../codec/vlq';
+import { encodeSVlq32, encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
 import type { PlusMember, PlusModel, PlusType } from './model';
 
 /** The attribute of a type object holding its byte size (typeinfo.py TI_TCOM_SIZE). */
@@ -87,8 +87,21 @@ export function cpuExecUnit(stateCode: number): Buffer {
   ]);
 }
 
-/** The type-info container: one object per type, each with its vartype and varname lists. */
-export function typeInfoContainer(model: PlusModel): Buffer {
+/** A type object's modification time (attribute 529) as a ULInt (PLCSIM's answer: `a3 84 11 00 05` and a 64-bit VLQ). */
+function modificationTime(model: PlusModel, rid: number): Buffer {
+  const time = model.times.get(rid);
+  return time === undefined ? Buffer.alloc(0) : attribute(Ids.VariableTypeStructModificationTime, DataType.ULInt, encodeUVlq64(time));
+}
+
+/**
+ * The type-info container: one object per type, each with its modification time and its vartype and varname lists,
+ * the I, Q and M areas' type objects (the tag table) among them. Asked for attributes (`attributes` not empty), each
+ * type object carries only those it has (the modification time), as thePLCProgram's blocks carry only the asked ones.
+ */
+export function typeInfoContainer(model: PlusModel, attributes: readonly number[] = []): Buffer {
+  const head = objectHead(Ids.ObjectOmsTypeInfoContainer, Ids.ClassOmsTypeInfoContainer);
+  const all = [...model.types, ...model.areas.map((a) => a.type)];
+  if (attributes.length > 0) return Buffer.concat([head, ...all.map((t) => typeObjectAttributes(model, t.rid, attributes)), END]);
   const standardTypes = new Set<PlusType>();
   const markStd = (t: PlusType) => {
     if (standardTypes.has(t)) return;
@@ -96,11 +109,24 @@ export function typeInfoContainer(model: PlusModel): Buffer {
     for (const m of t.members) if (m.type) markStd(m.type);
   };
   for (const db of model.dbs) if (!db.optimized) markStd(db.type);
-  const objects = model.types.map((t) => typeObject(t, standardTypes.has(t)));
-  return Buffer.concat([objectHead(Ids.ObjectOmsTypeInfoContainer, Ids.ClassOmsTypeInfoContainer), ...objects, END]);
+  // The I, Q and M areas have fixed addresses: their tags carry a classic offset.
+  for (const area of model.areas) standardTypes.add(area.type);
+  const objects = all.map((t) => typeObject(model, t, standardTypes.has(t)));
+  return Buffer.concat([head, ...objects, END]);
 }
 
-function typeObject(type: PlusType, classic: boolean): Buffer {
+/** A type object with the asked attributes only (an Explore of it, or of the container, for attribute 529). */
+export function typeObjectAttributes(model: PlusModel, rid: number, attributes: readonly number[]): Buffer {
+  const time = attributes.includes(Ids.VariableTypeStructModificationTime) ? modificationTime(model, rid) : Buffer.alloc(0);
+  return Buffer.concat([objectHead(rid, Ids.ClassTypeInfo), time, END]);
+}
+
+/** True when `rid` is one of the model's type objects. */
+export function isTypeObject(model: PlusModel, rid: number): boolean {
+  return model.times.has(rid);
+}
+
+function typeObject(model: PlusModel, type: PlusType, classic: boolean): Buffer {
   const elements = type.members.map((m) => vartype(m, classic));
   const blocks: Buffer[] = [];
   let current: Buffer[] = [u32le(0)];
@@ -130,6 +156,7 @@ function typeObject(type: PlusType, classic: boolean): Buffer {
   return Buffer.concat([
     objectHead(type.rid, 0),
     attribute(TI_TCOM_SIZE, DataType.UDInt, encodeUVlq32(type.size)),
+    modificationTime(model, type.rid),
     Buffer.from([ElementId.VartypeList]),
     ...blocks,
     Buffer.from([ElementId.VarnameList]),

@@ -8,7 +8,7 @@
 import { ProtocolError } from '../../errors';
 import type { PlcMemory } from '../../sim/memory';
 import type { LayoutNode } from '../../symbols/layout-nodes';
-import type { DataTypeName } from '../../types';
+import type { AreaName, DataTypeName } from '../../types';
 import { DataType } from '../constants';
 import type { Reader } from '../codec/bytes';
 import { encodeSVlq32, encodeUVlq32 } from '../codec/vlq';
@@ -104,14 +104,14 @@ export function readPValue(r: Reader): Buffer {
   }
 }
 
-/** Writes `raw` (a value's bytes) into `node` of DB `db` in `memory` (so its observers see it); false when its length does not fit the member (nothing written). */
-export function writeNode(node: LayoutNode, memory: PlcMemory, db: number, raw: Buffer): boolean {
+/** Writes `raw` (a value's bytes) into `node` of DB `db` (or of the area I, Q, M) in `memory` (so its observers see it); false when its length does not fit the member (nothing written). */
+export function writeNode(node: LayoutNode, memory: PlcMemory, area: AreaName, db: number, raw: Buffer): boolean {
   if (node.kind === 'elementary' && node.dataType === 'BOOL') {
     if (raw.length !== 1) return false;
-    memory.writeBit('DB', db, node.byte, node.bit ?? 0, raw[0] !== 0);
+    memory.writeBit(area, db, node.byte, node.bit ?? 0, raw[0] !== 0);
     return true;
   }
   if (raw.length !== node.size) return false;
-  memory.write('DB', db, node.byte, raw);
+  memory.write(area, db, node.byte, raw);
   return true;
 }

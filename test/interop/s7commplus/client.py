@@ -29,6 +29,9 @@ Operations ({"op": NAME, ...}):
   list_datablocks  -> [{name, number, rid, ...}]
   browse           -> the client's browse(): [{name, access_sequence, data_type,
                    offsets...}] (bytes as hex)
+  refresh_if_changed -> the client's refresh_caches_if_program_changed(): true when
+                   the block list or a type object's modification time changed
+                   (the catalog then browsed again)
   read_tags        names: [...] -> [{name, ok, value (hex), decoded (the package's
                    own decoding: number, bool, text; dates and times as text), type, error}]
   write_tag        name, value (hex) -> null
@@ -128,6 +131,9 @@ class Runner:
 
     def op_browse(self, op):
         return hexify(self.client.browse())
+
+    def op_refresh_if_changed(self, op):
+        return bool(self.client.refresh_caches_if_program_changed())
 
     def op_read_tags(self, op):
         results = self.client.read_tags(list(op["names"]))
