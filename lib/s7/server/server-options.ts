@@ -50,7 +50,11 @@ interface S7PlusEndpoint {
   open(
     frame: Buffer,
     socket: Socket,
-    cpu: { readonly memory: PlcMemory; readonly state: 'RUN' | 'STOP' },
+    cpu: {
+      readonly memory: PlcMemory;
+      readonly state: 'RUN' | 'STOP';
+      readonly identity: { readonly orderCode: string; readonly firmware: string };
+    },
     hostile: (err: Error) => void,
   ): S7PlusLink;
 }
