@@ -8,7 +8,10 @@
  * PUT/GET's SZL gives.
  */
 import { expect } from 'chai';
+import * as fs from 'node:fs';
 import * as net from 'node:net';
+import * as os from 'node:os';
+import * as path from 'node:path';
 import { diagnose, type DoctorReport, type DoctorStep } from '../lib/doctor';
 import { createClient } from '../lib/connect';
 import type { S7Client } from '../lib/s7/client';
@@ -16,6 +19,8 @@ import { S7Server, type S7Profile } from '../lib/s7/server';
 import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
+import type { S7PlusClient } from '../lib/s7plus/client';
+import { requireS7CommPlus, startS7CommPlusServer, stopS7CommPlusPeers, type S7CommPlusPeerServer } from './support/s7commplus-peer';
 import { until } from './support/wait';
 
 const HANDSHAKE = ['tcp', 'cotp', 'InitSSL', 'TLS', 'session', 'password', 'identity', 'browse'];
@@ -199,5 +204,55 @@ describe('doctor on s7plus:// (our simulator)', function () {
     }
     expect(code).to.equal('ABORTED');
     await noConnections(server);
+  });
+});
+
+describe('doctor and info() on s7plus:// against the s7commplus emulator (an independent peer)', function () {
+  this.timeout(60_000);
+  let python: string;
+  let peer: S7CommPlusPeerServer;
+  let cert: GeneratedCertificate;
+  let dir: string;
+
+  before(async function () {
+    python = requireS7CommPlus(this);
+    cert = await generateCertificate({ commonName: 'plcwire emulator PLC' });
+    dir = fs.mkdtempSync(path.join(os.tmpdir(), 'doctor-s7plus-'));
+    const files = { cert: path.join(dir, 'cert.pem'), key: path.join(dir, 'key.pem') };
+    fs.writeFileSync(files.cert, cert.cert);
+    fs.writeFileSync(files.key, cert.key);
+    peer = await startS7CommPlusServer(python, {
+      dbs: [{ number: 1, size: 16, variables: { temperature: ['Real', 0] } }],
+      tls: files,
+      version: 1,
+    });
+    await peer.write(1, 0, Buffer.from([0x41, 0xac, 0, 0]));
+  });
+  after(async () => {
+    await stopS7CommPlusPeers();
+    if (dir) fs.rmSync(dir, { recursive: true, force: true });
+  });
+
+  it('info(): the state, protocol version and certificate; no order code or firmware from a session version without a device string', async () => {
+    const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`) as S7PlusClient;
+    await client.connect();
+    try {
+      const info = await client.info();
+      expect(info).to.deep.include({ orderCode: undefined, firmware: undefined, device: undefined, state: 'RUN', protocolVersion: 2 });
+      expect(info.certificate!.fingerprint).to.equal(cert.fingerprint.toUpperCase());
+    } finally {
+      await client.close();
+    }
+  });
+
+  it('the walk passes to the browse, which says the PLC gives no type information, and reads an address of its DB', async () => {
+    const r = await diagnose(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`, ['DB1.DBD0:REAL']);
+    expect(r.ok, JSON.stringify(r.steps, null, 1)).to.equal(true);
+    expect(names(r)).to.deep.equal([...HANDSHAKE, 'address DB1.DBD0:REAL']);
+    expect(by(r).identity!.detail).to.equal('the CPU does not say what it is (no device string in its session); in RUN');
+    expect(by(r).browse!.detail).to.equal('1 data block (0 optimized, 0 standard, 1 without type information), 0 entries');
+    expect(by(r).browse!.hint).to.contain('no type information');
+    expect(by(r)['address DB1.DBD0:REAL']!.detail).to.equal('DB1.DBD0:REAL = 21.5 (REAL)');
+    await peer.waitForNoClients(10_000);
   });
 });
