@@ -18,6 +18,7 @@ import type { S7Client } from '../lib/s7/client';
 import { S7Server, type S7Profile } from '../lib/s7/server';
 import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
+import { compileSymbols } from '../lib/symbols';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
 import type { S7PlusClient } from '../lib/s7plus/client';
 import { requireS7CommPlus, startS7CommPlusServer, stopS7CommPlusPeers, type S7CommPlusPeerServer } from './support/s7commplus-peer';
@@ -51,6 +52,29 @@ describe('doctor on s7plus:// (our simulator)', function () {
   before(async () => (cert = await generateCertificate({ commonName: 'plcwire doctor test' })));
   after(async () => {
     for (const s of servers) await s.close();
+  });
+
+  it('on s7:// an optimized block says to use s7plus:// with the URL to try: a name the sources mark optimized, an absolute address in it; that URL leads to the pin and the value', async () => {
+    const { server, fingerprint } = await simulator();
+    const s7url = `s7://127.0.0.1:${server.port}?slot=1&timeout=5000`;
+    const symbols = compileSymbols(SOURCES, { db: DB_NUMBERS });
+    const plusUrl = `s7plus://127.0.0.1:${server.port}`;
+    const byName = await diagnose(s7url, ['"Recipe".Step'], { symbols });
+    const named = byName.steps.at(-1)!;
+    expect(named).to.include({ step: 'symbol "Recipe".Step', ok: false });
+    expect(named.hint).to.contain(`plcwire doctor ${plusUrl} "<name>"`);
+    const byAddress = await diagnose(s7url, ['DB2,INT0']);
+    const address = byAddress.steps.at(-1)!;
+    expect(address).to.include({ step: 'address DB2,INT0', ok: false });
+    expect(address.detail).to.contain('probably an optimized DB');
+    expect(address.hint).to.contain(`plcwire doctor ${plusUrl} `);
+    // The URL of the hint: the TLS step shows the certificate and the URL that pins it, which reads the member.
+    const first = await diagnose(plusUrl);
+    const pin = /pin it: (s7plus:\/\/\S+)$/.exec(by(first).TLS!.hint!)![1]!;
+    expect(pin).to.equal(`${plusUrl}?fingerprint=${fingerprint}`);
+    const read = await diagnose(pin, ['"Recipe".Step']);
+    expect(by(read)['symbol "Recipe".Step']!.detail).to.equal('"Recipe".Step = 3 (INT)');
+    await noConnections(server);
   });
 
   it('walks every step of a pinned connection and reads a name of the optimized DB, one of the standard DB and an address, each with its value and type', async () => {
