@@ -53,7 +53,8 @@ interface S7PlusEndpoint {
     cpu: {
       readonly memory: PlcMemory;
       readonly state: 'RUN' | 'STOP';
-      readonly identity: { readonly orderCode: string; readonly firmware: string };
+      /** The CPU's services: what it says about itself (the order code and firmware of its SZL). */
+      readonly cpu: { readonly identity: { readonly orderCode: string; readonly firmware: string } };
     },
     hostile: (err: Error) => void,
   ): S7PlusLink;

@@ -19,7 +19,7 @@ import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from '../codec';
 import { firstItems } from './items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './jobs';
-import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuIdentity, type CpuProfile } from './profiles';
+import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuProfile } from './profiles';
 import type { S7Faults, S7PlusLink, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
 
 export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './profiles';
@@ -108,11 +108,6 @@ export class S7Server extends EventEmitter {
   /** RUN or STOP. A CPU in STOP still serves reads and writes of its memory (and every system service). */
   get state(): SimulatorMode {
     return this.cpu.mode;
-  }
-
-  /** What the CPU says about itself: SZL 0x0011/0x001C over PUT/GET, the device string over S7CommPlus. */
-  get identity(): Readonly<CpuIdentity> {
-    return this.cpu.identity;
   }
 
   /** Puts the CPU in STOP, logging the cause in the diagnostic buffer (default: a PLC stop command, 0x4304); false when it was in STOP. */

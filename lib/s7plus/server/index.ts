@@ -83,12 +83,13 @@ export class S7PlusService {
     cpu: {
       readonly memory: PlcMemory;
       readonly state: 'RUN' | 'STOP';
-      /** The profile's identity: the same order code and firmware PUT/GET's SZL gives. */
-      readonly identity?: { readonly orderCode: string; readonly firmware: string };
+      /** The S7 simulator's CPU services: its profile's identity, the same order code and firmware PUT/GET's SZL gives. */
+      readonly cpu?: { readonly identity: { readonly orderCode: string; readonly firmware: string } };
     },
     hostile: (err: Error) => void,
   ): PlusLink {
-    const device = cpu.identity ? formatDeviceString(cpu.identity.orderCode, cpu.identity.firmware) : undefined;
+    const identity = cpu.cpu?.identity;
+    const device = identity ? formatDeviceString(identity.orderCode, identity.firmware) : undefined;
     return new PlusConnection(
       {
         cpu: { model: this.model, memory: cpu.memory, mode: () => cpu.state, maxItems: this.maxItems },
