@@ -86,7 +86,7 @@ describe('doctor on s7plus:// (our simulator)', function () {
     expect(seen).to.deep.equal(r.steps);
     const s = by(r);
     expect(s.cotp!.detail).to.contain('"SIMATIC-ROOT-HMI"');
-    expect(s.TLS!.detail).to.match(/^TLSv1\.[23]; the PLC's certificate pinned by fingerprint=/);
+    expect(s.TLS!.detail).to.match(/^TLSv1\.[23]; the PLC's certificate matches the URL's fingerprint: SHA-256 /);
     expect(s.TLS!.detail).to.contain(fingerprint).and.contain('CN=plcwire doctor test');
     expect(s.session!.detail).to.match(/^S7CommPlus V2 with integrity ids, session id 0x[0-9a-f]+$/);
     expect(s.identity!.detail).to.equal('6ES7 516-3AN02-0AB0 firmware V3.1; in RUN');
@@ -138,7 +138,7 @@ describe('doctor on s7plus:// (our simulator)', function () {
     const r = await diagnose(url.replace(/fingerprint=[0-9A-F]+/, 'insecure=true'));
     const tls = by(r).TLS!;
     expect(tls.ok).to.equal(true);
-    expect(tls.detail).to.contain('accepted unchecked (insecure=true)');
+    expect(tls.detail).to.contain('was accepted unchecked (insecure=true)');
     expect(tls.hint).to.contain(`fingerprint=${fingerprint}`).and.not.contain('insecure=true&');
     await noConnections(server);
   });

@@ -158,7 +158,7 @@ describe('editor in Chromium: the connection dialog on s7plus://', function () {
         'address DB1.DBW4:INT:ok',
       ]);
       expect(await page.textContent('#node-config-plcwire-test-summary')).to.equal(CATALOG.editor.testOk);
-      expect(await page.textContent('li[data-step="TLS"]')).to.contain(`pinned by fingerprint=`);
+      expect(await page.textContent('li[data-step="TLS"]')).to.contain("matches the URL's fingerprint");
       expect(await page.textContent('li[data-step="identity"]')).to.contain('6ES7 516-3AN02-0AB0 firmware V3.1');
       // A typed password reaches the runtime's doctor and is in no answer.
       const secret = 'typed-Secret-42';

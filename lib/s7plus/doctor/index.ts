@@ -222,7 +222,11 @@ class PlusDoctor {
       case 'TLS': {
         const { certificate: c, protocol, trust } = passed as Extract<HandshakeStep, { step: 'TLS' }>;
         const how =
-          trust === 'pinned' ? 'pinned by fingerprint=' : trust === 'ca' ? 'signed by the CA of ca=' : 'accepted unchecked (insecure=true)';
+          trust === 'pinned'
+            ? "matches the URL's fingerprint"
+            : trust === 'ca'
+              ? 'is signed by the CA of ca='
+              : 'was accepted unchecked (insecure=true)';
         this.pass(
           'TLS',
           `${protocol}; the PLC's certificate ${how}: SHA-256 ${c.fingerprint}, subject ${c.subject}, valid ${c.validFrom} to ${c.validTo}`,
