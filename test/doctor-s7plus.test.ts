@@ -34,8 +34,11 @@ describe('doctor on s7plus:// (our simulator)', function () {
   let cert: GeneratedCertificate;
   const servers: S7Server[] = [];
 
-  async function simulator(profile: S7Profile = 's7-1500'): Promise<{ server: S7Server; url: string; fingerprint: string }> {
-    const service = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key } });
+  async function simulator(
+    profile: S7Profile = 's7-1500',
+    served: GeneratedCertificate = cert,
+  ): Promise<{ server: S7Server; url: string; fingerprint: string }> {
+    const service = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: served.cert, key: served.key } });
     const server = new S7Server({ port: 0, profile, s7plus: service });
     await server.listen();
     servers.push(server);
@@ -131,6 +134,41 @@ describe('doctor on s7plus:// (our simulator)', function () {
     const again = await diagnose(tryUrl, ['"Recipe".Step']);
     expect(again.ok, JSON.stringify(again.steps)).to.equal(true);
     await noConnections(server);
+  });
+
+  it('ca=: a certificate the CA signed passes the TLS step saying so; another CA, a wrong pin and an expired certificate fail it with what to do', async () => {
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'doctor-s7plus-ca-'));
+    try {
+      const ca = await generateCertificate({ commonName: 'TIA project CA', ca: true });
+      const other = await generateCertificate({ commonName: 'another CA', ca: true });
+      const caFile = path.join(dir, 'ca.pem');
+      const otherFile = path.join(dir, 'other.pem');
+      fs.writeFileSync(caFile, ca.cert);
+      fs.writeFileSync(otherFile, other.cert);
+      const leaf = await generateCertificate({ commonName: 'PLC_2', issuer: ca, hosts: ['127.0.0.1'] });
+      const { server, url, fingerprint } = await simulator('s7-1500', leaf);
+      const base = url.replace(/fingerprint=[0-9A-F]+&/, '');
+      const signed = await diagnose(`${base}&ca=${encodeURIComponent(caFile)}`);
+      expect(signed.ok, JSON.stringify(signed.steps)).to.equal(true);
+      expect(by(signed).TLS!.detail).to.contain('is signed by the CA of ca=').and.contain('CN=PLC_2');
+      const foreign = await diagnose(`${base}&ca=${encodeURIComponent(otherFile)}`);
+      expect(names(foreign).at(-1)).to.equal('TLS');
+      expect(by(foreign).TLS!.detail).to.contain('(not-signed-by-ca)');
+      expect(by(foreign).TLS!.hint).to.contain('ca=FILE').and.contain(`fingerprint=${fingerprint}`);
+      const wrongPin = await diagnose(url.replace(/fingerprint=[0-9A-F]+/, `fingerprint=${'AB'.repeat(32)}`));
+      expect(by(wrongPin).TLS!.detail).to.contain('(wrong-pin)').and.contain(`SHA-256 ${fingerprint}`);
+      expect(by(wrongPin).TLS!.hint).to.contain(`fingerprint=${fingerprint}`);
+      await noConnections(server);
+
+      const old = await generateCertificate({ notBefore: new Date('2020-01-01'), notAfter: new Date('2021-01-01') });
+      const expired = await simulator('s7-1500', old);
+      const r = await diagnose(expired.url);
+      expect(by(r).TLS!.detail).to.contain('(expired)');
+      expect(by(r).TLS!.hint).to.contain('Renew');
+      await noConnections(expired.server);
+    } finally {
+      fs.rmSync(dir, { recursive: true, force: true });
+    }
   });
 
   it('insecure=true passes the TLS step with a hint that gives the URL pinning the certificate it took unchecked', async () => {
