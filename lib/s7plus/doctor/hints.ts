@@ -28,8 +28,6 @@ export const PLUS_HINT = {
   session:
     'The handshake worked but the PLC did not open a session: check that the CPU has a free connection and its firmware (docs/s7commplus.md, "What the PLC needs"); run the doctor again, and report it with this output if it repeats.',
   insecure: (url: string): string => `insecure=true accepts any certificate: pin this one instead: ${url}`,
-  noPassword:
-    'A CPU with a protection level refuses writes (or reads) without its password: give it as PLCWIRE_PASSWORD, with --password-file, as connect(url, { password }) or in the connection node.',
   password:
     "Check the password against the access level in TIA Portal (the CPU's Properties → Protection & Security → Access level), or lower the protection and download.",
   inStop:

@@ -201,8 +201,7 @@ class PlusDoctor {
     } finally {
       this.signal.removeEventListener('abort', onAbort);
     }
-    if (password === undefined)
-      this.pass('password', 'none given: the session has the access the CPU grants without a password', PLUS_HINT.noPassword);
+    if (password === undefined) this.pass('password', 'none given: the session has the access the CPU grants without a password');
   }
 
   private passed(e: S7PlusEndpoint, where: string, passed: HandshakeStep | { step: string; detail?: string }): void {
