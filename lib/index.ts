@@ -101,7 +101,7 @@ export type { CpuServices, ServiceSession } from './s7/server/services';
 /** S7CommPlus on the S7 simulator's port (`new S7Server({ s7plus: new S7PlusService({ sources, tls }) })`), issue #25. */
 export { S7PlusService, type S7PlusOptions } from './s7plus/server';
 export { type PlcInfo, type ClockOptions } from './s7/client';
-export { diagnose, type DoctorStep, type DoctorReport, type DiagnoseOptions } from './s7/doctor';
+export { diagnose, type DoctorStep, type DoctorReport, type DiagnoseOptions } from './doctor';
 export {
   SZL,
   parseSzl,

@@ -321,17 +321,20 @@ module.exports = function (RED) {
 
   /**
    * Test connection: POST { url, addresses?, timeout?, symbolSources?,
-   * dbNumbers?, strictSymbols? } → the library's connection doctor, { ok,
+   * dbNumbers?, strictSymbols?, id?, password? } → the library's connection doctor, { ok,
    * steps: [{ step, ok, detail, hint? }] }; names among the addresses resolve
    * through the sources as the connection's reads will (a `symbols` step
    * names the file and line when they do not compile). It never
    * outlives its request: when the editor closes it (dialog closed, page left),
    * the walk is aborted, and the doctor closes every socket it opened on every
-   * path. Nothing is written to the PLC.
+   * path. Nothing is written to the PLC. An s7plus:// URL walks S7CommPlus
+   * (TLS, session, password, browse) with the password typed in the dialog or
+   * the node's credential (by id); no answer carries it.
    */
   RED.httpAdmin.post('/plcwire/doctor', canRead, function (req, res) {
     const body = req.body || {};
     const url = String(body.url || '').trim();
+    const password = /^s7plus:/i.test(url) ? s7plusAdmin.passwordOf(RED, body) : undefined;
     let addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 100).map(String) : [];
     // The dialog's sources as it holds them (not yet deployed ones too), compiled as the connection node compiles them at start.
     const compiled = symbols.compileCached(symbolConfig(body));
@@ -364,6 +367,7 @@ module.exports = function (RED) {
         timeout,
         signal: stop.signal,
         ...(compiled.table ? { symbols: compiled.table, strictSymbols: body.strictSymbols === true } : {}),
+        ...(password !== undefined ? { password } : {}),
       })
       .then(
         (report) => report,

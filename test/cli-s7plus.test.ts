@@ -89,21 +89,38 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
     fs.rmSync(tmp, { recursive: true, force: true });
   });
 
-  it('info: the CPU state and the certificate of the TLS session the fingerprint pinned', async () => {
+  it('info: the identity PUT/GET gives for the profile (order code, firmware), the CPU state and the certificate of the TLS session the fingerprint pinned', async () => {
     const r = await done(['info', url, '--json']);
     expect(r.code, r.err).to.equal(EXIT.OK);
-    const info = JSON.parse(r.out) as { state: string; certificate: { fingerprint: string; subject: string } };
-    expect(info.state).to.equal('RUN');
+    const info = JSON.parse(r.out) as Record<string, unknown> & { certificate: { fingerprint: string; subject: string } };
+    expect(info).to.include({
+      orderCode: '6ES7 516-3AN02-0AB0',
+      firmware: 'V3.1',
+      state: 'RUN',
+      device: '1;6ES7 516-3AN02-0AB0 ;V3.1',
+      protocolVersion: 2,
+    });
     expect(info.certificate.fingerprint).to.equal(fingerprint);
     expect(info.certificate.subject).to.include('CN=plcwire simulator');
+    // The same order code as s7:// tells, and its firmware's major.minor: the device string carries no more.
+    const s7 = JSON.parse((await done(['info', s7url, '--json'])).out) as { orderCode: string; firmware: string };
+    expect(s7.orderCode).to.equal(info.orderCode);
+    expect(s7.firmware.startsWith(`${info.firmware as string}.`)).to.equal(true);
     const text = await done(['info', url]);
-    expect(text.out).to.match(/^state: RUN\n/);
+    expect(text.out).to.match(/^orderCode: 6ES7 516-3AN02-0AB0\nfirmware: V3\.1\nstate: RUN\n/);
   });
 
-  it('blocks: the data blocks with their names (standard and optimized); a type S7CommPlus does not list is refused before connecting', async () => {
+  it('blocks: the data blocks with their names and access (standard, optimized); a type S7CommPlus does not list is refused before connecting', async () => {
     const all = await done(['blocks', url]);
     expect(all.code, all.err).to.equal(EXIT.OK);
-    expect(all.out).to.equal('DB1  Tank\nDB2  Recipe\n');
+    expect(all.out).to.equal('DB1  Tank  standard\nDB2  Recipe  optimized\n');
+    const json = await done(['blocks', url, '--json']);
+    expect(JSON.parse(json.out)).to.deep.equal({
+      DB: [
+        { number: 1, name: 'Tank', optimized: false },
+        { number: 2, name: 'Recipe', optimized: true },
+      ],
+    });
     const db = await done(['blocks', url, 'DB', '--json']);
     expect(JSON.parse(db.out)).to.deep.equal({ type: 'DB', numbers: [1, 2] });
     const fb = await done(['blocks', url, 'FB']);
@@ -111,6 +128,42 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
     expect(fb.err).to.include('cannot list FB blocks (only data blocks)');
     const one = await done(['blocks', url, 'DB', '1']);
     expect(one.err).to.include('cannot read block information');
+  });
+
+  it('doctor: the S7CommPlus walk in text and --json, a name of the optimized block with its value and type; unpinned, the TLS step fails (exit 3) with the URL that pins it', async () => {
+    const r = await done(['doctor', url, '"Recipe".Step', '--json']);
+    expect(r.code, r.out + r.err).to.equal(EXIT.OK);
+    const report = JSON.parse(r.out) as { ok: boolean; steps: { step: string; ok: boolean; detail: string }[] };
+    expect(report.ok).to.equal(true);
+    expect(report.steps.map((s) => s.step)).to.deep.equal([
+      'tcp',
+      'cotp',
+      'InitSSL',
+      'TLS',
+      'session',
+      'password',
+      'identity',
+      'browse',
+      'symbol "Recipe".Step',
+    ]);
+    expect(report.steps.at(-1)!.detail).to.match(/^"Recipe"\.Step = -?\d+ \(INT\)$/);
+    const text = await done(['doctor', url.replace(/fingerprint=[0-9A-F]+&?/, '')]);
+    expect(text.code).to.equal(EXIT.CONNECTION);
+    expect(text.out)
+      .to.match(/^ok {3}tcp: /m)
+      .and.match(/^FAIL TLS: the PLC's certificate was refused/m);
+    expect(text.out).to.contain(`fix: Check the fingerprint`).and.contain(`fingerprint=${fingerprint}`);
+    const missing = await done(['doctor', url, '"Recipe".Nope']);
+    expect(missing.code).to.equal(EXIT.TAG_ERROR);
+    expect(missing.out).to.match(/^FAIL symbol "Recipe".Nope: /m);
+  });
+
+  it('doctor with a password (PLCWIRE_PASSWORD): it goes to the client, never to the output, text or --json', async () => {
+    for (const json of [[], ['--json']]) {
+      const r = await done(['doctor', url, ...json], { PLCWIRE_PASSWORD: SECRET });
+      expect(r.out + r.err).to.not.contain(SECRET);
+      expect(r.out).to.contain('password');
+    }
   });
 
   it('read and write by address in the standard DB over S7CommPlus, the same bytes as over s7://', async () => {

@@ -577,7 +577,7 @@ describe('plcwire system commands (the installed binary against the simulator)',
     const info = JSON.parse(r.out) as Record<string, unknown>;
     expect(info).to.include({
       orderCode: '6ES7 516-3AN02-0AB0',
-      firmware: 'V2.9.2',
+      firmware: 'V3.1.0',
       moduleTypeName: 'CPU 1516-3 PN/DP',
       serialNumber: 'S V-PW0000042019',
       asName: 'PLCWIRE-SIM',

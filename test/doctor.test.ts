@@ -76,7 +76,7 @@ describe('connection doctor', function () {
       expect(by.cotp!.detail).to.equal('the CPU accepted the connection request (rack 0, slot 1: called TSAP 0x0101, calling TSAP 0x0100)');
       expect(by.setup!.detail).to.equal('PDU 960 bytes (asked 960), 8 parallel jobs (AmQ)');
       expect(by.identity!.detail)
-        .to.contain('CPU 1516-3 PN/DP (6ES7 516-3AN02-0AB0) firmware V2.9.2')
+        .to.contain('CPU 1516-3 PN/DP (6ES7 516-3AN02-0AB0) firmware V3.1.0')
         .and.contain('in RUN')
         .and.contain('family S7-1500');
       expect(by.protection!.detail).to.match(/^level 1: no protection/);

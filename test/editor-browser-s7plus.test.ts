@@ -4,7 +4,8 @@
  * shows the TLS fields (certificate, CA file, TLS, insecure, password) and
  * hides the S7comm ones; "Get certificate" shows the PLC certificate's
  * fingerprint, subject and validity (the en-US catalog's text), and "Pin"
- * puts the fingerprint into the field and the URL.
+ * puts the fingerprint into the field and the URL; "Test connection" walks
+ * the S7CommPlus doctor, a typed password in no answer.
  */
 import { expect } from 'chai';
 import * as fs from 'node:fs';
@@ -113,6 +114,69 @@ describe('editor in Chromium: the connection dialog on s7plus://', function () {
           }),
       );
       expect(names).to.include('"Recipe".Step');
+      expect(errors, errors.join('\n')).to.deep.equal([]);
+    } finally {
+      await context.close();
+    }
+  });
+
+  it('Test connection on s7plus:// walks the S7CommPlus steps in the dialog (TLS with the pinned certificate, session, identity, browse, the read node address); a typed password goes to the runtime and never comes back', async () => {
+    const { context, page, errors } = await openEditor(browser, red, 'en-US', 'read');
+    try {
+      await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn'));
+      await page.waitForSelector('#node-config-plcwire-protocol', { state: 'visible', timeout: 10_000 });
+      await page.selectOption('#node-config-plcwire-protocol', 's7plus');
+      await page.fill('#node-config-plcwire-fingerprint', service.fingerprint!);
+      await page.dispatchEvent('#node-config-plcwire-fingerprint', 'change');
+      await page.waitForFunction(
+        (fp) => (globalThis as any).document.querySelector('#node-config-input-url').value.includes(`fingerprint=${fp}`),
+        service.fingerprint!,
+        { timeout: 5_000 },
+      );
+      await page.waitForSelector('#node-config-plcwire-test', { state: 'visible', timeout: 5_000 });
+      expect(await page.isVisible('#node-config-plcwire-test-hint')).to.equal(true);
+      expect(await page.textContent('#node-config-plcwire-test-hint')).to.equal(CATALOG.hint.testS7plus);
+      await page.click('#node-config-plcwire-test');
+      await page.waitForFunction(
+        (done) =>
+          [done.ok, done.failed].includes((globalThis as any).document.querySelector('#node-config-plcwire-test-summary').textContent),
+        { ok: CATALOG.editor.testOk, failed: CATALOG.editor.testFailed },
+        { timeout: 30_000 },
+      );
+      const steps = await page.$$eval('#node-config-plcwire-test-steps li', (lis) =>
+        lis.map((li) => `${li.getAttribute('data-step')}:${li.className.includes('ok') ? 'ok' : 'bad'}`),
+      );
+      expect(steps).to.deep.equal([
+        'tcp:ok',
+        'cotp:ok',
+        'InitSSL:ok',
+        'TLS:ok',
+        'session:ok',
+        'password:ok',
+        'identity:ok',
+        'browse:ok',
+        'address DB1.DBW4:INT:ok',
+      ]);
+      expect(await page.textContent('#node-config-plcwire-test-summary')).to.equal(CATALOG.editor.testOk);
+      expect(await page.textContent('li[data-step="TLS"]')).to.contain("matches the URL's fingerprint");
+      expect(await page.textContent('li[data-step="identity"]')).to.contain('6ES7 516-3AN02-0AB0 firmware V3.1');
+      // A typed password reaches the runtime's doctor and is in no answer.
+      const secret = 'typed-Secret-42';
+      const answer = await page.evaluate(
+        ({ url, password }) =>
+          new Promise<string>((resolve) => {
+            const $ = (globalThis as any).$;
+            $.ajax({
+              url: 'plcwire/doctor',
+              type: 'POST',
+              contentType: 'application/json',
+              data: JSON.stringify({ url, password, id: 'conn' }),
+              complete: (xhr: any) => resolve(xhr.responseText),
+            });
+          }),
+        { url: await page.inputValue('#node-config-input-url'), password: secret },
+      );
+      expect(answer).to.contain('"step":"password"').and.not.contain(secret);
       expect(errors, errors.join('\n')).to.deep.equal([]);
     } finally {
       await context.close();

@@ -92,7 +92,7 @@ describe('S7 system services: client against the simulator', function () {
         const list = await client.readSzl(id, index[id] ?? 0);
         expect(list.id, `0x${id.toString(16)}`).to.equal(id);
       }
-      expect(decodeModuleIdentification(await client.readSzl(0x0111, 7)).firmware).to.equal('V4.4.0');
+      expect(decodeModuleIdentification(await client.readSzl(0x0111, 7)).firmware).to.equal('V4.7.0');
     });
 
     it('an SZL the CPU lacks is SZL_NOT_AVAILABLE naming the request, and the connection stays up', async () => {

@@ -272,7 +272,8 @@ describe('symbols: blocks with optimized access', () => {
             '"Recipe".Heater.Power is in DB2 "Recipe", a block with optimized access: it has no absolute address to read or write by. ' +
             'Read it by name over s7plus:// (S7CommPlus), or untick "Optimized block access" in the block\'s properties in TIA Portal, download it and use PUT/GET',
           hint:
-            'Read this name over an s7plus:// URL (S7CommPlus: the PLC finds the member by name, which PUT/GET cannot), with the same sources. ' +
+            `Read this name over S7CommPlus (the PLC finds the member by name, which PUT/GET cannot), with the same sources: try plcwire doctor s7plus://127.0.0.1:${server.port} "<name>" ` +
+            "(it shows the PLC's certificate and the fingerprint= that pins it). " +
             'Or switch the DB to standard access: TIA Portal → the DB\'s Properties → Attributes → untick "Optimized block access", compile and download, ' +
             'then export its source again (Generate source from blocks) and read it over s7:// with PUT/GET.',
         });

@@ -62,7 +62,8 @@ example:
   plcwire browse "s7plus://192.168.0.1?fingerprint=<64 hex digits the simulator or TIA shows>" --json`,
   info: `usage: plcwire info <url> [--json]
 Prints what the PLC's client can tell: over s7:// the CPU's identity, its state (RUN, STOP, ...), protection,
-PDU size, parallel jobs and clock; over s7plus:// its state and the certificate of the TLS session.
+PDU size, parallel jobs and clock; over s7plus:// its order code and firmware (the device string of the
+session: major.minor), its state, the protocol version and the certificate of the TLS session.
 ${PASSWORD_OPTION}
 example:
   plcwire info "s7://192.168.0.1?rack=0&slot=1" --json`,
@@ -82,7 +83,7 @@ example:
   blocks: `usage: plcwire blocks <url> [TYPE [NUMBER]] [--json]
 Without a type: the count per type; with a type (OB, FB, FC, DB, SDB, SFC, SFB) its numbers; with a number its
 block info. S7-1200/1500 have no block functions over S7comm; over s7plus:// they list their data blocks
-with names (no counts of code blocks, no block info).
+with names and access (standard or optimized; no counts of code blocks, no block info).
 example:
   plcwire blocks "s7://192.168.0.10?rack=0&slot=2" DB 10 --json`,
   cpu: `usage: plcwire cpu <url> stop|start|cold-start [--yes] [--json]
@@ -90,11 +91,15 @@ Changes the CPU's mode and prints the state after. The URL needs control=true; -
 PLC that is not on this machine.
 example:
   plcwire cpu "s7://192.168.0.10?rack=0&slot=2&control=true" stop --yes`,
-  doctor: `usage: plcwire doctor <url> [address...] [--json] [--timeout ms]
-Walks the connection step by step and stops at the first failure with the fix in words.
+  doctor: `usage: plcwire doctor <url> [address|name...] [--json] [--timeout ms]
+Walks the connection step by step and stops at the first failure with the fix in words. Over s7plus://:
+TCP, COTP, InitSSL, TLS (the PLC's certificate; refused, it prints the URL with the fingerprint= that pins it),
+the session, the password, the identity, the browse, then each name or address with its value and type.
   --timeout ms       the deadline of the whole walk (default 20000)
-example:
-  plcwire doctor "s7://192.168.0.1?rack=0&slot=1" DB1.DBW0`,
+${PASSWORD_OPTION}
+examples:
+  plcwire doctor "s7://192.168.0.1?rack=0&slot=1" DB1.DBW0
+  plcwire doctor "s7plus://192.168.0.1" '"Recipe".Step'`,
   serve: `usage: plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo]
                    [--layout file.json] [--max-items N] [--source Tank.db... --db Tank=1...]
        plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]

@@ -5,11 +5,12 @@
  * refused before connecting unless the URL says control=true, and needs
  * --yes from a script or for a PLC that is not this machine.
  */
-import { PlcError } from '../errors';
+import { isLinkError, PlcError } from '../errors';
+import type { SymbolTable } from '../symbols/model';
 import { S7Client } from '../s7/client';
 import { BLOCK_TYPES, type BlockType } from '../s7/constants';
 import { decodeDiagnosticBuffer } from '../s7/codec/diagnostics';
-import { diagnose, type DoctorStep } from '../s7/doctor';
+import { diagnose, type DoctorStep } from '../doctor';
 import {
   decodeCommunication,
   decodeComponentIdentification,
@@ -53,6 +54,7 @@ interface SystemServices {
   certificate?: { fingerprint: string; subject: string; validFrom: string; validTo: string } | undefined;
   listBlocks?(options?: RequestOptions): Promise<Record<string, number>>;
   dataBlocks?(options?: RequestOptions): Promise<{ number: number; name: string }[]>;
+  browse?(options?: RequestOptions): Promise<SymbolTable>;
 }
 
 /** The URL's client (with the password of an s7plus:// URL), unconnected, seen through the services it may offer. */
@@ -222,15 +224,46 @@ export async function blocks(rest: string[], args: ParsedArgs, io: CliIo): Promi
   if (!dataBlocks) throw notOffered(endpoint, 'list blocks');
   if (numberText !== undefined) throw notOffered(endpoint, 'read block information');
   if (type !== undefined && type !== 'DB') throw notOffered(endpoint, `list ${type} blocks (only data blocks)`);
-  const list = await withClient(client, io, () => dataBlocks.call(client, { signal: io.signal }));
+  const list = await withClient(client, io, async () => {
+    const blocks = await dataBlocks.call(client, { signal: io.signal });
+    return withAccess(blocks, client, io);
+  });
   if (type === 'DB') {
     const numbers = list.map((b) => b.number);
     print(io, args, { type, numbers }, () => [numbers.length === 0 ? 'no DB blocks' : `DB: ${numbers.join(' ')}`]);
   } else {
-    // The data blocks with their names: what S7CommPlus tells (no counts of code blocks).
-    print(io, args, { DB: list }, () => (list.length === 0 ? ['no DB blocks'] : list.map((b) => `DB${b.number}  ${b.name}`)));
+    // The data blocks with their names and access: what S7CommPlus tells (no counts of code blocks).
+    const access = (o: boolean | null) => (o === null ? 'access unknown' : o ? 'optimized' : 'standard');
+    print(io, args, { DB: list }, () =>
+      list.length === 0 ? ['no DB blocks'] : list.map((b) => `DB${b.number}  ${b.name}  ${access(b.optimized)}`),
+    );
   }
   return EXIT.OK;
+}
+
+/**
+ * Each data block with its access (optimized or standard), from the client's
+ * browse of the blocks' type objects; null where it cannot tell (no browse,
+ * or a PLC that gives no type information, as the s7commplus emulator).
+ */
+async function withAccess(
+  blocks: { number: number; name: string }[],
+  client: SystemServices,
+  io: CliIo,
+): Promise<{ number: number; name: string; optimized: boolean | null }[]> {
+  let table: SymbolTable | undefined;
+  if (client.browse && blocks.length > 0) {
+    try {
+      table = await client.browse({ signal: io.signal });
+    } catch (err) {
+      if (io.signal.aborted) throw err;
+      if (!(err instanceof PlcError) || isLinkError(err)) throw err;
+    }
+  }
+  return blocks.map((b) => {
+    const summary = table?.blocks.find((s) => s.db === b.number);
+    return { number: b.number, name: b.name, optimized: summary ? summary.optimized === true : null };
+  });
 }
 
 async function s7Blocks(
@@ -281,7 +314,11 @@ export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promi
   const url = rest[0];
   if (url === undefined) throw new UsageError('doctor needs a PLC url');
   // A URL that does not parse is a usage error, as for every command; the doctor itself starts at the name.
-  if (parseUrl(url).protocol !== 's7') throw new UsageError('doctor speaks S7 only: give an s7:// URL');
+  const endpoint = parseUrl(url);
+  if (endpoint.protocol !== 's7' && endpoint.protocol !== 's7plus')
+    throw new UsageError('doctor checks S7 and S7CommPlus connections: give an s7:// or s7plus:// URL');
+  // The password of an s7plus:// URL (PLCWIRE_PASSWORD, --password-file): to the client only, never in a step.
+  const password = passwordOption(endpoint, args);
   const json = args.flags.has('json');
   const timeout = args.flags.has('timeout') ? intFlag(args, 'timeout', 20_000, 1, 600_000) : undefined;
   // Names resolve through --symbols (with --db, --strict-symbols) as they do for read: the same parsing, the same table.
@@ -295,6 +332,7 @@ export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promi
   const report = await diagnose(url, rest.slice(1), {
     signal: io.signal,
     ...named,
+    ...password,
     ...(timeout !== undefined ? { timeout } : {}),
     ...(onStep ? { onStep } : {}),
   });

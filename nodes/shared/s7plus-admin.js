@@ -70,6 +70,17 @@ async function peekCertificate(endpoint, signal) {
   }
 }
 
+/**
+ * The PLC's password of a dialog's request: the one typed in the dialog
+ * (not Node-RED's placeholder for a stored one), else the deployed node's
+ * credential (by id); undefined without either. Never part of an answer.
+ */
+function passwordOf(RED, body) {
+  const stored = body.id ? RED.nodes.getCredentials(String(body.id)) : undefined;
+  const typed = typeof body.password === 'string' && body.password !== '' && body.password !== '__PWRD__' ? body.password : undefined;
+  return typed !== undefined ? typed : stored && stored.password ? stored.password : undefined;
+}
+
 function failure(err) {
   return { ok: false, code: (err && err.code) || 'PLC_ERROR', message: err && err.message ? err.message : String(err) };
 }
@@ -94,9 +105,7 @@ module.exports = function s7plusAdmin(RED, canRead) {
     Promise.resolve()
       .then(async () => {
         const endpoint = s7plusEndpoint(body.url);
-        const stored = body.id ? RED.nodes.getCredentials(String(body.id)) : undefined;
-        const typed = typeof body.password === 'string' && body.password !== '' && body.password !== '__PWRD__' ? body.password : undefined;
-        const password = typed !== undefined ? typed : stored && stored.password ? stored.password : undefined;
+        const password = passwordOf(RED, body);
         client = plc.createClient(endpoint, password !== undefined ? { password } : {});
         if (typeof client.browse !== 'function')
           throw new plc.PlcError('NOT_SUPPORTED', 'this S7CommPlus client cannot browse the PLC yet');
@@ -112,3 +121,5 @@ module.exports = function s7plusAdmin(RED, canRead) {
       });
   });
 };
+
+module.exports.passwordOf = passwordOf;

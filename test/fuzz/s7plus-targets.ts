@@ -13,6 +13,7 @@ import {
   cpuStateOf,
 } from '../../lib/s7plus/codec/explore';
 import { encodeFrames, S7pFrameReader } from '../../lib/s7plus/codec/frame';
+import { deviceString, parseDeviceString } from '../../lib/s7plus/codec/identity';
 import { decodeObject } from '../../lib/s7plus/codec/object';
 import { decodePValue } from '../../lib/s7plus/codec/pvalue';
 import {
@@ -99,6 +100,16 @@ export function s7plusTargets(): FuzzTarget[] {
       },
     },
     { name: 'S7+ decodePValue', seeds: values, run: (b) => void decodePValue(b, 0) },
+    {
+      // The CPU's identity: a ServerSessionVersion struct with its device string, as an S7-1200 sends it (legitimation.py's example).
+      name: 'S7+ device string',
+      seeds: [Buffer.from('00170000013a823b000403823f00151b313b36455337203231352d31424734302d30584230203b56342e3200', 'hex'), ...values],
+      run: (b) => {
+        parseDeviceString(b.toString('latin1'));
+        const device = deviceString(decodePValue(b, 0).value);
+        if (device !== undefined) parseDeviceString(device);
+      },
+    },
     {
       name: 'S7+ decodeObject',
       seeds: values.map((v) => v.subarray(v.indexOf(0xa1) < 0 ? 0 : v.indexOf(0xa1))),

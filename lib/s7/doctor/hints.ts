@@ -49,9 +49,15 @@ export const HINT = {
   putGet:
     'Allow PUT/GET in the CPU: TIA Portal → the CPU\'s Properties → Protection & Security → Connection mechanisms → tick "Permit access with PUT/GET communication from remote partner", then download the hardware configuration.',
   password: 'The protection level forbids reads: give the password (S7Client.setPassword) or lower the protection.',
-  /** A name of the sources in a block with optimized access: PUT/GET cannot reach it. */
-  optimizedName:
-    'Read this name over an s7plus:// URL (S7CommPlus: the PLC finds the member by name, which PUT/GET cannot), with the same sources. ' +
+  /** A name of the sources in a block with optimized access: PUT/GET cannot reach it; `plusUrl` is the same PLC over S7CommPlus. */
+  optimizedName: (plusUrl: string): string =>
+    `Read this name over S7CommPlus (the PLC finds the member by name, which PUT/GET cannot), with the same sources: try plcwire doctor ${plusUrl} "<name>" ` +
+    "(it shows the PLC's certificate and the fingerprint= that pins it). " +
     'Or switch the DB to standard access: TIA Portal → the DB\'s Properties → Attributes → untick "Optimized block access", compile and download, ' +
     'then export its source again (Generate source from blocks) and read it over s7:// with PUT/GET.',
+  /** An absolute address in a DB that is probably optimized; `plusUrl` is the same PLC over S7CommPlus. */
+  optimizedDb: (plusUrl: string): string =>
+    `An optimized DB is read by name over S7CommPlus: try plcwire doctor ${plusUrl} (it shows the PLC's certificate and the fingerprint= that pins it), ` +
+    `then plcwire browse with the pinned URL lists the DB's names. Or switch the DB to standard access: TIA Portal → the DB's Properties → Attributes → ` +
+    'untick "Optimized block access", compile and download; the DB editor then shows each variable\'s absolute offset (the Offset column) to use in the address.',
 } as const;

@@ -11,6 +11,7 @@ import type { Tag } from '../../types';
 import { textOf } from '../../values/text';
 import type { S7Client } from '../client';
 import type { Family } from './families';
+import { hostPart } from '../../link/url-params';
 import { HINT } from './hints';
 
 /** What the steps need of the doctor's walk: its client, its abort, and how a step passes or ends the walk. */
@@ -23,8 +24,11 @@ export interface StepContext {
   failed(step: string, err: unknown, other: (e: PlcError) => never): never;
 }
 
-const OPTIMIZED_HINT =
-  'Switch the DB to standard access: TIA Portal → the DB\'s Properties → Attributes → untick "Optimized block access", compile and download; the DB editor then shows each variable\'s absolute offset (the Offset column) to use in the address.';
+/** The same PLC over S7CommPlus (an S7-1200/1500 serves it on its PUT/GET port): the URL an optimized block is read with. */
+function plusUrl(client: S7Client): string {
+  const { host, port } = client.endpoint;
+  return `s7plus://${hostPart(host)}${port === 102 ? '' : `:${port}`}`;
+}
 
 export class TagSteps {
   constructor(
@@ -77,7 +81,8 @@ export class TagSteps {
       tag = this.c.client.tag(name);
     } catch (err) {
       // A member of an optimized block exists in the sources but has no address PUT/GET could read.
-      if (err instanceof PlcError && err.code === 'OPTIMIZED_BLOCK') this.c.fail(step, err.message, HINT.optimizedName);
+      if (err instanceof PlcError && err.code === 'OPTIMIZED_BLOCK')
+        this.c.fail(step, err.message, HINT.optimizedName(plusUrl(this.c.client)));
       this.c.fail(
         step,
         (err as Error).message,
@@ -238,7 +243,7 @@ export class TagSteps {
         step,
         `DB${db} exists (the CPU did not answer "object does not exist") but not even its byte 0 can be read: it is probably an optimized DB ` +
           '(an S7-1200/1500 answers "address out of range" for every absolute address of a DB with optimized block access; an empty DB answers the same)',
-        OPTIMIZED_HINT,
+        HINT.optimizedDb(plusUrl(client)),
       );
     }
     // The DB's length: the first byte that cannot be read, by bisection (about 16 one-byte reads at most).

@@ -205,7 +205,11 @@ export interface CpuIdentity {
 
 const COPYRIGHT = 'Original Siemens Equipment';
 
-/** Identity defaults per profile: catalogue CPUs of each family; serial numbers are made up. */
+/**
+ * Identity defaults per profile: catalogue CPUs of each family; serial numbers are made up. The S7-1200 and
+ * S7-1500 run firmware that has secure PG/HMI communication and the password exchange keyed by TLS (S7-1200
+ * V4.7, S7-1500 V3.1: docs/s7commplus.md), as the S7CommPlus side of the simulator serves them.
+ */
 export const IDENTITIES: Readonly<Record<S7Profile, Readonly<CpuIdentity>>> = Object.freeze({
   's7-300': Object.freeze({
     orderCode: '6ES7 315-2EH14-0AB0',
@@ -235,7 +239,7 @@ export const IDENTITIES: Readonly<Record<S7Profile, Readonly<CpuIdentity>>> = Ob
   }),
   's7-1200': Object.freeze({
     orderCode: '6ES7 214-1AG40-0XB0',
-    firmware: 'V4.4.0',
+    firmware: 'V4.7.0',
     hardwareVersion: 5,
     moduleTypeName: 'CPU 1214C DC/DC/DC',
     serialNumber: 'S V-PW0000032019',
@@ -248,7 +252,7 @@ export const IDENTITIES: Readonly<Record<S7Profile, Readonly<CpuIdentity>>> = Ob
   }),
   's7-1500': Object.freeze({
     orderCode: '6ES7 516-3AN02-0AB0',
-    firmware: 'V2.9.2',
+    firmware: 'V3.1.0',
     hardwareVersion: 2,
     moduleTypeName: 'CPU 1516-3 PN/DP',
     serialNumber: 'S V-PW0000042019',

@@ -52,7 +52,12 @@ interface S7PlusEndpoint {
   open(
     frame: Buffer,
     socket: Socket,
-    cpu: { readonly memory: PlcMemory; readonly state: 'RUN' | 'STOP' },
+    cpu: {
+      readonly memory: PlcMemory;
+      readonly state: 'RUN' | 'STOP';
+      /** The CPU's services: what it says about itself (the order code and firmware of its SZL). */
+      readonly cpu: { readonly identity: { readonly orderCode: string; readonly firmware: string } };
+    },
     hostile: (err: Error) => void,
   ): S7PlusLink;
 }

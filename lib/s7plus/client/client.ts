@@ -20,15 +20,39 @@ import type { Limits } from './io';
 import { plusSyntax, readMixed, writeMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';
-import type { PeerCertificate } from './handshake';
+import type { HandshakeStep, PeerCertificate } from './handshake';
+import { parseDeviceString } from '../codec/identity';
 
 export type { PeerCertificate } from './handshake';
 export type { CpuState, S7PlusDataBlock } from './services';
+
+/**
+ * What `info()` tells of an S7-1200/1500 over S7CommPlus: the fields of the
+ * S7 client's PlcInfo that S7CommPlus gives (order code, firmware, state),
+ * and what only this connection has (the device string, the protocol
+ * version, the PLC's certificate). No module name, serial number or plant
+ * designation: no public source names an object that carries them.
+ */
+export interface S7PlusInfo {
+  /** The order code (MLFB) of the device string: "6ES7 516-3AN02-0AB0". */
+  orderCode: string | undefined;
+  /** Major.minor, as the device string says it: "V3.1". */
+  firmware: string | undefined;
+  state: CpuState;
+  /** ServerSessionVersion's device string as it came ("1;6ES7 516-3AN02-0AB0 ;V3.1"); undefined when the PLC sends none. */
+  device: string | undefined;
+  /** The S7CommPlus protocol version of the session: 1 (plain text) or 2 (TLS, integrity ids). */
+  protocolVersion: number;
+  /** The PLC's certificate over TLS. */
+  certificate?: PeerCertificate;
+}
 
 /** A client's options: ClientOptions and the PLC's password. */
 export interface S7PlusClientOptions extends Partial<ClientOptions> {
   /** For the PLC's protection levels that need one (legitimation). */
   password?: string;
+  /** Told each handshake step as it passes, on every connect (the connection doctor shows them). */
+  handshake?: (passed: HandshakeStep) => void;
 }
 
 /** The `insecure` event of a connection with `insecure=true`: which certificate it accepted unchecked. */
@@ -47,7 +71,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   readonly stats: S7PlusWireCounters = { requestsSent: 0, bytesSent: 0, bytesReceived: 0, ignored: 0 };
   /** The PLC's certificate on the live TLS connection; undefined without one. */
   certificate: PeerCertificate | undefined;
+  /** The device string of the live session (order code, firmware: codec/identity.ts); undefined when the PLC sends none. */
+  device: string | undefined;
   readonly #password: string | undefined;
+  private readonly onHandshakeStep: ((passed: HandshakeStep) => void) | undefined;
   /** Items per request: the URL's maxItems or 20, lowered when the PLC refuses a request as too large. */
   private itemLimit: number;
   private readonly limits: Limits = {
@@ -74,11 +101,12 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   };
 
   constructor(endpoint: S7PlusEndpoint, options: S7PlusClientOptions = {}) {
-    const { password, ...rest } = options;
+    const { password, handshake, ...rest } = options;
     super(endpointOptions(S7PLUS_URLS.name(endpoint), endpoint, rest));
     this.driver = { syntax: plusSyntax(rest.symbols), ...this.baseDriver };
     this.endpoint = endpoint;
     this.#password = password;
+    this.onHandshakeStep = handshake;
     this.itemLimit = endpoint.maxItems ?? S7PLUS_DEFAULT_MAX_ITEMS;
   }
 
@@ -99,6 +127,17 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   /** The CPU's operating state: RUN, STOP or UNKNOWN (theCPUexecUnit). */
   cpuState(options: RequestOptions = {}): Promise<CpuState> {
     return this.withSession((s) => cpuState(s, options.signal));
+  }
+
+  /** The CPU's identity (order code, firmware) from the session's device string, its state, and the connection's protocol and certificate. */
+  info(options: RequestOptions = {}): Promise<S7PlusInfo> {
+    return this.withSession(async (s) => {
+      const state = await cpuState(s, options.signal);
+      const device = this.device;
+      const { orderCode, firmware } = device === undefined ? { orderCode: undefined, firmware: undefined } : parseDeviceString(device);
+      const certificate = this.certificate;
+      return { orderCode, firmware, state, device, protocolVersion: s.version, ...(certificate ? { certificate } : {}) };
+    });
   }
 
   /** The data blocks of the PLC's program (standard and optimized), by number, with their names. */
@@ -158,8 +197,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
       lossError: (cause) => this.lossError(cause),
       lost: (session, err) => this.sessionLost(session, err),
       insecure: (certificate) => this.warnInsecure(certificate),
+      ...(this.onHandshakeStep ? { onStep: this.onHandshakeStep } : {}),
     });
     this.certificate = opened.certificate;
+    this.device = opened.device;
     return opened.session;
   }
 

@@ -23,6 +23,7 @@ import { S7PlusSession, type S7PlusWireCounters, type S7PlusWiring } from './ses
 import { startTls } from '../transport/handshake';
 import type { CertificateInfo } from '../transport/trust';
 import { openTunnel } from './tunnel';
+import { deviceString } from '../codec/identity';
 
 /** The PLC's certificate of a TLS connection, as the client tells it (`client.certificate`, the `insecure` event). */
 export interface PeerCertificate {
@@ -46,16 +47,28 @@ export interface OpenOptions extends Omit<S7PlusWiring, 'timeout'> {
   stats: S7PlusWireCounters;
   /** Told the PLC's certificate of a connection that trusts any (`insecure=true`): the client warns. */
   insecure?(certificate: PeerCertificate): void;
+  /** Told each handshake step as it passes (the connection doctor shows them); a failure is the step after the last one told. */
+  onStep?(passed: HandshakeStep): void;
 }
 
-/** What a connection was opened with: its session, and the PLC's certificate over TLS. */
+/** A handshake step that passed, with what it learnt. */
+export type HandshakeStep =
+  | { step: 'cotp'; maxPayload: number }
+  | { step: 'InitSSL' }
+  | { step: 'TLS'; certificate: PeerCertificate; protocol: string; trust: 'pinned' | 'ca' | 'insecure' }
+  | { step: 'session'; sessionId: number; version: number; device: string | undefined };
+
+/** What a connection was opened with: its session, the PLC's certificate over TLS, its device string (order code, firmware). */
 export interface Opened {
   session: S7PlusSession;
   certificate: PeerCertificate | undefined;
+  /** ServerSessionVersion's device string (codec/identity.ts); undefined when the PLC sends none. */
+  device: string | undefined;
 }
 
 export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Promise<Opened> {
   const tunnel = await openTunnel(e, o);
+  o.onStep?.({ step: 'cotp', maxPayload: tunnel.maxPayload });
   let stream: Duplex = tunnel;
   let session: S7PlusSession | undefined;
   let step: Step = 'InitSSL';
@@ -69,6 +82,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
   try {
     // InitSSL goes in plain text with sequence number 0, before TLS.
     await initSsl(tunnel, o);
+    o.onStep?.({ step: 'InitSSL' });
     let certificate: PeerCertificate | undefined;
     if (e.tls) {
       step = 'TLS';
@@ -82,6 +96,8 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       stream = started.socket;
       certificate = peerCertificate(started.certificate);
       if (started.warning !== undefined) o.insecure?.(certificate);
+      const trusted = e.fingerprint ? 'pinned' : e.ca ? 'ca' : 'insecure';
+      o.onStep?.({ step: 'TLS', certificate, protocol: started.protocol, trust: trusted });
     }
     session = new S7PlusSession(
       stream,
@@ -130,7 +146,9 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     }
     if (e.tls) session.startIntegrity();
     if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
-    return { session, certificate };
+    const device = deviceString(version);
+    o.onStep?.({ step: 'session', sessionId: session.sessionId, version: session.version, device });
+    return { session, certificate, device };
   } catch (err) {
     if (session) session.destroy();
     stream.destroy();

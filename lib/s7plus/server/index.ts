@@ -10,6 +10,7 @@ import type { Socket } from 'node:net';
 import * as tls from 'node:tls';
 import type { PlcMemory } from '../../sim/memory';
 import type { CompileOptions, SymbolSource } from '../../symbols/model';
+import { formatDeviceString } from '../codec/identity';
 import { fingerprint256 } from '../transport/cert';
 import { PlusConnection } from './connection';
 import { dataBlockImages } from '../../symbols/memory';
@@ -120,10 +121,17 @@ export class S7PlusService {
   open(
     frame: Buffer,
     socket: Socket,
-    cpu: { readonly memory: PlcMemory; readonly state: 'RUN' | 'STOP' },
+    cpu: {
+      readonly memory: PlcMemory;
+      readonly state: 'RUN' | 'STOP';
+      /** The S7 simulator's CPU services: its profile's identity, the same order code and firmware PUT/GET's SZL gives. */
+      readonly cpu?: { readonly identity: { readonly orderCode: string; readonly firmware: string } };
+    },
     hostile: (err: Error) => void,
   ): PlusLink {
     const service = this;
+    const identity = cpu.cpu?.identity;
+    const device = identity ? formatDeviceString(identity.orderCode, identity.firmware) : undefined;
     return new PlusConnection(
       {
         cpu: {
@@ -136,7 +144,12 @@ export class S7PlusService {
           maxItems: this.maxItems,
         },
         secureContext: this.secureContext,
-        session: { maxRequestBytes: this.maxRequestBytes, newSessionId: () => this.nextSession++, password: this.password },
+        session: {
+          maxRequestBytes: this.maxRequestBytes,
+          newSessionId: () => this.nextSession++,
+          password: this.password,
+          ...(device ? { device } : {}),
+        },
         send: (bytes) => socket.write(bytes),
         close: (reason) => (reason ? hostile(reason) : socket.end()),
       },

@@ -25,7 +25,7 @@ import { FULL_ACCESS, Legitimation } from './legitimation';
 import { Subscriptions } from './subscriptions';
 import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
 
-/** The device string of ServerSessionVersion: an S7-1500 at firmware V3.1 (the form of legitimation.py's examples). */
+/** The device string of ServerSessionVersion without a profile's (codec/identity.ts): an S7-1500 at firmware V3.1. */
 const PAOM = '1;6ES7 516-3AN02-0AB0 ;V3.1';
 /** A refused legitimation's return value: bit 15 set (connection.py _check_set_variable_response). */
 const LEGITIMATION_REFUSED = 0x8000n;
@@ -41,6 +41,8 @@ export interface SessionOptions {
   readonly password?: string | undefined;
   /** The TLS exporter secret the legitimation key derives from; undefined without TLS. */
   exporter(): Buffer | undefined;
+  /** The device string (order code, firmware) of the CPU's profile; PAOM without one. */
+  readonly device?: string;
 }
 
 /** What the transport does after a frame: send `reply`; switch to TLS; close. */
@@ -276,7 +278,7 @@ export class PlusSession {
   private sessionVersion(): Buffer {
     const id = Buffer.alloc(4);
     id.writeUInt32BE(Ids.SessionVersionStruct);
-    const paom = Buffer.from(PAOM, 'utf8');
+    const paom = Buffer.from(this.options.device ?? PAOM, 'utf8');
     return Buffer.concat([
       Buffer.from([0x00, DataType.Struct]),
       id,

@@ -1,0 +1,353 @@
+/**
+ * The connection doctor of an s7plus:// URL: the walk TCP → COTP (the
+ * S7CommPlus TSAPs) → InitSSL → TLS (the PLC's certificate, and whether it
+ * was pinned, signed by the given CA, or accepted unchecked) → session
+ * (protocol version, session id) → password → identity → browse → each given
+ * name or address, in the report shape of the S7 doctor (lib/s7/doctor:
+ * steps with ok, detail and a hint in words). The handshake steps are the
+ * client's own: openS7PlusSession tells each step that passed (OpenOptions
+ * onStep), so a failure is the step after the last one told. Nothing is
+ * written to the PLC; the one connection is closed on every path, and the
+ * whole walk has one deadline.
+ */
+import { abortError, PlcError, toPlcError } from '../../errors';
+import { IsoConnectError } from '../../iso/connect';
+import { openTcp } from '../../link/tcp';
+import { S7_TAG_SYNTAX } from '../../address';
+import type { DiagnoseOptions, DoctorReport, DoctorStep } from '../../s7/doctor';
+import type { SymbolTable } from '../../symbols/model';
+import { formatUrl, parseUrl } from '../../url';
+import { textOf } from '../../values/text';
+import { S7PlusClient } from '../client';
+import type { HandshakeStep } from '../client/handshake';
+import { CertificateError } from '../transport/trust';
+import type { S7PlusEndpoint } from '../url';
+import { HINT as S7_HINT } from '../../s7/doctor/hints';
+import { PLUS_HINT } from './hints';
+
+export interface PlusDiagnoseOptions extends DiagnoseOptions {
+  /** The PLC's password (legitimation): never in a step, a hint or the report. */
+  password?: string;
+}
+
+const DEFAULT_DEADLINE = 20_000;
+
+/** Thrown inside the walk to end it at a failed step. */
+class Stop extends Error {}
+
+/**
+ * Diagnoses the connection to an S7-1200/1500 over S7CommPlus. Resolves a
+ * report whose steps end at the first failure; rejects only with ABORTED
+ * when `options.signal` aborts.
+ */
+export async function diagnosePlus(url: string, names: readonly string[] = [], options: PlusDiagnoseOptions = {}): Promise<DoctorReport> {
+  const doctor = new PlusDoctor(options);
+  try {
+    await doctor.run(url, names);
+  } finally {
+    await doctor.dispose();
+  }
+  return doctor.report();
+}
+
+/** The handshake steps in their order; `password` only when one is given. */
+type HandshakeName = 'cotp' | 'InitSSL' | 'TLS' | 'session' | 'password';
+
+class PlusDoctor {
+  private readonly steps: DoctorStep[] = [];
+  private readonly ctl = new AbortController();
+  private readonly ms: number;
+  private readonly timer: NodeJS.Timeout;
+  private client: S7PlusClient | undefined;
+  private readonly onUserAbort = () => this.ctl.abort();
+  /** The handshake step that runs now: the one a connect failure belongs to. */
+  private next: HandshakeName = 'cotp';
+
+  constructor(private readonly options: PlusDiagnoseOptions) {
+    const ms = options.timeout ?? DEFAULT_DEADLINE;
+    if (!Number.isFinite(ms) || ms <= 0)
+      throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
+    this.ms = ms;
+    this.timer = setTimeout(() => this.ctl.abort(), ms);
+    if (options.signal?.aborted) this.ctl.abort();
+    else options.signal?.addEventListener('abort', this.onUserAbort, { once: true });
+  }
+
+  report(): DoctorReport {
+    return { ok: this.steps.length > 0 && this.steps.every((s) => s.ok), steps: this.steps };
+  }
+
+  async dispose(): Promise<void> {
+    clearTimeout(this.timer);
+    this.options.signal?.removeEventListener('abort', this.onUserAbort);
+    await this.client?.close();
+  }
+
+  private get signal(): AbortSignal {
+    return this.ctl.signal;
+  }
+
+  private record(step: string, ok: boolean, detail: string, hint?: string): void {
+    const s: DoctorStep = { step, ok, detail };
+    if (hint !== undefined) s.hint = hint;
+    this.steps.push(s);
+    this.options.onStep?.(s);
+  }
+
+  private pass(step: string, detail: string, hint?: string): void {
+    this.record(step, true, detail, hint);
+  }
+
+  private fail(step: string, detail: string, hint?: string): never {
+    this.record(step, false, detail, hint);
+    throw new Stop();
+  }
+
+  /** An error inside a step: the caller's abort ends the walk, the deadline fails the step, anything else is `other`. */
+  private failed(step: string, err: unknown, other: (e: PlcError) => never): never {
+    if (err instanceof Stop) throw err;
+    if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
+    if (this.signal.aborted) this.fail(step, `no result before the doctor's deadline of ${this.ms} ms`, PLUS_HINT.deadline);
+    return other(toPlcError(err, 'CONNECT_FAILED'));
+  }
+
+  async run(url: string, names: readonly string[]): Promise<void> {
+    try {
+      const e = this.url(url);
+      await this.handshake(e);
+      await this.identity();
+      const table = await this.browse();
+      for (const n of names) await this.check(n, table);
+    } catch (err) {
+      if (err instanceof Stop) return;
+      if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
+      if (this.signal.aborted) {
+        const after = this.steps.at(-1)?.step;
+        this.record(
+          'deadline',
+          false,
+          `no result before the doctor's deadline of ${this.ms} ms${after ? ` (after the ${after} step)` : ''}`,
+          PLUS_HINT.deadline,
+        );
+        return;
+      }
+      throw err;
+    }
+  }
+
+  // ---------------------------------------------------------------- steps
+
+  private url(url: string): S7PlusEndpoint {
+    let e;
+    try {
+      e = parseUrl(url);
+    } catch (err) {
+      this.fail('url', (err as Error).message, PLUS_HINT.url);
+    }
+    if (e.protocol !== 's7plus')
+      this.fail('url', `this doctor checks S7CommPlus connections; this URL is ${e.protocol}`, PLUS_HINT.notPlus);
+    return e;
+  }
+
+  /** The URL `e` with `fingerprint=` pinning this certificate (and no insecure=true): what to try next. */
+  private pinned(e: S7PlusEndpoint, fingerprint: string): string {
+    const { insecure: _insecure, ca: _ca, ...rest } = e;
+    return formatUrl({ ...rest, fingerprint });
+  }
+
+  /** TCP on a socket of its own, closed at once: a refusal or silence is told apart from the PLC's later answers. */
+  private async tcp(e: S7PlusEndpoint, where: string): Promise<void> {
+    try {
+      const socket = await openTcp({
+        host: e.host,
+        port: e.port,
+        timeout: Math.min(e.timeout, this.ms),
+        signal: this.signal,
+        keepAliveMs: 0,
+      });
+      socket.destroy();
+    } catch (err) {
+      this.failed('tcp', err, (p) => this.tcpFailure(e, where, p));
+    }
+    this.pass('tcp', `${where} accepts TCP connections`);
+  }
+
+  /** One connection by the client's own handshake; each step it tells becomes a passed step. */
+  private async handshake(e: S7PlusEndpoint): Promise<void> {
+    const where = `${e.host}:${e.port}`;
+    await this.tcp(e, where);
+    const password = this.options.password;
+    const client = new S7PlusClient(
+      { ...e, timeout: Math.max(1, Math.min(e.timeout, this.ms)) },
+      {
+        ...(password !== undefined ? { password } : {}),
+        ...(this.options.symbols ? { symbols: this.options.symbols } : {}),
+        handshake: (passed) => this.passed(e, where, passed),
+      },
+    );
+    this.client = client;
+    client.on('error', () => undefined);
+    client.on('insecure', () => undefined); // the TLS step says it
+    const onAbort = () => void client.close();
+    this.signal.addEventListener('abort', onAbort, { once: true });
+    try {
+      await client.connect();
+    } catch (err) {
+      if (password !== undefined && err instanceof PlcError && err.code === 'NOT_SUPPORTED' && this.next === 'cotp') {
+        this.fail('password', err.message, 'Leave the password out to check the connection with the access the CPU gives without one.');
+      }
+      const step = this.next;
+      this.failed(step, err, (p) => this.handshakeFailure(e, where, step, p));
+    } finally {
+      this.signal.removeEventListener('abort', onAbort);
+    }
+    if (password === undefined) this.pass('password', 'none given: the session has the access the CPU grants without a password');
+  }
+
+  private passed(e: S7PlusEndpoint, where: string, passed: HandshakeStep | { step: string; detail?: string }): void {
+    switch (passed.step) {
+      case 'cotp':
+        this.pass(
+          'cotp',
+          `the CPU accepted the S7CommPlus connection request (called TSAP "SIMATIC-ROOT-${e.role.toUpperCase()}", calling TSAP 0x0600)`,
+        );
+        this.next = 'InitSSL';
+        return;
+      case 'InitSSL':
+        this.pass('InitSSL', 'the CPU answered InitSSL: it speaks S7CommPlus');
+        if (!e.tls) this.pass('TLS', 'tls=false: plain S7CommPlus V1, as the URL asks', PLUS_HINT.plainText);
+        this.next = e.tls ? 'TLS' : 'session';
+        return;
+      case 'TLS': {
+        const { certificate: c, protocol, trust } = passed as Extract<HandshakeStep, { step: 'TLS' }>;
+        const how =
+          trust === 'pinned'
+            ? "matches the URL's fingerprint"
+            : trust === 'ca'
+              ? 'is signed by the CA of ca='
+              : 'was accepted unchecked (insecure=true)';
+        this.pass(
+          'TLS',
+          `${protocol}; the PLC's certificate ${how}: SHA-256 ${c.fingerprint}, subject ${c.subject}, valid ${c.validFrom} to ${c.validTo}`,
+          trust === 'insecure' ? PLUS_HINT.insecure(this.pinned(e, c.fingerprint)) : undefined,
+        );
+        this.next = 'session';
+        return;
+      }
+      case 'session': {
+        const { sessionId, version } = passed as Extract<HandshakeStep, { step: 'session' }>;
+        this.pass('session', `S7CommPlus V${version}${version >= 2 ? ' with integrity ids' : ''}, session id 0x${sessionId.toString(16)}`);
+        this.next = 'password';
+        return;
+      }
+      default: {
+        // A step this doctor does not know yet (the password's legitimation): shown as the client tells it.
+        const detail = 'detail' in passed && typeof passed.detail === 'string' ? passed.detail : 'passed';
+        this.pass(passed.step, detail);
+      }
+    }
+  }
+
+  private handshakeFailure(e: S7PlusEndpoint, where: string, step: HandshakeName, p: PlcError): never {
+    let cause: unknown = p;
+    while (cause instanceof Error && !(cause instanceof IsoConnectError)) cause = cause.cause;
+    if (step === 'cotp') return this.cotpFailure(e, p, cause instanceof IsoConnectError ? cause : undefined);
+    if (step === 'InitSSL') this.fail('InitSSL', p.message, /closed the connection/.test(p.message) ? PLUS_HINT.notPlusCpu : undefined);
+    if (step === 'TLS') {
+      if (p instanceof CertificateError) {
+        const c = p.certificate;
+        const detail =
+          `the PLC's certificate was refused (${p.problem}): SHA-256 ${c.fingerprint}, subject ${c.subject}, issuer ${c.issuer}, ` +
+          `valid ${c.notBefore.toISOString()} to ${c.notAfter.toISOString()}`;
+        const url = this.pinned(e, c.fingerprint);
+        if (p.problem === 'expired' || p.problem === 'not-yet-valid') this.fail('TLS', detail, PLUS_HINT.expired);
+        if (p.problem === 'not-signed-by-ca') this.fail('TLS', detail, PLUS_HINT.notSignedByCa + url);
+        this.fail('TLS', detail, PLUS_HINT.pin(url));
+      }
+      this.fail('TLS', p.message, PLUS_HINT.tlsRefused);
+    }
+    if (step === 'session') this.fail('session', p.message, e.tls ? PLUS_HINT.session : PLUS_HINT.plainAsked);
+    this.fail(step, p.message, step === 'password' ? PLUS_HINT.password : undefined);
+  }
+
+  private tcpFailure(e: S7PlusEndpoint, where: string, p: PlcError): never {
+    let c: unknown = p;
+    let code: string | undefined;
+    while (c instanceof Error && code === undefined) {
+      code = (c as NodeJS.ErrnoException).code?.startsWith('E') ? (c as NodeJS.ErrnoException).code : undefined;
+      c = c.cause;
+    }
+    if (p.code === 'TIMEOUT') this.fail('tcp', `no answer from ${where}: ${p.message}`, S7_HINT.filtered(e.port));
+    if (code === 'ECONNREFUSED')
+      this.fail(
+        'tcp',
+        `${where} refused the connection (ECONNREFUSED): the host is up, but nothing listens on port ${e.port}`,
+        S7_HINT.refused,
+      );
+    if (code === 'ENOTFOUND' || code === 'EAI_AGAIN') this.fail('tcp', `"${e.host}" does not resolve (${code})`, S7_HINT.unknownHost);
+    if (code === 'EHOSTUNREACH' || code === 'ENETUNREACH') this.fail('tcp', `no route to ${where} (${code})`, S7_HINT.noRoute);
+    this.fail('tcp', p.message);
+  }
+
+  private cotpFailure(e: S7PlusEndpoint, p: PlcError, iso: IsoConnectError | undefined): never {
+    const r = iso?.refusal;
+    if (r?.kind === 'silent' || (!iso && p.code === 'TIMEOUT'))
+      this.fail('cotp', `port ${e.port} accepts TCP but nothing answered the connection request: ${p.message}`, S7_HINT.notIsoOnTcp);
+    if (r?.kind === 'garbage') this.fail('cotp', `the answer is not ISO-on-TCP: ${r.message}`, S7_HINT.otherProtocol);
+    if (!iso) this.fail('cotp', p.message);
+    const role = `SIMATIC-ROOT-${e.role.toUpperCase()}`;
+    this.fail('cotp', `the CPU refused the S7CommPlus connection request (called TSAP "${role}"): ${p.message}`, PLUS_HINT.refusedTsap);
+  }
+
+  private async identity(): Promise<void> {
+    const client = this.client!;
+    try {
+      const info = await client.info({ signal: this.signal });
+      const who = info.orderCode
+        ? `${info.orderCode}${info.firmware ? ` firmware ${info.firmware}` : ''}`
+        : 'the CPU does not say what it is (no device string in its session)';
+      this.pass('identity', `${who}; in ${info.state}`, info.state === 'STOP' ? PLUS_HINT.inStop : undefined);
+    } catch (err) {
+      this.failed('identity', err, (p) => this.fail('identity', p.message));
+    }
+  }
+
+  private async browse(): Promise<SymbolTable | undefined> {
+    const client = this.client!;
+    try {
+      const blocks = await client.dataBlocks({ signal: this.signal });
+      const table = await client.browse({ signal: this.signal });
+      const optimized = table.blocks.filter((b) => b.optimized === true).length;
+      const typed = table.blocks.length;
+      const detail =
+        blocks.length === 0
+          ? 'the PLC program has no data blocks'
+          : `${blocks.length} data block${blocks.length === 1 ? '' : 's'} (${optimized} optimized, ${typed - optimized} standard` +
+            `${typed < blocks.length ? `, ${blocks.length - typed} without type information` : ''}), ${table.entries.length} entries`;
+      this.pass('browse', detail, blocks.length > 0 && typed === 0 ? PLUS_HINT.noTypes : undefined);
+      return table;
+    } catch (err) {
+      return this.failed('browse', err, (p) => this.fail('browse', p.message));
+    }
+  }
+
+  /** One step per given text: an address (standard DBs) or a name, read once, with its value and type. */
+  private async check(text: string, table: SymbolTable | undefined): Promise<void> {
+    let address = true;
+    try {
+      S7_TAG_SYNTAX.parse(text);
+    } catch {
+      address = false;
+    }
+    const step = `${address ? 'address' : 'symbol'} ${text}`;
+    const client = this.client!;
+    try {
+      const r = (await client.readDetailed([text], { signal: this.signal }))[text]!;
+      if (!r.ok) this.fail(step, r.error.message, address ? PLUS_HINT.address : PLUS_HINT.name);
+      const type = address ? client.tag(text).type : (table?.lookup(text)?.type ?? '');
+      this.pass(step, `${text} = ${textOf(r.value)}${type ? ` (${type})` : ''}`);
+    } catch (err) {
+      this.failed(step, err, (p) => this.fail(step, p.message, address ? PLUS_HINT.address : PLUS_HINT.name));
+    }
+  }
+}
