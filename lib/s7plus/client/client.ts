@@ -9,7 +9,7 @@
  * no property, no JSON, no inspect() output, no error and no log line.
  */
 import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
-import { ConnectionError, isLinkError, PlcError } from '../../errors';
+import { ConnectionError, isLinkError } from '../../errors';
 import type { Driver } from '../../link/driver';
 import type { SymbolTable } from '../../symbols/model';
 import type { Protocol, RequestOptions, Tag } from '../../types';
@@ -21,9 +21,11 @@ import { plusSyntax, readMixed, writeMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';
 import type { PeerCertificate } from './handshake';
+import { readOnlyRefusals, type Protection } from './legitimation';
 
 export type { PeerCertificate } from './handshake';
 export type { CpuState, S7PlusDataBlock } from './services';
+export type { Protection } from './legitimation';
 
 /** A client's options: ClientOptions and the PLC's password. */
 export interface S7PlusClientOptions extends Partial<ClientOptions> {
@@ -47,6 +49,8 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   readonly stats: S7PlusWireCounters = { requestsSent: 0, bytesSent: 0, bytesReceived: 0, ignored: 0 };
   /** The PLC's certificate on the live TLS connection; undefined without one. */
   certificate: PeerCertificate | undefined;
+  /** What the password step of the live connection found (its protection level); undefined when no password was given. */
+  protection: Protection | undefined;
   readonly #password: string | undefined;
   /** Items per request: the URL's maxItems or 20, lowered when the PLC refuses a request as too large. */
   private itemLimit: number;
@@ -67,8 +71,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
       const { values, errors } = await readMixed(session, tags, this.limits, () => this.tableOf(session, signal), signal);
       return toResults(values, errors);
     },
-    writeTags: (session: S7PlusSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal) =>
-      writeMixed(session, items, this.limits, () => this.tableOf(session, signal), signal),
+    writeTags: async (session: S7PlusSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal) => {
+      const results = await writeMixed(session, items, this.limits, () => this.tableOf(session, signal), signal);
+      return this.#password === undefined ? readOnlyRefusals(session, this.name, items, results, signal) : results;
+    },
     noBlockLength: 'S7CommPlus reads data blocks by their own layout: there is no PUT/GET layout to check',
     isLinkError,
   };
@@ -144,10 +150,7 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   }
 
   private async openSession(signal: AbortSignal): Promise<S7PlusSession> {
-    if (this.#password !== undefined) {
-      // Legitimation is not there yet: a connection that would silently lack the rights the password gives is worse than none.
-      throw new PlcError('NOT_SUPPORTED', `${this.name}: a password (legitimation) is not supported over S7CommPlus yet`);
-    }
+    // Every session (a reconnect, a second one) gives the password again: the "password" step of the handshake.
     const opened = await openS7PlusSession(this.endpoint, {
       name: this.name,
       timeout: this.timeout,
@@ -157,8 +160,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
       lossError: (cause) => this.lossError(cause),
       lost: (session, err) => this.sessionLost(session, err),
       insecure: (certificate) => this.warnInsecure(certificate),
+      password: this.#password,
     });
     this.certificate = opened.certificate;
+    this.protection = opened.protection;
     return opened.session;
   }
 
