@@ -144,7 +144,13 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     let protection: Protection | undefined;
     if (o.password !== undefined) {
       step = 'password';
-      protection = await legitimate(session, { name: o.name, password: o.password, version: created.serverSessionVersion, tls: secure, signal });
+      protection = await legitimate(session, {
+        name: o.name,
+        password: o.password,
+        version: created.serverSessionVersion,
+        tls: secure,
+        signal,
+      });
     }
     if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
     return { session, certificate, ...(protection ? { protection } : {}) };

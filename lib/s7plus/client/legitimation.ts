@@ -41,15 +41,7 @@ import {
 } from '../codec/legitimation';
 import type { PValue } from '../codec/pvalue';
 import { decodeSubStreamedResponse, encodeSubStreamedRequest } from '../codec/substreamed';
-import {
-  AccessLevel,
-  FunctionCode,
-  Ids,
-  LegitimationType,
-  OMS_EXPORTER_LABEL,
-  OMS_EXPORTER_LENGTH,
-  TransportFlags,
-} from '../constants';
+import { AccessLevel, FunctionCode, Ids, LegitimationType, OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH, TransportFlags } from '../constants';
 import type { S7PlusSession } from './session';
 
 /** What the password step found and did: the session's protection level after it, and whether a password lowered it. */
@@ -172,7 +164,8 @@ export async function legitimate(session: S7PlusSession, o: LegitimateOptions): 
     levels.set(session, Promise.resolve(before));
     return { level: before, legitimated: false };
   }
-  if (!o.tls) throw refuse('legitimation needs TLS, and tls=false is plain text (drop tls=false: the PLC then needs secure PG/HMI communication)');
+  if (!o.tls)
+    throw refuse('legitimation needs TLS, and tls=false is plain text (drop tls=false: the PLC then needs secure PG/HMI communication)');
   const paom = paomString(o.version);
   const form = paom === undefined ? undefined : legitimationForm(paom);
   if (!form)
@@ -209,7 +202,10 @@ export async function legitimate(session: S7PlusSession, o: LegitimateOptions): 
       ...(plcCode === undefined ? {} : { plcCode }),
     });
   if (setVariableRefused(answer.returnValue)) {
-    throw wrong(`the answer was refused with 0x${answer.returnValue.toString(16)}, the session keeps ${levelName(before)}`, Number(answer.returnValue & 0xffffn));
+    throw wrong(
+      `the answer was refused with 0x${answer.returnValue.toString(16)}, the session keeps ${levelName(before)}`,
+      Number(answer.returnValue & 0xffffn),
+    );
   }
   const after = await protectionLevel(session, o.signal);
   levels.set(session, Promise.resolve(after));
@@ -289,6 +285,9 @@ export async function readOnlyRefusals(
       `${tag}: the PLC refused the write: ${name} gives this connection read access only without its password ` +
       `(${levelName(level)}); give the PLC's password: ${PASSWORD_WAYS}`;
     const plcCode = r.error.plcCode;
-    return { ok: false, error: new PlcError('ACCESS_DENIED', message, { tag, cause: r.error, ...(plcCode === undefined ? {} : { plcCode }) }) };
+    return {
+      ok: false,
+      error: new PlcError('ACCESS_DENIED', message, { tag, cause: r.error, ...(plcCode === undefined ? {} : { plcCode }) }),
+    };
   });
 }

@@ -174,7 +174,14 @@ export function decodeCredentials(plain: Buffer): Credentials {
   const v = readPValue(r);
   r.done('legitimation credentials');
   const s = v.value;
-  if (v.flags !== 0 || v.type !== DataType.Struct || !s || typeof s !== 'object' || !('members' in s) || s.id !== Ids.LegitimationPayloadStruct)
+  if (
+    v.flags !== 0 ||
+    v.type !== DataType.Struct ||
+    !s ||
+    typeof s !== 'object' ||
+    !('members' in s) ||
+    s.id !== Ids.LegitimationPayloadStruct
+  )
     throw new ProtocolError(`S7CommPlus: legitimation credentials are not Struct ${Ids.LegitimationPayloadStruct}`);
   const member = (key: number) => s.members.find((m) => m.key === key)?.value;
   const blob = (key: number): Buffer => {
