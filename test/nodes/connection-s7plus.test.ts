@@ -155,4 +155,53 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       expect(msg.payload).to.deep.equal({ step: 12, inlet: { Open: true, Position: 7 } });
     });
   });
+
+  describe('a PLC protected with a password (legitimation)', () => {
+    let locked: S7Server;
+    let lockedUrl: string;
+    before(async () => {
+      const cert = await generateCertificate();
+      const plus = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key }, password: SECRET });
+      locked = new S7Server({ port: 0, profile: 's7-1500', s7plus: plus });
+      await locked.listen();
+      lockedUrl = `s7plus://127.0.0.1:${locked.port}?fingerprint=${plus.fingerprint!}&timeout=3000`;
+    });
+    after(async () => {
+      await locked?.close();
+    });
+
+    const at = { z: 'tab', x: 100, y: 100 };
+    const flow = () => [
+      { id: 'tab', type: 'tab', label: 'plcwire' },
+      { id: 'c1', type: 'plcwire-connection', name: 'press', url: lockedUrl },
+      { id: 'w1', type: 'plcwire-write', ...at, connection: 'c1', tags: [{ name: 'step', address: '"Recipe".Step' }], wires: [['wout']] },
+      { id: 'wout', type: 'helper', ...at },
+      { id: 'catcher', type: 'catch', ...at, scope: ['w1'], uncaught: false, wires: [['caught']] },
+      { id: 'caught', type: 'helper', ...at },
+    ];
+
+    it('a write node through a connection whose password credential is set writes (the session legitimated)', async () => {
+      await helper.load(ALL_NODES, flow(), { c1: { password: SECRET } });
+      const conn = helper.getNode('c1');
+      await until(() => conn.linkStatus.state === 'connected', 10000, 'connected');
+      const written = new Recorder(helper.getNode('wout'));
+      helper.getNode('w1').receive({ payload: { step: 41 } });
+      const ack = await written.next(() => true, 10000, 'the write acknowledged');
+      expect(ack.results, JSON.stringify(ack.results)).to.deep.equal({ step: { ok: true, address: '"Recipe".Step' } });
+      expect(JSON.stringify(conn.linkStatus)).not.to.include(SECRET);
+      expect(JSON.stringify(helper._redNodes.getFlows())).not.to.include(SECRET);
+    });
+
+    it('without it, the write fails on Catch with the read-only message and the ways to give the password', async () => {
+      await helper.load(ALL_NODES, flow());
+      const conn = helper.getNode('c1');
+      await until(() => conn.linkStatus.state === 'connected', 10000, 'connected');
+      const caught = new Recorder(helper.getNode('caught'));
+      helper.getNode('w1').receive({ payload: { step: 42 } });
+      const failed = await caught.next(() => true, 10000, 'the write refused on Catch');
+      expect(failed.error.message).to.include('gives this connection read access only without its password');
+      expect(failed.error.message).to.include("the connection node's password in Node-RED");
+      expect(failed.results.step).to.include({ ok: false, code: 'ACCESS_DENIED' });
+    });
+  });
 });
