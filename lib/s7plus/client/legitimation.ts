@@ -65,12 +65,12 @@ const LEVEL_NAMES: Record<number, string> = {
 };
 
 /** "protection level 2 (read access)". */
-export function levelName(level: number): string {
+function levelName(level: number): string {
   return `protection level ${level}${LEVEL_NAMES[level] ? ` (${LEVEL_NAMES[level]})` : ''}`;
 }
 
 /** Where the password can be given, for messages. */
-export const PASSWORD_WAYS =
+const PASSWORD_WAYS =
   "connect(url, { password }), PLCWIRE_PASSWORD or --password-file FILE for the CLI, the connection node's password in Node-RED";
 
 /**
@@ -247,7 +247,7 @@ async function attribute(session: S7PlusSession, address: number, signal: AbortS
 }
 
 /** The session's protection level (EffectiveProtectionLevel, 1842). */
-export async function protectionLevel(session: S7PlusSession, signal?: AbortSignal): Promise<number> {
+async function protectionLevel(session: S7PlusSession, signal?: AbortSignal): Promise<number> {
   return protectionLevelOf(await attribute(session, Ids.EffectiveProtectionLevel, signal));
 }
 
