@@ -10,17 +10,11 @@
  * when the user is empty). The password is compared, never logged.
  */
 import { createDecipheriv, createHash, randomBytes, timingSafeEqual } from 'node:crypto';
-import { Reader } from '../codec/bytes';
-import { DataType } from '../constants';
+import { decodeCredentials } from '../codec/legitimation';
+import { AccessLevel, LegitimationType } from '../constants';
 
-/** protocol.py AccessLevel. */
-export const FULL_ACCESS = 1;
-const READ_ACCESS = 2;
-/** legitimation.py / connection.py: the exporter label and length of the OMS secret. */
-export const OMS_EXPORTER_LABEL = 'EXPERIMENTAL_OMS';
-export const OMS_EXPORTER_LENGTH = 32;
-/** protocol.py LegitimationType (1 legacy: SHA-1 of the password; 2 new: user and password). */
-const LEGACY = 1;
+/** The level of a session that may write (protocol.py AccessLevel). */
+export const FULL_ACCESS = AccessLevel.FullAccess;
 
 export class Legitimation {
   private challenge: Buffer | undefined;
@@ -32,7 +26,7 @@ export class Legitimation {
     /** The TLS exporter secret of the connection, undefined without TLS. */
     private readonly exporter: () => Buffer | undefined,
   ) {
-    this.level = password === undefined ? FULL_ACCESS : READ_ACCESS;
+    this.level = password === undefined ? AccessLevel.FullAccess : AccessLevel.ReadAccess;
   }
 
   /** The challenge of this attempt (20 bytes, as a CPU gives). */
@@ -57,34 +51,18 @@ export class Legitimation {
     } catch {
       return false;
     }
-    const credentials = parse(plain);
-    if (!credentials) return false;
-    const expected =
-      credentials.type === LEGACY ? createHash('sha1').update(this.password, 'utf8').digest() : Buffer.from(this.password, 'utf8');
-    const ok = expected.length === credentials.password.length && timingSafeEqual(expected, credentials.password);
-    if (ok) this.level = FULL_ACCESS;
-    return ok;
-  }
-}
-
-function parse(plain: Buffer): { type: number; password: Buffer } | undefined {
-  try {
-    const r = new Reader(plain);
-    if (r.u8() !== 0 || r.u8() !== DataType.Struct || r.u32() !== 40400) return undefined;
-    let type = 0;
-    let password: Buffer | undefined;
-    for (let key = r.uvlq32(); key !== 0; key = r.uvlq32()) {
-      r.u8();
-      const t = r.u8();
-      if (key === 40401 && t === DataType.UDInt) type = r.uvlq32();
-      else if (t === DataType.Blob) {
-        r.uvlq32();
-        const value = r.bytes(r.uvlq32());
-        if (key === 40403) password = Buffer.from(value);
-      } else return undefined;
+    let credentials: { type: number; password: Buffer };
+    try {
+      credentials = decodeCredentials(plain);
+    } catch {
+      return false;
     }
-    return password ? { type, password } : undefined;
-  } catch {
-    return undefined;
+    const expected =
+      credentials.type === LegitimationType.Legacy
+        ? createHash('sha1').update(this.password, 'utf8').digest()
+        : Buffer.from(this.password, 'utf8');
+    const ok = expected.length === credentials.password.length && timingSafeEqual(expected, credentials.password);
+    if (ok) this.level = AccessLevel.FullAccess;
+    return ok;
   }
 }
