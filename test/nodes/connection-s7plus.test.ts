@@ -203,5 +203,17 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       expect(failed.error.message).to.include("the connection node's password in Node-RED");
       expect(failed.results.step).to.include({ ok: false, code: 'ACCESS_DENIED' });
     });
+
+    it('Browse PLC with the password typed in the dialog legitimates; a wrong one answers ACCESS_DENIED without echoing it', async () => {
+      await helper.load(ALL_NODES, []);
+      const ok = await helper.request().post('/plcwire/s7plus/browse').send({ url: lockedUrl, password: SECRET }).expect(200);
+      expect(ok.body.ok, JSON.stringify(ok.body)).to.equal(true);
+      const wrong = `${SECRET}-typo`;
+      const refused = await helper.request().post('/plcwire/s7plus/browse').send({ url: lockedUrl, password: wrong }).expect(200);
+      expect(refused.body).to.include({ ok: false, code: 'ACCESS_DENIED' });
+      expect(refused.body.message).to.include('refused the password');
+      expect(JSON.stringify(refused.body)).not.to.include(wrong);
+      await until(() => locked.connectionCount === 0, 3000, 'no connection left');
+    });
   });
 });
