@@ -13,10 +13,15 @@
  * writes refused per tag with the way to give it, writes with it, a wrong
  * password refused (ACCESS_DENIED, no hammering, nothing left open), a
  * reconnect that gives the password again, and the password in no error.
- * The s7commplus server emulator has no password protection, so it is not a
- * peer here (test/s7plus-server-python.test.ts runs its client against ours).
+ * The s7commplus server emulator has no password protection (it answers every
+ * GetVarSubStreamed with its challenge): with a password our client is told
+ * in words that the PLC reports no protection level, and leaves nothing open
+ * (test/s7plus-server-python.test.ts runs its client against our protection).
  */
 import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as os from 'node:os';
+import * as path from 'node:path';
 import * as util from 'node:util';
 import { createClient } from '../lib/connect';
 import { PlcError } from '../lib/errors';
@@ -44,6 +49,7 @@ import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { createHash } from 'node:crypto';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
+import { requireS7CommPlus, startS7CommPlusServer, stopS7CommPlusPeers } from './support/s7commplus-peer';
 import { until, waitFor } from './support/wait';
 
 const SECRET = 'Leg1t-Pa55!not-for-logs';
@@ -291,6 +297,44 @@ describe('S7CommPlus legitimation: our client against our simulator protected wi
       await until(() => plain.connectionCount === 0, 5000, 'no connection left');
     } finally {
       await plain.close();
+    }
+  });
+});
+
+describe('S7CommPlus legitimation against the s7commplus emulator (no protection level there)', function () {
+  this.timeout(60000);
+  let python: string;
+  before(function () {
+    python = requireS7CommPlus(this);
+  });
+  after(() => stopS7CommPlusPeers());
+
+  it('a password is NOT_SUPPORTED in words (the PLC reports no protection level), the session ended, nothing left open', async () => {
+    const cert = await generateCertificate();
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 's7plus-legit-'));
+    const files = { cert: path.join(dir, 'cert.pem'), key: path.join(dir, 'key.pem') };
+    fs.writeFileSync(files.cert, cert.cert);
+    fs.writeFileSync(files.key, cert.key);
+    const peer = await startS7CommPlusServer(python, { dbs: [{ number: 1, size: 8, variables: {} }], tls: files, version: 1 });
+    try {
+      const c = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`, { password: SECRET });
+      const err = await c.connect().then(
+        () => undefined,
+        (e: unknown) => e as PlcError,
+      );
+      await c.close();
+      expect(err?.code).to.equal('NOT_SUPPORTED');
+      expect(err?.message).to.include('the password cannot be given: the PLC reports no protection level');
+      expect(util.inspect(err, { depth: 8, showHidden: true })).not.to.include(SECRET);
+      await peer.waitForEvent((e) => e.event === 'deleteObject');
+      await peer.waitForNoClients(10_000);
+      // Without the password the same emulator serves.
+      const plain = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`);
+      await plain.connect();
+      await plain.close();
+    } finally {
+      await peer.stop();
+      fs.rmSync(dir, { recursive: true, force: true });
     }
   });
 });
