@@ -27,7 +27,7 @@ import { createClient } from '../lib/connect';
 import { PlcError } from '../lib/errors';
 import { S7Server } from '../lib/s7/server';
 import type { S7PlusClient } from '../lib/s7plus/client';
-import { legacyAnswer, legitimationForm, newAnswer } from '../lib/s7plus/client/legitimation';
+import { legacyAnswer, newAnswer } from '../lib/s7plus/client/legitimation';
 import {
   decodeCredentials,
   decodeSetVariableRequest,
@@ -37,6 +37,7 @@ import {
   encodeSetVariableResponse,
   legacyAnswerValue,
   legitimateRequest,
+  legitimationForm,
   credentialsBlobValue,
   paomString,
   protectionLevelOf,

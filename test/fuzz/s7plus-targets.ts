@@ -25,7 +25,6 @@ import {
   encodeInitSslRequest,
   sessionInfo,
 } from '../../lib/s7plus/codec/session';
-import { legitimationForm } from '../../lib/s7plus/client/legitimation';
 import {
   challengeOf,
   credentialsBlobValue,
@@ -37,6 +36,7 @@ import {
   encodeSetVariableResponse,
   legacyAnswerValue,
   legitimateRequest,
+  legitimationForm,
   paomString,
   protectionLevelOf,
 } from '../../lib/s7plus/codec/legitimation';

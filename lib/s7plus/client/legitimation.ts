@@ -34,10 +34,12 @@ import {
   encodeSetVariableRequest,
   legacyAnswerValue,
   legitimateRequest,
+  legitimationForm,
   paomString,
   protectionLevelOf,
   sessionAttributeRequest,
   setVariableRefused,
+  type LegitimationForm,
 } from '../codec/legitimation';
 import type { PValue } from '../codec/pvalue';
 import { decodeSubStreamedResponse, encodeSubStreamedRequest } from '../codec/substreamed';
@@ -53,8 +55,6 @@ export interface Protection {
   /** The form used, when one was. */
   form?: LegitimationForm;
 }
-
-export type LegitimationForm = 'new' | 'legacy';
 
 const LEVEL_NAMES: Record<number, string> = {
   [AccessLevel.None]: 'no protection',
@@ -72,38 +72,6 @@ function levelName(level: number): string {
 /** Where the password can be given, for messages. */
 const PASSWORD_WAYS =
   "connect(url, { password }), PLCWIRE_PASSWORD or --password-file FILE for the CLI, the connection node's password in Node-RED";
-
-/**
- * The form of legitimation a firmware takes, from the device string of its
- * ServerSessionVersion (`1;6ES7 513-1AL02-0AB0;V3.1`); undefined when it
- * takes none we know. The series is the first digit of the last three-digit
- * model number after a 1 or 7 (PLCSIM's "SIM-01500" reads 500), the firmware
- * major*100+minor. s7commplus (MIT), legitimation.py _parse_paom_string and
- * decide_legitimation_mode (which cite thomas-v2/S7CommPlusDriver, facts only).
- */
-export function legitimationForm(paom: string): LegitimationForm | undefined {
-  const fields = paom.split(';');
-  if (fields.length < 3 || paom.includes('\n')) return undefined;
-  const firmware = /^[VS](\d{1,2})\.(\d{1,4})$/i.exec(fields[fields.length - 1]!);
-  const series = seriesOf(fields[1]!);
-  if (!firmware || series === undefined) return undefined;
-  const fw = Number(firmware[1]) * 100 + Number(firmware[2]);
-  if (series === '5') return fw < 209 ? undefined : fw < 301 ? 'legacy' : 'new';
-  if (series === '2' && paom.toUpperCase().includes('50-0XB0')) return 'new'; // S7-1200 G2
-  if (series === '2') return fw < 403 ? undefined : fw < 407 ? 'legacy' : 'new';
-  if (series === '6') return fw < 2109 ? undefined : 'legacy'; // S7-1507S software controller
-  return undefined;
-}
-
-function seriesOf(order: string): string | undefined {
-  let last: string | undefined;
-  for (let i = 0; i < order.length; i++) {
-    if (order[i] !== '1' && order[i] !== '7') continue;
-    const m = /^\s*(\d)\d\d/.exec(order.slice(i + 1, i + 1 + 64));
-    if (m) last = m[1];
-  }
-  return last;
-}
 
 /** The legacy answer: SHA-1 of the password XOR the challenge's first 20 bytes (legitimation.py build_legacy_response). */
 export function legacyAnswer(password: string, challenge: Buffer): Buffer {

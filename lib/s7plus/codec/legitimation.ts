@@ -11,7 +11,8 @@
  * Source: s7commplus (MIT), connection.py _build_set_variable_payload,
  * _check_set_variable_response, _parse_protection_level_response,
  * _parse_get_var_substreamed_response, _send_legitimation_new/_legacy, and
- * legitimation.py _build_legitimation_payload, extract_session_version_string.
+ * legitimation.py _build_legitimation_payload, extract_session_version_string,
+ * decide_legitimation_mode.
  * Pure: the crypto (SHA-1, AES) is the client's (client/legitimation.ts).
  */
 import { ProtocolError } from '../../errors';
@@ -204,4 +205,38 @@ export function paomString(version: PValue | undefined): string | undefined {
   if (!version || version.type !== DataType.Struct || !s || typeof s !== 'object' || !('members' in s)) return undefined;
   const m = s.members.find((x) => x.key === Ids.SessionVersionSystemPaomString);
   return m && m.value.type === DataType.WString && typeof m.value.value === 'string' ? m.value.value : undefined;
+}
+
+export type LegitimationForm = 'new' | 'legacy';
+
+/**
+ * The form of legitimation a firmware takes, from the device string of its
+ * ServerSessionVersion (`1;6ES7 513-1AL02-0AB0;V3.1`); undefined when it
+ * takes none we know. The series is the first digit of the last three-digit
+ * model number after a 1 or 7 (PLCSIM's "SIM-01500" reads 500), the firmware
+ * major*100+minor. s7commplus (MIT), legitimation.py _parse_paom_string and
+ * decide_legitimation_mode (which cite thomas-v2/S7CommPlusDriver, facts only).
+ */
+export function legitimationForm(paom: string): LegitimationForm | undefined {
+  const fields = paom.split(';');
+  if (fields.length < 3 || paom.includes('\n')) return undefined;
+  const firmware = /^[VS](\d{1,2})\.(\d{1,4})$/i.exec(fields[fields.length - 1]!);
+  const series = seriesOf(fields[1]!);
+  if (!firmware || series === undefined) return undefined;
+  const fw = Number(firmware[1]) * 100 + Number(firmware[2]);
+  if (series === '5') return fw < 209 ? undefined : fw < 301 ? 'legacy' : 'new';
+  if (series === '2' && paom.toUpperCase().includes('50-0XB0')) return 'new'; // S7-1200 G2
+  if (series === '2') return fw < 403 ? undefined : fw < 407 ? 'legacy' : 'new';
+  if (series === '6') return fw < 2109 ? undefined : 'legacy'; // S7-1507S software controller
+  return undefined;
+}
+
+function seriesOf(order: string): string | undefined {
+  let last: string | undefined;
+  for (let i = 0; i < order.length; i++) {
+    if (order[i] !== '1' && order[i] !== '7') continue;
+    const m = /^\s*(\d)\d\d/.exec(order.slice(i + 1, i + 1 + 64));
+    if (m) last = m[1];
+  }
+  return last;
 }
