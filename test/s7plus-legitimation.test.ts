@@ -9,7 +9,8 @@
  * password "hunter2", the challenge 01..14 and the exporter secret 20..3f.
  *
  * Then our client against our simulator protected with a password, over TLS
- * (the new form, keyed by the TLS exporter): reads without the password,
+ * (the new form, keyed by the TLS exporter; the legacy form where the
+ * simulated firmware takes it): reads without the password,
  * writes refused per tag with the way to give it, writes with it, a wrong
  * password refused (ACCESS_DENIED, no hammering, nothing left open), a
  * reconnect that gives the password again, and the password in no error.
@@ -278,6 +279,56 @@ describe('S7CommPlus legitimation: our client against our simulator protected wi
       }
     } finally {
       await plain.close();
+    }
+  });
+
+  it('the legacy form on a CPU whose firmware takes it (S7-1500 V2.9): the right password legitimates, a wrong one is refused; V2.8 takes none', async () => {
+    const serve = async (device: string) => {
+      const cert = await generateCertificate();
+      const plus = new S7PlusService({
+        sources: SOURCES,
+        db: DB_NUMBERS,
+        tls: { cert: cert.cert, key: cert.key },
+        password: SECRET,
+        device,
+      });
+      const sim = new S7Server({ port: 0, profile: 's7-1500', s7plus: plus });
+      await sim.listen();
+      return { sim, url: `s7plus://127.0.0.1:${sim.port}?fingerprint=${plus.fingerprint!}&timeout=10000` };
+    };
+    const failure = async (c: S7PlusClient) => {
+      const err = await c.connect().then(
+        () => undefined,
+        (e: unknown) => e as PlcError,
+      );
+      await c.close();
+      show(err);
+      return err;
+    };
+    const legacy = await serve('1;6ES7 512-1CK01-0AB0;V2.9');
+    try {
+      const c = createClient(legacy.url, { password: SECRET }) as S7PlusClient;
+      try {
+        await c.connect();
+        expect(c.protection).to.deep.equal({ level: 1, legitimated: true, form: 'legacy' });
+        await c.write({ 'DB1.DBW4:INT': 29 });
+        expect(legacy.sim.memory.area('DB', 1)!.readInt16BE(4)).to.equal(29);
+      } finally {
+        await c.close();
+      }
+      const wrong = await failure(createClient(legacy.url, { password: 'nope' }) as S7PlusClient);
+      expect(wrong?.code).to.equal('ACCESS_DENIED');
+      await until(() => legacy.sim.connectionCount === 0, 5000, 'no connection left');
+    } finally {
+      await legacy.sim.close();
+    }
+    const old = await serve('1;6ES7 512-1CK01-0AB0;V2.8');
+    try {
+      const none = await failure(createClient(old.url, { password: SECRET }) as S7PlusClient);
+      expect(none?.code).to.equal('NOT_SUPPORTED');
+      expect(none?.message).to.include(`the PLC's firmware ("1;6ES7 512-1CK01-0AB0;V2.8") takes no form of legitimation plcwire knows`);
+    } finally {
+      await old.sim.close();
     }
   });
 

@@ -35,6 +35,11 @@ export interface S7PlusOptions {
   readonly password?: string;
   /** Bytes one request frame may have; more resets the connection. Default 65535. */
   readonly maxRequestBytes?: number;
+  /**
+   * The device string of ServerSessionVersion (`1;<order number>;V<firmware>`), default an S7-1500 at V3.1:
+   * its firmware decides the form of legitimation the CPU takes (V2.9 to V3.0: the legacy one).
+   */
+  readonly device?: string;
 }
 
 /** What the S7 simulator gives each S7CommPlus connection. */
@@ -51,6 +56,7 @@ export class S7PlusService {
   private readonly maxItems: number;
   private readonly maxRequestBytes: number;
   private nextSession = 0x3a0;
+  private readonly device: string | undefined;
   /** The CPU's password (`S7PlusOptions.password`); nothing prints it. */
   readonly password: string | undefined;
 
@@ -58,6 +64,7 @@ export class S7PlusService {
     this.model = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
     this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
     this.password = options.password;
+    this.device = options.device;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
     if (options.tls) {
       this.secureContext = tls.createSecureContext({
@@ -86,7 +93,12 @@ export class S7PlusService {
       {
         cpu: { model: this.model, memory: cpu.memory, mode: () => cpu.state, maxItems: this.maxItems },
         secureContext: this.secureContext,
-        session: { maxRequestBytes: this.maxRequestBytes, newSessionId: () => this.nextSession++, password: this.password },
+        session: {
+          maxRequestBytes: this.maxRequestBytes,
+          newSessionId: () => this.nextSession++,
+          password: this.password,
+          device: this.device,
+        },
         send: (bytes) => socket.write(bytes),
         close: (reason) => (reason ? hostile(reason) : socket.end()),
       },
