@@ -27,7 +27,7 @@ import { Subscriptions } from './subscriptions';
 import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
 
 /** The device string of ServerSessionVersion by default: an S7-1500 at firmware V3.1 (the form of legitimation.py's examples). */
-export const DEFAULT_DEVICE = '1;6ES7 516-3AN02-0AB0 ;V3.1';
+const DEFAULT_DEVICE = '1;6ES7 516-3AN02-0AB0 ;V3.1';
 /** A refused legitimation's return value: bit 15 set (connection.py _check_set_variable_response). */
 const LEGITIMATION_REFUSED = 0x8000n;
 
