@@ -204,6 +204,24 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       expect(failed.results.step).to.include({ ok: false, code: 'ACCESS_DENIED' });
     });
 
+    it('a wrong password credential: the link waits the longest delay with ACCESS_DENIED, and the error reaches Catch without the password', async () => {
+      const wrong = `${SECRET}-stale`;
+      // One Catch for the whole tab (the test helper registers a core node's type once): the connection's link errors go there.
+      const flowWithCatch = flow().map((n) => (n.id === 'catcher' ? { ...n, scope: null } : n));
+      await helper.load(ALL_NODES, flowWithCatch, { c1: { password: wrong } });
+      const caught = new Recorder(helper.getNode('caught'));
+      const conn = helper.getNode('c1');
+      const reported = await caught.next((m) => m.error.source.type === 'plcwire-connection', 10000, "the connection's error on Catch");
+      expect(reported.error.message).to.include('refused the password');
+      await until(() => conn.linkStatus.state === 'reconnecting', 10000, 'reconnecting');
+      const status = conn.linkStatus;
+      expect(status.error.code).to.equal('ACCESS_DENIED');
+      // The default backoff's longest delay, 30 s ± 20 %, where a transient fault waits half a second.
+      expect(status.delay).to.be.at.least(24_000);
+      const caughtText = JSON.stringify(caught.messages.map((m) => ({ ...m, error: { message: m.error.message } })));
+      expect(caughtText + JSON.stringify(status) + String(status.error.message)).not.to.include(wrong);
+    });
+
     it('Browse PLC with the password typed in the dialog legitimates; a wrong one answers ACCESS_DENIED without echoing it', async () => {
       await helper.load(ALL_NODES, []);
       const ok = await helper.request().post('/plcwire/s7plus/browse').send({ url: lockedUrl, password: SECRET }).expect(200);
