@@ -184,6 +184,11 @@ describe('S7CommPlus legitimation: our client against our simulator protected wi
     for (const text of shown) expect(text).not.to.include(SECRET);
   });
 
+  it('the simulator keeps its password out of sight too: protected, but no inspect() or JSON of the service shows it', () => {
+    expect(service.protected).to.equal(true);
+    expect(util.inspect(service, { depth: 6, showHidden: true }) + JSON.stringify(service)).not.to.include(SECRET);
+  });
+
   it('without the password: reads work; each write is refused with ACCESS_DENIED saying read access only and how to give it; nothing changes', async () => {
     const c = client();
     await c.connect();

@@ -57,13 +57,13 @@ export class S7PlusService {
   private readonly maxRequestBytes: number;
   private nextSession = 0x3a0;
   private readonly device: string | undefined;
-  /** The CPU's password (`S7PlusOptions.password`); nothing prints it. */
-  readonly password: string | undefined;
+  /** The CPU's password (`S7PlusOptions.password`): a private field, so no inspect(), JSON or log shows it. */
+  readonly #password: string | undefined;
 
   constructor(options: S7PlusOptions) {
     this.model = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
     this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
-    this.password = options.password;
+    this.#password = options.password;
     this.device = options.device;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
     if (options.tls) {
@@ -75,6 +75,11 @@ export class S7PlusService {
       });
       this.fingerprint = fingerprint256(new X509Certificate(options.tls.cert).raw);
     }
+  }
+
+  /** True when the CPU has a password: sessions have read access until they give it. */
+  get protected(): boolean {
+    return this.#password !== undefined;
   }
 
   /** True when a COTP CR asks for S7CommPlus. */
@@ -96,7 +101,7 @@ export class S7PlusService {
         session: {
           maxRequestBytes: this.maxRequestBytes,
           newSessionId: () => this.nextSession++,
-          password: this.password,
+          password: this.#password,
           device: this.device,
         },
         send: (bytes) => socket.write(bytes),

@@ -27,13 +27,17 @@ export class Legitimation {
   /** The form the CPU's firmware takes (codec/legitimation.ts legitimationForm); the other one is refused. */
   private readonly form: LegitimationForm | undefined;
 
+  /** Compared, never shown: a private field (no inspect() of the simulator's sessions shows it). */
+  readonly #password: string | undefined;
+
   constructor(
-    private readonly password: string | undefined,
+    password: string | undefined,
     /** The TLS exporter secret of the connection, undefined without TLS. */
     private readonly exporter: () => Buffer | undefined,
     /** The device string of the CPU's ServerSessionVersion. */
     device: string,
   ) {
+    this.#password = password;
     this.level = password === undefined ? AccessLevel.FullAccess : AccessLevel.ReadAccess;
     this.form = legitimationForm(device);
   }
@@ -46,9 +50,9 @@ export class Legitimation {
   attemptLegacy(answer: Buffer): boolean {
     const challenge = this.challenge;
     this.challenge = undefined;
-    if (this.password === undefined) return true;
+    if (this.#password === undefined) return true;
     if (this.form !== 'legacy' || !challenge || answer.length !== 20 || challenge.length < 20) return false;
-    const hash = createHash('sha1').update(this.password, 'utf8').digest();
+    const hash = createHash('sha1').update(this.#password, 'utf8').digest();
     const expected = Buffer.from(hash.map((b, i) => b ^ challenge[i]!));
     const ok = timingSafeEqual(expected, answer);
     if (ok) this.level = AccessLevel.FullAccess;
@@ -65,7 +69,7 @@ export class Legitimation {
   attempt(blob: Buffer): boolean {
     const challenge = this.challenge;
     this.challenge = undefined;
-    if (this.password === undefined) return true;
+    if (this.#password === undefined) return true;
     if (this.form !== 'new') return false;
     this.secret ??= this.exporter();
     if (!challenge || !this.secret) return false;
@@ -86,8 +90,8 @@ export class Legitimation {
     }
     const expected =
       credentials.type === LegitimationType.Legacy
-        ? createHash('sha1').update(this.password, 'utf8').digest()
-        : Buffer.from(this.password, 'utf8');
+        ? createHash('sha1').update(this.#password, 'utf8').digest()
+        : Buffer.from(this.#password, 'utf8');
     const ok = expected.length === credentials.password.length && timingSafeEqual(expected, credentials.password);
     if (ok) this.level = AccessLevel.FullAccess;
     return ok;
