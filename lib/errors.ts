@@ -219,6 +219,18 @@ export function isLinkError(err: unknown): boolean {
   return code === 'NOT_CONNECTED' || code === 'CONNECT_FAILED' || code === 'CONNECTION_LOST' || code === 'CLOSED';
 }
 
+/**
+ * True for a refusal that another attempt in a second will not change: the
+ * PLC refused our password or rights (ACCESS_DENIED), or offers no way to
+ * do what the connection asks (NOT_SUPPORTED). The supervisor still retries
+ * (the PLC's configuration may change), but at its longest delay from the
+ * first retry, so a wrong password does not knock on the PLC every second.
+ */
+export function isLastingRefusal(err: unknown): boolean {
+  const code = typeof err === 'object' && err !== null ? (err as { code?: unknown }).code : undefined;
+  return code === 'ACCESS_DENIED' || code === 'NOT_SUPPORTED';
+}
+
 /** Wraps anything thrown into a PlcError, keeping PlcErrors as they are. */
 export function toPlcError(err: unknown, fallback: PlcErrorCode = 'CONNECTION_LOST'): PlcError {
   if (err instanceof PlcError) return err;

@@ -186,13 +186,13 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
   });
 
   describe('the password', () => {
-    /** What the client does with a password today: it reached it (no legitimation yet), and nothing shows it. */
+    /** A password given to a PLC that wants none: the command works (full access without it), and nothing shows the password. */
     function reachedClient(r: { code: number; out: string; err: string }): void {
       expect(r.out + r.err).not.to.include(SECRET);
-      expect(r.err).to.include('a password (legitimation)');
+      expect(r.code, r.err).to.equal(EXIT.OK);
     }
 
-    it('from PLCWIRE_PASSWORD reaches the client and is never printed, not with --debug nor --json', async () => {
+    it('from PLCWIRE_PASSWORD, to a PLC that wants none: the command works and never prints it, not with --debug nor --json', async () => {
       reachedClient(await done(['read', url, 'DB1.DBW4:INT', '--debug'], { PLCWIRE_PASSWORD: SECRET }));
       reachedClient(await done(['info', url, '--json'], { PLCWIRE_PASSWORD: SECRET }));
       // Without it, the same command connects: the password was the difference.
@@ -227,7 +227,7 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
       expect(s7.err).to.include('--password-file is for s7plus:// URLs');
     });
 
-    it('a PLC protected with the simulator --password-file: without a password a write is refused and nothing changes; the password of the file reaches the client', async () => {
+    it('a PLC protected with the simulator --password-file: without a password a write is refused saying how to give it; with the file or PLCWIRE_PASSWORD it goes through; a wrong one is refused; the password is never printed', async () => {
       const pwFile = path.join(tmp, 'plc-password.txt');
       fs.writeFileSync(pwFile, `${SECRET}\n`);
       const guarded = await startSimulator(['--password-file', pwFile]);
@@ -235,9 +235,32 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
         expect(guarded.sim.output().out).to.include('protected: writes need the password').and.not.include(SECRET);
         const w = await done(['write', guarded.url, 'DB1.DBW4:INT=99']);
         expect(w.code, w.err).to.equal(EXIT.TAG_ERROR);
-        const r = await done(['read', guarded.s7url, 'DB1.DBW4:INT', '--json']);
-        expect(JSON.parse(r.out)).to.deep.equal({ 'DB1.DBW4:INT': 7 });
-        reachedClient(await done(['write', guarded.url, 'DB1.DBW4:INT=99', '--password-file', pwFile]));
+        expect(w.err).to.include('gives this connection read access only without its password');
+        expect(w.err).to.include('PLCWIRE_PASSWORD or --password-file FILE for the CLI');
+        const read = async () => JSON.parse((await done(['read', guarded.s7url, 'DB1.DBW4:INT', '--json'])).out) as unknown;
+        expect(await read()).to.deep.equal({ 'DB1.DBW4:INT': 7 });
+        // The password of the file legitimates the session: the write goes through.
+        const byFile = await done(['write', guarded.url, 'DB1.DBW4:INT=99', '--password-file', pwFile, '--debug']);
+        expect(byFile.code, byFile.err).to.equal(EXIT.OK);
+        expect(byFile.out + byFile.err).not.to.include(SECRET);
+        expect(await read()).to.deep.equal({ 'DB1.DBW4:INT': 99 });
+        // The file comes before PLCWIRE_PASSWORD.
+        const first = await done(['write', guarded.url, 'DB1.DBW4:INT=97', '--password-file', pwFile], { PLCWIRE_PASSWORD: 'other' });
+        expect(first.code, first.err).to.equal(EXIT.OK);
+        // So does PLCWIRE_PASSWORD; reads with --json show it nowhere.
+        const byEnv = await done(['write', guarded.url, 'DB1.DBW4:INT=98'], { PLCWIRE_PASSWORD: SECRET });
+        expect(byEnv.code, byEnv.err).to.equal(EXIT.OK);
+        expect(await read()).to.deep.equal({ 'DB1.DBW4:INT': 98 });
+        const json = await done(['read', guarded.url, 'DB1.DBW4:INT', '"Recipe".Step', '--json', '--debug'], { PLCWIRE_PASSWORD: SECRET });
+        expect(JSON.parse(json.out)).to.deep.equal({ 'DB1.DBW4:INT': 98, '"Recipe".Step': 3 });
+        expect(json.out + json.err).not.to.include(SECRET);
+        // A wrong one: refused in words that name the PLC, never the password; nothing written.
+        const wrong = `${SECRET}-old`;
+        const refused = await done(['write', guarded.url, 'DB1.DBW4:INT=1', '--debug'], { PLCWIRE_PASSWORD: wrong });
+        expect(refused.code).to.not.equal(EXIT.OK);
+        expect(refused.err).to.include('refused the password (wrong password');
+        expect(refused.out + refused.err).not.to.include(wrong);
+        expect(await read()).to.deep.equal({ 'DB1.DBW4:INT': 98 });
       } finally {
         await stop(guarded.sim);
       }

@@ -1,5 +1,5 @@
 import type { EventEmitter } from 'node:events';
-import { PlcError, TimeoutError, toPlcError } from '../errors';
+import { isLastingRefusal, PlcError, TimeoutError, toPlcError } from '../errors';
 import type { LinkState } from '../types';
 import { backoffDelay, type BackoffOptions } from './backoff';
 import type { DriverSession } from './driver';
@@ -147,7 +147,8 @@ export class LinkSupervisor<S extends DriverSession> {
   private scheduleRetry(error: PlcError): void {
     if (this.current === 'closed') return;
     this.attempt++;
-    const delay = backoffDelay(this.attempt, this.options.backoff, this.options.random);
+    // A lasting refusal (a wrong password) waits the longest delay at once: the growing schedule is for faults that pass.
+    const delay = backoffDelay(isLastingRefusal(error) ? Infinity : this.attempt, this.options.backoff, this.options.random);
     this.setState('reconnecting');
     this.options.events.emit('reconnecting', { delay, attempt: this.attempt, error });
     this.retryTimer = setTimeout(() => this.connectNow(), delay);

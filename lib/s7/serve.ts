@@ -46,7 +46,7 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   if (shown) for (const line of servedBlocks(shown)) say(line);
   say(`try: plcwire read "${url}" ${shown ? flags.tryByName(shown) : REACH[profile].addresses}`);
   if (s7plus?.fingerprint) {
-    const protectedNote = s7plus.password === undefined ? '' : ', protected: writes need the password';
+    const protectedNote = !s7plus.protected ? '' : ', protected: writes need the password';
     say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}${protectedNote}`);
     say(`  s7plus://${hostPart(host)}:${port}?fingerprint=${s7plus.fingerprint}`);
   }

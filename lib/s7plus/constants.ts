@@ -233,6 +233,11 @@ export const Ids = {
   /** The struct of a Struct-typed ServerSessionVersion, and its PAOM device string member. */
   SessionVersionStruct: 314,
   SessionVersionSystemPaomString: 319,
+  /** The credentials of the new legitimation: Struct 40400 of the legitimation type (UDInt), user and password (Blobs). s7commplus (MIT), protocol.py Ids and legitimation.py _build_legitimation_payload. */
+  LegitimationPayloadStruct: 40400,
+  LegitimationPayloadType: 40401,
+  LegitimationPayloadUsername: 40402,
+  LegitimationPayloadPassword: 40403,
   ClassTypeInfo: 511,
   VariableTypeStructModificationTime: 529,
   ClassOmsTypeInfoContainer: 534,
@@ -302,6 +307,42 @@ export const AreaTypeInfoRID = Object.freeze({ I: 0x90010000, Q: 0x90020000, M: 
 export function dbAccessArea(db: number): number {
   return (Ids.DBAccessAreaBase + (db & 0xffff)) >>> 0;
 }
+
+/**
+ * The session's protection level as the PLC reports it (attribute 1842,
+ * EffectiveProtectionLevel); lower is more privileged, a legitimation lowers
+ * it. None: no protection configured. s7commplus (MIT), protocol.py AccessLevel
+ * (which cites thomas-v2/S7CommPlusDriver Legitimation/AccessLevel.cs).
+ */
+export const AccessLevel = {
+  None: 0,
+  FullAccess: 1,
+  ReadAccess: 2,
+  HmiAccess: 3,
+  NoAccess: 4,
+} as const;
+
+/**
+ * The two forms of legitimation, also the LegitimationPayloadType of the new
+ * form's credentials (1: the password as its SHA-1, 2: user and password).
+ * Legacy: SHA-1 of the password XOR the challenge, written to
+ * ServerSessionResponse (304); new: AES-256-CBC credentials written to
+ * Legitimate (1846). s7commplus (MIT), protocol.py LegitimationType,
+ * legitimation.py and connection.py _send_legitimation_legacy/_new.
+ */
+export const LegitimationType = {
+  Legacy: 1,
+  New: 2,
+} as const;
+
+/**
+ * The TLS exporter (RFC 5705 / RFC 8446 7.5) of the new legitimation: label
+ * and length of the secret whose SHA-256 is the first AES-256 key. s7commplus
+ * (MIT), connection.py _OMS_EXPORTER_LABEL/_OMS_EXPORTER_LENGTH and
+ * legitimation.py derive_legitimation_key.
+ */
+export const OMS_EXPORTER_LABEL = 'EXPERIMENTAL_OMS';
+export const OMS_EXPORTER_LENGTH = 32;
 
 /** The operating-state codes of theCPUexecUnit seen on PLCSIM Advanced and a CPU 1215C. s7commplus (MIT), protocol.py. */
 export const OperatingState = { Stop: 4, Run: 8 } as const;

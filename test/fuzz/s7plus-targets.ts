@@ -15,7 +15,7 @@ import {
 import { encodeFrames, S7pFrameReader } from '../../lib/s7plus/codec/frame';
 import { deviceString, parseDeviceString } from '../../lib/s7plus/codec/identity';
 import { decodeObject } from '../../lib/s7plus/codec/object';
-import { decodePValue } from '../../lib/s7plus/codec/pvalue';
+import { decodePValue, encodePValue, scalar } from '../../lib/s7plus/codec/pvalue';
 import {
   decodeCreateObjectRequest,
   decodeCreateObjectResponse,
@@ -26,7 +26,22 @@ import {
   encodeInitSslRequest,
   sessionInfo,
 } from '../../lib/s7plus/codec/session';
-import { decodeSubStreamedRequest, decodeSubStreamedResponse } from '../../lib/s7plus/codec/substreamed';
+import {
+  challengeOf,
+  credentialsBlobValue,
+  decodeCredentials,
+  decodeSetVariableRequest,
+  decodeSetVariableResponse,
+  encodeCredentials,
+  encodeSetVariableRequest,
+  encodeSetVariableResponse,
+  legacyAnswerValue,
+  legitimateRequest,
+  legitimationForm,
+  paomString,
+  protectionLevelOf,
+} from '../../lib/s7plus/codec/legitimation';
+import { decodeSubStreamedRequest, decodeSubStreamedResponse, encodeSubStreamedResponse } from '../../lib/s7plus/codec/substreamed';
 import { decodeNotification, readSubscription } from '../../lib/s7plus/codec/subscription';
 import {
   decodeGetMultiVariablesRequest,
@@ -34,7 +49,7 @@ import {
   decodeSetMultiVariablesRequest,
   decodeSetMultiVariablesResponse,
 } from '../../lib/s7plus/codec/variables';
-import { FunctionCode } from '../../lib/s7plus/constants';
+import { DataType, FunctionCode, Ids } from '../../lib/s7plus/constants';
 import type { FuzzTarget } from './engine';
 
 function fixtureFrames(): Buffer[] {
@@ -154,6 +169,66 @@ export function s7plusTargets(): FuzzTarget[] {
       ),
     },
     { name: 'S7+ decodeNotification', seeds: data, run: (b) => void decodeNotification(b) },
+    ...legitimationTargets(data),
+  ];
+}
+
+/** The legitimation's decoders (codec/legitimation.ts), seeded with our encoders' requests and answers and s7commplus's frames. */
+function legitimationTargets(data: Buffer[]): FuzzTarget[] {
+  const credentials = encodeCredentials({ type: 1, username: Buffer.alloc(0), password: Buffer.alloc(20, 0xa5) });
+  const sets = [
+    encodeSetVariableRequest({ ...legitimateRequest(3, 0x3a0, Ids.Legitimate, credentialsBlobValue(Buffer.alloc(48, 1))), integrityId: 2 }),
+    encodeSetVariableRequest(legitimateRequest(3, 0x3a0, Ids.ServerSessionResponse, legacyAnswerValue(Buffer.alloc(20, 2)))),
+    encodeSetVariableResponse({
+      header: { functionCode: FunctionCode.SetVariable, sequence: 3, transportFlags: 0 },
+      body: { returnValue: 0x8000n },
+      integrityId: 9,
+    }),
+  ];
+  const paom = encodePValue({
+    flags: 0,
+    type: DataType.Struct,
+    value: {
+      id: Ids.SessionVersionStruct,
+      members: [
+        { key: 315, value: { flags: 0, type: DataType.UDInt, value: 2 } },
+        { key: Ids.SessionVersionSystemPaomString, value: { flags: 0, type: DataType.WString, value: '1;6ES7 513-1AL02-0AB0;V3.1' } },
+      ],
+    },
+  });
+  return [
+    {
+      name: 'S7+ SetVariable req/res',
+      seeds: [...sets, ...data],
+      run: both((b, o) => (b[0] === 0x31 ? decodeSetVariableRequest(b, o) : decodeSetVariableResponse(b, o))),
+    },
+    { name: 'S7+ legitimation credentials', seeds: [credentials], run: (b) => void decodeCredentials(b) },
+    {
+      name: 'S7+ protection level, challenge (GetVarSubStreamed answers)',
+      seeds: [
+        ...[scalar(DataType.UDInt, 2), legacyAnswerValue(Buffer.alloc(20, 7)), credentialsBlobValue(Buffer.alloc(20, 8))].map((value, i) =>
+          encodeSubStreamedResponse({
+            header: { functionCode: FunctionCode.GetVarSubStreamed, sequence: 4, transportFlags: 0 },
+            body: { returnValue: 0n, marker: 0, value },
+            integrityId: i,
+          }),
+        ),
+        ...data,
+      ],
+      run: both((b, o) => {
+        const value = decodeSubStreamedResponse(b, FunctionCode.GetVarSubStreamed, o).body.value;
+        if (value?.type === DataType.UDInt) protectionLevelOf(value);
+        else challengeOf(value);
+      }),
+    },
+    {
+      name: 'S7+ ServerSessionVersion device string',
+      seeds: [paom],
+      run: (b) => {
+        const s = paomString(decodePValue(b, 0).value);
+        if (s !== undefined) legitimationForm(s);
+      },
+    },
   ];
 }
 

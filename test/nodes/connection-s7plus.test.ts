@@ -155,4 +155,83 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       expect(msg.payload).to.deep.equal({ step: 12, inlet: { Open: true, Position: 7 } });
     });
   });
+
+  describe('a PLC protected with a password (legitimation)', () => {
+    let locked: S7Server;
+    let lockedUrl: string;
+    before(async () => {
+      const cert = await generateCertificate();
+      const plus = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key }, password: SECRET });
+      locked = new S7Server({ port: 0, profile: 's7-1500', s7plus: plus });
+      await locked.listen();
+      lockedUrl = `s7plus://127.0.0.1:${locked.port}?fingerprint=${plus.fingerprint!}&timeout=3000`;
+    });
+    after(async () => {
+      await locked?.close();
+    });
+
+    const at = { z: 'tab', x: 100, y: 100 };
+    const flow = () => [
+      { id: 'tab', type: 'tab', label: 'plcwire' },
+      { id: 'c1', type: 'plcwire-connection', name: 'press', url: lockedUrl },
+      { id: 'w1', type: 'plcwire-write', ...at, connection: 'c1', tags: [{ name: 'step', address: '"Recipe".Step' }], wires: [['wout']] },
+      { id: 'wout', type: 'helper', ...at },
+      { id: 'catcher', type: 'catch', ...at, scope: ['w1'], uncaught: false, wires: [['caught']] },
+      { id: 'caught', type: 'helper', ...at },
+    ];
+
+    it('a write node through a connection whose password credential is set writes (the session legitimated)', async () => {
+      await helper.load(ALL_NODES, flow(), { c1: { password: SECRET } });
+      const conn = helper.getNode('c1');
+      await until(() => conn.linkStatus.state === 'connected', 10000, 'connected');
+      const written = new Recorder(helper.getNode('wout'));
+      helper.getNode('w1').receive({ payload: { step: 41 } });
+      const ack = await written.next(() => true, 10000, 'the write acknowledged');
+      expect(ack.results, JSON.stringify(ack.results)).to.deep.equal({ step: { ok: true, address: '"Recipe".Step' } });
+      expect(JSON.stringify(conn.linkStatus)).not.to.include(SECRET);
+      expect(JSON.stringify(helper._redNodes.getFlows())).not.to.include(SECRET);
+    });
+
+    it('without it, the write fails on Catch with the read-only message and the ways to give the password', async () => {
+      await helper.load(ALL_NODES, flow());
+      const conn = helper.getNode('c1');
+      await until(() => conn.linkStatus.state === 'connected', 10000, 'connected');
+      const caught = new Recorder(helper.getNode('caught'));
+      helper.getNode('w1').receive({ payload: { step: 42 } });
+      const failed = await caught.next(() => true, 10000, 'the write refused on Catch');
+      expect(failed.error.message).to.include('gives this connection read access only without its password');
+      expect(failed.error.message).to.include("the connection node's password in Node-RED");
+      expect(failed.results.step).to.include({ ok: false, code: 'ACCESS_DENIED' });
+    });
+
+    it('a wrong password credential: the link waits the longest delay with ACCESS_DENIED, and the error reaches Catch without the password', async () => {
+      const wrong = `${SECRET}-stale`;
+      // One Catch for the whole tab (the test helper registers a core node's type once): the connection's link errors go there.
+      const flowWithCatch = flow().map((n) => (n.id === 'catcher' ? { ...n, scope: null } : n));
+      await helper.load(ALL_NODES, flowWithCatch, { c1: { password: wrong } });
+      const caught = new Recorder(helper.getNode('caught'));
+      const conn = helper.getNode('c1');
+      const reported = await caught.next((m) => m.error.source.type === 'plcwire-connection', 10000, "the connection's error on Catch");
+      expect(reported.error.message).to.include('refused the password');
+      await until(() => conn.linkStatus.state === 'reconnecting', 10000, 'reconnecting');
+      const status = conn.linkStatus;
+      expect(status.error.code).to.equal('ACCESS_DENIED');
+      // The default backoff's longest delay, 30 s ± 20 %, where a transient fault waits half a second.
+      expect(status.delay).to.be.at.least(24_000);
+      const caughtText = JSON.stringify(caught.messages.map((m) => ({ ...m, error: { message: m.error.message } })));
+      expect(caughtText + JSON.stringify(status) + String(status.error.message)).not.to.include(wrong);
+    });
+
+    it('Browse PLC with the password typed in the dialog legitimates; a wrong one answers ACCESS_DENIED without echoing it', async () => {
+      await helper.load(ALL_NODES, []);
+      const ok = await helper.request().post('/plcwire/s7plus/browse').send({ url: lockedUrl, password: SECRET }).expect(200);
+      expect(ok.body.ok, JSON.stringify(ok.body)).to.equal(true);
+      const wrong = `${SECRET}-typo`;
+      const refused = await helper.request().post('/plcwire/s7plus/browse').send({ url: lockedUrl, password: wrong }).expect(200);
+      expect(refused.body).to.include({ ok: false, code: 'ACCESS_DENIED' });
+      expect(refused.body.message).to.include('refused the password');
+      expect(JSON.stringify(refused.body)).not.to.include(wrong);
+      await until(() => locked.connectionCount === 0, 3000, 'no connection left');
+    });
+  });
 });

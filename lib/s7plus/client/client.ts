@@ -9,7 +9,7 @@
  * no property, no JSON, no inspect() output, no error and no log line.
  */
 import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
-import { ConnectionError, isLinkError, PlcError } from '../../errors';
+import { ConnectionError, isLinkError } from '../../errors';
 import type { Driver } from '../../link/driver';
 import type { SymbolTable } from '../../symbols/model';
 import type { Protocol, RequestOptions, Tag } from '../../types';
@@ -22,9 +22,11 @@ import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './ser
 import type { S7PlusSession, S7PlusWireCounters } from './session';
 import type { HandshakeStep, PeerCertificate } from './handshake';
 import { parseDeviceString } from '../codec/identity';
+import { readOnlyRefusals, type Protection } from './legitimation';
 
 export type { PeerCertificate } from './handshake';
 export type { CpuState, S7PlusDataBlock } from './services';
+export type { Protection } from './legitimation';
 
 /**
  * What `info()` tells of an S7-1200/1500 over S7CommPlus: the fields of the
@@ -73,6 +75,8 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   certificate: PeerCertificate | undefined;
   /** The device string of the live session (order code, firmware: codec/identity.ts); undefined when the PLC sends none. */
   device: string | undefined;
+  /** What the password step of the live connection found (its protection level); undefined when no password was given. */
+  protection: Protection | undefined;
   readonly #password: string | undefined;
   private readonly onHandshakeStep: ((passed: HandshakeStep) => void) | undefined;
   /** Items per request: the URL's maxItems or 20, lowered when the PLC refuses a request as too large. */
@@ -94,8 +98,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
       const { values, errors } = await readMixed(session, tags, this.limits, this.programOf(session), signal);
       return toResults(values, errors);
     },
-    writeTags: (session: S7PlusSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal) =>
-      writeMixed(session, items, this.limits, this.programOf(session), signal),
+    writeTags: async (session: S7PlusSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal) => {
+      const results = await writeMixed(session, items, this.limits, this.programOf(session), signal);
+      return this.#password === undefined ? readOnlyRefusals(session, this.name, items, results, signal) : results;
+    },
     noBlockLength: 'S7CommPlus reads data blocks by their own layout: there is no PUT/GET layout to check',
     isLinkError,
   };
@@ -184,10 +190,7 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   }
 
   private async openSession(signal: AbortSignal): Promise<S7PlusSession> {
-    if (this.#password !== undefined) {
-      // Legitimation is not there yet: a connection that would silently lack the rights the password gives is worse than none.
-      throw new PlcError('NOT_SUPPORTED', `${this.name}: a password (legitimation) is not supported over S7CommPlus yet`);
-    }
+    // Every session (a reconnect, a second one) gives the password again: the "password" step of the handshake.
     const opened = await openS7PlusSession(this.endpoint, {
       name: this.name,
       timeout: this.timeout,
@@ -198,9 +201,11 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
       lost: (session, err) => this.sessionLost(session, err),
       insecure: (certificate) => this.warnInsecure(certificate),
       ...(this.onHandshakeStep ? { onStep: this.onHandshakeStep } : {}),
+      password: this.#password,
     });
     this.certificate = opened.certificate;
     this.device = opened.device;
+    this.protection = opened.protection;
     return opened.session;
   }
 

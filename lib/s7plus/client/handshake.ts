@@ -2,10 +2,12 @@
  * The S7CommPlus handshake as steps (s7commplus (MIT), connection.py,
  * connect): TCP → COTP CR/CC with the S7CommPlus TSAPs → InitSSL → TLS
  * (unless tls=false) → CreateObject of a ServerSession → session setup (the
- * ServerSessionVersion echoed) → IntegrityIds on (over TLS). Each step says
- * in words what failed; a failure leaves no socket behind.
+ * ServerSessionVersion echoed) → IntegrityIds on (over TLS) → the password
+ * (legitimation.ts), only when one is given. Each step says in words what
+ * failed; a failure leaves no socket behind.
  */
 import type { Duplex } from 'node:stream';
+import type { TLSSocket } from 'node:tls';
 import { abortError, ConnectionError, PlcError, TimeoutError, toPlcError } from '../../errors';
 import type { S7PlusEndpoint } from '../url';
 import { encodeFrames, S7pFrameReader } from '../codec/frame';
@@ -24,6 +26,7 @@ import { startTls } from '../transport/handshake';
 import type { CertificateInfo } from '../transport/trust';
 import { openTunnel } from './tunnel';
 import { deviceString } from '../codec/identity';
+import { legitimate, type Protection } from './legitimation';
 
 /** The PLC's certificate of a TLS connection, as the client tells it (`client.certificate`, the `insecure` event). */
 export interface PeerCertificate {
@@ -49,6 +52,8 @@ export interface OpenOptions extends Omit<S7PlusWiring, 'timeout'> {
   insecure?(certificate: PeerCertificate): void;
   /** Told each handshake step as it passes (the connection doctor shows them); a failure is the step after the last one told. */
   onStep?(passed: HandshakeStep): void;
+  /** The PLC's password: given in the "password" step, used there and nowhere else. */
+  password?: string | undefined;
 }
 
 /** A handshake step that passed, with what it learnt. */
@@ -56,7 +61,8 @@ export type HandshakeStep =
   | { step: 'cotp'; maxPayload: number }
   | { step: 'InitSSL' }
   | { step: 'TLS'; certificate: PeerCertificate; protocol: string; trust: 'pinned' | 'ca' | 'insecure' }
-  | { step: 'session'; sessionId: number; version: number; device: string | undefined };
+  | { step: 'session'; sessionId: number; version: number; device: string | undefined }
+  | { step: 'password'; protection: Protection };
 
 /** What a connection was opened with: its session, the PLC's certificate over TLS, its device string (order code, firmware). */
 export interface Opened {
@@ -64,12 +70,18 @@ export interface Opened {
   certificate: PeerCertificate | undefined;
   /** ServerSessionVersion's device string (codec/identity.ts); undefined when the PLC sends none. */
   device: string | undefined;
+  /** What the password step found (only when a password was given). */
+  protection?: Protection;
 }
+
+/** A closing session says goodbye (DeleteObject) for at most this long after a refused password. */
+const GOODBYE_MS = 2000;
 
 export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Promise<Opened> {
   const tunnel = await openTunnel(e, o);
   o.onStep?.({ step: 'cotp', maxPayload: tunnel.maxPayload });
   let stream: Duplex = tunnel;
+  let secure: TLSSocket | undefined;
   let session: S7PlusSession | undefined;
   let step: Step = 'InitSSL';
   // close() or the connect deadline during a step ends it at once, whatever that step waits for.
@@ -94,6 +106,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       };
       const started = await startTls(tunnel, { trust, host: e.host, timeout: o.timeout, signal: o.signal });
       stream = started.socket;
+      secure = started.socket;
       certificate = peerCertificate(started.certificate);
       if (started.warning !== undefined) o.insecure?.(certificate);
       const trusted = e.fingerprint ? 'pinned' : e.ca ? 'ca' : 'insecure';
@@ -145,11 +158,25 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       });
     }
     if (e.tls) session.startIntegrity();
-    if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
     const device = deviceString(version);
     o.onStep?.({ step: 'session', sessionId: session.sessionId, version: session.version, device });
-    return { session, certificate, device };
+    let protection: Protection | undefined;
+    if (o.password !== undefined) {
+      step = 'password';
+      protection = await legitimate(session, {
+        name: o.name,
+        password: o.password,
+        version: created.serverSessionVersion,
+        tls: secure,
+        signal,
+      });
+      o.onStep?.({ step: 'password', protection });
+    }
+    if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
+    return { session, certificate, device, ...(protection ? { protection } : {}) };
   } catch (err) {
+    // A session the PLC set up is ended with a DeleteObject (a refused password leaves nothing open on the PLC).
+    if (session?.alive && step === 'password' && !o.signal.aborted) await session.goodbye(Math.min(o.timeout, GOODBYE_MS));
     if (session) session.destroy();
     stream.destroy();
     tunnel.destroy();
@@ -166,7 +193,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
 }
 
 /** The handshake's steps after the COTP connection, for messages. */
-type Step = 'InitSSL' | 'TLS' | 'CreateObject' | 'session setup';
+type Step = 'InitSSL' | 'TLS' | 'CreateObject' | 'session setup' | 'password';
 
 /** What a failure at `step` most likely means, for the URL it used. */
 function hint(e: S7PlusEndpoint, step: Step): string {

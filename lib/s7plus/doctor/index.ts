@@ -50,6 +50,15 @@ export async function diagnosePlus(url: string, names: readonly string[] = [], o
   return doctor.report();
 }
 
+/** protocol.py AccessLevel, in words (client/legitimation.ts Protection.level). */
+const ACCESS_LEVELS: Readonly<Record<number, string>> = {
+  0: 'no protection configured',
+  1: 'full access',
+  2: 'read access',
+  3: 'HMI access',
+  4: 'no access',
+};
+
 /** The handshake steps in their order; `password` only when one is given. */
 type HandshakeName = 'cotp' | 'InitSSL' | 'TLS' | 'session' | 'password';
 
@@ -193,9 +202,6 @@ class PlusDoctor {
     try {
       await client.connect();
     } catch (err) {
-      if (password !== undefined && err instanceof PlcError && err.code === 'NOT_SUPPORTED' && this.next === 'cotp') {
-        this.fail('password', err.message, 'Leave the password out to check the connection with the access the CPU gives without one.');
-      }
       const step = this.next;
       this.failed(step, err, (p) => this.handshakeFailure(e, where, step, p));
     } finally {
@@ -240,8 +246,19 @@ class PlusDoctor {
         this.next = 'password';
         return;
       }
+      case 'password': {
+        const { protection: p } = passed as Extract<HandshakeStep, { step: 'password' }>;
+        const access = ACCESS_LEVELS[p.level] ?? `access level ${p.level}`;
+        this.pass(
+          'password',
+          p.legitimated
+            ? `the PLC took the password${p.form ? ` (${p.form} legitimation)` : ''}: the session has ${access}`
+            : `the PLC wants no password: the session has ${access} without it`,
+        );
+        return;
+      }
       default: {
-        // A step this doctor does not know yet (the password's legitimation): shown as the client tells it.
+        // A step this doctor does not know: shown as the client tells it.
         const detail = 'detail' in passed && typeof passed.detail === 'string' ? passed.detail : 'passed';
         this.pass(passed.step, detail);
       }

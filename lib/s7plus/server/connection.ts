@@ -8,7 +8,7 @@
 import { Duplex } from 'node:stream';
 import * as tls from 'node:tls';
 import { ProtocolError } from '../../errors';
-import { OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH } from './legitimation';
+import { OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH } from '../constants';
 import { PlusSession, type SessionOptions } from './session';
 import type { CpuSide } from './services';
 import { connectionConfirm, connectionRequest, dataFrame } from './tsap';

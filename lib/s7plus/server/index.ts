@@ -37,6 +37,11 @@ export interface S7PlusOptions {
   readonly password?: string;
   /** Bytes one request frame may have; more resets the connection. Default 65535. */
   readonly maxRequestBytes?: number;
+  /**
+   * The device string of ServerSessionVersion (`1;<order number>;V<firmware>`), default an S7-1500 at V3.1:
+   * its firmware decides the form of legitimation the CPU takes (V2.9 to V3.0: the legacy one).
+   */
+  readonly device?: string;
 }
 
 /** What the S7 simulator gives each S7CommPlus connection. */
@@ -56,15 +61,17 @@ export class S7PlusService {
   private readonly maxItems: number;
   private readonly maxRequestBytes: number;
   private nextSession = 0x3a0;
-  /** The CPU's password (`S7PlusOptions.password`); nothing prints it. */
-  readonly password: string | undefined;
+  private readonly device: string | undefined;
+  /** The CPU's password (`S7PlusOptions.password`): a private field, so no inspect(), JSON or log shows it. */
+  readonly #password: string | undefined;
 
   constructor(options: S7PlusOptions) {
     this.db = options.db;
     this.current = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
     for (const n of this.current.optimizedDbs) this.optimizedDbs.add(n);
     this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
-    this.password = options.password;
+    this.#password = options.password;
+    this.device = options.device;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
     if (options.tls) {
       this.secureContext = tls.createSecureContext({
@@ -112,6 +119,11 @@ export class S7PlusService {
     return after;
   }
 
+  /** True when the CPU has a password: sessions have read access until they give it. */
+  get protected(): boolean {
+    return this.#password !== undefined;
+  }
+
   /** True when a COTP CR asks for S7CommPlus. */
   claims(frame: Buffer): boolean {
     return isS7PlusRequest(frame);
@@ -147,8 +159,9 @@ export class S7PlusService {
         session: {
           maxRequestBytes: this.maxRequestBytes,
           newSessionId: () => this.nextSession++,
-          password: this.password,
-          ...(device ? { device } : {}),
+          password: this.#password,
+          // The device string given to the service (a test's firmware) before the profile's.
+          device: this.device ?? device,
         },
         send: (bytes) => socket.write(bytes),
         close: (reason) => (reason ? hostile(reason) : socket.end()),

@@ -7,32 +7,56 @@
  * TLS exporter secret "EXPERIMENTAL_OMS" (32 bytes), IV the challenge's first
  * 16 bytes; the key rolls (SHA-256 again) after every attempt. Credentials:
  * Struct 40400 of type 40401, user 40402 and password 40403 (a SHA-1 of it
- * when the user is empty). The password is compared, never logged.
+ * when the user is empty). The "legacy" form of S7-1500 V2.9-V3.0 and
+ * S7-1200 V4.3-V4.6 (the CPU's device string decides, `device` of the
+ * service): SHA-1 of the password XOR the challenge, written to 304. The
+ * password is compared, never logged.
  */
 import { createDecipheriv, createHash, randomBytes, timingSafeEqual } from 'node:crypto';
-import { Reader } from '../codec/bytes';
-import { DataType } from '../constants';
+import { decodeCredentials, legitimationForm, type LegitimationForm } from '../codec/legitimation';
+import { AccessLevel, LegitimationType } from '../constants';
 
-/** protocol.py AccessLevel. */
-export const FULL_ACCESS = 1;
-const READ_ACCESS = 2;
-/** legitimation.py / connection.py: the exporter label and length of the OMS secret. */
-export const OMS_EXPORTER_LABEL = 'EXPERIMENTAL_OMS';
-export const OMS_EXPORTER_LENGTH = 32;
-/** protocol.py LegitimationType (1 legacy: SHA-1 of the password; 2 new: user and password). */
-const LEGACY = 1;
+/** The level of a session that may write (protocol.py AccessLevel). */
+export const FULL_ACCESS = AccessLevel.FullAccess;
 
 export class Legitimation {
   private challenge: Buffer | undefined;
   private secret: Buffer | undefined;
   level: number;
 
+  /** The form the CPU's firmware takes (codec/legitimation.ts legitimationForm); the other one is refused. */
+  private readonly form: LegitimationForm | undefined;
+
+  /** Compared, never shown: a private field (no inspect() of the simulator's sessions shows it). */
+  readonly #password: string | undefined;
+
   constructor(
-    private readonly password: string | undefined,
+    password: string | undefined,
     /** The TLS exporter secret of the connection, undefined without TLS. */
     private readonly exporter: () => Buffer | undefined,
+    /** The device string of the CPU's ServerSessionVersion. */
+    device: string,
   ) {
-    this.level = password === undefined ? FULL_ACCESS : READ_ACCESS;
+    this.#password = password;
+    this.level = password === undefined ? AccessLevel.FullAccess : AccessLevel.ReadAccess;
+    this.form = legitimationForm(device);
+  }
+
+  /**
+   * The legacy form's answer: true when it is the SHA-1 of the password XOR
+   * the challenge (legitimation.py build_legacy_response); a CPU of the new
+   * form refuses it.
+   */
+  attemptLegacy(answer: Buffer): boolean {
+    const challenge = this.challenge;
+    this.challenge = undefined;
+    if (this.#password === undefined) return true;
+    if (this.form !== 'legacy' || !challenge || answer.length !== 20 || challenge.length < 20) return false;
+    const hash = createHash('sha1').update(this.#password, 'utf8').digest();
+    const expected = Buffer.from(hash.map((b, i) => b ^ challenge[i]!));
+    const ok = timingSafeEqual(expected, answer);
+    if (ok) this.level = AccessLevel.FullAccess;
+    return ok;
   }
 
   /** The challenge of this attempt (20 bytes, as a CPU gives). */
@@ -45,7 +69,8 @@ export class Legitimation {
   attempt(blob: Buffer): boolean {
     const challenge = this.challenge;
     this.challenge = undefined;
-    if (this.password === undefined) return true;
+    if (this.#password === undefined) return true;
+    if (this.form !== 'new') return false;
     this.secret ??= this.exporter();
     if (!challenge || !this.secret) return false;
     const key = createHash('sha256').update(this.secret).digest();
@@ -57,34 +82,18 @@ export class Legitimation {
     } catch {
       return false;
     }
-    const credentials = parse(plain);
-    if (!credentials) return false;
-    const expected =
-      credentials.type === LEGACY ? createHash('sha1').update(this.password, 'utf8').digest() : Buffer.from(this.password, 'utf8');
-    const ok = expected.length === credentials.password.length && timingSafeEqual(expected, credentials.password);
-    if (ok) this.level = FULL_ACCESS;
-    return ok;
-  }
-}
-
-function parse(plain: Buffer): { type: number; password: Buffer } | undefined {
-  try {
-    const r = new Reader(plain);
-    if (r.u8() !== 0 || r.u8() !== DataType.Struct || r.u32() !== 40400) return undefined;
-    let type = 0;
-    let password: Buffer | undefined;
-    for (let key = r.uvlq32(); key !== 0; key = r.uvlq32()) {
-      r.u8();
-      const t = r.u8();
-      if (key === 40401 && t === DataType.UDInt) type = r.uvlq32();
-      else if (t === DataType.Blob) {
-        r.uvlq32();
-        const value = r.bytes(r.uvlq32());
-        if (key === 40403) password = Buffer.from(value);
-      } else return undefined;
+    let credentials: { type: number; password: Buffer };
+    try {
+      credentials = decodeCredentials(plain);
+    } catch {
+      return false;
     }
-    return password ? { type, password } : undefined;
-  } catch {
-    return undefined;
+    const expected =
+      credentials.type === LegitimationType.Legacy
+        ? createHash('sha1').update(this.#password, 'utf8').digest()
+        : Buffer.from(this.#password, 'utf8');
+    const ok = expected.length === credentials.password.length && timingSafeEqual(expected, credentials.password);
+    if (ok) this.level = AccessLevel.FullAccess;
+    return ok;
   }
 }

@@ -16,6 +16,7 @@ import {
   ITEM_ERROR_UNRESOLVED,
   Opcode,
   ProtocolVersion,
+  PValueFlag,
   READ_FUNCTIONS,
   S7P_PROTOCOL_ID,
 } from '../constants';
@@ -25,8 +26,8 @@ import { FULL_ACCESS, Legitimation } from './legitimation';
 import { Subscriptions } from './subscriptions';
 import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
 
-/** The device string of ServerSessionVersion without a profile's (codec/identity.ts): an S7-1500 at firmware V3.1. */
-const PAOM = '1;6ES7 516-3AN02-0AB0 ;V3.1';
+/** The device string of ServerSessionVersion by default: an S7-1500 at firmware V3.1 (the form of legitimation.py's examples). */
+const DEFAULT_DEVICE = '1;6ES7 516-3AN02-0AB0 ;V3.1';
 /** A refused legitimation's return value: bit 15 set (connection.py _check_set_variable_response). */
 const LEGITIMATION_REFUSED = 0x8000n;
 
@@ -41,8 +42,8 @@ export interface SessionOptions {
   readonly password?: string | undefined;
   /** The TLS exporter secret the legitimation key derives from; undefined without TLS. */
   exporter(): Buffer | undefined;
-  /** The device string (order code, firmware) of the CPU's profile; PAOM without one. */
-  readonly device?: string;
+  /** The device string of ServerSessionVersion (`1;<order number>;V<firmware>`): its firmware decides the legitimation's form. */
+  readonly device?: string | undefined;
 }
 
 /** What the transport does after a frame: send `reply`; switch to TLS; close. */
@@ -67,7 +68,7 @@ export class PlusSession {
     private readonly options: SessionOptions,
   ) {
     this.subscriptions = new Subscriptions(cpu, options.push, this.version());
-    this.legitimation = new Legitimation(options.password, options.exporter);
+    this.legitimation = new Legitimation(options.password, options.exporter, options.device ?? DEFAULT_DEVICE);
   }
 
   /** The connection ended: no more notifications. */
@@ -237,13 +238,16 @@ export class PlusSession {
     const object = r.u32('the object id');
     if (r.uvlq32() !== 1) return LEGITIMATION_REFUSED;
     const address = r.uvlq32();
-    r.u8('flags');
+    const flags = r.u8('flags');
     const type = r.u8('type');
     if (address === Ids.SubscriptionCreditLimit && type === DataType.Int)
       this.subscriptions.setCredit(object, r.bytes(2, 'an Int').readInt16BE(0));
     else if (address === Ids.Legitimate && type === DataType.Blob) {
       r.uvlq32();
       return this.legitimation.attempt(r.bytes(r.uvlq32(), 'the credentials')) ? 0n : LEGITIMATION_REFUSED;
+    } else if (address === Ids.ServerSessionResponse && type === DataType.USInt && flags & PValueFlag.Array) {
+      // The legacy form's answer, a USInt array (connection.py _send_legitimation_legacy).
+      return this.legitimation.attemptLegacy(r.bytes(r.uvlq32(), 'the legacy answer')) ? 0n : LEGITIMATION_REFUSED;
     }
     return 0n;
   }
@@ -278,7 +282,7 @@ export class PlusSession {
   private sessionVersion(): Buffer {
     const id = Buffer.alloc(4);
     id.writeUInt32BE(Ids.SessionVersionStruct);
-    const paom = Buffer.from(this.options.device ?? PAOM, 'utf8');
+    const paom = Buffer.from(this.options.device ?? DEFAULT_DEVICE, 'utf8');
     return Buffer.concat([
       Buffer.from([0x00, DataType.Struct]),
       id,
