@@ -254,6 +254,27 @@ describe('doctor on s7plus:// (our simulator)', function () {
     await noConnections(server);
   });
 
+  it('a CPU protected with a password: the right one passes the password step with the access it gives, a wrong one fails there and the later steps are not run', async () => {
+    const secret = 'Sw0rdfish-protected-cpu';
+    const service = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key }, password: secret });
+    const server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    await server.listen();
+    servers.push(server);
+    const url = `s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=5000`;
+    const good = await diagnose(url, ['"Recipe".Step'], { password: secret });
+    expect(names(good)).to.deep.equal([...HANDSHAKE, 'symbol "Recipe".Step']);
+    expect(by(good).password).to.include({ ok: true });
+    expect(by(good).password!.detail).to.equal('the PLC took the password (new legitimation): the session has full access');
+    const bad = await diagnose(url, ['"Recipe".Step'], { password: 'not-the-password' });
+    expect(names(bad)).to.deep.equal(['tcp', 'cotp', 'InitSSL', 'TLS', 'session', 'password']);
+    expect(by(bad).password).to.include({ ok: false });
+    expect(by(bad).password!.detail).to.contain('refused the password');
+    expect(JSON.stringify([good, bad]))
+      .to.not.contain(secret)
+      .and.to.not.contain('not-the-password');
+    await noConnections(server);
+  });
+
   it('rejects with ABORTED when the caller aborts, and leaves no connection', async () => {
     const { server, url } = await simulator();
     const stop = new AbortController();
