@@ -91,7 +91,10 @@ const MAX_LINES = 400;
  * Files allowed past MAX_LINES, each with its reason. A pure table may stay
  * long; a file another piece of work is reshaping stays until that lands.
  */
-const LONG_FILES: Readonly<Record<string, string>> = {};
+const LONG_FILES: Readonly<Record<string, string>> = {
+  'lib/s7plus/constants.ts':
+    'the one table of every S7CommPlus id, opcode, function code and attribute number with its source, which issue #25 asks for in one place',
+};
 
 /** Lines of a file as `wc -l` counts them (a last line without a newline counts too). */
 function lineCount(file: string): number {

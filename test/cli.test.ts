@@ -530,7 +530,7 @@ describe('plcwire CLI', function () {
         expect(r.code, command).to.equal(0);
         expect(r.out, command)
           .to.match(new RegExp(`^usage: plcwire ${command}\\b`))
-          .and.match(/\nexample:\n {2}plcwire /);
+          .and.match(/\nexamples?:\n {2}plcwire /);
       }
       const global = await cli(['--help']);
       expect(global.out)
