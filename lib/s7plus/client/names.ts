@@ -33,12 +33,12 @@ import { readTags, sized, writeTags, type Limits } from './io';
 import type { S7PlusSession } from './session';
 
 /** A tag that stands for a name of the PLC's program (resolved at the read or write). */
-interface NamedTag extends Tag {
+export interface NamedTag extends Tag {
   /** The name's key: canonical, lower case. */
   readonly symbol: string;
 }
 
-const isNamed = (tag: Tag): tag is NamedTag => typeof (tag as Partial<NamedTag>).symbol === 'string';
+export const isNamed = (tag: Tag): tag is NamedTag => typeof (tag as Partial<NamedTag>).symbol === 'string';
 
 /**
  * The S7 address syntax, and names: what does not parse as an address but
@@ -93,7 +93,7 @@ function unknownName(table: SymbolTable, name: string): PlcError {
 const LEAVES = new WeakMap<SymbolEntry, readonly SymbolEntry[]>();
 
 /** The elementary entries of an entry (itself when elementary), in order. */
-function leavesOf(table: SymbolTable, entry: SymbolEntry): readonly SymbolEntry[] {
+export function leavesOf(table: SymbolTable, entry: SymbolEntry): readonly SymbolEntry[] {
   if (entry.kind === 'elementary') return [entry];
   let leaves = LEAVES.get(entry);
   if (!leaves) {
@@ -106,7 +106,7 @@ function leavesOf(table: SymbolTable, entry: SymbolEntry): readonly SymbolEntry[
   return leaves;
 }
 
-function itemOf(entry: SymbolEntry): ItemAddress {
+export function itemOf(entry: SymbolEntry): ItemAddress {
   return { symbolCrc: 0, accessArea: entry.access!.area, accessSubArea: Ids.DBValueActual, lids: [...entry.access!.lids] };
 }
 
@@ -132,7 +132,7 @@ const WIDTH: Readonly<Record<number, [number, 'u' | 's' | 'f']>> = Object.freeze
 });
 
 /** A leaf's value from the PValue the PLC answered: a BLOB as the member's standard bytes, a typed value by its wire type. */
-function valueOf(entry: SymbolEntry, v: PValue): PlcValue {
+export function valueOf(entry: SymbolEntry, v: PValue): PlcValue {
   const x = v.value;
   if (v.type === DataType.Bool && typeof x === 'boolean') return x;
   if ((v.type === DataType.WString || v.type === DataType.S7String) && typeof x === 'string') return x;
@@ -157,7 +157,7 @@ function valueOf(entry: SymbolEntry, v: PValue): PlcValue {
 }
 
 /** A struct's or array's value from its leaves' values (by name). */
-function assemble(table: SymbolTable, entry: SymbolEntry, leaf: Map<string, PlcValue>): unknown {
+export function assemble(table: SymbolTable, entry: SymbolEntry, leaf: Map<string, PlcValue>): unknown {
   if (entry.kind === 'elementary') return leaf.get(entry.name);
   const children = (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
   if (entry.kind === 'array') return children.map((c) => assemble(table, c, leaf));
@@ -171,7 +171,7 @@ function memberKey(parent: SymbolEntry, child: SymbolEntry): string {
 }
 
 /** What a named tag stands for: the entry, or why not. */
-function resolve(table: SymbolTable, tag: NamedTag): SymbolEntry | PlcError {
+export function resolveName(table: SymbolTable, tag: NamedTag): SymbolEntry | PlcError {
   const entry = table.lookup(tag.address);
   if (!entry) return unknownName(table, tag.address);
   if (!entry.access || entry.access.lids.length === 0)
@@ -220,7 +220,7 @@ export async function readMixed(
   const leaves: SymbolEntry[] = [];
   const wanted: { i: number; entry: SymbolEntry }[] = [];
   for (const i of named) {
-    const entry = resolve(t, tags[i] as NamedTag);
+    const entry = resolveName(t, tags[i] as NamedTag);
     if (entry instanceof PlcError) errors[i] = entry;
     else {
       wanted.push({ i, entry });
@@ -323,7 +323,7 @@ export async function writeMixed(
   const ready: { i: number; address: ItemAddress; value: PValue; name: string }[] = [];
   items.forEach(({ tag, value }, i) => {
     if (!isNamed(tag)) return;
-    const entry = resolve(t, tag);
+    const entry = resolveName(t, tag);
     if (entry instanceof PlcError) return void (results[i] = { ok: false, error: entry });
     try {
       const leaves: { entry: SymbolEntry; value: unknown }[] = [];
