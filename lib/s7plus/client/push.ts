@@ -178,6 +178,9 @@ export class PushLink extends EventEmitter {
   private async create(sub: S7PlusSubscription, session: S7PlusSession): Promise<void> {
     if (!this.subs.has(sub) || !session.alive || session !== this.supervisor.session) return;
     try {
+      // A PLC that named no container when the session was created has nowhere to create one (s7commplus client.py create_subscription).
+      if (session.subscriptionContainerId === 0)
+        throw new PlcError('NOT_SUPPORTED', `${this.wiring.name} offers no subscription container: it cannot report changes; poll instead`);
       const needsTable = sub.tags.some((t) => isNamed(this.wiring.parse(t)));
       const plan = sub.planWith(needsTable ? await this.tableOf(session) : undefined);
       const { id, changeCounter } = await this.createObject(session, sub, plan);
