@@ -146,7 +146,12 @@ module.exports = function (RED) {
     const push = pushed
       ? new ReadPush(tags, Math.max(10, Number(config.cycle) || 100), {
           outcomes: (list) => {
-            if (!closing) deliver(outcomesShown(liveClient(RED, connection), list));
+            if (closing) return;
+            try {
+              deliver(outcomesShown(liveClient(RED, connection), list));
+            } catch (err) {
+              node.error(err, { topic, payload: {} });
+            }
           },
           active: () => {
             if (!failing && connection) connection.showLink();

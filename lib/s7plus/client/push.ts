@@ -260,7 +260,14 @@ export class PushLink extends EventEmitter {
 
   private deliver(live: Live, n: Notification): void {
     if (live.changeCounter !== n.changeCounter) return;
-    live.sub.notified(n);
+    try {
+      live.sub.notified(n);
+    } catch (err) {
+      // A listener's own error is the application's, not the PLC's: it must not drop the link as a protocol error.
+      process.nextTick(() => {
+        throw err;
+      });
+    }
     const left = (live.credit - n.creditTick + TICKS) % TICKS;
     if (left <= CREDIT_STEP) this.grant(live);
   }
