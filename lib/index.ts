@@ -100,6 +100,15 @@ export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type Simula
 export type { CpuServices, ServiceSession } from './s7/server/services';
 /** S7CommPlus on the S7 simulator's port (`new S7Server({ s7plus: new S7PlusService({ sources, tls }) })`), issue #25. */
 export { S7PlusService, type S7PlusOptions } from './s7plus/server';
+/** The S7CommPlus client (`connect('s7plus://…')` gives one) and its subscriptions: `client.subscribe(tags, { cycle })`. */
+export {
+  S7PlusClient,
+  S7PlusSubscription,
+  type SubscribeOptions,
+  type SubscriptionChange,
+  type SubscriptionData,
+  type SubscriptionState,
+} from './s7plus/client';
 export { type PlcInfo, type ClockOptions } from './s7/client';
 export { diagnose, type DoctorStep, type DoctorReport, type DiagnoseOptions } from './doctor';
 export {

@@ -3,6 +3,7 @@ const { attach, settleWithin, liveClient, warnDuplicateNames } = require('./shar
 const { tagTable, tagsOfMessage, outcomes, tagFailure, ChangeFilter, PolledTable, PlcError, isLinkError, realsForPeople } = require('..');
 const { ReadQueue } = require('../dist/lib/flows/read-queue');
 const { ReadMessages, readOutput } = require('../dist/lib/flows/read-messages');
+const { ReadPush, canPush } = require('../dist/lib/flows/read-push');
 const { tagErrorsStatus } = require('./shared/status');
 
 /** Each address once, in table order (a table may name one address twice). */
@@ -17,6 +18,10 @@ function uniqueAddresses(list) {
  * one. A read of the configured table in which every tag succeeded (the
  * common case) is sent from the client's values by address, any other from
  * per-tag outcomes; ReadMessages builds the messages of both.
+ *
+ * Mode "push" (s7plus:// only): no polling; the PLC reports changes of the
+ * table (ReadPush, a subscription on the client), sent as the polled mode's
+ * change messages; input messages still read at once.
  */
 module.exports = function (RED) {
   function PlcwireRead(config) {
@@ -24,8 +29,9 @@ module.exports = function (RED) {
     const node = this;
     const tags = tagTable(config.tags);
     warnDuplicateNames(RED, node, tags);
-    const interval = Math.max(0, Number(config.interval) || 0);
-    const output = readOutput(config.output);
+    const pushed = config.mode === 'push';
+    const interval = pushed ? 0 : Math.max(0, Number(config.interval) || 0);
+    const output = pushed ? 'changes' : readOutput(config.output);
     const changes = new ChangeFilter(config.deadband);
     const topic = node.name || 'plcwire';
     let timer;
@@ -40,6 +46,8 @@ module.exports = function (RED) {
     const connection = attach(RED, node, config.connection, (status) => {
       const show = status.state !== 'connected' || !failing;
       if (status.state === 'connected' && interval > 0) schedule(0);
+      // After attach() has returned: it calls this at once with the current state.
+      if (status.state === 'connected' && pushed) process.nextTick(subscribe);
       if (show) shown = 'link';
       return show;
     });
@@ -122,6 +130,60 @@ module.exports = function (RED) {
       }
     }
 
+    /** Outcomes of a poll or a notification: the status, the messages, each newly failed tag to Catch once. */
+    function deliver(list, send = (m) => node.send(m)) {
+      showQuality(list.filter((o) => !o.ok).length);
+      messages.sendOutcomes(send, list);
+      const bad = list.filter((o) => !o.ok && !reported.has(o.name));
+      for (const o of list) if (o.ok) reported.delete(o.name);
+      if (bad.length > 0) {
+        bad.forEach((o) => reported.add(o.name));
+        node.error(tagFailure('read', bad), { topic, payload: Object.fromEntries(bad.map((o) => [o.name, o.error])) });
+      }
+    }
+
+    // Push mode: the table subscribed when the link is up; the client subscribes again after a reconnect.
+    const push = pushed
+      ? new ReadPush(tags, Math.max(10, Number(config.cycle) || 100), {
+          outcomes: (list) => {
+            if (closing) return;
+            try {
+              deliver(outcomesShown(liveClient(RED, connection), list));
+            } catch (err) {
+              node.error(err, { topic, payload: {} });
+            }
+          },
+          active: () => {
+            if (!failing && connection) connection.showLink();
+          },
+          failed: (err) => {
+            if (closing) return;
+            // A lost link with the connection's own link down is the connection's to report (Status and Catch), as when polling.
+            if (isLinkError(err) && node.linkState !== 'connected') return;
+            node.status({ fill: 'yellow', shape: 'ring', text: RED._('plcwire-read.status.resubscribing') });
+            node.error(err, { topic, payload: {} });
+          },
+        })
+      : undefined;
+    let pushRefused = false;
+    function subscribe() {
+      if (closing || !push) return;
+      let client;
+      try {
+        client = liveClient(RED, connection);
+      } catch {
+        return; // the connection reports why
+      }
+      if (canPush(client)) return push.linkUp(client);
+      if (pushRefused) return;
+      pushRefused = true;
+      node.status({ fill: 'red', shape: 'ring', text: RED._('plcwire-read.status.noPush') });
+      node.error(new PlcError('NOT_SUPPORTED', RED._('plcwire-read.errors.pushProtocol', { protocol: client.protocol })), {
+        topic,
+        payload: {},
+      });
+    }
+
     function schedule(delay) {
       clearTimeout(timer);
       timer = undefined;
@@ -145,15 +207,7 @@ module.exports = function (RED) {
               reported.clear();
               return;
             }
-            const { list } = read;
-            showQuality(list.filter((o) => !o.ok).length);
-            messages.sendOutcomes(send, list);
-            const bad = list.filter((o) => !o.ok && !reported.has(o.name));
-            for (const o of list) if (o.ok) reported.delete(o.name);
-            if (bad.length > 0) {
-              bad.forEach((o) => reported.add(o.name));
-              node.error(tagFailure('read', bad), { topic, payload: Object.fromEntries(bad.map((o) => [o.name, o.error])) });
-            }
+            deliver(read.list);
           },
           (err) => {
             // A lost link shows on the status and reaches Catch through the connection; anything else is reported here.
@@ -198,7 +252,7 @@ module.exports = function (RED) {
       closing = true;
       clearTimeout(timer);
       timer = undefined;
-      settleWithin(connection ? connection.detach() : undefined).then(() => done());
+      settleWithin(Promise.all([push ? push.close() : undefined, connection ? connection.detach() : undefined])).then(() => done());
     });
   }
 

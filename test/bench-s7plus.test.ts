@@ -53,7 +53,10 @@ describe('npm run bench: the S7CommPlus section (issue #25)', function () {
     // 100 names at 50 items per request: 2 reads and the program check (client/program.ts), by our own count and by the proxy's TLS records.
     expect(row(out, 'ours (s7plus://, by name)').slice(2, 4)).to.deep.equal(['3.0', '3.0']);
     expect(row(out, 'ours s7plus:// (TLS)').slice(2, 4)).to.deep.equal(['2.0', '2.0']);
-    expect(row(out, 'requests per poll: 100 names at 50 per request = 2, and the program check = 3')).to.deep.equal(['3.0 (ours) / 3.0 (proxy)', 'pass']);
+    expect(row(out, 'requests per poll: 100 names at 50 per request = 2, and the program check = 3')).to.deep.equal([
+      '3.0 (ours) / 3.0 (proxy)',
+      'pass',
+    ]);
     for (const target of ["polls/s at least 10× the s7commplus client's", 'CPU per poll over TLS at most 1.5×']) {
       expect(out.split('\n').find((l) => l.startsWith(target))).to.match(/(pass|FAIL|not measured)$/);
     }

@@ -12,6 +12,8 @@ import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
 import { EXIT } from '../lib/cli/io';
+import { createClient } from '../lib/connect';
+import type { S7PlusClient } from '../lib/s7plus/client';
 import { until } from './support/wait';
 
 const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
@@ -274,16 +276,45 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
     });
   });
 
-  it('help: browse has its usage and example; watch says it polls on s7plus://; the global usage names the password ways', async () => {
+  it('help: browse has its usage and example; watch says the PLC reports changes on s7plus://; the global usage names the password ways', async () => {
     const b = await done(['browse', '--help']);
     expect(b.code).to.equal(EXIT.OK);
     expect(b.out)
       .to.match(/^usage: plcwire browse <s7plus-url>/)
       .and.match(/\nexample:\n {2}plcwire browse "s7plus:\/\//);
     const w = await done(['watch', '--help']);
-    expect(w.out).to.include('On s7plus:// it polls too');
+    expect(w.out).to.include('On s7plus:// the PLC reports the changes').and.include('--cycle ms');
     const all = await done(['--help']);
     expect(all.out).to.include('plcwire browse <s7plus-url>').and.include('PLCWIRE_PASSWORD or --password-file FILE');
+  });
+
+  describe('watch', () => {
+    it('subscribes: a change written through a second client shows long before the 60 s poll; a tag that cannot be subscribed is polled and said so', async function () {
+      const writer = createClient(url) as S7PlusClient;
+      await writer.connect();
+      const w = run(['watch', url, '"Recipe".Step', '"Tank".Count', 'MW10', '--interval', '60000']);
+      try {
+        await writer.write({ '"Recipe".Step': 21 });
+        await until(() => /"Recipe"\.Step = \d+/.test(w.output().out), 20000, 'the first value line');
+        await until(() => /subscribed to 3 tag\(s\)/.test(w.output().err), 20000, 'the subscription');
+        await until(() => /MW10 cannot be subscribed .*polled every 60000 ms/.test(w.output().err), 20000, 'the fallback message');
+        const started = Date.now();
+        await writer.write({ '"Recipe".Step': 22 });
+        await until(() => /"Recipe"\.Step = 22\n/.test(w.output().out), 5000, 'the changed value line');
+        const latency = Date.now() - started;
+        this.test!.title += ` (a change showed after ${latency} ms)`;
+        expect(latency).to.be.below(1000);
+        expect(w.output().out).to.match(/"Tank"\.Count = \d+/);
+        // MW10 was read at once when it fell back to polling, not after the 60 s interval: its poll's outcome is on stderr.
+        await until(() => /MW10.*(no such|refused|not)/i.test(w.output().err.split('polled every')[1] ?? ''), 5000, 'the poll of MW10');
+        // Only one line per change: the value did not change again, no poll ran.
+        expect(w.output().out.match(/"Recipe"\.Step = 22/g)).to.have.length(1);
+      } finally {
+        w.child.kill('SIGINT');
+        expect(await w.exit).to.equal(EXIT.INTERRUPTED);
+        await writer.close();
+      }
+    });
   });
 
   describe('browse', () => {

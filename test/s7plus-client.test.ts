@@ -108,6 +108,18 @@ describe('s7plus client against the s7commplus emulator', function () {
       await noConnections(peer);
     });
 
+    it('subscribe(): the emulator offers no subscription container, so it is refused in words (NOT_SUPPORTED) and no connection is left', async () => {
+      const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`) as S7PlusClient;
+      await client.connect();
+      const err = await rejection(client.subscribe(['DB1.DBW4']));
+      expect(err.code).to.equal('NOT_SUPPORTED');
+      expect(err.message).to.include('no subscription container');
+      // The client's own session goes on.
+      expect(await client.read(['DB1.DBD4:DINT'])).to.have.keys('DB1.DBD4:DINT');
+      await client.close();
+      await noConnections(peer);
+    });
+
     it('reads and writes a standard DB by address, with the IntegrityIds counting a read and a write, and tells the CPU state and the DBs', async () => {
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${cert.fingerprint}&timeout=5000`);
       await client.connect();

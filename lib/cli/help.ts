@@ -33,11 +33,13 @@ ${PASSWORD_OPTION}
 ${URL_NOTE}
 example:
   plcwire write "s7://192.168.0.1?rack=0&slot=1" DB1.DBW2:INT=42 '"Plant".MotorRun=true' --symbols Plant.db --db Plant=1 --yes`,
-  watch: `usage: plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--json]
+  watch: `usage: plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--cycle ms] [--json]
 Polls until Ctrl-C (exit code 130) and prints a line per changed value, all values first; reconnects by itself.
-On s7plus:// it polls too: the S7CommPlus client offers no subscription yet (the PLC pushing changes).
+On s7plus:// the PLC reports the changes (a subscription on a session of its own, subscribed again after a
+reconnect); a tag that cannot be subscribed is polled, and stderr says which and why.
 ${SYMBOL_OPTIONS}
   --interval ms      time between polls (default 1000)
+  --cycle ms         s7plus://: how often the PLC samples the subscribed tags (default 100)
   --json             one JSON object per line: { "time": ISO 8601, "values": { tag: value } }
 ${PASSWORD_OPTION}
 ${URL_NOTE}

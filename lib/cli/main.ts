@@ -5,7 +5,7 @@
  */
 import { createClient, type AnyClient } from '../connect';
 import { NAME_HINT } from '../address/parse';
-import { AddressError, PlcError, TagErrors } from '../errors';
+import { AddressError, PlcError, TagErrors, type TagResult } from '../errors';
 import type { SymbolTable } from '../symbols/model';
 import type { PlcData } from '../types';
 import { validateValue, type TagShape } from '../values';
@@ -17,13 +17,14 @@ import { serve, SERVE_FLAGS } from './serve';
 import { realsForPeople } from '../flows/reals';
 import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
 import { browse, passwordOption } from './s7plus';
+import { canSubscribe, watchPushed } from './watch-push';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { textOf, toJson, valueFromText, type TypedTag } from './values';
 
 const USAGE = `usage:
   plcwire read  <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
   plcwire write <url> <address|symbol>=<value>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--yes] [--json] [--timeout ms]
-  plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--json]
+  plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--cycle ms] [--json]
   plcwire symbols <file>... [--db NAME=N]... [--json | --csv]   (DB/UDT sources, symbol tables)
   plcwire browse <s7plus-url> [--password-file FILE] [--json | --csv]   (the PLC's own tags, optimized blocks too)
   plcwire info  <url> [--json]
@@ -262,11 +263,14 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
 
 /**
  * Polls until Ctrl-C; prints a line per changed value (all values first).
- * Link loss is reported on stderr and the client reconnects by itself.
+ * Link loss is reported on stderr and the client reconnects by itself. On
+ * s7plus:// the PLC reports the changes (watch-push.ts); only what cannot be
+ * subscribed is polled.
  */
 async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const { endpoint, addresses } = endpointArg(rest, 'watch');
   const interval = intFlag(args, 'interval', 1000, 10, 3_600_000);
+  const cycle = intFlag(args, 'cycle', 100, 10, 3_600_000);
   const json = args.flags.has('json');
   const { client, table } = targetClient(endpoint, addresses, args, io); // bad addresses and unknown names fail here, before connecting
   const last = new Map<string, string>();
@@ -277,35 +281,49 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     report(`reconnecting in ${(e.delay / 1000).toFixed(1)} s${e.error ? ` (${e.error.message})` : ''}`),
   );
   client.on('error', () => {}); // reported through 'disconnected'/'reconnecting'
+  const print = (results: Record<string, TagResult<unknown>>) => {
+    const changed: Record<string, unknown> = {};
+    for (const [a, r] of Object.entries(results)) {
+      const value = r.ok ? show(client, table, a, r.value) : undefined;
+      const text = r.ok ? textOf(value) : `error: ${r.error.message}`;
+      if (last.get(a) === text) continue;
+      last.set(a, text);
+      if (r.ok) changed[a] = value;
+      // A tag's error names it already (tagError); an error that does not is prefixed with the target.
+      else report(r.error.tag === a ? r.error.message : `${a}: ${r.error.message}`);
+    }
+    if (Object.keys(changed).length > 0) {
+      if (json) io.stdout.write(`${toJson({ time: new Date().toISOString(), values: changed })}\n`);
+      else for (const [a, v] of Object.entries(changed)) io.stdout.write(`${new Date().toISOString()} ${a} = ${textOf(v)}\n`);
+    }
+  };
+  const readAndPrint = async (list: readonly string[]) => {
+    if (client.state !== 'connected' || list.length === 0) return;
+    try {
+      const results = await client.readDetailed<PlcData>(list, { signal: io.signal });
+      print(Object.fromEntries(list.map((a) => [a, results[a]!])));
+    } catch (err) {
+      if (!io.signal.aborted) report((err as Error).message);
+    }
+  };
+  let polled: readonly string[] = addresses;
+  // A tag that falls back to polling is read at once, then with the others every interval.
+  const poll = (tags: readonly string[]) => {
+    const fresh = tags.filter((t) => !polled.includes(t));
+    polled = addresses.filter((a) => tags.includes(a));
+    void readAndPrint(fresh);
+  };
+  const push = canSubscribe(client) ? watchPushed(client, addresses, { cycle, interval, report, print, poll }) : undefined;
+  if (push) polled = [];
   client.start();
   try {
     while (!io.signal.aborted) {
       const started = Date.now();
-      if (client.state === 'connected') {
-        try {
-          const results = await client.readDetailed<PlcData>(addresses, { signal: io.signal });
-          const changed: Record<string, unknown> = {};
-          for (const a of addresses) {
-            const r = results[a]!;
-            const value = r.ok ? show(client, table, a, r.value) : undefined;
-            const text = r.ok ? textOf(value) : `error: ${r.error.message}`;
-            if (last.get(a) === text) continue;
-            last.set(a, text);
-            if (r.ok) changed[a] = value;
-            // A tag's error names it already (tagError); an error that does not is prefixed with the target.
-            else report(r.error.tag === a ? r.error.message : `${a}: ${r.error.message}`);
-          }
-          if (Object.keys(changed).length > 0) {
-            if (json) io.stdout.write(`${toJson({ time: new Date().toISOString(), values: changed })}\n`);
-            else for (const [a, v] of Object.entries(changed)) io.stdout.write(`${new Date().toISOString()} ${a} = ${textOf(v)}\n`);
-          }
-        } catch (err) {
-          if (!io.signal.aborted) report((err as Error).message);
-        }
-      }
+      await readAndPrint(polled);
       await delay(Math.max(0, interval - (Date.now() - started)), io.signal);
     }
   } finally {
+    await push?.stop();
     await client.close();
   }
   // It runs until stopped: Ctrl-C (or SIGTERM) is how it ends, and the exit code says so.

@@ -81,6 +81,8 @@ export const TransportFlags = {
   InitSsl: 0x30,
   Normal: 0x34,
   SessionCreate: 0x36,
+  /** A request the PLC answers not at all: the subscription credit update (connection.py send_subscription_credit). */
+  NoAnswer: 0x74,
 } as const;
 
 /** The element ids of the object tree. s7commplus (MIT), protocol.py ElementID. */

@@ -9,13 +9,14 @@
  * no property, no JSON, no inspect() output, no error and no log line.
  */
 import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
-import { ConnectionError, isLinkError } from '../../errors';
+import { ConnectionError, isLinkError, type PlcError } from '../../errors';
 import type { Driver } from '../../link/driver';
 import type { SymbolTable } from '../../symbols/model';
 import type { Protocol, RequestOptions, Tag } from '../../types';
 import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../url';
 import { openS7PlusSession } from './handshake';
 import { BrowsedProgram } from './program';
+import { browseTable } from './browse';
 import type { Limits } from './io';
 import { plusSyntax, readMixed, writeMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
@@ -23,6 +24,8 @@ import type { S7PlusSession, S7PlusWireCounters } from './session';
 import type { HandshakeStep, PeerCertificate } from './handshake';
 import { parseDeviceString } from '../codec/identity';
 import { readOnlyRefusals, type Protection } from './legitimation';
+import { PushLink } from './push';
+import type { S7PlusSubscription, SubscribeOptions, SubscriptionChange } from './subscription';
 
 export type { PeerCertificate } from './handshake';
 export type { CpuState, S7PlusDataBlock } from './services';
@@ -89,6 +92,11 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   /** The program of the live session (browse(), the program check); a new session browses again. */
   private program: { session: S7PlusSession; program: BrowsedProgram } | undefined;
 
+  /** The session of the subscriptions (push.ts), opened at the first subscribe(). */
+  private push: PushLink | undefined;
+  /** The reconnect backoff of the client's options, for the subscriptions' session too. */
+  private readonly pushBackoff: Pick<ClientOptions, 'backoff' | 'random'>;
+
   protected readonly driver: Driver<S7PlusSession, Tag>;
   private readonly baseDriver = {
     openSession: (signal: AbortSignal) => this.openSession(signal),
@@ -113,6 +121,7 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     this.endpoint = endpoint;
     this.#password = password;
     this.onHandshakeStep = handshake;
+    this.pushBackoff = { ...(rest.backoff ? { backoff: rest.backoff } : {}), ...(rest.random ? { random: rest.random } : {}) };
     this.itemLimit = endpoint.maxItems ?? S7PLUS_DEFAULT_MAX_ITEMS;
   }
 
@@ -182,15 +191,50 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     return fn(session);
   }
 
+  /**
+   * The PLC reports changes of `tags` (addresses or names) sampled every
+   * `options.cycle` ms (default 100), on a session of their own on which
+   * nothing is written. Resolves when the PLC created the subscription;
+   * rejects with TagErrors naming each tag it cannot have (an unknown name:
+   * INVALID_ADDRESS with the closest names), NOT_CONNECTED while the client
+   * is not connected. `listener` is added for `change` before the first
+   * notification. Created again after a reconnect; the client's close()
+   * closes it.
+   */
+  subscribe(
+    tags: readonly string[],
+    options: SubscribeOptions = {},
+    listener?: (change: SubscriptionChange) => void,
+  ): Promise<S7PlusSubscription> {
+    if (this.state !== 'connected') {
+      return Promise.reject(new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (the link is ${this.state})`));
+    }
+    if (!this.push || this.push.done) {
+      this.push = new PushLink({
+        name: this.name,
+        timeout: this.timeout,
+        ...this.pushBackoff,
+        open: (signal, hooks) => this.openSession(signal, hooks),
+        browse: (session) => browseTable(session),
+        parse: (address) => this.tag(address),
+      });
+    }
+    return this.push.subscribe(tags, options, listener);
+  }
+
   /** Ends the PLC's session (DeleteObject, at most 2 s), then closes as every client does. Always resolves. */
   override async close(): Promise<void> {
+    await this.push?.close();
     const session = this.session;
     if (session?.alive) await session.goodbye(Math.min(this.timeout, GOODBYE_MS));
     return super.close();
   }
 
-  private async openSession(signal: AbortSignal): Promise<S7PlusSession> {
-    // Every session (a reconnect, a second one) gives the password again: the "password" step of the handshake.
+  /** Opens a session: the client's own, or with `hooks` the subscriptions' one (push.ts), the same way (the password step included). */
+  private async openSession(
+    signal: AbortSignal,
+    hooks?: { lost(session: S7PlusSession, err: PlcError): void; notify(data: Buffer): void },
+  ): Promise<S7PlusSession> {
     const opened = await openS7PlusSession(this.endpoint, {
       name: this.name,
       timeout: this.timeout,
@@ -198,7 +242,8 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
       signal,
       stats: this.stats,
       lossError: (cause) => this.lossError(cause),
-      lost: (session, err) => this.sessionLost(session, err),
+      lost: hooks?.lost ?? ((session, err) => this.sessionLost(session, err)),
+      ...(hooks ? { notify: hooks.notify } : {}),
       insecure: (certificate) => this.warnInsecure(certificate),
       ...(this.onHandshakeStep ? { onStep: this.onHandshakeStep } : {}),
       password: this.#password,

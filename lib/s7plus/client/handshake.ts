@@ -115,7 +115,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     session = new S7PlusSession(
       stream,
       { sessionId: Ids.ObjectNullServerSession, version: ProtocolVersion.V1, nextSeq: 1 },
-      { name: o.name, timeout: o.timeout, maxQueued: o.maxQueued, lossError: o.lossError, lost: o.lost },
+      { name: o.name, timeout: o.timeout, maxQueued: o.maxQueued, lossError: o.lossError, lost: o.lost, notify: o.notify },
       o.stats,
     );
     const signal = o.signal;
@@ -141,6 +141,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
       );
     }
     session.sessionId = created.sessionId;
+    session.subscriptionContainerId = created.subscriptionContainerId;
     if (e.tls) session.version = ProtocolVersion.V2;
     const version = created.serverSessionVersion;
     step = 'session setup';

@@ -35,7 +35,7 @@ const AREA_OBJECT: Partial<Record<Tag['area'], number>> = {
 };
 
 /** Where a tag's bytes are, as an item address; a PlcError for an area S7CommPlus does not reach by address. */
-function itemAddress(tag: Tag): ItemAddress | PlcError {
+export function itemAddress(tag: Tag): ItemAddress | PlcError {
   if (tag.area === 'DB') return classicBlobAddress(tag.dbNumber, tag.byteOffset, tag.byteLength);
   const area = AREA_OBJECT[tag.area];
   if (area === undefined) {
@@ -69,7 +69,7 @@ function itemError(tag: Tag, code: bigint): PlcError {
   });
 }
 
-function bytesOf(v: PValue): Buffer | undefined {
+export function bytesOf(v: PValue): Buffer | undefined {
   const blob = v.value as { data?: unknown } | undefined;
   return blob && Buffer.isBuffer(blob.data) ? blob.data : undefined;
 }

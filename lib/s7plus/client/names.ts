@@ -33,12 +33,12 @@ import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } f
 import type { S7PlusSession } from './session';
 
 /** A tag that stands for a name of the PLC's program (resolved at the read or write). */
-interface NamedTag extends Tag {
+export interface NamedTag extends Tag {
   /** The name's key: canonical, lower case. */
   readonly symbol: string;
 }
 
-const isNamed = (tag: Tag): tag is NamedTag => typeof (tag as Partial<NamedTag>).symbol === 'string';
+export const isNamed = (tag: Tag): tag is NamedTag => typeof (tag as Partial<NamedTag>).symbol === 'string';
 
 /**
  * The S7 address syntax, and names: what does not parse as an address but
@@ -90,7 +90,7 @@ function unknownName(table: SymbolTable, name: string): PlcError {
 }
 
 /** What a named tag stands for: the entry, or why not. */
-function resolve(table: SymbolTable, tag: NamedTag): SymbolEntry | PlcError {
+export function resolveName(table: SymbolTable, tag: NamedTag): SymbolEntry | PlcError {
   const entry = table.lookup(tag.address);
   if (!entry) return unknownName(table, tag.address);
   if (!entry.access || entry.access.lids.length === 0)
@@ -194,7 +194,7 @@ function planOf(tags: readonly Tag[], named: readonly number[], table: SymbolTab
   const unresolved: { i: number; error: PlcError }[] = [];
   const leaves: SymbolEntry[] = [];
   for (const i of named) {
-    const entry = resolve(table, tags[i] as NamedTag);
+    const entry = resolveName(table, tags[i] as NamedTag);
     if (entry instanceof PlcError) {
       unresolved.push({ i, error: entry });
       continue;
@@ -300,7 +300,7 @@ export async function writeMixed(
   const ready: { i: number; address: ItemAddress; value: PValue; name: string }[] = [];
   items.forEach(({ tag, value }, i) => {
     if (!isNamed(tag)) return;
-    const entry = resolve(t, tag);
+    const entry = resolveName(t, tag);
     if (entry instanceof PlcError) return void (results[i] = { ok: false, error: entry });
     try {
       const leaves: { entry: SymbolEntry; value: unknown }[] = [];

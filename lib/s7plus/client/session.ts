@@ -31,6 +31,8 @@ export interface S7PlusWiring {
   lossError(cause: PlcError): PlcError;
   /** Called once when the link is gone, after every request failed with `err`. */
   lost(session: S7PlusSession, err: PlcError): void;
+  /** A notification's data (opcode 0x33 first), on a session that carries subscriptions; without it they are ignored. */
+  notify?(data: Buffer): void;
 }
 
 /**
@@ -47,6 +49,8 @@ export interface RequestOptions {
   version?: number;
   /** False: this request carries no IntegrityId and advances no counter (the session setup write). */
   integrity?: boolean;
+  /** The PLC does not answer it (transport flags 0x74: a subscription's credits): settled once it is on the wire. */
+  noAnswer?: boolean;
 }
 
 /** Counters for diagnostics and the benchmark. */
@@ -74,6 +78,8 @@ const MAX_STALE = 16;
 export class S7PlusSession {
   /** The session's object id, from CreateObject (the null session until then). */
   sessionId: number;
+  /** Where the session's subscriptions are created: the second object id of its CreateObject answer (0: the PLC named none). */
+  subscriptionContainerId = 0;
   /** The frame version of data requests: V2 over TLS, V1 in plain text. */
   version: number;
   private nextSeq: number;
@@ -221,6 +227,11 @@ export class S7PlusSession {
     this.stats.requestsSent++;
     this.stats.bytesSent += frame.length;
     this.stream.write(frame);
+    if (o.noAnswer) {
+      this.current = undefined;
+      this.settle(job, undefined, Buffer.alloc(0));
+      return this.pump();
+    }
     this.timer = setTimeout(() => {
       const what = `${this.wiring.name} did not answer request 0x${job.fn.toString(16)} (sequence ${seq}) within ${this.wiring.timeout} ms`;
       this.lose(new TimeoutError(what));
@@ -242,7 +253,8 @@ export class S7PlusSession {
     if (this.dead) return;
     if (m.version === ProtocolVersion.SystemEvent) return this.systemEvent(m.data);
     if (m.data[0] === Opcode.Notification) {
-      this.stats.ignored++;
+      if (this.wiring.notify) this.wiring.notify(m.data);
+      else this.stats.ignored++;
       return;
     }
     const peek = peekMessage(m.data);

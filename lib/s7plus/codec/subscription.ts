@@ -23,7 +23,7 @@
 import { ProtocolError } from '../../errors';
 import { DataType, FunctionCode, Ids, NotificationRecord, Opcode, PValueFlag, TransportFlags } from '../constants';
 import { Reader, Writer } from './bytes';
-import type { Request } from './header';
+import { NO_QUALIFIER, writeObjectQualifier, writeRequestHeader, type Request } from './header';
 import { attributeOf, newObject, type PObject } from './object';
 import { readPValue, scalar, writePValue, type PValue } from './pvalue';
 import type { CreateObjectRequest } from './session';
@@ -115,6 +115,57 @@ export function subscriptionCreateRequest(
     header: { functionCode: FunctionCode.CreateObject, sequence, sessionId, transportFlags: TransportFlags.Normal },
     body: { requestId: containerId, requestValue: scalar(DataType.UDInt, 0), object },
   };
+}
+
+export interface CreditRequest {
+  subscriptionId: number;
+  /** The new credit limit (1 to 255 as s7commplus sends it). */
+  creditLimit: number;
+  /** A session of frame version 1: the ObjectQualifier's V1 form. */
+  v1?: boolean;
+}
+
+/**
+ * More notifications for a subscription: SetVariable of its credit limit
+ * (attribute 1053, an Int) with transport flags 0x74, which the PLC does not
+ * answer. Layout: s7commplus (MIT), connection.py send_subscription_credit and
+ * _build_set_variable_payload (object id, 1 item, its address, the PValue, the
+ * ObjectQualifier, a 0 byte, [IntegrityId], fill).
+ */
+export function subscriptionCreditRequest(sequence: number, sessionId: number, credit: CreditRequest): Request<CreditRequest> {
+  return {
+    header: { functionCode: FunctionCode.SetVariable, sequence, sessionId, transportFlags: TransportFlags.NoAnswer },
+    body: credit,
+  };
+}
+
+export function encodeCreditRequest(req: Request<CreditRequest>): Buffer {
+  const { subscriptionId, creditLimit, v1 } = req.body;
+  if (!Number.isInteger(creditLimit) || creditLimit < 1 || creditLimit > 255)
+    throw new RangeError(`S7CommPlus: a credit limit of ${creditLimit} (1 to 255)`);
+  const w = new Writer();
+  writeRequestHeader(w, { ...req.header, functionCode: FunctionCode.SetVariable });
+  w.u32(subscriptionId).uvlq32(1).uvlq32(Ids.SubscriptionCreditLimit);
+  writePValue(w, scalar(DataType.Int, creditLimit));
+  writeObjectQualifier(w, { ...NO_QUALIFIER, ...(v1 ? { v1: true } : {}) });
+  w.u8(0);
+  if (req.integrityId !== undefined) w.uvlq32(req.integrityId);
+  return w.u32(0).toBuffer();
+}
+
+/**
+ * DeleteObject of a session's subscription container (every subscription in
+ * it goes): the object id, a 0 byte, the ObjectQualifier, [IntegrityId], fill.
+ * Layout: s7commplus (MIT), subscription.py build_delete_subscription_request,
+ * as client.py delete_subscription sends it.
+ */
+export function encodeSubscriptionDeleteRequest(req: Request<{ objectId: number; v1?: boolean }>): Buffer {
+  const w = new Writer();
+  writeRequestHeader(w, { ...req.header, functionCode: FunctionCode.DeleteObject });
+  w.u32(req.body.objectId).u8(0);
+  writeObjectQualifier(w, { ...NO_QUALIFIER, ...(req.body.v1 ? { v1: true } : {}) });
+  if (req.integrityId !== undefined) w.uvlq32(req.integrityId);
+  return w.u32(0).toBuffer();
 }
 
 /** What the simulator needs of a Subscription object; ProtocolError when it is not one. */
