@@ -178,6 +178,21 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
     expect(JSON.parse(viaS7.out)).to.deep.equal({ 'DB1.DBW4:INT': 4242 });
   });
 
+  it('a REAL read by name in an optimized DB shows the digits TIA shows (the browsed table gives its type), in text and --json, alone, in an array and in its whole block', async () => {
+    const w = await done(['write', url, '"Recipe".Target=40.4']);
+    expect(w.code, w.err).to.equal(EXIT.OK);
+    const text = await done(['read', url, '"Recipe".Target']);
+    expect(text.out).to.equal('"Recipe".Target = 40.4\n');
+    const a = await done(['write', url, '"Tank".Temps=[1.1, 40.4, 3.3]']);
+    expect(a.code, a.err).to.equal(EXIT.OK);
+    const json = await done(['read', url, '"Recipe".Target', '"Tank".Temps', '"Recipe"', '--json']);
+    const values = JSON.parse(json.out);
+    expect(values).to.deep.include({ '"Recipe".Target': 40.4, '"Tank".Temps': [1.1, 40.4, 3.3] });
+    // A data block named alone is the struct of its members, as with compiled sources.
+    expect(values['"Recipe"']).to.include({ Target: 40.4, Done: false });
+    expect(Math.fround(40.4)).to.not.equal(40.4); // as read, the float32 would show 40.400001525878906
+  });
+
   it('a wrong pin is refused before any S7CommPlus data, with the certificate and the URL parameter that pins it', async () => {
     const wrong = url.replace(/fingerprint=[0-9A-F]+/, `fingerprint=${'ab'.repeat(32)}`);
     const r = await done(['read', wrong, 'DB1.DBW4:INT']);
@@ -292,12 +307,12 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
     it('subscribes: a change written through a second client shows long before the 60 s poll; a tag that cannot be subscribed is polled and said so', async function () {
       const writer = createClient(url) as S7PlusClient;
       await writer.connect();
-      const w = run(['watch', url, '"Recipe".Step', '"Tank".Count', 'MW10', '--interval', '60000']);
+      const w = run(['watch', url, '"Recipe".Step', '"Tank".Count', 'DB99.DBW0', '--interval', '60000']);
       try {
         await writer.write({ '"Recipe".Step': 21 });
         await until(() => /"Recipe"\.Step = \d+/.test(w.output().out), 20000, 'the first value line');
         await until(() => /subscribed to 3 tag\(s\)/.test(w.output().err), 20000, 'the subscription');
-        await until(() => /MW10 cannot be subscribed .*polled every 60000 ms/.test(w.output().err), 20000, 'the fallback message');
+        await until(() => /DB99\.DBW0 cannot be subscribed .*polled every 60000 ms/.test(w.output().err), 20000, 'the fallback message');
         const started = Date.now();
         await writer.write({ '"Recipe".Step': 22 });
         await until(() => /"Recipe"\.Step = 22\n/.test(w.output().out), 5000, 'the changed value line');
@@ -305,8 +320,12 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
         this.test!.title += ` (a change showed after ${latency} ms)`;
         expect(latency).to.be.below(1000);
         expect(w.output().out).to.match(/"Tank"\.Count = \d+/);
-        // MW10 was read at once when it fell back to polling, not after the 60 s interval: its poll's outcome is on stderr.
-        await until(() => /MW10.*(no such|refused|not)/i.test(w.output().err.split('polled every')[1] ?? ''), 5000, 'the poll of MW10');
+        // DB99.DBW0 was read at once when it fell back to polling, not after the 60 s interval: its poll's outcome is on stderr.
+        await until(
+          () => /DB99\.DBW0.*(no such|refused|not)/i.test(w.output().err.split('polled every')[1] ?? ''),
+          5000,
+          'the poll of DB99.DBW0',
+        );
         // Only one line per change: the value did not change again, no poll ran.
         expect(w.output().out.match(/"Recipe"\.Step = 22/g)).to.have.length(1);
       } finally {

@@ -164,10 +164,10 @@ describe('S7CommPlus subscriptions (our client, our simulator)', function () {
   });
 
   it("an item the PLC does not report is that tag's error (NOT_SUPPORTED), the others flow", async () => {
-    const sub = await client.subscribe(['"Recipe".Step', 'MW10'], { cycle: 20 });
+    const sub = await client.subscribe(['"Recipe".Step', 'DB99.DBW0'], { cycle: 20 });
     const first = await dataWhere(sub, (d) => d.initial);
-    expect(first.results['MW10']).to.have.property('ok', false);
-    expect((first.results['MW10'] as { error: PlcError }).error).to.include({ code: 'NOT_SUPPORTED', tag: 'MW10' });
+    expect(first.results['DB99.DBW0']).to.have.property('ok', false);
+    expect((first.results['DB99.DBW0'] as { error: PlcError }).error).to.include({ code: 'NOT_SUPPORTED', tag: 'DB99.DBW0' });
     expect(first.results['"Recipe".Step']!.ok).to.equal(true);
   });
 

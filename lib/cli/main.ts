@@ -16,7 +16,7 @@ import { EXIT, confirm, exitCode, fail, withClient, type CliIo } from './io';
 import { serve, SERVE_FLAGS } from './serve';
 import { realsForPeople } from '../flows/reals';
 import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
-import { browse, passwordOption } from './s7plus';
+import { browse, browsedValueFromText, isPlcName, passwordOption } from './s7plus';
 import { canSubscribe, watchPushed } from './watch-push';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { textOf, toJson, valueFromText, type TypedTag } from './values';
@@ -224,7 +224,13 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     io,
   );
   const values: Record<string, unknown> = {};
+  // Names of the PLC's own table (s7plus:// without sources): their types come with the browse, after connecting.
+  const browsedNames: { address: string; text: string }[] = [];
   for (const { address, text } of pairs) {
+    if (table === undefined && isPlcName(client, address)) {
+      browsedNames.push({ address, text });
+      continue;
+    }
     const struct = structValueFromText(client, table, address, text);
     if (struct) {
       values[address] = struct.value;
@@ -247,6 +253,10 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   // The layout check first: its warning comes before the values are sent.
   const results = await withClient(client, io, async (c) => {
     await layoutChecked(c, table, io);
+    if (browsedNames.length > 0) {
+      const browsed = await (c as AnyClient & { browse(o: { signal: AbortSignal }): Promise<SymbolTable> }).browse({ signal: io.signal });
+      for (const { address, text } of browsedNames) values[address] = browsedValueFromText(browsed, address, text);
+    }
     return c.writeDetailed(values, { signal: io.signal });
   });
   const errors = Object.values(results).filter((r) => !r.ok);

@@ -9,7 +9,7 @@
  * message of this file quotes it.
  */
 import type { AnyClient, ConnectOptions } from '../connect';
-import { PlcError } from '../errors';
+import { PlcError, ValueError } from '../errors';
 import type { SymbolTable } from '../symbols/model';
 import type { RequestOptions } from '../types';
 import { parseUrl, type Endpoint } from '../url';
@@ -17,6 +17,8 @@ import { UsageError, stringFlag, withTimeout, type ParsedArgs } from './args';
 import { readInputFile } from './files';
 import { EXIT, withClient, type CliIo } from './io';
 import { printSymbolRows } from './symbols';
+import { valueFromText, type TypedTag } from './values';
+import { validateValue, type TagShape } from '../values';
 import { createClient } from '../connect';
 
 /** The environment variable that gives an s7plus:// connection its password. */
@@ -84,4 +86,35 @@ export async function browse(rest: string[], args: ParsedArgs, io: CliIo): Promi
   const table = await withClient(client, io, (c) => (c as AnyClient & Browsing).browse({ signal: io.signal }));
   printSymbolRows(table, args, io);
   return EXIT.OK;
+}
+
+/**
+ * True when `address` is, for this client, a name of the PLC's own program (an s7plus:// client without sources:
+ * client/names.ts plusSyntax), whose type only the browse tells.
+ */
+export function isPlcName(client: AnyClient, address: string): boolean {
+  if (client.protocol !== 's7plus') return false;
+  return typeof (client.tag(address) as { symbol?: unknown }).symbol === 'string';
+}
+
+/**
+ * The value of `text` for the name `address` of a browsed table: an elementary member's text parsed by its type, as
+ * an address's is (a REAL's 40.4, a STRING's text); a struct or array as JSON keyed by member name (an array as a
+ * JSON array). A name the PLC does not have keeps its text: the write then fails naming it, with the closest names.
+ */
+export function browsedValueFromText(table: SymbolTable, address: string, text: string): unknown {
+  const entry = table.lookup(address);
+  if (!entry) return text;
+  if (entry.kind === 'elementary' && entry.dataType) {
+    const tag = { address, type: entry.dataType, count: 1, isArray: false, stringLength: entry.stringLength, bitOffset: 0 };
+    const value = valueFromText(tag as TypedTag, text);
+    validateValue(tag as TypedTag & TagShape, value);
+    return value;
+  }
+  try {
+    return JSON.parse(text) as unknown;
+  } catch {
+    const example = entry.kind === 'array' ? 'a JSON array, e.g. [1, 2, 3]' : 'an object keyed by member name, e.g. {"Speed": 1.5}';
+    throw new ValueError(address, `"${text}" is not JSON (a ${entry.type} is written as ${example})`);
+  }
 }

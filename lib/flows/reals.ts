@@ -7,8 +7,8 @@
  * "REAL values", has the measurement that decided it.
  */
 import { isAddress } from '../address';
-import type { SymbolTable } from '../symbols/model';
-import { resolveSymbol, type SymbolShape } from '../symbols/resolve';
+import type { SymbolEntry, SymbolTable } from '../symbols/model';
+import { resolveSymbol, wholeBlock, type SymbolShape } from '../symbols/resolve';
 import type { DriverTag } from '../link/driver';
 import { shortestFloat32 } from '../values/float32';
 
@@ -34,6 +34,11 @@ function ofShape<T>(shape: SymbolShape<T>): Convert | undefined {
     if (convert) members.set(name, convert);
   }
   if (members.size === 0) return undefined;
+  return byMember(members);
+}
+
+/** A struct's value with each member that `members` names converted. */
+function byMember(members: ReadonlyMap<string, Convert>): Convert {
   return (value) => {
     if (typeof value !== 'object' || value === null || Array.isArray(value)) return value;
     const out: Record<string, unknown> = {};
@@ -45,6 +50,29 @@ function ofShape<T>(shape: SymbolShape<T>): Convert | undefined {
   };
 }
 
+/** The conversion of a value of `entry` (by its children: the browsed table of an S7CommPlus PLC), or undefined without a REAL. */
+function ofEntry(table: SymbolTable, entry: SymbolEntry): Convert | undefined {
+  if (entry.kind === 'elementary') return entry.dataType === 'REAL' ? shortReal : undefined;
+  const children = (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
+  const converts = children.map((c) => ofEntry(table, c));
+  if (converts.every((c) => c === undefined)) return undefined;
+  if (entry.kind === 'array') {
+    return (value) => (Array.isArray(value) ? value.map((v: unknown, i) => (converts[i] ? converts[i](v) : v)) : value);
+  }
+  const members = new Map<string, Convert>();
+  children.forEach((c, i) => {
+    const convert = converts[i];
+    if (convert) members.set(memberKey(entry, c), convert);
+  });
+  return byMember(members);
+}
+
+/** A member's key in its struct's value: its name after the parent's, quotes off (client/name-values.ts puts values so). */
+function memberKey(parent: SymbolEntry, child: SymbolEntry): string {
+  const rest = child.name.slice(parent.name.length + 1);
+  return rest.startsWith('"') && rest.endsWith('"') ? rest.slice(1, -1) : rest;
+}
+
 /**
  * How to show what a read of `target` returns: a function when it holds a
  * REAL (an address of type REAL, a REAL name, a STRUCT with REAL members),
@@ -52,11 +80,19 @@ function ofShape<T>(shape: SymbolShape<T>): Convert | undefined {
  * throws as the read would).
  */
 export function realsForPeople(
-  client: { tag(address: string): unknown },
-  table: SymbolTable | undefined,
+  client: { tag(address: string): unknown; readonly browsedTable?: SymbolTable | undefined },
+  given: SymbolTable | undefined,
   target: string,
 ): Convert | undefined {
+  // Without sources, an S7CommPlus client's names are the PLC's own (its browsed table).
+  const table = given ?? client.browsedTable;
   if (table && !isAddress(target)) {
+    const entry = table.lookup(target) ?? wholeBlock(table, target);
+    if (entry?.kind === 'elementary') return entry.dataType === 'REAL' ? shortReal : undefined;
+    // The PLC's own table (no sources: the client reads by name) or a member of an optimized block (no address): the
+    // entry tree's shape.
+    if (entry && (given === undefined || entry.address === null)) return ofEntry(table, entry);
+    if (given === undefined) return undefined;
     const resolved = resolveSymbol(table, target, (address) => client.tag(address) as DriverTag);
     if (resolved?.shape) return ofShape(resolved.shape);
   }

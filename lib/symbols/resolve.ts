@@ -189,7 +189,7 @@ const blockMembers = new WeakMap<SymbolTable, Map<number, { first: SymbolEntry; 
  * block when it finds the block's first member with that member's part
  * after it. Undefined when it names no block.
  */
-function wholeBlock(table: SymbolTable, name: string): SymbolEntry | undefined {
+export function wholeBlock(table: SymbolTable, name: string): SymbolEntry | undefined {
   const parts = splitSymbol(name);
   if (parts?.length !== 1 || parts[0]!.index) return undefined;
   let members = blockMembers.get(table);

@@ -176,6 +176,14 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
    * The session's program: its table browsed once, checked after each read by name (and before each write) with one
    * request for the type objects' modification times; a download is the `programChanged` event and a new table.
    */
+  /**
+   * The PLC's table as the last session browsed it (after close() too: the values read were read through it), at once
+   * (no request); undefined before the first read or browse by name. What a value of a name looks like (how a REAL is shown: lib/flows/reals.ts) is decided by it.
+   */
+  get browsedTable(): SymbolTable | undefined {
+    return this.program?.program.latest;
+  }
+
   private programOf(session: S7PlusSession): BrowsedProgram {
     if (this.program?.session !== session) {
       const program = new BrowsedProgram(session, (change) => this.emit('programChanged', change));

@@ -14,6 +14,7 @@ import { S7_TAG_SYNTAX } from '../../address';
 import { PlcError, toPlcError, type TagResult } from '../../errors';
 import type { ReadValues, TagSyntax } from '../../link/driver';
 import { canonicalName, splitSymbol } from '../../symbols/names';
+import { wholeBlock } from '../../symbols/resolve';
 import type { SymbolEntry, SymbolTable } from '../../symbols/model';
 import type { PlcValue, Tag } from '../../types';
 import type { TagShape } from '../../values';
@@ -89,11 +90,18 @@ function unknownName(table: SymbolTable, name: string): PlcError {
   return new PlcError('INVALID_ADDRESS', `unknown name ${name} on the PLC${hint}`, { tag: name });
 }
 
+/** True when `table` has the name: a member, or a data block named alone. */
+function knows(table: SymbolTable, name: string): boolean {
+  return table.lookup(name) !== undefined || wholeBlock(table, name) !== undefined;
+}
+
 /** What a named tag stands for: the entry, or why not. */
 export function resolveName(table: SymbolTable, tag: NamedTag): SymbolEntry | PlcError {
-  const entry = table.lookup(tag.address);
+  // A data block named alone ("Recipe") is the struct of its top-level members, as with compiled sources.
+  const entry = table.lookup(tag.address) ?? wholeBlock(table, tag.address);
   if (!entry) return unknownName(table, tag.address);
-  if (!entry.access || entry.access.lids.length === 0)
+  // What goes on the wire is each elementary member's access path.
+  if (leavesOf(table, entry).some((leaf) => !leaf.access || leaf.access.lids.length === 0))
     return new PlcError('NOT_SUPPORTED', `${tag.address}: the PLC's browse gives no access path for it`, { tag: tag.address });
   return entry;
 }
@@ -153,7 +161,7 @@ export async function readMixed(
   for (let attempt = 1; ; attempt++) {
     const t = await program.table();
     await readNamed(session, tags, named, t, limits, values, errors, signal);
-    const unknown = named.some((i) => t.lookup(tags[i]!.address) === undefined);
+    const unknown = named.some((i) => !knows(t, tags[i]!.address));
     if (!(await program.changed(unknown))) break;
     if (attempt === MAX_ATTEMPTS) {
       for (const i of named) {
@@ -295,7 +303,7 @@ export async function writeMixed(
   }
   // A write by a stale LID would land in another member: the program is checked first (browsed again if it changed).
   const known = await program.table();
-  await program.changed(items.some((it) => isNamed(it.tag) && known.lookup(it.tag.address) === undefined));
+  await program.changed(items.some((it) => isNamed(it.tag) && !knows(known, it.tag.address)));
   const t = await program.table();
   const ready: { i: number; address: ItemAddress; value: PValue; name: string }[] = [];
   items.forEach(({ tag, value }, i) => {

@@ -29,6 +29,8 @@ export interface ProgramChange {
 
 export class BrowsedProgram implements Program {
   private browsed: Promise<BrowsedTable> | undefined;
+  /** The last table a browse gave, for what must know it at once (how a REAL is shown: lib/flows/reals.ts). */
+  latest: SymbolTable | undefined;
   /** False once the PLC refused the question for the times: nothing to watch, the table stays as browsed. */
   private watchable = true;
   /** When the block list was last asked for an unknown name. */
@@ -48,6 +50,7 @@ export class BrowsedProgram implements Program {
     if (!this.browsed) {
       const browsed = browseProgram(this.session, signal);
       this.browsed = browsed;
+      browsed.then((b) => (this.latest = b.table)).catch(() => undefined);
       browsed.catch(() => {
         if (this.browsed === browsed) this.browsed = undefined;
       });
