@@ -182,6 +182,9 @@ export class PlusSession {
       if (body.subarray(11, 11 + id.length).equals(id)) return expected;
       throw new ResetConnection(`integrity id of a CreateObject is not the expected ${expected}: the counters jumped`);
     }
+    // A DeleteObject of plcwire's form (codec/session.ts): the object id as four fixed bytes, the id, a fill of 4; its
+    // last byte is no VLQ, so the rule below would misread an object id ending in a byte with bit 7 set (0x3A0).
+    if (fn === FunctionCode.DeleteObject && body.length === 8 + id.length && body.subarray(4, 4 + id.length).equals(id)) return expected;
     const tails = fn === FunctionCode.Explore ? [5] : [4, 3];
     for (const tail of tails) {
       const at = body.length - tail - id.length;
