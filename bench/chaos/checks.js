@@ -12,7 +12,7 @@ const HEAP_GROWTH_MAX = 0.1;
  * The writes of station `s` against what its PLC applied ([slot, value] in
  * order): every acknowledged write applied exactly once, no write applied
  * twice, nothing applied that was not written, every rejection typed and
- * naming its tag or PLC, every slot value read one the PLC applied.
+ * naming its tag, every slot value read one the PLC applied.
  */
 function checkWrites(s, applied, t, fail) {
   const counts = new Map();
@@ -39,7 +39,7 @@ function checkWrites(s, applied, t, fail) {
   for (const [code, n] of Object.entries(s.rejectedCodes)) t.byCode[code] = (t.byCode[code] ?? 0) + n;
   for (const b of s.badRejections) {
     if (!b.typed) fail(s, `write ${b.address} = ${b.value} rejected with an untyped error: ${b.message}`, 'untyped');
-    else fail(s, `write ${b.address} = ${b.value} rejected (${b.code}) without naming its tag or PLC: ${b.message}`, 'unnamed');
+    else fail(s, `write ${b.address} = ${b.value} rejected (${b.code}) without naming its tag: ${b.message}`, 'unnamed');
   }
 }
 

@@ -191,7 +191,8 @@ class Station {
         const code = typed ? err.code : 'untyped';
         this.rejectedCodes[code] = (this.rejectedCodes[code] ?? 0) + 1;
         const text = String(err && err.message);
-        const named = text.includes(address) || text.includes(this.name);
+        // The tag itself, not only the PLC: a gateway's log must say which write failed (issue #26).
+        const named = text.includes(address) && err.tag === address;
         if (!typed || !named) this.badRejections.push({ n, address, value, typed, named, code, message: text });
         this.slotBusy[k] = false;
       },
