@@ -1,6 +1,6 @@
 import { EventEmitter } from 'node:events';
 import type { Duplex } from 'node:stream';
-import { ConnectionError, PlcError, quoteTag, TagErrors, tagError, toPlcError, type TagResult } from '../errors';
+import { ConnectionError, PlcError, TagErrors, tagError, toPlcError, writeRefusal, type TagResult } from '../errors';
 import type { Driver, DriverSession, DriverTag, ReadValues } from '../link/driver';
 import { LinkSupervisor } from '../link/supervisor';
 import { expandWrite } from '../symbols/resolve';
@@ -324,7 +324,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     try {
       return await this.writeEach(values, options);
     } catch (err) {
-      throw refusalOf(Object.keys(values), err);
+      throw writeRefusal(Object.keys(values), err);
     }
   }
 
@@ -382,21 +382,4 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     const why = this.state === 'closed' ? 'the client was closed' : `the link is ${this.state}`;
     throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (${why})`);
   }
-}
-
-/**
- * A write refused as a whole (not connected, the link lost, the queue full,
- * aborted): the same code and kind of error, naming the tags it was for, so
- * a log says which write failed (issue #26). An error that names a tag
- * already is returned as it is.
- */
-function refusalOf(keys: readonly string[], err: unknown): PlcError {
-  const e = toPlcError(err);
-  if (keys.length === 0 || e.tag !== undefined) return e;
-  const Kind = e instanceof ConnectionError ? ConnectionError : PlcError;
-  return new Kind(e.code, `write ${keys.map(quoteTag).join(', ')}: ${e.message}`, {
-    ...(keys.length === 1 ? { tag: keys[0]! } : {}),
-    ...(e.plcCode === undefined ? {} : { plcCode: e.plcCode }),
-    cause: e,
-  });
 }
