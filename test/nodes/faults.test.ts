@@ -184,6 +184,8 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
         helper.getNode('write').receive({ payload: { sp: 4321 } });
         const writeErr = await seen(caught, c0, (m) => m.error.source.id === 'write', 4000, 'the write error at Catch');
         expect(writeErr.error.code).to.be.oneOf([...fault.codes, 'TAG_ERRORS']);
+        // It names the tag as the flow names it, whether the write was refused as a whole or per tag (issue #26).
+        expect(writeErr.error.message).to.match(/^\w*Error: write "sp" \(/);
         if (fault.linkDown) {
           await seen(statuses, s0, (m) => m.status.source.id === 'read' && m.status.fill === 'red', 4000, 'a red status on the read node');
           await seen(
