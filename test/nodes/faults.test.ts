@@ -203,6 +203,12 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
             'the link error at Catch',
           );
           expect(linkErr.error.code).to.be.oneOf(fault.codes);
+          // Each link error once, however many nodes of the tab use the connection (read, write, heartbeat here; issue #26).
+          const fromConnection = caught.messages
+            .slice(c0)
+            .filter((m) => m.error.source.type === 'plcwire-connection')
+            .map((m) => m.error.message as string);
+          expect(fromConnection.length, fromConnection.join(' | ')).to.equal(new Set(fromConnection).size);
         } else {
           const readErr = await seen(caught, c0, (m) => m.error.source.id === 'read', 4000, 'the read error at Catch');
           expect(readErr.error.code).to.be.oneOf(fault.codes);
