@@ -249,4 +249,4 @@ async function drive(stations, { t0, durationMs, intervalMs, writeEveryMs, warmM
   while (stations.some((s) => s.inFlight > 0) && Date.now() < deadline) await new Promise((r) => setTimeout(r, 20));
 }
 
-module.exports = { openStations, drive, PENDING, ACKED, REJECTED };
+module.exports = { openStations, drive, urlOf, PENDING, ACKED, REJECTED };

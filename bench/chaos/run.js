@@ -40,6 +40,7 @@ function args(argv) {
     writeEveryMs: 250,
     countsOnly: false,
     calm: false,
+    nodered: false,
   };
   for (let i = 0; i < argv.length; i++) {
     const a = argv[i];
@@ -52,9 +53,10 @@ function args(argv) {
     else if (a === '--write-every') o.writeEveryMs = next();
     else if (a === '--counts-only') o.countsOnly = true;
     else if (a === '--calm') o.calm = true;
+    else if (a === '--nodered') o.nodered = true;
     else
       throw new Error(
-        `unknown argument ${a} (--seed N --minutes M --seconds S --plcs N --interval ms --write-every ms --counts-only --calm)`,
+        `unknown argument ${a} (--seed N --minutes M --seconds S --plcs N --interval ms --write-every ms --counts-only --calm --nodered)`,
       );
   }
   o.seed ??= Math.floor(Math.random() * 2 ** 31);
@@ -185,7 +187,7 @@ module.exports = { run, print, args };
 
 if (require.main === module) {
   const o = args(process.argv.slice(2));
-  run(o).then(
+  (o.nodered ? require('./nodered').runNodeRed(o) : run(o)).then(
     (result) => {
       print(result);
       if (process.send) process.send({ ok: true, result: { rows: result.rows, failed: result.failed, figures: result.figures } });
