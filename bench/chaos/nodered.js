@@ -310,4 +310,4 @@ function evaluateNodeRed(r) {
   return { o, rows, failed, histories: [], figures, episodes };
 }
 
-module.exports = { runNodeRed, chaosFlow };
+module.exports = { runNodeRed };

@@ -209,6 +209,9 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
             .filter((m) => m.error.source.type === 'plcwire-connection')
             .map((m) => m.error.message as string);
           expect(fromConnection.length, fromConnection.join(' | ')).to.equal(new Set(fromConnection).size);
+          // The connection reports the link's loss; the read node whose poll timed out with it does not report it again.
+          const fromRead = caught.messages.slice(c0).filter((m) => m.error.source.id === 'read');
+          expect(fromRead.map((m) => `${m.error.code} ${m.error.message}`)).to.deep.equal([]);
         } else {
           const readErr = await seen(caught, c0, (m) => m.error.source.id === 'read', 4000, 'the read error at Catch');
           expect(readErr.error.code).to.be.oneOf(fault.codes);
