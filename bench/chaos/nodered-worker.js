@@ -122,7 +122,8 @@ function settle(plc, payload, outcome) {
     const n = value - plc * 1_000_000;
     const k = Number(name.replace('slot', ''));
     if (!(n >= 1 && n <= w.seq) || w.slots[n - 1] !== k) continue;
-    if (w.outcomes[n - 1] === 0) w.outcomes[n - 1] = outcome;
+    // A write counted as cut by a redeploy whose node answered after all keeps that answer.
+    if (w.outcomes[n - 1] === 0 || w.outcomes[n - 1] === CUT) w.outcomes[n - 1] = outcome;
     else w.outcomes[n - 1] = 3; // settled twice
     w.busy[k] = false;
   }
