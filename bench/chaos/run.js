@@ -178,7 +178,9 @@ function print(result, log = console.log) {
   for (const line of result.figures) log(line);
   if (failed.length === 0) return;
   log('');
-  log(`FAILED (seed ${o.seed}; replay: npm run chaos -- --seed ${o.seed} --seconds ${o.durationMs / 1000} --plcs ${o.plcs}):`);
+  log(
+    `FAILED (seed ${o.seed}; replay: npm run chaos -- ${o.nodered ? '--nodered ' : ''}--seed ${o.seed} --seconds ${o.durationMs / 1000} --plcs ${o.plcs}):`,
+  );
   for (const f of failed) log(`  ${f}`);
   for (const h of histories) log(h);
 }
