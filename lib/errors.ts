@@ -237,3 +237,20 @@ export function toPlcError(err: unknown, fallback: PlcErrorCode = 'CONNECTION_LO
   const message = err instanceof Error ? err.message : String(err);
   return new PlcError(fallback, message, { cause: err });
 }
+
+/**
+ * A write refused as a whole (not connected, the link lost, the queue full,
+ * aborted): the same code and kind of error, naming the tags it was for, so
+ * a log says which write failed (issue #26). An error that names a tag
+ * already is returned as it is.
+ */
+export function writeRefusal(keys: readonly string[], err: unknown): PlcError {
+  const e = toPlcError(err);
+  if (keys.length === 0 || e.tag !== undefined) return e;
+  const Kind = e instanceof ConnectionError ? ConnectionError : PlcError;
+  return new Kind(e.code, `write ${keys.map(quoteTag).join(', ')}: ${e.message}`, {
+    ...(keys.length === 1 ? { tag: keys[0]! } : {}),
+    ...(e.plcCode === undefined ? {} : { plcCode: e.plcCode }),
+    cause: e,
+  });
+}

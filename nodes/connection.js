@@ -23,7 +23,19 @@ module.exports = function (RED) {
     const node = this;
     node.name = config.name;
     node.url = String(config.url || '').trim();
+    /** Every node that uses this connection, by id: they hear the link's status and keep the link open. */
+    let registered = {};
+    /**
+     * What the runtime forwards this node's error() and status() through: one user per flow (tab or subflow
+     * instance). The runtime hands an error to the Catch nodes of each user's flow, so two users on one tab (a
+     * read and a write node) would make a Catch node hear every link error twice (issue #26).
+     */
     node.users = {};
+    const forwardVia = () => {
+      const byFlow = new Map();
+      for (const user of Object.values(registered)) if (!byFlow.has(user.z)) byFlow.set(user.z, user);
+      node.users = Object.fromEntries([...byFlow.values()].map((u) => [u.id, u]));
+    };
     node.problem = undefined;
     const compiled = symbols.compile(config);
     /** The compiled symbol table, or undefined (no sources, or they did not compile). */
@@ -67,7 +79,7 @@ module.exports = function (RED) {
     function broadcast() {
       const status = node.linkStatus;
       if (status.state === 'connected') lastError = '';
-      for (const user of Object.values(node.users)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
+      for (const user of Object.values(registered)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
     }
 
     function onMismatch(event) {
@@ -159,20 +171,23 @@ module.exports = function (RED) {
     };
 
     node.register = function (user) {
-      node.users[user.id] = user;
+      registered[user.id] = user;
+      forwardVia();
       if (!link && !node.problem) open();
       else if (typeof user.onLinkStatus === 'function') user.onLinkStatus(node.linkStatus);
     };
 
     /** Resolves once the link is closed if `user` was the last one. */
     node.deregister = function (user) {
-      delete node.users[user.id];
-      if (Object.keys(node.users).length > 0) return Promise.resolve();
+      delete registered[user.id];
+      forwardVia();
+      if (Object.keys(registered).length > 0) return Promise.resolve();
       node.problem = undefined;
       return shut();
     };
 
     node.on('close', function (removed, done) {
+      registered = {};
       node.users = {};
       settleWithin(shut()).then(() => done());
     });

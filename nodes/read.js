@@ -210,8 +210,9 @@ module.exports = function (RED) {
             deliver(read.list);
           },
           (err) => {
-            // A lost link shows on the status and reaches Catch through the connection; anything else is reported here.
-            if (!closing && !isLinkError(err)) {
+            // A lost link shows on the status and reaches Catch through the connection; anything else is reported
+            // here, unless it took the link down with it (a timeout that ends the connection): the connection reports that.
+            if (!closing && !isLinkError(err) && node.linkState === 'connected') {
               node.error(err, { topic, payload: {} });
             }
           },

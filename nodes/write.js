@@ -7,6 +7,14 @@ const { tagTable, writeRequest, errorInfo, tagFailure } = require('..');
  * `msg.topic` + value) and sends the message on once the PLC acknowledged,
  * with `msg.results` per tag. Failures go to done(err) naming the tag.
  */
+/** One error for a write refused as a whole, naming every tag of `names` ({ address: name }) with the library's words. */
+function refusal(names, err) {
+  // The library's refusal names the addresses already (lib/errors.ts writeRefusal); its cause has the words without them.
+  const words = err && err.cause instanceof Error && err.cause.code === err.code ? err.cause : err;
+  const failed = Object.entries(names).map(([address, name]) => ({ name, error: errorInfo(words, address) }));
+  return failed.length > 0 ? Object.assign(tagFailure('write', failed), { cause: err }) : err;
+}
+
 module.exports = function (RED) {
   function PlcwireWrite(config) {
     RED.nodes.createNode(this, config);
@@ -45,7 +53,9 @@ module.exports = function (RED) {
           if (failed.length < Object.keys(request.names).length) send(msg);
           done(failed.length > 0 ? tagFailure('write', failed) : undefined);
         })
-        .catch((err) => done(err));
+        // Refused as a whole (not connected, the link lost, the queue full): the error names the tags as the flow
+        // names them, as a failed tag's does; the library's error (it names the addresses) is the cause.
+        .catch((err) => done(refusal(request.names, err)));
     });
 
     node.on('close', function (removed, done) {

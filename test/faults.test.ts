@@ -352,6 +352,9 @@ function burst(c: AnyClient, rig: Rig, from: number, count: number, value: (i: n
           () => void acked.push(i),
           (e: unknown) => {
             if (!(e instanceof PlcError)) throw new Error(`write ${i} rejected with a non-PlcError: ${String(e)}`);
+            // Writes rejected while the link is down name their tag too (issue #26): a gateway's log must say which write failed.
+            expect(e.message, `the rejection of write ${i} (${e.code}) names its tag`).to.include(rig.addr(i));
+            expect(e.tag, `the rejection of write ${i} (${e.code}) carries its tag`).to.equal(rig.addr(i));
             rejected.push(e);
           },
         ),

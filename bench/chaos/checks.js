@@ -12,7 +12,7 @@ const HEAP_GROWTH_MAX = 0.1;
  * The writes of station `s` against what its PLC applied ([slot, value] in
  * order): every acknowledged write applied exactly once, no write applied
  * twice, nothing applied that was not written, every rejection typed and
- * naming its tag or PLC, every slot value read one the PLC applied.
+ * naming its tag, every slot value read one the PLC applied.
  */
 function checkWrites(s, applied, t, fail) {
   const counts = new Map();
@@ -39,7 +39,7 @@ function checkWrites(s, applied, t, fail) {
   for (const [code, n] of Object.entries(s.rejectedCodes)) t.byCode[code] = (t.byCode[code] ?? 0) + n;
   for (const b of s.badRejections) {
     if (!b.typed) fail(s, `write ${b.address} = ${b.value} rejected with an untyped error: ${b.message}`, 'untyped');
-    else fail(s, `write ${b.address} = ${b.value} rejected (${b.code}) without naming its tag or PLC: ${b.message}`, 'unnamed');
+    else fail(s, `write ${b.address} = ${b.value} rejected (${b.code}) without naming its tag: ${b.message}`, 'unnamed');
   }
 }
 
@@ -72,7 +72,38 @@ function recoveries(s, episodes) {
     });
 }
 
-function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, heap, handles }) {
+/** Milliseconds after a certificate fault began from which a good poll can only be one the other certificate answered. */
+const SWAP_SLACK_MS = 50;
+
+/**
+ * The certificate faults of station `s`: each must be refused (CERTIFICATE_UNTRUSTED, at least once while it
+ * lasts), never trusted (no good poll begun while it lasted, nothing written to the PLC with the other
+ * certificate). Adds to `c` { episodes, refused, refusals, trusted }.
+ */
+function checkCertificates(s, episodes, impostorApplied, c, fail) {
+  for (const e of episodes.filter((x) => x.fault === 'certificate')) {
+    c.episodes++;
+    const end = e.end ?? Infinity;
+    const refusals = s.refusals.filter((t) => t >= e.start && t <= end + TIMEOUT_MS).length;
+    c.refusals += refusals;
+    if (refusals > 0) c.refused++;
+    else fail(s, `the certificate changed at ${e.start - s.t0} ms, and the client never refused it`, 'certificate');
+    if (s.runs.some(([first, last]) => last >= e.start + SWAP_SLACK_MS && first <= end)) {
+      c.trusted++;
+      fail(
+        s,
+        `a poll begun while the PLC had another certificate (from ${e.start - s.t0} ms) was answered: trusted silently`,
+        'certificate',
+      );
+    }
+  }
+  if (impostorApplied.length > 0) {
+    c.trusted++;
+    fail(s, `${impostorApplied.length} writes applied by the PLC with another certificate: trusted silently`, 'certificate');
+  }
+}
+
+function evaluate({ o, fleet, stations, status, applied, impostorApplied, connected, loopP99Ms, heap, load, cores, handles }) {
   const failed = [];
   const concerned = new Set();
   const kinds = {};
@@ -91,8 +122,11 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
   const healthy = { due: 0, ok: 0 };
   const polls = { due: 0, ok: 0, partial: 0, failed: 0, skipped: 0 };
   const codes = {};
+  const certificates = { episodes: 0, refused: 0, refusals: 0, trusted: 0 };
   stations.forEach((s, i) => {
+    s.t0 = o.t0;
     checkWrites(s, applied[i], t, fail);
+    checkCertificates(s, status.episodes[i], impostorApplied[i], certificates, fail);
     overlapped += s.polls.overlapped;
     if (s.polls.overlapped > 0) fail(s, `${s.polls.overlapped} polls overlapped`, 'overlap');
     for (const k of Object.keys(polls)) polls[k] += s.polls[k];
@@ -135,6 +169,11 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
   const heapGrowth = heap.first && heap.last ? heap.last / heap.first - 1 : NaN;
   const rates = o.countsOnly;
   const row = (check, measured, limit, ok, skipped = false) => ({ check, measured: String(measured), limit, ok, skipped });
+  /** A figure that depends on the machine's speed: checked unless --counts-only, always with the load beside it. */
+  const timed = (check, measured, limit, within, skipped = rates) => ({
+    ...row(check, `${measured}, load ${load.highest.toFixed(1)}`, limit, skipped || within, skipped),
+    within,
+  });
   const rows = [
     row('writes acknowledged, applied exactly once', `${t.acked} of ${t.writes}`, 'lost 0, twice 0', !kinds.lost && !kinds.twice),
     row('writes rejected with a typed error naming it', `${t.rejected}`, 'untyped 0, unnamed 0', !kinds.untyped && !kinds.unnamed),
@@ -149,6 +188,12 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
       `≤ ${RECOVERY_MS} ms (freeport ${RECOVERY_MS + TIMEOUT_MS})`,
       notBack === 0,
     ),
+    row(
+      'certificates changed: refused, never trusted',
+      `${certificates.refused} of ${certificates.episodes} refused (${certificates.refusals} refusals), trusted ${certificates.trusted}`,
+      'all refused, trusted 0',
+      !kinds.certificate,
+    ),
     row('connections at the simulators at the end', `${connections}`, `${o.plcs}`, connections === o.plcs && !kinds.connections),
     row(
       'handles left behind',
@@ -156,21 +201,20 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
       'none',
       handles.after === handles.before,
     ),
-    row(
+    timed(
       'polls achieved / due, healthy PLCs',
       `${(healthyRatio * 100).toFixed(1)} % (${healthy.ok}/${healthy.due})`,
       `≥ ${HEALTHY_POLLS_MIN * 100} %`,
-      rates || healthyRatio >= HEALTHY_POLLS_MIN,
-      rates,
+      healthyRatio >= HEALTHY_POLLS_MIN,
     ),
-    row('event-loop delay p99', `${loopP99Ms.toFixed(1)} ms`, `< ${LOOP_P99_LIMIT_MS} ms`, rates || loopP99Ms < LOOP_P99_LIMIT_MS, rates),
-    row(
+    timed('event-loop delay p99', `${loopP99Ms.toFixed(1)} ms`, `< ${LOOP_P99_LIMIT_MS} ms`, loopP99Ms < LOOP_P99_LIMIT_MS),
+    timed(
       'heap after GC vs first minute',
       Number.isNaN(heapGrowth)
         ? 'not measured'
         : `${heapGrowth >= 0 ? '+' : ''}${(heapGrowth * 100).toFixed(1)} % (${(heap.last / 2 ** 20).toFixed(1)} MiB)`,
       `≤ +${HEAP_GROWTH_MAX * 100} %`,
-      rates || Number.isNaN(heapGrowth) || heapGrowth <= HEAP_GROWTH_MAX,
+      Number.isNaN(heapGrowth) || heapGrowth <= HEAP_GROWTH_MAX,
       rates || Number.isNaN(heapGrowth),
     ),
   ];
@@ -187,6 +231,7 @@ function evaluate({ o, fleet, stations, status, applied, connected, loopP99Ms, h
     `writes: ${t.writes}, ${t.acked} acknowledged, ${t.rejected} rejected (${Object.entries(t.byCode)
       .map(([c, n]) => `${c} ${n}`)
       .join(', ')}), of those ${t.inDoubt} applied by the PLC (answer lost: in doubt, reported as failed)`,
+    `load average (1 min) on ${cores} cores: ${load.start.toFixed(1)} at the start, ${load.highest.toFixed(1)} at the highest, ${load.end.toFixed(1)} at the end`,
     `poll and item errors: ${Object.entries(codes)
       .map(([c, n]) => `${c} ${n}`)
       .join(', ')}`,

@@ -9,11 +9,13 @@
 const { plcwire } = require('../lib/peers');
 const { slotAddress, SLOTS, TIMEOUT_MS, BACKOFF } = require('./plan');
 
-function urlOf(p, port) {
+/** PLC `p`'s URL at `port`; an S7CommPlus PLC's with its certificate pinned (`fingerprint`). */
+function urlOf(p, port, fingerprint) {
   const params = new URLSearchParams({ timeout: String(TIMEOUT_MS) });
   for (const [k, v] of Object.entries(p.driver.url)) params.set(k, String(v));
   if (p.driver.protocol === 'fetchwrite') return `fetchwrite://127.0.0.1?port=${port}&${params}`;
-  const scheme = p.driver.protocol === 'freeport' ? 'freeport+tcp' : 's7';
+  if (p.driver.protocol === 's7plus') params.set('fingerprint', fingerprint);
+  const scheme = { freeport: 'freeport+tcp', s7plus: 's7plus' }[p.driver.protocol] ?? 's7';
   return `${scheme}://127.0.0.1:${port}?${params}`;
 }
 
@@ -56,13 +58,17 @@ const REJECTED = 2;
  * PLC i carries the value i × 1,000,000 + n, so a value names its write.
  */
 class Station {
-  constructor(lib, p, port) {
+  constructor(lib, p, port, fingerprint) {
     this.lib = lib;
     this.p = p;
-    this.url = urlOf(p, port);
+    this.url = urlOf(p, port, fingerprint);
     this.name = p.driver.protocol === 'fetchwrite' ? `127.0.0.1:${port}` : this.url.split('?')[0];
     this.client = lib.createClient(this.url, { backoff: BACKOFF });
-    this.client.on('error', () => undefined);
+    /** When the client refused a certificate that is not the pinned one (CERTIFICATE_UNTRUSTED). */
+    this.refusals = [];
+    this.client.on('error', (err) => {
+      if (err && err.code === 'CERTIFICATE_UNTRUSTED') this.refusals.push(Date.now());
+    });
     this.list = this.client.prepare(p.addresses);
     this.polls = { due: 0, started: 0, ok: 0, partial: 0, failed: 0, skipped: 0, overlapped: 0 };
     this.healthyPolls = { due: 0, ok: 0 };
@@ -191,7 +197,8 @@ class Station {
         const code = typed ? err.code : 'untyped';
         this.rejectedCodes[code] = (this.rejectedCodes[code] ?? 0) + 1;
         const text = String(err && err.message);
-        const named = text.includes(address) || text.includes(this.name);
+        // The tag itself, not only the PLC: a gateway's log must say which write failed (issue #26).
+        const named = text.includes(address) && err.tag === address;
         if (!typed || !named) this.badRejections.push({ n, address, value, typed, named, code, message: text });
         this.slotBusy[k] = false;
       },
@@ -203,10 +210,10 @@ class Station {
   }
 }
 
-/** Starts a client per PLC of `fleet` (ports: the proxies'); returns the stations. */
-function openStations(fleet, ports) {
+/** Starts a client per PLC of `fleet` (ports: the proxies'; fingerprints: the S7CommPlus PLCs' certificates); returns the stations. */
+function openStations(fleet, ports, fingerprints) {
   const lib = plcwire();
-  const stations = fleet.map((p, i) => new Station(lib, p, ports[i]));
+  const stations = fleet.map((p, i) => new Station(lib, p, ports[i], fingerprints[i]));
   for (const s of stations) s.start();
   return stations;
 }
@@ -242,4 +249,4 @@ async function drive(stations, { t0, durationMs, intervalMs, writeEveryMs, warmM
   while (stations.some((s) => s.inFlight > 0) && Date.now() < deadline) await new Promise((r) => setTimeout(r, 20));
 }
 
-module.exports = { openStations, drive, PENDING, ACKED, REJECTED };
+module.exports = { openStations, drive, urlOf, PENDING, ACKED, REJECTED };

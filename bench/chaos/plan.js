@@ -4,14 +4,13 @@
 // seeded generator (mulberry32), so a seed replays the same run.
 //
 // DRIVERS is data: a driver is one entry (its simulator kind, profile,
-// URL parameters and the faults that apply to it). An S7CommPlus row
-// (`s7plus`, S7-1200/1500 over TLS, with its TLS faults) is one more entry
-// here, plus its simulator kind in server-worker.js, once that driver lands.
+// URL parameters and the faults that apply to it), the S7CommPlus row
+// (an S7-1500 over TLS, with its TLS faults) among them.
 const { plcTable } = require('../lib/fleet');
 // mulberry32: small, fast, good enough to draw a schedule from (the benchmark tables' generator).
 const { prng } = require('../lib/tables');
 
-/** Every fault of issue #26 (S7comm, FETCH/WRITE and freeport; the TLS ones come with s7plus). */
+/** Every fault of issue #26; the last three only where S7CommPlus runs over TLS. */
 const FAULTS = {
   reset: 'connection reset (RST on every connection)',
   silence: 'silence: sockets open, no answer',
@@ -23,8 +22,12 @@ const FAULTS = {
   garbage: 'garbage instead of an answer',
   itemError: 'an error answer to one item',
   stop: 'CPU in STOP',
+  tlsAlert: 'a fatal TLS alert in mid-session, then the PLC closes',
+  recordReset: 'half a TLS record, then RST',
+  certificate: 'a restart with another certificate (refused, never trusted), then the right one back',
 };
-const ALL = Object.keys(FAULTS);
+const TLS_ONLY = ['tlsAlert', 'recordReset', 'certificate'];
+const ALL = Object.keys(FAULTS).filter((f) => !TLS_ONLY.includes(f));
 const NO_CPU_MODE = ALL.filter((f) => f !== 'stop');
 
 /**
@@ -54,6 +57,15 @@ const DRIVERS = [
   { id: 'logo', protocol: 's7', server: { profile: 'logo' }, url: { localTsap: '0100', remoteTsap: '0200', pdu: 240 }, faults: ALL },
   { id: 'fetchwrite', protocol: 'fetchwrite', server: {}, url: {}, faults: NO_CPU_MODE },
   { id: 'freeport+tcp', protocol: 'freeport', server: {}, url: { retries: 0, gap: 0 }, faults: NO_CPU_MODE },
+  // S7CommPlus over TLS, the certificate pinned: a standard DB by address, an optimized DB by name. The TLS
+  // faults are drawn as often as all the others together, so that a short run sees them.
+  {
+    id: 's7-1500 S7CommPlus/TLS',
+    protocol: 's7plus',
+    server: { profile: 's7-1500' },
+    url: {},
+    faults: [...ALL, ...TLS_ONLY.flatMap((f) => [f, f, f])],
+  },
 ];
 
 /** The client's request timeout and backoff (every URL carries the timeout). */
@@ -62,15 +74,50 @@ const BACKOFF = { initialDelay: 100, maxDelay: 2000, factor: 2, jitter: 0.2 };
 /** A link must be back (a good poll) this long after its fault ended: a timeout, the longest backoff wait, slack for a loaded machine. */
 const RECOVERY_MS = TIMEOUT_MS + BACKOFF.maxDelay * (1 + BACKOFF.jitter) + 1500;
 
-/** Write slots: DINTs the simulator records (S7/FETCH/WRITE: DB2; freeport: stations 1..8). */
+/** Write slots: DINTs the simulator records (S7/FETCH/WRITE: DB2; freeport: stations 1..8; S7CommPlus: "Line".slot[k] of the optimized DB2). */
 const SLOTS = 8;
 /** The data block of the one item that answers an error during an itemError fault. */
 const ITEM_DB = 3;
 const STATIC_TAGS = 91;
 const FREEPORT_STATIC = [9, 10, 11, 12];
 
+/**
+ * The S7CommPlus PLC's program: DB1 "Image" standard (the static table's bytes, read by address), DB2 "Line"
+ * optimized (the write slots and four statics, by name), DB3 "Item" standard (the item that an itemError fault
+ * fails, by address).
+ */
+const PLUS_SOURCES = [
+  {
+    name: 'Image.db',
+    content: `DATA_BLOCK "Image"\n{ S7_Optimized_Access := 'FALSE' }\nVERSION : 0.1\nNON_RETAIN\n   STRUCT\n      raw : Array[0..3071] of Byte;\n   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n`,
+  },
+  {
+    name: 'Line.db',
+    content: `DATA_BLOCK "Line"\n{ S7_Optimized_Access := 'TRUE' }\nVERSION : 0.1\nNON_RETAIN\n   STRUCT\n      slot : Array[0..${SLOTS - 1}] of DInt;\n      speed : Int;\n      level : Real;\n      count : DInt;\n      running : Bool;\n   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n`,
+  },
+  {
+    name: 'Item.db',
+    content: `DATA_BLOCK "Item"\n{ S7_Optimized_Access := 'FALSE' }\nVERSION : 0.1\nNON_RETAIN\n   STRUCT\n      v : Int;\n   END_STRUCT;\nBEGIN\nEND_DATA_BLOCK\n`,
+  },
+];
+const PLUS_DB = { Image: 1, Line: 2, Item: ITEM_DB };
+/** Bytes of DB1 "Image": the static table's tags lie below (bench/lib/fleet.js plcTable, shifted by up to 30). */
+const PLUS_IMAGE_BYTES = 3072;
+/** The S7CommPlus PLC's statics by name in the optimized block, PLC i's values. */
+function plusNamed(i) {
+  return [
+    { name: 'speed', address: '"Line".speed', type: 'INT', value: 100 + i },
+    { name: 'level', address: '"Line".level', type: 'REAL', value: i + 0.5 },
+    { name: 'count', address: '"Line".count', type: 'DINT', value: 70_000 + i },
+    { name: 'running', address: '"Line".running', type: 'BOOL', value: i % 2 === 1 },
+  ];
+}
+/** Tags by address in the S7CommPlus PLC's standard DB1 (with the 4 names, the item and the 8 slots: 100). */
+const PLUS_BY_ADDRESS = 87;
+
 function slotAddress(protocol, k) {
-  return protocol === 'freeport' ? `ST${k + 1},DINT0` : `DB2,DINT${4 * k}`;
+  if (protocol === 'freeport') return `ST${k + 1},DINT0`;
+  return protocol === 's7plus' ? `"Line".slot[${k}]` : `DB2,DINT${4 * k}`;
 }
 
 /**
@@ -90,9 +137,16 @@ function tagsOf(protocol, i) {
     }
     item = addresses.length - 1;
   } else {
-    for (const t of plcTable(100, i).slice(0, STATIC_TAGS)) {
+    const plus = protocol === 's7plus';
+    for (const t of plcTable(100, i).slice(0, plus ? PLUS_BY_ADDRESS : STATIC_TAGS)) {
       statics.push({ index: addresses.length, type: t.type, value: t.value });
       addresses.push(t.address);
+    }
+    if (plus) {
+      for (const t of plusNamed(i)) {
+        statics.push({ index: addresses.length, type: t.type, value: t.value });
+        addresses.push(t.address);
+      }
     }
     item = addresses.length;
     statics.push({ index: item, type: 'INT', value: itemValue(i) });
@@ -136,6 +190,12 @@ function drawEpisode(fault, rnd, protocol) {
       return { duration: between(500, 5000) };
     case 'half':
       return { duration: between(1000, 3000) };
+    case 'tlsAlert':
+    case 'recordReset':
+      return { duration: 0 };
+    case 'certificate':
+      // Long enough for the client to try again (and refuse again) at least once at the longest backoff.
+      return { duration: between(3000, 6000) };
     default:
       return { duration: between(1000, 5000) };
   }
@@ -181,6 +241,10 @@ module.exports = {
   SLOTS,
   ITEM_DB,
   FREEPORT_STATIC,
+  PLUS_SOURCES,
+  PLUS_DB,
+  PLUS_IMAGE_BYTES,
+  plusNamed,
   fleetPlan,
   freeportStatic,
   itemValue,

@@ -10,6 +10,11 @@
 //   garbage   the next answer is replaced by garbage, then pass
 //   backlog   new connections are accepted and never answered nor forwarded
 //   refuse    new connections are closed at once
+// and for S7CommPlus over TLS (the answers are TLS records in COTP data frames):
+//   alert     the next request's TLS record is corrupted on its way (its last byte, in the authentication
+//             tag, flipped): the PLC's own TLS refuses it with a fatal alert (bad_record_mac) and closes, a
+//             real alert under the session's keys, which a proxy could not forge
+//   recordReset  half of the next answer (inside its TLS record), then RST
 // and reset() (RST on every connection), gone() / back() (the listener closes
 // and reopens on the same port: connection refused meanwhile).
 const net = require('node:net');
@@ -104,8 +109,16 @@ class ChaosProxy {
     };
     client.on('close', end);
     upstream.on('close', end);
-    client.on('data', (chunk) => upstream.write(chunk));
+    client.on('data', (chunk) => upstream.write(this.mode === 'alert' ? this.corrupt(chunk) : chunk));
     upstream.on('data', (chunk) => this.answer(chunk, client));
+  }
+
+  /** The next request with its last byte (the TLS record's authentication tag) flipped: the PLC's TLS answers a fatal alert. */
+  corrupt(chunk) {
+    this.mode = 'pass';
+    const bad = Buffer.from(chunk);
+    bad[bad.length - 1] ^= 0xff;
+    return bad;
   }
 
   answer(chunk, client) {
@@ -122,6 +135,10 @@ class ChaosProxy {
       case 'garbage':
         this.mode = 'pass';
         return this.later(client, GARBAGE, 0);
+      case 'recordReset':
+        this.mode = 'pass';
+        if (!client.destroyed) client.write(chunk.subarray(0, Math.max(1, chunk.length >> 1)), () => client.resetAndDestroy());
+        return;
       default:
         return this.later(client, chunk, 0);
     }

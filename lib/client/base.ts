@@ -1,6 +1,6 @@
 import { EventEmitter } from 'node:events';
 import type { Duplex } from 'node:stream';
-import { ConnectionError, PlcError, TagErrors, tagError, toPlcError, type TagResult } from '../errors';
+import { ConnectionError, PlcError, TagErrors, tagError, toPlcError, writeRefusal, type TagResult } from '../errors';
 import type { Driver, DriverSession, DriverTag, ReadValues } from '../link/driver';
 import { LinkSupervisor } from '../link/supervisor';
 import { expandWrite } from '../symbols/resolve';
@@ -321,6 +321,14 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     if (values === null || typeof values !== 'object') {
       throw new PlcError('INVALID_VALUE', 'write() takes an object of { address: value }');
     }
+    try {
+      return await this.writeEach(values, options);
+    } catch (err) {
+      throw writeRefusal(Object.keys(values), err);
+    }
+  }
+
+  private async writeEach(values: Readonly<Record<string, unknown>>, options: RequestOptions): Promise<Record<string, TagResult<void>>> {
     let session = this.liveSession();
     const keys = Object.keys(values);
     const tags = keys.map((address) => this.tags.get(address));
@@ -356,7 +364,9 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
     const outcome = items.length > 0 ? await this.driver.writeTags(session, items, options.signal) : [];
     for (const { key, from, count } of written) {
       if (count === 1) {
-        results[key] = outcome[from]!;
+        // Every driver's refusal names the tag it was for (a freeport station's failure names only the station).
+        const r = outcome[from]!;
+        results[key] = r.ok ? r : { ok: false, error: tagError(key, r.error) };
         continue;
       }
       // A struct: ok when every member written is; else its first member's error, naming the struct and the member.

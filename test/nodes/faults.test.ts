@@ -184,6 +184,8 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
         helper.getNode('write').receive({ payload: { sp: 4321 } });
         const writeErr = await seen(caught, c0, (m) => m.error.source.id === 'write', 4000, 'the write error at Catch');
         expect(writeErr.error.code).to.be.oneOf([...fault.codes, 'TAG_ERRORS']);
+        // It names the tag as the flow names it, whether the write was refused as a whole or per tag (issue #26).
+        expect(writeErr.error.message).to.match(/^\w*Error: write "sp" \(/);
         if (fault.linkDown) {
           await seen(statuses, s0, (m) => m.status.source.id === 'read' && m.status.fill === 'red', 4000, 'a red status on the read node');
           await seen(
@@ -201,6 +203,15 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
             'the link error at Catch',
           );
           expect(linkErr.error.code).to.be.oneOf(fault.codes);
+          // Each link error once, however many nodes of the tab use the connection (read, write, heartbeat here; issue #26).
+          const fromConnection = caught.messages
+            .slice(c0)
+            .filter((m) => m.error.source.type === 'plcwire-connection')
+            .map((m) => m.error.message as string);
+          expect(fromConnection.length, fromConnection.join(' | ')).to.equal(new Set(fromConnection).size);
+          // The connection reports the link's loss; the read node whose poll timed out with it does not report it again.
+          const fromRead = caught.messages.slice(c0).filter((m) => m.error.source.id === 'read');
+          expect(fromRead.map((m) => `${m.error.code} ${m.error.message}`)).to.deep.equal([]);
         } else {
           const readErr = await seen(caught, c0, (m) => m.error.source.id === 'read', 4000, 'the read error at Catch');
           expect(readErr.error.code).to.be.oneOf(fault.codes);

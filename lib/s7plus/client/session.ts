@@ -13,12 +13,14 @@
  * never comes drops the link (its numbers are spent on the PLC's side too).
  */
 import type { Duplex } from 'node:stream';
+import { TLSSocket } from 'node:tls';
 import { abortError, ConnectionError, type PlcError, ProtocolError, TimeoutError, toPlcError } from '../../errors';
 import { Fifo } from '../../link/fifo';
 import { encodeFrames, S7pFrameReader, type S7pMessage } from '../codec/frame';
 import { peekMessage } from '../codec/header';
 import { encodeDeleteObjectRequest } from '../codec/session';
 import { FunctionCode, Opcode, ProtocolVersion, READ_FUNCTIONS, TransportFlags } from '../constants';
+import { tlsFailure } from '../transport/handshake';
 
 /** What a session is given by its client, and all it reports back. */
 export interface S7PlusWiring {
@@ -107,7 +109,14 @@ export class S7PlusSession {
     this.nextSeq = start.nextSeq & 0xffff;
     this.maxQueued = wiring.maxQueued ?? DEFAULT_MAX_QUEUED;
     stream.on('data', this.receive);
-    stream.on('error', (err: Error) => this.lose(new ConnectionError('CONNECTION_LOST', `${wiring.name}: ${err.message}`, { cause: err })));
+    // Over TLS, the error says in words what the PLC's TLS did (an alert, records that are not TLS); OpenSSL's own text stays in `cause`.
+    stream.on('error', (err: Error) =>
+      this.lose(
+        stream instanceof TLSSocket
+          ? tlsFailure(err, wiring.name, 'session')
+          : new ConnectionError('CONNECTION_LOST', `${wiring.name}: ${err.message}`, { cause: err }),
+      ),
+    );
     // A stream the PLC ended is as gone as a closed one (a half-open stream would leave requests to their timeout).
     const ended = () => this.lose(new ConnectionError('CONNECTION_LOST', `${wiring.name} closed the connection`));
     stream.on('end', ended);
