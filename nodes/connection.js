@@ -7,6 +7,8 @@ const s7plusAdmin = require('./shared/s7plus-admin');
 
 /** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
 const pool = new ClientPool();
+/** A link that stayed connected this long has ended its outage: the next error goes to Catch again. */
+const STABLE_MS = 5000;
 
 /**
  * plcwire-connection (config): properties `url`, and for tags by name
@@ -48,7 +50,10 @@ module.exports = function (RED) {
     /** Data blocks whose length on the PLC differs from their source's, by DB number, since the link came up. */
     const mismatches = new Map();
     let link;
-    let lastError = '';
+    /** True once this outage's first error went to Catch: one message per outage, until the link has stayed up. */
+    let reported = false;
+    /** Ends the outage when the link has stayed connected for STABLE_MS (a link that flaps is one outage). */
+    let stable;
 
     Object.defineProperty(node, 'client', { get: () => link && link.client });
 
@@ -78,7 +83,16 @@ module.exports = function (RED) {
     /** Tells every user the link's status (after it or what it shows changed). */
     function broadcast() {
       const status = node.linkStatus;
-      if (status.state === 'connected') lastError = '';
+      if (status.state !== 'connected') {
+        clearTimeout(stable);
+        stable = undefined;
+      } else if (reported && stable === undefined) {
+        stable = setTimeout(() => {
+          stable = undefined;
+          if (node.linkStatus.state === 'connected') reported = false;
+        }, STABLE_MS);
+        stable.unref();
+      }
       for (const user of Object.values(registered)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
     }
 
@@ -114,11 +128,14 @@ module.exports = function (RED) {
       node.on('close', () => RED.events.removeListener('flows:started', report));
     }
 
-    /** Reported once per distinct error between two connections, so a PLC that is off does not flood the log. */
+    /**
+     * The first error of an outage goes to Catch, once; the ones after it (each reconnect that fails, in whatever
+     * words, and each loss of a link that came up for less than STABLE_MS) only to the status. A PLC that is off, or
+     * silent, or a link that flaps within one fault, is one Catch message, not one per attempt (issue #26).
+     */
     function reportError(err) {
-      const text = err && err.message ? err.message : String(err);
-      if (text === lastError) return;
-      lastError = text;
+      if (reported) return;
+      reported = true;
       // Catch messages end up in debug sidebars and files: never with the URL's user info.
       const url = withoutCredentials(node.url);
       node.error(err, { topic: link ? link.name : url, payload: { url, state: node.linkStatus.state, code: err && err.code } });
@@ -187,6 +204,7 @@ module.exports = function (RED) {
     };
 
     node.on('close', function (removed, done) {
+      clearTimeout(stable);
       registered = {};
       node.users = {};
       settleWithin(shut()).then(() => done());

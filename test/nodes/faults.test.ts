@@ -228,9 +228,21 @@ describe('nodes under faults: Status and Catch report them, values flow again wi
         expect(written.messages).to.deep.equal([]);
         const s1 = statuses.messages.length;
 
+        if (fault.linkDown) {
+          // Let the link fail again while the fault lasts: a refused or unanswered reconnect, in other words than the loss.
+          await seen(statuses, s1, (m) => m.status.source.id === 'read' && m.status.fill === 'red', 6000, 'a failed reconnect');
+        }
         await fault.off(ctx);
         sim.set(0, 22);
         await out.next((m) => m.payload.a === 22 && m.quality.a === 'good', 8000, 'values flowing again');
+        if (fault.linkDown) {
+          // One outage, one message from the connection at Catch, whatever the reconnects said (issue #26).
+          const outage = caught.messages.slice(c0).filter((m) => m.error.source.type === 'plcwire-connection');
+          expect(
+            outage.map((m) => m.error.message),
+            "the connection's Catch messages of the outage",
+          ).to.have.length(1);
+        }
         await beats.next((m) => m.payload.event === 'restored', 8000, 'heartbeat restored');
         await seen(statuses, s1, (m) => m.status.source.id === 'read' && m.status.fill === 'green', 4000, 'the read node green again');
         written.skip();
