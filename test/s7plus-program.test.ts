@@ -288,7 +288,11 @@ describe('plcwire serve s7 loads its program again (SIGHUP, a --source file chan
       await client.connect();
       expect(await client.read(['"Prog".A', '"Prog".C'])).to.deep.equal({ '"Prog".A': 1, '"Prog".C': 3 });
       write(V2);
-      await until(() => /program loaded again \(.*Prog\.db changed\): \d+ type objects new or changed/.test(out), 10000, 'the reload');
+      await until(
+        () => /program loaded again \([^)]*Prog\.db changed[^)]*\): \d+ type objects new or changed/.test(out),
+        10000,
+        'the reload',
+      );
       const r = await client.readDetailed(['"Prog".A', '"Prog".C']);
       expect(r['"Prog".C']).to.deep.equal({ ok: true, value: 3 });
       expect(r['"Prog".A']!.ok).to.equal(false);

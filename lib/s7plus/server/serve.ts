@@ -48,8 +48,18 @@ export async function servePlus(flags: ServeFlags, profile: string): Promise<S7P
   }
 }
 
-/** How often a --source file's size and time are looked at (fs.watchFile: also sees a file an editor replaced). */
+/** How often a --source file's size and time are looked at (by path: a file an editor replaced is seen too). */
 const WATCH_MS = 500;
+
+/** A file's time and size, or 'missing'. */
+function stamp(file: string): string {
+  try {
+    const st = fs.statSync(file);
+    return `${st.mtimeMs} ${st.size}`;
+  } catch {
+    return 'missing';
+  }
+}
 
 /**
  * Loads the --source files again into `service` (S7PlusService.reload: a download) on SIGHUP and when one of them
@@ -75,15 +85,32 @@ export function reloadOnChange(service: S7PlusService, memory: PlcMemory, flags:
   };
   const onHangup = () => reload('SIGHUP');
   process.on('SIGHUP', onHangup);
-  const watched = flags.sourcePaths().map((file) => {
-    const listener = (now: fs.Stats, was: fs.Stats) => {
-      if (now.mtimeMs !== was.mtimeMs || now.size !== was.size) reload(`${file} changed`);
-    };
-    fs.watchFile(file, { interval: WATCH_MS, persistent: false }, listener);
-    return { file, listener };
-  });
+  // Each file's size and time as it is now, taken at once: a change made the moment after this call is seen (fs.watchFile
+  // takes its first look later, on its own, and missed a file written in between).
+  const seen = new Map(flags.sourcePaths().map((file) => [file, stamp(file)]));
+  let looking = false;
+  const timer = setInterval(() => {
+    if (looking) return;
+    looking = true;
+    void Promise.all(
+      [...seen].map(async ([file, was]) => {
+        const now = await fs.promises.stat(file).then(
+          (st) => `${st.mtimeMs} ${st.size}`,
+          () => 'missing',
+        );
+        if (now === was) return undefined;
+        seen.set(file, now);
+        return file;
+      }),
+    ).then((files) => {
+      looking = false;
+      const changed = files.filter((f): f is string => f !== undefined);
+      if (changed.length > 0) reload(changed.map((file) => `${file} changed`).join(', '));
+    });
+  }, WATCH_MS);
+  timer.unref();
   return () => {
     process.off('SIGHUP', onHangup);
-    for (const { file, listener } of watched) fs.unwatchFile(file, listener);
+    clearInterval(timer);
   };
 }
