@@ -10,53 +10,22 @@
  */
 import { lookup } from 'node:dns/promises';
 import * as net from 'node:net';
-import { abortError, PlcError, toPlcError } from '../../errors';
+import { abortError, PlcError } from '../../errors';
 import { openTcp } from '../../link/tcp';
 import { parseUrl, type S7Endpoint } from '../../url';
 import { valueToText } from '../../values/text';
 import { S7Client } from '../client';
 import { TagSteps, type StepContext } from './tags';
-import type { SymbolTable } from '../../symbols/model';
 import type { PlcInfo } from '../client';
 import { familyOf, type Family } from './families';
 import { Handshake, type HandshakeContext } from './handshake';
 import { HINT } from './hints';
+import { DoctorWalk, type DiagnoseOptions, type DoctorReport } from './walk';
 
 export { familyOf } from './families';
 
-/** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
-export interface DoctorStep {
-  step: string;
-  ok: boolean;
-  detail: string;
-  hint?: string;
-}
+export type { DiagnoseOptions, DoctorReport, DoctorStep } from './walk';
 
-export interface DoctorReport {
-  /** Every step passed. */
-  ok: boolean;
-  steps: DoctorStep[];
-}
-
-export interface DiagnoseOptions {
-  /** The deadline of the whole walk in ms (default 20 s); each network step also keeps the URL's timeout. */
-  timeout?: number;
-  /** Aborting rejects with ABORTED once every socket is closed. */
-  signal?: AbortSignal;
-  /** Called with each step as soon as it is known. */
-  onStep?: (step: DoctorStep) => void;
-  /**
-   * A compiled symbol table (compileSymbols), as connect(url, { symbols })
-   * takes it: each given text that is not an S7 address is then a name,
-   * resolved as a read resolves it and read at its address; an unknown name
-   * is a failed step with the closest names the table has.
-   */
-  symbols?: SymbolTable;
-  /** Names in a DB whose length in the PLC differs from the sources' are refused, as with ClientOptions.strictSymbols. */
-  strictSymbols?: boolean;
-}
-
-const DEFAULT_DEADLINE = 20_000;
 /** Header errors by which an S7-1200/1500 refuses Read Var without PUT/GET (SERVICE_ERRORS, HEADER_ERRORS). */
 const PUT_GET_REFUSALS = [0x8104, 0x8304];
 const PASSWORD_NEEDED = 0xd241;
@@ -76,42 +45,21 @@ export async function diagnose(url: string, addresses: readonly string[] = [], o
   return doctor.report();
 }
 
-/** Thrown inside the walk to end it at a failed step. */
-class Stop extends Error {}
-
-class Doctor {
-  private readonly steps: DoctorStep[] = [];
-  private readonly ctl = new AbortController();
+class Doctor extends DoctorWalk {
   private readonly deadline: number;
-  private readonly timer: NodeJS.Timeout;
   private readonly sockets = new Set<net.Socket>();
   private client: S7Client | undefined;
-  private readonly onUserAbort = () => this.ctl.abort();
 
-  constructor(private readonly options: DiagnoseOptions) {
-    const ms = options.timeout ?? DEFAULT_DEADLINE;
-    if (!Number.isFinite(ms) || ms <= 0)
-      throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
-    this.deadline = Date.now() + ms;
-    this.timer = setTimeout(() => this.ctl.abort(), ms);
-    if (options.signal?.aborted) this.ctl.abort();
-    else options.signal?.addEventListener('abort', this.onUserAbort, { once: true });
+  constructor(options: DiagnoseOptions) {
+    super(options, HINT.deadline);
+    this.deadline = Date.now() + this.ms;
   }
 
-  report(): DoctorReport {
-    return { ok: this.steps.length > 0 && this.steps.every((s) => s.ok), steps: this.steps };
-  }
-
-  async dispose(): Promise<void> {
-    clearTimeout(this.timer);
-    this.options.signal?.removeEventListener('abort', this.onUserAbort);
+  override async dispose(): Promise<void> {
+    await super.dispose();
     for (const s of this.sockets) s.destroy();
     this.sockets.clear();
     await this.client?.close();
-  }
-
-  private get signal(): AbortSignal {
-    return this.ctl.signal;
   }
 
   /** Per network step: the URL's timeout, cut to what is left of the deadline. */
@@ -142,34 +90,8 @@ class Doctor {
     };
   }
 
-  private record(step: DoctorStep): void {
-    const s: DoctorStep = { step: step.step, ok: step.ok, detail: step.detail };
-    if (step.hint !== undefined) s.hint = step.hint;
-    this.steps.push(s);
-    this.options.onStep?.(s);
-  }
-
-  private pass(step: string, detail: string, hint?: string): void {
-    this.record({ step, ok: true, detail, ...(hint !== undefined ? { hint } : {}) });
-  }
-
-  private fail(step: string, detail: string, hint?: string): never {
-    this.record({ step, ok: false, detail, ...(hint !== undefined ? { hint } : {}) });
-    throw new Stop();
-  }
-
-  /** An error inside a step: an abort by the caller ends the walk, the deadline fails the step, anything else is `other`. */
-  private failed(step: string, err: unknown, other: (e: PlcError) => never): never {
-    if (err instanceof Stop) throw err;
-    if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
-    if (this.signal.aborted) {
-      this.fail(step, `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms`, HINT.deadline);
-    }
-    return other(toPlcError(err, 'CONNECT_FAILED'));
-  }
-
   async run(url: string, addresses: readonly string[]): Promise<void> {
-    try {
+    await this.walk(async () => {
       const e = this.url(url);
       const address = await this.resolve(e);
       await new Handshake(this.handshakeContext()).run(e, address);
@@ -179,22 +101,7 @@ class Doctor {
       await this.putGet(family);
       const tags = new TagSteps(this.context(), family, this.options.symbols);
       for (const a of addresses) await tags.check(a);
-    } catch (err) {
-      if (err instanceof Stop) return;
-      if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
-      // The deadline ran out where no step caught it (between steps, or inside one's own retries): a failed step, not a rejection.
-      if (this.signal.aborted) {
-        const after = this.steps.at(-1)?.step;
-        this.record({
-          step: 'deadline',
-          ok: false,
-          detail: `no result before the doctor's deadline of ${this.options.timeout ?? DEFAULT_DEADLINE} ms${after ? ` (after the ${after} step)` : ''}`,
-          hint: HINT.deadline,
-        });
-        return;
-      }
-      throw err;
-    }
+    });
   }
 
   // ---------------------------------------------------------------- steps

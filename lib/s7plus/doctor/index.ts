@@ -10,11 +10,11 @@
  * written to the PLC; the one connection is closed on every path, and the
  * whole walk has one deadline.
  */
-import { abortError, PlcError, toPlcError } from '../../errors';
+import { PlcError } from '../../errors';
 import { IsoConnectError } from '../../iso/connect';
 import { openTcp } from '../../link/tcp';
 import { S7_TAG_SYNTAX } from '../../address';
-import type { DiagnoseOptions, DoctorReport, DoctorStep } from '../../s7/doctor';
+import type { DiagnoseOptions, DoctorReport } from '../../s7/doctor';
 import type { SymbolTable } from '../../symbols/model';
 import { formatUrl, parseUrl } from '../../url';
 import { textOf } from '../../values/text';
@@ -24,16 +24,12 @@ import { CertificateError } from '../transport/trust';
 import type { S7PlusEndpoint } from '../url';
 import { HINT as S7_HINT } from '../../s7/doctor/hints';
 import { PLUS_HINT } from './hints';
+import { DoctorWalk } from '../../s7/doctor/walk';
 
 export interface PlusDiagnoseOptions extends DiagnoseOptions {
   /** The PLC's password (legitimation): never in a step, a hint or the report. */
   password?: string;
 }
-
-const DEFAULT_DEADLINE = 20_000;
-
-/** Thrown inside the walk to end it at a failed step. */
-class Stop extends Error {}
 
 /**
  * Diagnoses the connection to an S7-1200/1500 over S7CommPlus. Resolves a
@@ -62,86 +58,28 @@ const ACCESS_LEVELS: Readonly<Record<number, string>> = {
 /** The handshake steps in their order; `password` only when one is given. */
 type HandshakeName = 'cotp' | 'InitSSL' | 'TLS' | 'session' | 'password';
 
-class PlusDoctor {
-  private readonly steps: DoctorStep[] = [];
-  private readonly ctl = new AbortController();
-  private readonly ms: number;
-  private readonly timer: NodeJS.Timeout;
+class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
   private client: S7PlusClient | undefined;
-  private readonly onUserAbort = () => this.ctl.abort();
   /** The handshake step that runs now: the one a connect failure belongs to. */
   private next: HandshakeName = 'cotp';
 
-  constructor(private readonly options: PlusDiagnoseOptions) {
-    const ms = options.timeout ?? DEFAULT_DEADLINE;
-    if (!Number.isFinite(ms) || ms <= 0)
-      throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
-    this.ms = ms;
-    this.timer = setTimeout(() => this.ctl.abort(), ms);
-    if (options.signal?.aborted) this.ctl.abort();
-    else options.signal?.addEventListener('abort', this.onUserAbort, { once: true });
+  constructor(options: PlusDiagnoseOptions) {
+    super(options, PLUS_HINT.deadline);
   }
 
-  report(): DoctorReport {
-    return { ok: this.steps.length > 0 && this.steps.every((s) => s.ok), steps: this.steps };
-  }
-
-  async dispose(): Promise<void> {
-    clearTimeout(this.timer);
-    this.options.signal?.removeEventListener('abort', this.onUserAbort);
+  override async dispose(): Promise<void> {
+    await super.dispose();
     await this.client?.close();
   }
 
-  private get signal(): AbortSignal {
-    return this.ctl.signal;
-  }
-
-  private record(step: string, ok: boolean, detail: string, hint?: string): void {
-    const s: DoctorStep = { step, ok, detail };
-    if (hint !== undefined) s.hint = hint;
-    this.steps.push(s);
-    this.options.onStep?.(s);
-  }
-
-  private pass(step: string, detail: string, hint?: string): void {
-    this.record(step, true, detail, hint);
-  }
-
-  private fail(step: string, detail: string, hint?: string): never {
-    this.record(step, false, detail, hint);
-    throw new Stop();
-  }
-
-  /** An error inside a step: the caller's abort ends the walk, the deadline fails the step, anything else is `other`. */
-  private failed(step: string, err: unknown, other: (e: PlcError) => never): never {
-    if (err instanceof Stop) throw err;
-    if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
-    if (this.signal.aborted) this.fail(step, `no result before the doctor's deadline of ${this.ms} ms`, PLUS_HINT.deadline);
-    return other(toPlcError(err, 'CONNECT_FAILED'));
-  }
-
   async run(url: string, names: readonly string[]): Promise<void> {
-    try {
+    await this.walk(async () => {
       const e = this.url(url);
       await this.handshake(e);
       await this.identity();
       const table = await this.browse();
       for (const n of names) await this.check(n, table);
-    } catch (err) {
-      if (err instanceof Stop) return;
-      if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
-      if (this.signal.aborted) {
-        const after = this.steps.at(-1)?.step;
-        this.record(
-          'deadline',
-          false,
-          `no result before the doctor's deadline of ${this.ms} ms${after ? ` (after the ${after} step)` : ''}`,
-          PLUS_HINT.deadline,
-        );
-        return;
-      }
-      throw err;
-    }
+    });
   }
 
   // ---------------------------------------------------------------- steps

@@ -1,0 +1,137 @@
+/**
+ * What every connection doctor's walk shares (this folder's for s7://, lib/s7plus/doctor for s7plus://): the steps
+ * in order, each told to `onStep` as it ends; one deadline for the whole walk; the caller's abort; the first failed
+ * step ending the walk. A doctor is a subclass that runs its own steps inside `walk()`.
+ */
+import { abortError, PlcError, toPlcError } from '../../errors';
+import type { SymbolTable } from '../../symbols/model';
+
+/** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
+export interface DoctorStep {
+  step: string;
+  ok: boolean;
+  detail: string;
+  hint?: string;
+}
+
+export interface DoctorReport {
+  /** Every step passed. */
+  ok: boolean;
+  steps: DoctorStep[];
+}
+
+export interface DiagnoseOptions {
+  /** The deadline of the whole walk in ms (default 20 s); each network step also keeps the URL's timeout. */
+  timeout?: number;
+  /** Aborting rejects with ABORTED once every socket is closed. */
+  signal?: AbortSignal;
+  /** Called with each step as soon as it is known. */
+  onStep?: (step: DoctorStep) => void;
+  /**
+   * A compiled symbol table (compileSymbols), as connect(url, { symbols })
+   * takes it: each given text that is not an S7 address is then a name,
+   * resolved as a read resolves it and read at its address; an unknown name
+   * is a failed step with the closest names the table has.
+   */
+  symbols?: SymbolTable;
+  /** Names in a DB whose length in the PLC differs from the sources' are refused, as with ClientOptions.strictSymbols. */
+  strictSymbols?: boolean;
+}
+
+/** The whole walk's deadline when the caller gives none. */
+const DEFAULT_DEADLINE = 20_000;
+
+/** Thrown inside the walk to end it at a failed step. */
+class Stop extends Error {}
+
+export abstract class DoctorWalk<O extends DiagnoseOptions = DiagnoseOptions> {
+  private readonly steps: DoctorStep[] = [];
+  private readonly ctl = new AbortController();
+  /** The whole walk's deadline in ms. */
+  protected readonly ms: number;
+  private readonly timer: NodeJS.Timeout;
+  private readonly onUserAbort = () => this.ctl.abort();
+
+  /** `deadlineHint`: what to do when the deadline ends a step (each doctor words it for its protocol). */
+  constructor(
+    protected readonly options: O,
+    private readonly deadlineHint: string,
+  ) {
+    const ms = options.timeout ?? DEFAULT_DEADLINE;
+    if (!Number.isFinite(ms) || ms <= 0)
+      throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
+    this.ms = ms;
+    this.timer = setTimeout(() => this.ctl.abort(), ms);
+    if (options.signal?.aborted) this.ctl.abort();
+    else options.signal?.addEventListener('abort', this.onUserAbort, { once: true });
+  }
+
+  report(): DoctorReport {
+    return { ok: this.steps.length > 0 && this.steps.every((s) => s.ok), steps: this.steps };
+  }
+
+  /** Ends the deadline and lets go of the caller's signal; a doctor closes what it opened, then calls this. */
+  async dispose(): Promise<void> {
+    clearTimeout(this.timer);
+    this.options.signal?.removeEventListener('abort', this.onUserAbort);
+    return Promise.resolve();
+  }
+
+  /** Aborts at the deadline or when the caller aborts. */
+  protected get signal(): AbortSignal {
+    return this.ctl.signal;
+  }
+
+  /** The step that ended last, undefined before the first. */
+  protected get lastStep(): string | undefined {
+    return this.steps.at(-1)?.step;
+  }
+
+  private record(step: string, ok: boolean, detail: string, hint?: string): void {
+    const s: DoctorStep = { step, ok, detail };
+    if (hint !== undefined) s.hint = hint;
+    this.steps.push(s);
+    this.options.onStep?.(s);
+  }
+
+  protected pass(step: string, detail: string, hint?: string): void {
+    this.record(step, true, detail, hint);
+  }
+
+  protected fail(step: string, detail: string, hint?: string): never {
+    this.record(step, false, detail, hint);
+    throw new Stop();
+  }
+
+  /** An error inside a step: the caller's abort ends the walk, the deadline fails the step, anything else is `other`. */
+  protected failed(step: string, err: unknown, other: (e: PlcError) => never): never {
+    if (err instanceof Stop) throw err;
+    if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
+    if (this.signal.aborted) this.fail(step, `no result before the doctor's deadline of ${this.ms} ms`, this.deadlineHint);
+    return other(toPlcError(err, 'CONNECT_FAILED'));
+  }
+
+  /**
+   * Runs `steps`: a failed step ends them; the caller's abort rejects with ABORTED; the deadline running out where no
+   * step caught it (between steps, or inside one's own retries) is a failed "deadline" step, not a rejection.
+   */
+  protected async walk(steps: () => Promise<void>): Promise<void> {
+    try {
+      await steps();
+    } catch (err) {
+      if (err instanceof Stop) return;
+      if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
+      if (this.signal.aborted) {
+        const after = this.lastStep;
+        this.record(
+          'deadline',
+          false,
+          `no result before the doctor's deadline of ${this.ms} ms${after ? ` (after the ${after} step)` : ''}`,
+          this.deadlineHint,
+        );
+        return;
+      }
+      throw err;
+    }
+  }
+}
