@@ -20,6 +20,7 @@ import { newObject, type PObject } from '../lib/s7plus/codec/object';
 import { encodeGetMultiVariablesResponse } from '../lib/s7plus/codec/variables';
 import { DataType, dbAccessArea, ElementId, FunctionCode, Ids, SoftDataType } from '../lib/s7plus/constants';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
+import { startPlusSimulator } from './support/s7plus-sim';
 import { requireS7CommPlus, startS7CommPlusServer, stopS7CommPlusPeers, type S7CommPlusPeerServer } from './support/s7commplus-peer';
 
 describe('S7CommPlus browse and names (our client, our simulator)', function () {
@@ -29,11 +30,9 @@ describe('S7CommPlus browse and names (our client, our simulator)', function () 
   let client: S7PlusClient;
 
   before(async () => {
-    const cert = await generateCertificate();
-    service = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key } });
-    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
-    await server.listen();
-    client = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`) as S7PlusClient;
+    let url: string;
+    ({ server, service, url } = await startPlusSimulator({ sources: SOURCES, db: DB_NUMBERS }));
+    client = createClient(url) as S7PlusClient;
     await client.connect();
   });
   after(async () => {

@@ -23,6 +23,7 @@ import { compileSymbols } from '../lib/symbols';
 import type { SymbolSource } from '../lib/symbols/model';
 import { Ids } from '../lib/s7plus/constants';
 import { DB_NUMBERS, S7PLUS_FIXTURES, SOURCES } from './fixtures/s7plus';
+import { startPlusSimulator } from './support/s7plus-sim';
 import { until, waitFor } from './support/wait';
 
 const TAGS: SymbolSource = { name: 'PLC tags.csv', content: fs.readFileSync(path.join(S7PLUS_FIXTURES, 'PLC tags.csv'), 'utf8') };
@@ -128,11 +129,9 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
   let client: S7PlusClient;
 
   beforeEach(async () => {
-    const cert = await generateCertificate();
-    service = new S7PlusService({ sources: V1, db: NUMBERS, tls: { cert: cert.cert, key: cert.key } });
-    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
-    await server.listen();
-    client = createClient(`s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000`) as S7PlusClient;
+    let url: string;
+    ({ server, service, url } = await startPlusSimulator({ sources: V1, db: NUMBERS }));
+    client = createClient(url) as S7PlusClient;
     await client.connect();
   });
   afterEach(async () => {
