@@ -7,8 +7,9 @@
  * "REAL values", has the measurement that decided it.
  */
 import { isAddress } from '../address';
-import type { SymbolEntry, SymbolTable } from '../symbols/model';
-import { resolveSymbol, wholeBlock, type SymbolShape } from '../symbols/resolve';
+import type { SymbolTable } from '../symbols/model';
+import { resolveSymbol, wholeBlock, type ShapeLeaf } from '../symbols/resolve';
+import { convertStruct, entryTree, type EntryLeaf, type StructTree } from '../symbols/struct-tree';
 import type { DriverTag } from '../link/driver';
 import { shortestFloat32 } from '../values/float32';
 
@@ -20,58 +21,13 @@ const shortReal: Convert = (value) => {
   return Array.isArray(value) ? value.map(shortReal) : value;
 };
 
-/** The conversion of a value of `shape`, or undefined when it holds no REAL. */
-function ofShape<T>(shape: SymbolShape<T>): Convert | undefined {
-  if (shape.kind === 'leaf') return shape.s7.type === 'REAL' ? shortReal : undefined;
-  if (shape.kind === 'array') {
-    const elements = shape.elements.map(ofShape);
-    if (elements.every((e) => e === undefined)) return undefined;
-    return (value) => (Array.isArray(value) ? value.map((v: unknown, i) => (elements[i] ? elements[i](v) : v)) : value);
-  }
-  const members = new Map<string, Convert>();
-  for (const [name, member] of shape.members) {
-    const convert = ofShape(member);
-    if (convert) members.set(name, convert);
-  }
-  if (members.size === 0) return undefined;
-  return byMember(members);
+/** The conversion of a value of `tree` (a struct's shape, or an entry of the PLC's browsed table), or undefined when it holds no REAL. */
+function ofTree<L>(tree: StructTree<L>, isReal: (leaf: L) => boolean): Convert | undefined {
+  return convertStruct(tree, (leaf) => (isReal(leaf) ? shortReal : undefined));
 }
 
-/** A struct's value with each member that `members` names converted. */
-function byMember(members: ReadonlyMap<string, Convert>): Convert {
-  return (value) => {
-    if (typeof value !== 'object' || value === null || Array.isArray(value)) return value;
-    const out: Record<string, unknown> = {};
-    for (const [k, v] of Object.entries(value)) {
-      const convert = members.get(k);
-      Object.defineProperty(out, k, { value: convert ? convert(v) : v, enumerable: true, writable: true, configurable: true });
-    }
-    return out;
-  };
-}
-
-/** The conversion of a value of `entry` (by its children: the browsed table of an S7CommPlus PLC), or undefined without a REAL. */
-function ofEntry(table: SymbolTable, entry: SymbolEntry): Convert | undefined {
-  if (entry.kind === 'elementary') return entry.dataType === 'REAL' ? shortReal : undefined;
-  const children = (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
-  const converts = children.map((c) => ofEntry(table, c));
-  if (converts.every((c) => c === undefined)) return undefined;
-  if (entry.kind === 'array') {
-    return (value) => (Array.isArray(value) ? value.map((v: unknown, i) => (converts[i] ? converts[i](v) : v)) : value);
-  }
-  const members = new Map<string, Convert>();
-  children.forEach((c, i) => {
-    const convert = converts[i];
-    if (convert) members.set(memberKey(entry, c), convert);
-  });
-  return byMember(members);
-}
-
-/** A member's key in its struct's value: its name after the parent's, quotes off (client/name-values.ts puts values so). */
-function memberKey(parent: SymbolEntry, child: SymbolEntry): string {
-  const rest = child.name.slice(parent.name.length + 1);
-  return rest.startsWith('"') && rest.endsWith('"') ? rest.slice(1, -1) : rest;
-}
+const shapeReal = (leaf: ShapeLeaf<unknown>): boolean => leaf.s7.type === 'REAL';
+const entryReal = (leaf: EntryLeaf): boolean => leaf.entry.dataType === 'REAL';
 
 /**
  * How to show what a read of `target` returns: a function when it holds a
@@ -91,10 +47,10 @@ export function realsForPeople(
     if (entry?.kind === 'elementary') return entry.dataType === 'REAL' ? shortReal : undefined;
     // The PLC's own table (no sources: the client reads by name) or a member of an optimized block (no address): the
     // entry tree's shape.
-    if (entry && (given === undefined || entry.address === null)) return ofEntry(table, entry);
+    if (entry && (given === undefined || entry.address === null)) return ofTree(entryTree(table, entry), entryReal);
     if (given === undefined) return undefined;
     const resolved = resolveSymbol(table, target, (address) => client.tag(address) as DriverTag);
-    if (resolved?.shape) return ofShape(resolved.shape);
+    if (resolved?.shape) return ofTree(resolved.shape, shapeReal);
   }
   return (client.tag(target) as { type?: unknown }).type === 'REAL' ? shortReal : undefined;
 }

@@ -13,33 +13,32 @@
  * and writing by name").
  */
 import { parseAddress } from '../address';
-import { AddressError, OptimizedBlockError, PlcError, ValueError, toPlcError } from '../errors';
+import { AddressError, OptimizedBlockError, PlcError, toPlcError } from '../errors';
 import type { DriverTag } from '../link/driver';
-import type { PlcData, PlcStruct, PlcValue, Tag } from '../types';
+import type { PlcData, PlcValue, Tag } from '../types';
 import { tagDecoder, validateValue, type TagDecoder } from '../values';
 import { orList } from '../values/text';
 import type { SymbolEntry, SymbolTable } from './model';
 import { canonicalName, splitSymbol } from './names';
+import { assembleStruct, expandStruct, memberKey, type StructTree } from './struct-tree';
 
 /**
  * How the bytes of a struct (or of an array of structs) become a value, and
  * a value its member writes: a tree of the entry's members down to the
  * elementary ones, each with its offset from the struct's first byte.
  */
-export type SymbolShape<T> =
-  | {
-      readonly kind: 'leaf';
-      readonly name: string;
-      /** The driver's tag of the member, named by its full symbol (the key of its errors). */
-      readonly tag: T;
-      /** Its shape for the value codecs (S7 syntax, as every entry address is written). */
-      readonly s7: Tag;
-      /** Bytes from the outer struct's first byte. */
-      readonly offset: number;
-      readonly decode: TagDecoder;
-    }
-  | { readonly kind: 'struct'; readonly name: string; readonly members: ReadonlyMap<string, SymbolShape<T>> }
-  | { readonly kind: 'array'; readonly name: string; readonly elements: readonly SymbolShape<T>[] };
+export type SymbolShape<T> = StructTree<ShapeLeaf<T>>;
+
+/** A struct's elementary member as a driver reaches it by address. */
+export interface ShapeLeaf<T> {
+  /** The driver's tag of the member, named by its full symbol (the key of its errors). */
+  readonly tag: T;
+  /** Its shape for the value codecs (S7 syntax, as every entry address is written). */
+  readonly s7: Tag;
+  /** Bytes from the outer struct's first byte. */
+  readonly offset: number;
+  readonly decode: TagDecoder;
+}
 
 /** A resolved name: the entry, the driver's tag for its bytes, and for structs their shape. */
 export interface ResolvedSymbol<T> {
@@ -270,12 +269,6 @@ function shapeOf<T>(table: SymbolTable, rootByte: number, entry: SymbolEntry, na
   return { kind: 'struct', name: entry.name, members };
 }
 
-/** A member's key in the object: its name after the parent's (`"Tank".Motor.Speed` → `Speed`, `."Speed.Set"` → `Speed.Set`). */
-function memberKey(parent: string, child: string): string {
-  const rest = child.startsWith(parent) ? child.slice(parent.length).replace(/^\./, '') : (child.split('.').at(-1) ?? child);
-  return rest.length >= 2 && rest.startsWith('"') && rest.endsWith('"') ? rest.slice(1, -1) : rest;
-}
-
 /** The object (array of objects) of a struct's bytes: a BYTE array as read, or the bytes. */
 export function decodeShape<T>(shape: SymbolShape<T>, bytes: PlcValue | Buffer): PlcData {
   const data = Buffer.isBuffer(bytes) ? bytes : Array.isArray(bytes) ? Buffer.from(bytes as number[]) : Buffer.of(bytes as number);
@@ -283,17 +276,7 @@ export function decodeShape<T>(shape: SymbolShape<T>, bytes: PlcValue | Buffer):
 }
 
 function decodeAt<T>(shape: SymbolShape<T>, data: Buffer): PlcData {
-  switch (shape.kind) {
-    case 'leaf':
-      return shape.decode(data, shape.offset);
-    case 'array':
-      return shape.elements.map((e) => decodeAt(e, data) as PlcStruct);
-    case 'struct': {
-      const out: Record<string, PlcData> = {};
-      for (const [key, member] of shape.members) out[key] = decodeAt(member, data);
-      return out;
-    }
-  }
+  return assembleStruct(shape, (leaf) => leaf.decode(data, leaf.offset)) as PlcData;
 }
 
 /**
@@ -304,48 +287,8 @@ function decodeAt<T>(shape: SymbolShape<T>, data: Buffer): PlcData {
  * does not have (naming them) and for a member value that does not fit.
  */
 export function expandWrite<T>(shape: SymbolShape<T>, value: unknown): { tag: T; value: unknown }[] {
-  const items: { tag: T; value: unknown }[] = [];
-  const walk = (s: SymbolShape<T>, v: unknown): void => {
-    if (s.kind === 'leaf') {
-      validateValue(s.s7, v);
-      items.push({ tag: s.tag, value: v });
-      return;
-    }
-    if (s.kind === 'array') {
-      if (!Array.isArray(v) || v.length !== s.elements.length) {
-        throw new ValueError(
-          s.name,
-          `expected an array of ${s.elements.length} objects (holes or undefined keep an element), got ${describe(v)}`,
-        );
-      }
-      s.elements.forEach((e, i) => {
-        const element: unknown = v[i];
-        if (element !== undefined) walk(e, element);
-      });
-      return;
-    }
-    if (v === null || typeof v !== 'object' || Array.isArray(v) || v instanceof Date || Buffer.isBuffer(v)) {
-      throw new ValueError(s.name, `expected an object of its members (${[...s.members.keys()].join(', ')}), got ${describe(v)}`);
-    }
-    const record = v as Record<string, unknown>;
-    const unknown = Object.keys(record).filter((k) => !s.members.has(k));
-    if (unknown.length > 0) {
-      throw new ValueError(
-        s.name,
-        `no member${unknown.length > 1 ? 's' : ''} ${unknown.map((k) => JSON.stringify(k)).join(', ')} (its members: ${[...s.members.keys()].join(', ')})`,
-      );
-    }
-    for (const [key, member] of s.members) if (record[key] !== undefined) walk(member, record[key]);
-  };
-  walk(shape, value);
-  return items;
-}
-
-function describe(v: unknown): string {
-  if (Array.isArray(v)) return `an array of ${v.length}`;
-  if (v === null) return 'null';
-  if (v instanceof Date) return 'a Date';
-  if (typeof v === 'object') return 'an object';
-  if (typeof v === 'bigint') return `bigint ${v}n`;
-  return `${typeof v} ${JSON.stringify(v) ?? 'undefined'}`;
+  return expandStruct(shape, value, (leaf, v) => {
+    validateValue(leaf.s7, v);
+    return { tag: leaf.tag, value: v };
+  });
 }
