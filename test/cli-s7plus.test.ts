@@ -193,6 +193,34 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
     expect(Math.fround(40.4)).to.not.equal(40.4); // as read, the float32 would show 40.400001525878906
   });
 
+  it('a struct partly given writes the members it names, as over s7:// (one struct walker for both drivers)', async () => {
+    const w = await done(['write', url, '"Recipe".Step=47', '"Tank".Motor={"Speed":1200}', '--yes']);
+    expect(w.code, w.err).to.equal(EXIT.OK);
+    const r = await done(['read', url, '"Recipe".Step', '"Tank".Motor', '--json']);
+    expect(JSON.parse(r.out)).to.deep.equal({ '"Recipe".Step': 47, '"Tank".Motor': { Speed: 1200, On: false } });
+  });
+
+  it('every value is checked before the first byte is sent: a bad member or an unknown name writes nothing (exit 2), naming it', async () => {
+    const member = await done(['write', url, '"Recipe".Step=48', '"Tank".Motor={"Speed":1300,"Nope":1}', '--yes']);
+    expect(member.code, member.err).to.equal(EXIT.USAGE);
+    expect(member.err).to.match(/"Tank"\.Motor.*no member "Nope" \(its members: Speed, On\)/);
+    const range = await done(['write', url, '"Recipe".Step=48', '"Tank".Motor={"On":3}', '--yes']);
+    expect(range.code, range.err).to.equal(EXIT.USAGE);
+    const name = await done(['write', url, '"Recipe".Step=48', '"Tank".Motr={"Speed":1}', '--yes']);
+    expect(name.code, name.err).to.equal(EXIT.USAGE);
+    expect(name.err).to.match(/unknown name "Tank"\.Motr on the PLC; did you mean "Tank"\.Motor/);
+    const r = await done(['read', url, '"Recipe".Step', '"Tank".Motor', '--json']);
+    expect(JSON.parse(r.out)).to.deep.equal({ '"Recipe".Step': 47, '"Tank".Motor': { Speed: 1200, On: false } });
+  });
+
+  it('a write the PLC refuses after others were written says which were written and exits 1, not 2 (which means nothing was sent)', async () => {
+    const w = await done(['write', url, '"Recipe".Step=49', 'DB1.DBW900:INT=1', '--yes']);
+    expect(w.code, w.err).to.equal(EXIT.TAG_ERROR);
+    expect(w.err).to.include('partly written: "Recipe".Step written; DB1.DBW900:INT not written');
+    const r = await done(['read', url, '"Recipe".Step', '--json']);
+    expect(JSON.parse(r.out)).to.deep.equal({ '"Recipe".Step': 49 });
+  });
+
   it('a wrong pin is refused before any S7CommPlus data, with the certificate and the URL parameter that pins it', async () => {
     const wrong = url.replace(/fingerprint=[0-9A-F]+/, `fingerprint=${'ab'.repeat(32)}`);
     const r = await done(['read', wrong, 'DB1.DBW4:INT']);

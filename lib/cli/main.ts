@@ -268,7 +268,14 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     for (const [a, r] of Object.entries(results)) if (r.ok) io.stdout.write(`${a} = ${textOf(values[a])} ok\n`);
   }
   for (const r of Object.values(results)) if (!r.ok) io.stderr.write(`plcwire: ${r.error.message}\n`);
-  return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
+  if (errors.length === 0) return EXIT.OK;
+  const written = Object.keys(results).filter((a) => results[a]!.ok);
+  if (written.length === 0) return exitCode(new TagErrors(results));
+  // Some values reached the PLC: say which, and never the exit code that means nothing was sent.
+  const failed = Object.keys(results).filter((a) => !results[a]!.ok);
+  io.stderr.write(`plcwire: partly written: ${written.join(', ')} written; ${failed.join(', ')} not written\n`);
+  const code = exitCode(new TagErrors(results));
+  return code === EXIT.USAGE ? EXIT.TAG_ERROR : code;
 }
 
 /**

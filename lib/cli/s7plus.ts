@@ -10,7 +10,10 @@
  */
 import type { AnyClient, ConnectOptions } from '../connect';
 import { PlcError, ValueError } from '../errors';
-import type { SymbolTable } from '../symbols/model';
+import type { SymbolEntry, SymbolTable } from '../symbols/model';
+import { wholeBlock } from '../symbols/resolve';
+import { unknownName } from '../s7plus/client/names';
+import { entryTree, expandStruct } from '../symbols/struct-tree';
 import type { RequestOptions } from '../types';
 import { parseUrl, type Endpoint } from '../url';
 import { UsageError, stringFlag, withTimeout, type ParsedArgs } from './args';
@@ -100,21 +103,38 @@ export function isPlcName(client: AnyClient, address: string): boolean {
 /**
  * The value of `text` for the name `address` of a browsed table: an elementary member's text parsed by its type, as
  * an address's is (a REAL's 40.4, a STRING's text); a struct or array as JSON keyed by member name (an array as a
- * JSON array). A name the PLC does not have keeps its text: the write then fails naming it, with the closest names.
+ * JSON array). A name the PLC does not have is refused, naming the closest names.
  */
 export function browsedValueFromText(table: SymbolTable, address: string, text: string): unknown {
-  const entry = table.lookup(address);
-  if (!entry) return text;
+  const entry = table.lookup(address) ?? wholeBlock(table, address);
+  // A name the PLC does not have is refused with the closest names before anything is sent.
+  if (!entry) throw unknownName(table, address);
   if (entry.kind === 'elementary' && entry.dataType) {
-    const tag = { address, type: entry.dataType, count: 1, isArray: false, stringLength: entry.stringLength, bitOffset: 0 };
-    const value = valueFromText(tag as TypedTag, text);
-    validateValue(tag as TypedTag & TagShape, value);
+    const tag = leafTag(entry);
+    const value = valueFromText(tag, text);
+    validateValue(tag, value);
     return value;
   }
+  let value: unknown;
   try {
-    return JSON.parse(text) as unknown;
+    value = JSON.parse(text) as unknown;
   } catch {
     const example = entry.kind === 'array' ? 'a JSON array, e.g. [1, 2, 3]' : 'an object keyed by member name, e.g. {"Speed": 1.5}';
     throw new ValueError(address, `"${text}" is not JSON (a ${entry.type} is written as ${example})`);
   }
+  // Every member's value checked now, before anything is sent (a struct partly given writes the members it names).
+  expandStruct(entryTree(table, entry), value, (leaf, v) => leaf.entry.dataType && validateValue(leafTag(leaf.entry), v));
+  return value;
+}
+
+/** An elementary entry as the value codecs see it. */
+function leafTag(entry: SymbolEntry): TypedTag & TagShape {
+  return {
+    address: entry.name,
+    type: entry.dataType!,
+    count: 1,
+    isArray: false,
+    stringLength: entry.stringLength,
+    bitOffset: 0,
+  } as TypedTag & TagShape;
 }

@@ -9,6 +9,7 @@
  */
 import { PlcError } from '../../errors';
 import type { SymbolEntry, SymbolTable } from '../../symbols/model';
+import { assembleStruct, entryTree, expandStruct } from '../../symbols/struct-tree';
 import type { PlcValue } from '../../types';
 import { decodeTag, encodeTag, type TagShape } from '../../values';
 import type { PValue } from '../codec/pvalue';
@@ -86,37 +87,16 @@ export function valueOf(entry: SymbolEntry, v: PValue, shape: TagShape = shapeOf
 
 /** A struct's or array's value from its leaves' values (by name). */
 export function assemble(table: SymbolTable, entry: SymbolEntry, leaf: Map<string, PlcValue>): unknown {
-  if (entry.kind === 'elementary') return leaf.get(entry.name);
-  const children = (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
-  if (entry.kind === 'array') return children.map((c) => assemble(table, c, leaf));
-  return Object.fromEntries(children.map((c) => [memberKey(entry, c), assemble(table, c, leaf)]));
+  return assembleStruct(entryTree(table, entry), (l) => leaf.get(l.name));
 }
 
-/** A member's key in its struct's object: its name as declared (quotes off). */
-function memberKey(parent: SymbolEntry, child: SymbolEntry): string {
-  const rest = child.name.slice(parent.name.length + 1);
-  return rest.startsWith('"') && rest.endsWith('"') ? rest.slice(1, -1) : rest;
-}
-
-/** The leaves of a write: each elementary member with its value (a struct's from the object's members, an array's by index). */
+/**
+ * The leaves of a write: each elementary member the value names with its value (a struct's from the object's
+ * members, an array's by index); a struct partly given writes the members it names, as over s7://
+ * (lib/symbols/struct-tree.ts walks both).
+ */
 export function writeLeaves(table: SymbolTable, entry: SymbolEntry, value: unknown, out: { entry: SymbolEntry; value: unknown }[]): void {
-  if (entry.kind === 'elementary') return void out.push({ entry, value });
-  const children = (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
-  if (entry.kind === 'array') {
-    if (!Array.isArray(value) || value.length !== children.length)
-      throw new PlcError('INVALID_VALUE', `${entry.name} is ${entry.type}: write an array of ${children.length} values`, {
-        tag: entry.name,
-      });
-    children.forEach((c, k) => writeLeaves(table, c, value[k], out));
-    return;
-  }
-  if (value === null || typeof value !== 'object' || Array.isArray(value))
-    throw new PlcError('INVALID_VALUE', `${entry.name} is a ${entry.type}: write an object of its members`, { tag: entry.name });
-  for (const c of children) {
-    const k = memberKey(entry, c);
-    if (!(k in value)) throw new PlcError('INVALID_VALUE', `${entry.name}: the value has no member ${k}`, { tag: entry.name });
-    writeLeaves(table, c, (value as Record<string, unknown>)[k], out);
-  }
+  out.push(...expandStruct(entryTree(table, entry), value, (l, v) => ({ entry: l.entry, value: v })));
 }
 
 export function pvalueOf(entry: SymbolEntry, value: unknown): PValue {

@@ -84,7 +84,7 @@ export function plusSyntax(given: SymbolTable | undefined): TagSyntax<Tag> {
   });
 }
 
-function unknownName(table: SymbolTable, name: string): PlcError {
+export function unknownName(table: SymbolTable, name: string): PlcError {
   const near = table.suggest(name);
   const hint = near.length > 0 ? `; did you mean ${near.join(', ')}?` : '; the PLC has no such name';
   return new PlcError('INVALID_ADDRESS', `unknown name ${name} on the PLC${hint}`, { tag: name });
