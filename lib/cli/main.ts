@@ -14,7 +14,7 @@ import { parseArgs, UsageError, intFlag, withTimeout, type ParsedArgs } from './
 import { commandHelp } from './help';
 import { EXIT, confirm, exitCode, fail, withClient, type CliIo } from './io';
 import { serve, SERVE_FLAGS } from './serve';
-import { realsForPeople } from '../flows/reals';
+import { realsShown } from '../symbols/reals';
 import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
 import { browse, browsedValueFromText, isPlcName, passwordOption } from './s7plus';
 import { canSubscribe, watchPushed } from './watch-push';
@@ -197,7 +197,7 @@ async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number
   const errors: PlcError[] = [];
   for (const address of addresses) {
     const r = results[address]!;
-    if (r.ok) values[address] = show(client, table, address, r.value);
+    if (r.ok) values[address] = realsShown(client, table, address, r.value);
     else {
       values[address] = null;
       errors.push(r.error);
@@ -301,7 +301,7 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   const print = (results: Record<string, TagResult<unknown>>) => {
     const changed: Record<string, unknown> = {};
     for (const [a, r] of Object.entries(results)) {
-      const value = r.ok ? show(client, table, a, r.value) : undefined;
+      const value = r.ok ? realsShown(client, table, a, r.value) : undefined;
       const text = r.ok ? textOf(value) : `error: ${r.error.message}`;
       if (last.get(a) === text) continue;
       last.set(a, text);
@@ -345,12 +345,6 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   }
   // It runs until stopped: Ctrl-C (or SIGTERM) is how it ends, and the exit code says so.
   return io.signal.aborted ? EXIT.INTERRUPTED : EXIT.OK;
-}
-
-/** A value read as read and watch print it (text and --json): a REAL with the digits TIA shows (lib/flows/reals.ts). */
-function show(client: AnyClient, table: SymbolTable | undefined, target: string, value: unknown): unknown {
-  const convert = realsForPeople(client, table, target);
-  return convert ? convert(value) : value;
 }
 
 function delay(ms: number, signal: AbortSignal): Promise<void> {

@@ -3,7 +3,7 @@ export { tagTable, tagsOfMessage } from './tag-list';
 export { errorInfo, outcomes, tagFailure, type TagErrorInfo, type TagOutcome, type TagFailure } from './outcome';
 export { valueChanged, ChangeFilter } from './change-filter';
 export { PolledTable } from './polled-table';
-export { realsForPeople } from './reals';
+export { realsForPeople } from '../symbols/reals';
 export { writeRequest, type WriteRequest } from './write-request';
 export {
   LifeSignWatch,

@@ -27,7 +27,7 @@ export function memberKey(parent: string, child: string): string {
 }
 
 /** The direct children of a struct or array entry, in order (a child the table lacks is left out). */
-export function childrenOf(table: SymbolTable, entry: SymbolEntry): SymbolEntry[] {
+function childrenOf(table: SymbolTable, entry: SymbolEntry): SymbolEntry[] {
   return (entry.children ?? []).map((c) => table.lookup(c)).filter((c): c is SymbolEntry => c !== undefined);
 }
 

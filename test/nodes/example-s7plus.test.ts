@@ -78,7 +78,7 @@ describe('nodes: the S7CommPlus example against the demo plant', function () {
     await helper.load(ALL_NODES, runnable(flow, pinned));
     const polled = new Recorder(helper.getNode('s7plus.debug.read'));
     const first = await polled.next((m) => m.payload?.setpoint !== undefined, 15000, 'the first poll');
-    // REALs with the digits TIA shows (lib/flows/reals.ts through the browsed table), as over s7:// with sources.
+    // REALs with the digits TIA shows (lib/symbols/reals.ts through the browsed table), as over s7:// with sources.
     const { levels, ...rest } = first.payload;
     expect(rest).to.deep.equal({ phase: tank.phase, setpoint: 42.5, drive: { Running: false, Speed: 0, Current: 0 } });
     expect(levels).to.deep.equal(tank.levels.map((v: number) => shortestFloat32(v)));

@@ -14,7 +14,7 @@ module.exports = function (RED) {
     for (const [name, type, value] of record.expect[plc] ?? []) {
       const v = payload ? payload[name] : undefined;
       if (v === undefined || v === null || typeof v === 'object') continue; // a failed tag: its error went to Catch
-      // The read node shows a REAL as its shortest decimal (lib/flows/reals.ts): the same float32.
+      // The read node shows a REAL as its shortest decimal (lib/symbols/reals.ts): the same float32.
       const same = type === 'REAL' ? Math.fround(value) === Math.fround(v) : value === v;
       if (!same && record.wrong.length < 20) record.wrong.push(`PLC ${plc} ${name}: expected ${value}, read ${JSON.stringify(v)}`);
     }

@@ -29,7 +29,7 @@ export interface ProgramChange {
 
 export class BrowsedProgram implements Program {
   private browsed: Promise<BrowsedTable> | undefined;
-  /** The last table a browse gave, for what must know it at once (how a REAL is shown: lib/flows/reals.ts). */
+  /** The last table a browse gave, for what must know it at once (how a REAL is shown: lib/symbols/reals.ts). */
   latest: SymbolTable | undefined;
   /** False once the PLC refused the question for the times: nothing to watch, the table stays as browsed. */
   private watchable = true;

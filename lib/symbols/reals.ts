@@ -7,9 +7,9 @@
  * "REAL values", has the measurement that decided it.
  */
 import { isAddress } from '../address';
-import type { SymbolTable } from '../symbols/model';
-import { resolveSymbol, wholeBlock, type ShapeLeaf } from '../symbols/resolve';
-import { convertStruct, entryTree, type EntryLeaf, type StructTree } from '../symbols/struct-tree';
+import type { SymbolTable } from './model';
+import { resolveSymbol, wholeBlock, type ShapeLeaf } from './resolve';
+import { convertStruct, entryTree, type EntryLeaf, type StructTree } from './struct-tree';
 import type { DriverTag } from '../link/driver';
 import { shortestFloat32 } from '../values/float32';
 
@@ -53,4 +53,15 @@ export function realsForPeople(
     if (resolved?.shape) return ofTree(resolved.shape, shapeReal);
   }
   return (client.tag(target) as { type?: unknown }).type === 'REAL' ? shortReal : undefined;
+}
+
+/** `value`, read from `target`, as people see it: its REALs with the digits TIA shows (realsForPeople), else as read. */
+export function realsShown(
+  client: { tag(address: string): unknown; readonly browsedTable?: SymbolTable | undefined },
+  table: SymbolTable | undefined,
+  target: string,
+  value: unknown,
+): unknown {
+  const convert = realsForPeople(client, table, target);
+  return convert ? convert(value) : value;
 }
