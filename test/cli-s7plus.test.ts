@@ -362,6 +362,30 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
         await writer.close();
       }
     });
+    it('a REAL the PLC reports shows the digits TIA shows, as read and the doctor show it (one rule on every path), in text and --json', async () => {
+      const writer = createClient(url) as S7PlusClient;
+      await writer.connect();
+      const w = run(['watch', url, '"Recipe".Target', '--interval', '60000']);
+      const j = run(['watch', url, '"Recipe".Target', '"Tank".Temps', '--interval', '60000', '--json']);
+      try {
+        await until(
+          () => /subscribed to 1 tag/.test(w.output().err) && /subscribed to 2 tag/.test(j.output().err),
+          20000,
+          'both subscriptions',
+        );
+        await writer.write({ '"Recipe".Target': 11.1, '"Tank".Temps': [1.1, 75.9, 3.3] });
+        await until(() => /"Recipe"\.Target = 11\.1\n/.test(w.output().out), 5000, 'the text line with 11.1');
+        await until(() => j.output().out.includes('"\\"Tank\\".Temps":[1.1,75.9,3.3]'), 5000, 'the JSON line with the array');
+        expect(w.output().out).to.not.match(/11\.10\d{5,}/);
+        const doctor = await done(['doctor', url, '"Recipe".Target']);
+        expect(doctor.out).to.match(/"Recipe"\.Target = 11\.1 \(Real\)|"Recipe"\.Target = 11\.1 \(REAL\)/);
+      } finally {
+        w.child.kill('SIGINT');
+        j.child.kill('SIGINT');
+        await Promise.all([w.exit, j.exit]);
+        await writer.close();
+      }
+    });
   });
 
   describe('browse', () => {

@@ -34,6 +34,7 @@ function flow(url: string, mode = 'push') {
         { name: 'step', address: '"Recipe".Step' },
         { name: 'inlet', address: '"Recipe".Inlet' },
         { name: 'count', address: 'DB1.DBW4:INT' },
+        { name: 'target', address: '"Recipe".Target' },
       ],
       wires: [['out']],
     },
@@ -94,6 +95,17 @@ describe('nodes: the read node when the PLC reports a change (s7plus://)', funct
     expect(inlet.payload).to.deep.equal({ Open: true, Position: 3 });
     // Only what changed: count sent no second message.
     expect(out.messages.filter((m) => m.topic === 'count')).to.have.length(1);
+  });
+
+  it('a REAL the PLC reports has the digits TIA shows, as a polled message has (one rule on every path)', async () => {
+    await writer.write({ '"Recipe".Target': 40.4 });
+    await helper.load(ALL_NODES, flow(url));
+    const out = new Recorder(helper.getNode('out'));
+    const first = await out.next((m) => m.topic === 'target', 10000, 'the first value of target');
+    expect(first.payload).to.equal(40.4);
+    await writer.write({ '"Recipe".Target': 75.9 });
+    const change = await out.next((m) => m.topic === 'target', 5000, 'the change of target');
+    expect(change.payload).to.equal(75.9);
   });
 
   it('is subscribed again after the link was reset, and a redeploy leaves no connection', async () => {

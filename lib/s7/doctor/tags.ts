@@ -8,6 +8,7 @@ import { abortError, PlcError, toPlcError } from '../../errors';
 import { formatAddress, S7_TAG_SYNTAX } from '../../address';
 import type { SymbolTable } from '../../symbols/model';
 import type { Tag } from '../../types';
+import { realsShown } from '../../symbols/reals';
 import { textOf } from '../../values/text';
 import type { S7Client } from '../client';
 import type { Family } from './families';
@@ -151,7 +152,7 @@ export class TagSteps {
       if (tag.area === 'DB') await this.dbAddress(step, tag);
       else {
         const r = (await client.readDetailed([address], { signal: this.c.signal }))[address]!;
-        if (r.ok) this.c.pass(step, `${address} = ${textOf(r.value)}`);
+        if (r.ok) this.c.pass(step, `${address} = ${textOf(realsShown(client, undefined, address, r.value))}`);
         else
           this.c.fail(
             step,
@@ -219,7 +220,7 @@ export class TagSteps {
     if (r.ok) {
       const size =
         length !== undefined ? `${length} bytes (block info)` : 'its length is not known (this CPU offers no block info over S7comm)';
-      return this.c.pass(step, `DB${db} exists, ${size}; ${tag.address} = ${textOf(r.value)}`);
+      return this.c.pass(step, `DB${db} exists, ${size}; ${tag.address} = ${textOf(realsShown(client, undefined, tag.address, r.value))}`);
     }
     if (r.error.code === 'OBJECT_DOES_NOT_EXIST') missing(`the CPU answered the read: ${r.error.message}`);
     if (r.error.code !== 'ADDRESS_OUT_OF_RANGE' || length !== undefined) this.c.fail(step, r.error.message);

@@ -92,6 +92,8 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   /** The program of the live session (browse(), the program check); a new session browses again. */
   private program: { session: S7PlusSession; program: BrowsedProgram } | undefined;
 
+  /** The table the subscriptions' session browsed: how their values look when no read by name browsed one. */
+  private pushTable: SymbolTable | undefined;
   /** The session of the subscriptions (push.ts), opened at the first subscribe(). */
   private push: PushLink | undefined;
   /** The reconnect backoff of the client's options, for the subscriptions' session too. */
@@ -178,10 +180,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
    */
   /**
    * The PLC's table as the last session browsed it (after close() too: the values read were read through it), at once
-   * (no request); undefined before the first read or browse by name. What a value of a name looks like (how a REAL is shown: lib/flows/reals.ts) is decided by it.
+   * (no request), or the one the subscriptions' session browsed; undefined before the first read, browse or subscription by name. What a value of a name looks like (how a REAL is shown: lib/symbols/reals.ts) is decided by it.
    */
   get browsedTable(): SymbolTable | undefined {
-    return this.program?.program.latest;
+    return this.program?.program.latest ?? this.pushTable;
   }
 
   private programOf(session: S7PlusSession): BrowsedProgram {
@@ -223,7 +225,7 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
         timeout: this.timeout,
         ...this.pushBackoff,
         open: (signal, hooks) => this.openSession(signal, hooks),
-        browse: (session) => browseTable(session),
+        browse: async (session) => (this.pushTable = await browseTable(session)),
         parse: (address) => this.tag(address),
       });
     }

@@ -17,6 +17,7 @@ import { S7_TAG_SYNTAX } from '../../address';
 import type { DiagnoseOptions, DoctorReport } from '../../s7/doctor';
 import type { SymbolTable } from '../../symbols/model';
 import { formatUrl, parseUrl } from '../../url';
+import { realsShown } from '../../symbols/reals';
 import { textOf } from '../../values/text';
 import { S7PlusClient } from '../client';
 import type { HandshakeStep } from '../client/handshake';
@@ -300,7 +301,7 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
       const r = (await client.readDetailed([text], { signal: this.signal }))[text]!;
       if (!r.ok) this.fail(step, r.error.message, address ? PLUS_HINT.address : PLUS_HINT.name);
       const type = address ? client.tag(text).type : (table?.lookup(text)?.type ?? '');
-      this.pass(step, `${text} = ${textOf(r.value)}${type ? ` (${type})` : ''}`);
+      this.pass(step, `${text} = ${textOf(realsShown(client, table, text, r.value))}${type ? ` (${type})` : ''}`);
     } catch (err) {
       this.failed(step, err, (p) => this.fail(step, p.message, address ? PLUS_HINT.address : PLUS_HINT.name));
     }
