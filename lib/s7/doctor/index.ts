@@ -12,7 +12,8 @@ import { lookup } from 'node:dns/promises';
 import * as net from 'node:net';
 import { abortError, PlcError } from '../../errors';
 import { openTcp } from '../../link/tcp';
-import { parseUrl, type S7Endpoint } from '../../url';
+import type { DiagnoseOptions, DiagnosePort, DoctorReport } from '../../doctor/types';
+import { DoctorWalk } from '../../doctor/walk';
 import { valueToText } from '../../values/text';
 import { S7Client } from '../client';
 import { TagSteps, type StepContext } from './tags';
@@ -20,11 +21,9 @@ import type { PlcInfo } from '../client';
 import { familyOf, type Family } from './families';
 import { Handshake, type HandshakeContext } from './handshake';
 import { HINT } from './hints';
-import { DoctorWalk, type DiagnoseOptions, type DoctorReport } from './walk';
+import type { S7Endpoint } from '../url';
 
 export { familyOf } from './families';
-
-export type { DiagnoseOptions, DoctorReport, DoctorStep } from './walk';
 
 /** Header errors by which an S7-1200/1500 refuses Read Var without PUT/GET (SERVICE_ERRORS, HEADER_ERRORS). */
 const PUT_GET_REFUSALS = [0x8104, 0x8304];
@@ -35,15 +34,19 @@ const PASSWORD_NEEDED = 0xd241;
  * at the first failure (every step up to it passed); rejects only with
  * ABORTED when `options.signal` aborts. Nothing is written to the PLC.
  */
-export async function diagnose(url: string, addresses: readonly string[] = [], options: DiagnoseOptions = {}): Promise<DoctorReport> {
-  const doctor = new Doctor(options);
+async function diagnoseS7(endpoint: S7Endpoint, addresses: readonly string[], options: DiagnoseOptions): Promise<DoctorReport> {
+  const { password: _password, ...s7 } = options; // S7's password is S7Client.setPassword, not a doctor option
+  const doctor = new Doctor(s7);
   try {
-    await doctor.run(url, addresses);
+    await doctor.run(endpoint, addresses);
   } finally {
     await doctor.dispose();
   }
   return doctor.report();
 }
+
+/** The S7 doctor as the registry's diagnose port (lib/drivers.ts): lib/doctor/ parses the URL and hands it the endpoint. */
+export const S7_DOCTOR: DiagnosePort<S7Endpoint> = Object.freeze({ urlHint: HINT.url, run: diagnoseS7 });
 
 class Doctor extends DoctorWalk {
   private readonly deadline: number;
@@ -90,9 +93,8 @@ class Doctor extends DoctorWalk {
     };
   }
 
-  async run(url: string, addresses: readonly string[]): Promise<void> {
+  async run(e: S7Endpoint, addresses: readonly string[]): Promise<void> {
     await this.walk(async () => {
-      const e = this.url(url);
       const address = await this.resolve(e);
       await new Handshake(this.handshakeContext()).run(e, address);
       const info = await this.identity(e);
@@ -105,17 +107,6 @@ class Doctor extends DoctorWalk {
   }
 
   // ---------------------------------------------------------------- steps
-
-  private url(url: string): S7Endpoint {
-    let e;
-    try {
-      e = parseUrl(url);
-    } catch (err) {
-      this.fail('url', (err as Error).message, HINT.url);
-    }
-    if (e.protocol !== 's7') this.fail('url', `the doctor checks S7 connections; this URL is ${e.protocol}`, HINT.notS7);
-    return e;
-  }
 
   private async resolve(e: S7Endpoint): Promise<string> {
     const host = e.host.replace(/^\[|\]$/g, '');

@@ -14,32 +14,32 @@ import { PlcError } from '../../errors';
 import { IsoConnectError } from '../../iso/connect';
 import { openTcp } from '../../link/tcp';
 import { S7_TAG_SYNTAX } from '../../address';
-import type { DiagnoseOptions, DoctorReport } from '../../s7/doctor';
+import { NETWORK_HINT } from '../../doctor/hints';
+import type { DiagnoseOptions, DiagnosePort, DoctorReport } from '../../doctor/types';
+import { DoctorWalk } from '../../doctor/walk';
 import type { SymbolTable } from '../../symbols/model';
-import { formatUrl, parseUrl } from '../../url';
 import { textOf } from '../../values/text';
 import { S7PlusClient } from '../client';
 import type { HandshakeStep } from '../client/handshake';
 import { CertificateError } from '../transport/trust';
 import type { S7PlusEndpoint } from '../url';
-import { HINT as S7_HINT } from '../../s7/doctor/hints';
 import { PLUS_HINT } from './hints';
-import { DoctorWalk } from '../../s7/doctor/walk';
-
-export interface PlusDiagnoseOptions extends DiagnoseOptions {
-  /** The PLC's password (legitimation): never in a step, a hint or the report. */
-  password?: string;
-}
 
 /**
  * Diagnoses the connection to an S7-1200/1500 over S7CommPlus. Resolves a
  * report whose steps end at the first failure; rejects only with ABORTED
- * when `options.signal` aborts.
+ * when `options.signal` aborts. `options.password` (legitimation) is never in
+ * a step, a hint or the report.
  */
-export async function diagnosePlus(url: string, names: readonly string[] = [], options: PlusDiagnoseOptions = {}): Promise<DoctorReport> {
-  const doctor = new PlusDoctor(options);
+async function diagnosePlus(
+  endpoint: S7PlusEndpoint,
+  names: readonly string[],
+  options: DiagnoseOptions,
+  formatUrl: (e: S7PlusEndpoint) => string,
+): Promise<DoctorReport> {
+  const doctor = new PlusDoctor(options, formatUrl);
   try {
-    await doctor.run(url, names);
+    await doctor.run(endpoint, names);
   } finally {
     await doctor.dispose();
   }
@@ -58,12 +58,19 @@ const ACCESS_LEVELS: Readonly<Record<number, string>> = {
 /** The handshake steps in their order; `password` only when one is given. */
 type HandshakeName = 'cotp' | 'InitSSL' | 'TLS' | 'session' | 'password';
 
-class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
+/** The S7CommPlus doctor as the registry's diagnose port (lib/drivers.ts): lib/doctor/ parses the URL and hands it the endpoint. */
+export const S7PLUS_DOCTOR: DiagnosePort<S7PlusEndpoint> = Object.freeze({ urlHint: PLUS_HINT.url, run: diagnosePlus });
+
+class PlusDoctor extends DoctorWalk {
   private client: S7PlusClient | undefined;
   /** The handshake step that runs now: the one a connect failure belongs to. */
   private next: HandshakeName = 'cotp';
 
-  constructor(options: PlusDiagnoseOptions) {
+  /** `formatUrl`: an endpoint as the URL a user pastes (the pinned URL of a hint). */
+  constructor(
+    options: DiagnoseOptions,
+    private readonly formatUrl: (e: S7PlusEndpoint) => string,
+  ) {
     super(options, PLUS_HINT.deadline);
   }
 
@@ -72,9 +79,8 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
     await this.client?.close();
   }
 
-  async run(url: string, names: readonly string[]): Promise<void> {
+  async run(e: S7PlusEndpoint, names: readonly string[]): Promise<void> {
     await this.walk(async () => {
-      const e = this.url(url);
       await this.handshake(e);
       await this.identity();
       const table = await this.browse();
@@ -84,22 +90,10 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
 
   // ---------------------------------------------------------------- steps
 
-  private url(url: string): S7PlusEndpoint {
-    let e;
-    try {
-      e = parseUrl(url);
-    } catch (err) {
-      this.fail('url', (err as Error).message, PLUS_HINT.url);
-    }
-    if (e.protocol !== 's7plus')
-      this.fail('url', `this doctor checks S7CommPlus connections; this URL is ${e.protocol}`, PLUS_HINT.notPlus);
-    return e;
-  }
-
   /** The URL `e` with `fingerprint=` pinning this certificate (and no insecure=true): what to try next. */
   private pinned(e: S7PlusEndpoint, fingerprint: string): string {
     const { insecure: _insecure, ca: _ca, ...rest } = e;
-    return formatUrl({ ...rest, fingerprint });
+    return this.formatUrl({ ...rest, fingerprint });
   }
 
   /** TCP on a socket of its own, closed at once: a refusal or silence is told apart from the PLC's later answers. */
@@ -232,23 +226,23 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
       code = (c as NodeJS.ErrnoException).code?.startsWith('E') ? (c as NodeJS.ErrnoException).code : undefined;
       c = c.cause;
     }
-    if (p.code === 'TIMEOUT') this.fail('tcp', `no answer from ${where}: ${p.message}`, S7_HINT.filtered(e.port));
+    if (p.code === 'TIMEOUT') this.fail('tcp', `no answer from ${where}: ${p.message}`, NETWORK_HINT.filtered(e.port));
     if (code === 'ECONNREFUSED')
       this.fail(
         'tcp',
         `${where} refused the connection (ECONNREFUSED): the host is up, but nothing listens on port ${e.port}`,
-        S7_HINT.refused,
+        NETWORK_HINT.refused,
       );
-    if (code === 'ENOTFOUND' || code === 'EAI_AGAIN') this.fail('tcp', `"${e.host}" does not resolve (${code})`, S7_HINT.unknownHost);
-    if (code === 'EHOSTUNREACH' || code === 'ENETUNREACH') this.fail('tcp', `no route to ${where} (${code})`, S7_HINT.noRoute);
+    if (code === 'ENOTFOUND' || code === 'EAI_AGAIN') this.fail('tcp', `"${e.host}" does not resolve (${code})`, NETWORK_HINT.unknownHost);
+    if (code === 'EHOSTUNREACH' || code === 'ENETUNREACH') this.fail('tcp', `no route to ${where} (${code})`, NETWORK_HINT.noRoute);
     this.fail('tcp', p.message);
   }
 
   private cotpFailure(e: S7PlusEndpoint, p: PlcError, iso: IsoConnectError | undefined): never {
     const r = iso?.refusal;
     if (r?.kind === 'silent' || (!iso && p.code === 'TIMEOUT'))
-      this.fail('cotp', `port ${e.port} accepts TCP but nothing answered the connection request: ${p.message}`, S7_HINT.notIsoOnTcp);
-    if (r?.kind === 'garbage') this.fail('cotp', `the answer is not ISO-on-TCP: ${r.message}`, S7_HINT.otherProtocol);
+      this.fail('cotp', `port ${e.port} accepts TCP but nothing answered the connection request: ${p.message}`, NETWORK_HINT.notIsoOnTcp);
+    if (r?.kind === 'garbage') this.fail('cotp', `the answer is not ISO-on-TCP: ${r.message}`, NETWORK_HINT.otherProtocol);
     if (!iso) this.fail('cotp', p.message);
     const role = `SIMATIC-ROOT-${e.role.toUpperCase()}`;
     this.fail('cotp', `the CPU refused the S7CommPlus connection request (called TSAP "${role}"): ${p.message}`, PLUS_HINT.refusedTsap);

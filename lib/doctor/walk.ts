@@ -1,45 +1,21 @@
 /**
- * What every connection doctor's walk shares (this folder's for s7://, lib/s7plus/doctor for s7plus://): the steps
+ * What every connection doctor's walk shares (lib/s7/doctor for s7://, lib/s7plus/doctor for s7plus://): the steps
  * in order, each told to `onStep` as it ends; one deadline for the whole walk; the caller's abort; the first failed
  * step ending the walk. A doctor is a subclass that runs its own steps inside `walk()`.
  */
-import { abortError, PlcError, toPlcError } from '../../errors';
-import type { SymbolTable } from '../../symbols/model';
-
-/** One step's outcome: `step` names it (`tcp`, `cotp` …, `address DB1,INT0`), `hint` says what to change. */
-export interface DoctorStep {
-  step: string;
-  ok: boolean;
-  detail: string;
-  hint?: string;
-}
-
-export interface DoctorReport {
-  /** Every step passed. */
-  ok: boolean;
-  steps: DoctorStep[];
-}
-
-export interface DiagnoseOptions {
-  /** The deadline of the whole walk in ms (default 20 s); each network step also keeps the URL's timeout. */
-  timeout?: number;
-  /** Aborting rejects with ABORTED once every socket is closed. */
-  signal?: AbortSignal;
-  /** Called with each step as soon as it is known. */
-  onStep?: (step: DoctorStep) => void;
-  /**
-   * A compiled symbol table (compileSymbols), as connect(url, { symbols })
-   * takes it: each given text that is not an S7 address is then a name,
-   * resolved as a read resolves it and read at its address; an unknown name
-   * is a failed step with the closest names the table has.
-   */
-  symbols?: SymbolTable;
-  /** Names in a DB whose length in the PLC differs from the sources' are refused, as with ClientOptions.strictSymbols. */
-  strictSymbols?: boolean;
-}
+import { abortError, PlcError, toPlcError } from '../errors';
+import type { DiagnoseOptions, DoctorReport, DoctorStep } from './types';
 
 /** The whole walk's deadline when the caller gives none. */
 const DEFAULT_DEADLINE = 20_000;
+
+/** The whole walk's deadline in ms; throws INVALID_VALUE for one that is not a positive number. */
+export function deadlineOf(options: DiagnoseOptions): number {
+  const ms = options.timeout ?? DEFAULT_DEADLINE;
+  if (!Number.isFinite(ms) || ms <= 0)
+    throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
+  return ms;
+}
 
 /** Thrown inside the walk to end it at a failed step. */
 class Stop extends Error {}
@@ -57,11 +33,8 @@ export abstract class DoctorWalk<O extends DiagnoseOptions = DiagnoseOptions> {
     protected readonly options: O,
     private readonly deadlineHint: string,
   ) {
-    const ms = options.timeout ?? DEFAULT_DEADLINE;
-    if (!Number.isFinite(ms) || ms <= 0)
-      throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
-    this.ms = ms;
-    this.timer = setTimeout(() => this.ctl.abort(), ms);
+    this.ms = deadlineOf(options);
+    this.timer = setTimeout(() => this.ctl.abort(), this.ms);
     if (options.signal?.aborted) this.ctl.abort();
     else options.signal?.addEventListener('abort', this.onUserAbort, { once: true });
   }
