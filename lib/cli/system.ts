@@ -1,7 +1,7 @@
 /**
  * The system commands: info and blocks (whatever the URL's client offers: the
  * S7Client's services, the S7CommPlus client's CPU state and data blocks),
- * szl, diag, clock, cpu (S7 only) and doctor (lib/s7/doctor/). Control (cpu, clock --set) is
+ * szl, diag, clock, cpu (S7 only) and doctor (lib/doctor/, each driver's steps through its diagnose port). Control (cpu, clock --set) is
  * refused before connecting unless the URL says control=true, and needs
  * --yes from a script or for a PLC that is not this machine.
  */
@@ -11,6 +11,8 @@ import { S7Client } from '../s7/client';
 import { BLOCK_TYPES, type BlockType } from '../s7/constants';
 import { decodeDiagnosticBuffer } from '../s7/codec/diagnostics';
 import { diagnose, type DoctorStep } from '../doctor';
+import { driverOf, schemesOffering } from '../drivers';
+import { isS7Endpoint } from '../s7/url';
 import {
   decodeCommunication,
   decodeComponentIdentification,
@@ -36,7 +38,7 @@ function s7Endpoint(rest: string[], what: string, args: ParsedArgs): S7Endpoint 
   const url = rest[0];
   if (url === undefined) throw new UsageError(`${what} needs a PLC url`);
   const endpoint = withTimeout(parseUrl(url), args);
-  if (endpoint.protocol !== 's7') throw new UsageError(`${what} speaks S7 only: give an s7:// URL`);
+  if (!isS7Endpoint(endpoint)) throw new UsageError(`${what} speaks S7 only: give an s7:// URL`);
   return endpoint;
 }
 
@@ -315,8 +317,10 @@ export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promi
   if (url === undefined) throw new UsageError('doctor needs a PLC url');
   // A URL that does not parse is a usage error, as for every command; the doctor itself starts at the name.
   const endpoint = parseUrl(url);
-  if (endpoint.protocol !== 's7' && endpoint.protocol !== 's7plus')
-    throw new UsageError('doctor checks S7 and S7CommPlus connections: give an s7:// or s7plus:// URL');
+  if (!driverOf(endpoint).diagnose) {
+    const schemes = schemesOffering('diagnose');
+    throw new UsageError(`doctor checks ${schemes} connections: give an ${schemes} URL`);
+  }
   // The password of an s7plus:// URL (PLCWIRE_PASSWORD, --password-file): to the client only, never in a step.
   const password = passwordOption(endpoint, args);
   const json = args.flags.has('json');
