@@ -55,7 +55,7 @@ export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
  * each driver's part in its own folder. Alarms (both generations) come next,
  * as an `alarms` port beside these.
  */
-export interface DriverPorts<E, C> {
+interface DriverPorts<E, C> {
   /** The connection doctor's steps of this protocol (`plcwire doctor`, diagnose(), Test connection in Node-RED). */
   readonly diagnose?: DiagnosePort<E>;
   /** The PLC's own tag table, names and types as its program declares them (`plcwire browse`, Browse PLC). */

@@ -14,13 +14,13 @@ import { diagnose } from './index';
 import type { DoctorReport, DoctorStep } from './types';
 
 /** The longest a Test connection may take (the doctor's deadline; a request may ask for less). */
-export const TEST_CONNECTION_MS = 15_000;
+const TEST_CONNECTION_MS = 15_000;
 
 /** Addresses and names one request may have checked at most. */
 const MAX_ADDRESSES = 100;
 
 /** The words of the `symbols` step, in the editor's language (the node's locale). */
-export interface SourcesStepWords {
+interface SourcesStepWords {
   /** The sources do not compile: `problem` is the first error, with its file and line. */
   sources(problem: string): string;
   /** `n` more errors after the first. */
