@@ -9,7 +9,7 @@
  */
 import type { BindingInterface } from '@serialport/bindings-interface';
 import type { ClientOptions } from './client/options';
-import type { DiagnosePort } from './doctor/types';
+import type { DiagnosePort } from './doctor-steps';
 import { PlcError } from './errors';
 import { FetchWriteClient } from './fetchwrite/client';
 import { serveFetchWrite } from './fetchwrite/serve';

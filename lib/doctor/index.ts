@@ -5,12 +5,12 @@
  * s7://, lib/s7plus/doctor for s7plus://), walked by lib/doctor/walk.ts. Every
  * doctor gives the same report: steps with ok, detail and a hint.
  */
+import type { DiagnosePort, DiagnoseOptions, DoctorReport } from '../doctor-steps';
 import { DRIVERS, driverOf, schemesOffering, type Endpoint } from '../drivers';
-import type { DiagnosePort, DiagnoseOptions, DoctorReport, DoctorStep } from './types';
-import { deadlineOf } from './walk';
 import { formatUrl, parseUrl } from '../url';
+import { DoctorWalk } from './walk';
 
-export type { DiagnoseOptions, DoctorReport, DoctorStep } from './types';
+export type { DiagnoseOptions, DoctorReport, DoctorStep } from '../doctor-steps';
 
 /**
  * Diagnoses the connection to a PLC, step by step, up to the first failure.
@@ -18,19 +18,26 @@ export type { DiagnoseOptions, DoctorReport, DoctorStep } from './types';
  * aborts. Nothing is written to the PLC.
  */
 export async function diagnose(url: string, addresses: readonly string[] = [], options: DiagnoseOptions = {}): Promise<DoctorReport> {
-  deadlineOf(options); // a bad timeout is refused before anything else, whatever the URL
-  let endpoint: Endpoint;
+  const walk = new DoctorWalk(options); // a bad timeout is refused here, before anything else
   try {
-    endpoint = parseUrl(url);
-  } catch (err) {
-    return urlFailed((err as Error).message, urlHintOf(url), options);
+    await walk.walk(async () => {
+      let endpoint: Endpoint;
+      try {
+        endpoint = parseUrl(url);
+      } catch (err) {
+        return walk.fail('url', (err as Error).message, urlHintOf(url));
+      }
+      const port = driverOf(endpoint).diagnose;
+      if (!port) {
+        const schemes = schemesOffering('diagnose');
+        return walk.fail('url', `the doctor checks ${schemes} connections; this URL is ${endpoint.protocol}`, `Give an ${schemes} URL.`);
+      }
+      await port.run(endpoint, addresses, walk, formatUrl);
+    });
+  } finally {
+    walk.dispose();
   }
-  const port = driverOf(endpoint).diagnose;
-  if (!port) {
-    const schemes = schemesOffering('diagnose');
-    return urlFailed(`the doctor checks ${schemes} connections; this URL is ${endpoint.protocol}`, `Give an ${schemes} URL.`, options);
-  }
-  return port.run(endpoint, addresses, options, formatUrl);
+  return walk.report();
 }
 
 /** The hint of a URL that does not parse: its scheme's doctor's, else the first doctor's (s7://, the usual mistake). */
@@ -44,11 +51,4 @@ function urlHintOf(url: string): string {
     ports.push(port);
   }
   return ports[0]!.urlHint;
-}
-
-/** The report of a walk that ended at its `url` step, told to `onStep` as a walk tells its steps. */
-function urlFailed(detail: string, hint: string, options: DiagnoseOptions): DoctorReport {
-  const step: DoctorStep = { step: 'url', ok: false, detail, hint };
-  options.onStep?.(step);
-  return { ok: false, steps: [step] };
 }

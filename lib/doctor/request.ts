@@ -11,7 +11,7 @@ import { DRIVERS } from '../drivers';
 import type { SymbolTable } from '../symbols/model';
 import { parseUrl } from '../url';
 import { diagnose } from './index';
-import type { DoctorReport, DoctorStep } from './types';
+import type { DoctorReport, DoctorStep } from '../doctor-steps';
 
 /** The longest a Test connection may take (the doctor's deadline; a request may ask for less). */
 const TEST_CONNECTION_MS = 15_000;

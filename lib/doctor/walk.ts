@@ -1,16 +1,19 @@
 /**
- * What every connection doctor's walk shares (lib/s7/doctor for s7://, lib/s7plus/doctor for s7plus://): the steps
- * in order, each told to `onStep` as it ends; one deadline for the whole walk; the caller's abort; the first failed
- * step ending the walk. A doctor is a subclass that runs its own steps inside `walk()`.
+ * The connection doctor's walk, whatever the protocol: the steps in order, each told to `onStep` as it ends; one
+ * deadline for the whole walk; the caller's abort; the first failed step ending the walk. A driver's steps
+ * (lib/s7/doctor for s7://, lib/s7plus/doctor for s7plus://) run inside `walk()` and see it as DoctorSteps.
  */
+import type { DiagnoseOptions, DoctorReport, DoctorStep, DoctorSteps } from '../doctor-steps';
 import { abortError, PlcError, toPlcError } from '../errors';
-import type { DiagnoseOptions, DoctorReport, DoctorStep } from './types';
+
+/** What to do when the deadline ends a step. */
+const DEADLINE_HINT = "Give the doctor more time (the timeout option, or --timeout), or raise the URL's timeout on a slow link.";
 
 /** The whole walk's deadline when the caller gives none. */
 const DEFAULT_DEADLINE = 20_000;
 
 /** The whole walk's deadline in ms; throws INVALID_VALUE for one that is not a positive number. */
-export function deadlineOf(options: DiagnoseOptions): number {
+function deadlineOf(options: DiagnoseOptions): number {
   const ms = options.timeout ?? DEFAULT_DEADLINE;
   if (!Number.isFinite(ms) || ms <= 0)
     throw new PlcError('INVALID_VALUE', `diagnose: timeout must be a positive number of ms, got ${String(ms)}`);
@@ -20,19 +23,16 @@ export function deadlineOf(options: DiagnoseOptions): number {
 /** Thrown inside the walk to end it at a failed step. */
 class Stop extends Error {}
 
-export abstract class DoctorWalk<O extends DiagnoseOptions = DiagnoseOptions> {
+export class DoctorWalk implements DoctorSteps {
   private readonly steps: DoctorStep[] = [];
   private readonly ctl = new AbortController();
   /** The whole walk's deadline in ms. */
-  protected readonly ms: number;
+  readonly ms: number;
   private readonly timer: NodeJS.Timeout;
   private readonly onUserAbort = () => this.ctl.abort();
+  private readonly deadlineHint = DEADLINE_HINT;
 
-  /** `deadlineHint`: what to do when the deadline ends a step (each doctor words it for its protocol). */
-  constructor(
-    protected readonly options: O,
-    private readonly deadlineHint: string,
-  ) {
+  constructor(readonly options: DiagnoseOptions) {
     this.ms = deadlineOf(options);
     this.timer = setTimeout(() => this.ctl.abort(), this.ms);
     if (options.signal?.aborted) this.ctl.abort();
@@ -43,20 +43,19 @@ export abstract class DoctorWalk<O extends DiagnoseOptions = DiagnoseOptions> {
     return { ok: this.steps.length > 0 && this.steps.every((s) => s.ok), steps: this.steps };
   }
 
-  /** Ends the deadline and lets go of the caller's signal; a doctor closes what it opened, then calls this. */
-  async dispose(): Promise<void> {
+  /** Ends the deadline and lets go of the caller's signal, once the steps closed what they opened. */
+  dispose(): void {
     clearTimeout(this.timer);
     this.options.signal?.removeEventListener('abort', this.onUserAbort);
-    return Promise.resolve();
   }
 
   /** Aborts at the deadline or when the caller aborts. */
-  protected get signal(): AbortSignal {
+  get signal(): AbortSignal {
     return this.ctl.signal;
   }
 
   /** The step that ended last, undefined before the first. */
-  protected get lastStep(): string | undefined {
+  private get lastStep(): string | undefined {
     return this.steps.at(-1)?.step;
   }
 
@@ -67,17 +66,17 @@ export abstract class DoctorWalk<O extends DiagnoseOptions = DiagnoseOptions> {
     this.options.onStep?.(s);
   }
 
-  protected pass(step: string, detail: string, hint?: string): void {
+  pass(step: string, detail: string, hint?: string): void {
     this.record(step, true, detail, hint);
   }
 
-  protected fail(step: string, detail: string, hint?: string): never {
+  fail(step: string, detail: string, hint?: string): never {
     this.record(step, false, detail, hint);
     throw new Stop();
   }
 
   /** An error inside a step: the caller's abort ends the walk, the deadline fails the step, anything else is `other`. */
-  protected failed(step: string, err: unknown, other: (e: PlcError) => never): never {
+  failed(step: string, err: unknown, other: (e: PlcError) => never): never {
     if (err instanceof Stop) throw err;
     if (this.options.signal?.aborted) throw abortError('the connection doctor', this.options.signal);
     if (this.signal.aborted) this.fail(step, `no result before the doctor's deadline of ${this.ms} ms`, this.deadlineHint);
@@ -88,7 +87,7 @@ export abstract class DoctorWalk<O extends DiagnoseOptions = DiagnoseOptions> {
    * Runs `steps`: a failed step ends them; the caller's abort rejects with ABORTED; the deadline running out where no
    * step caught it (between steps, or inside one's own retries) is a failed "deadline" step, not a rejection.
    */
-  protected async walk(steps: () => Promise<void>): Promise<void> {
+  async walk(steps: () => Promise<void>): Promise<void> {
     try {
       await steps();
     } catch (err) {

@@ -3,7 +3,7 @@
  * hint of a failed (or passed with a warning) step. The step's detail (what
  * was seen) stays with the step; these say what to do about it.
  */
-import { NETWORK_HINT } from '../../doctor/hints';
+import { NETWORK_HINT } from '../../iso/hints';
 import { usualAddressing, type Addressing } from './families';
 
 /** Where a CPU's protection is set: TIA Portal for an S7-1200/1500, the hardware configuration or mode selector for the others. */

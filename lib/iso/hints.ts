@@ -1,10 +1,10 @@
 /**
- * What a connection doctor tells a user to change when the network or
- * ISO-on-TCP fails, before any protocol of its own: the hints every
- * driver's doctor shares (lib/s7/doctor, lib/s7plus/doctor add their own).
+ * What a connection doctor tells a user to change when TCP or the ISO
+ * connect step (connect.ts) fails, before any protocol of its own: the hints
+ * the doctors of both protocols over ISO-on-TCP share (lib/s7/doctor,
+ * lib/s7plus/doctor add their own). Words only: no import, nothing run.
  */
 export const NETWORK_HINT = {
-  deadline: "Give the doctor more time (the timeout option, or --timeout), or raise the URL's timeout on a slow link.",
   noDns: "Check this machine's DNS settings, or use the PLC's IP address in the URL.",
   unknownHost:
     "Check the spelling of the host name, or use the PLC's IP address in the URL (TIA Portal: the CPU's Properties → PROFINET interface → Ethernet addresses).",
