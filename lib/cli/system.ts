@@ -56,7 +56,6 @@ interface SystemServices {
   certificate?: { fingerprint: string; subject: string; validFrom: string; validTo: string } | undefined;
   listBlocks?(options?: RequestOptions): Promise<Record<string, number>>;
   dataBlocks?(options?: RequestOptions): Promise<{ number: number; name: string }[]>;
-  browse?(options?: RequestOptions): Promise<SymbolTable>;
 }
 
 /** The URL's client (with the password of an s7plus:// URL), unconnected, seen through the services it may offer. */
@@ -244,19 +243,21 @@ export async function blocks(rest: string[], args: ParsedArgs, io: CliIo): Promi
 }
 
 /**
- * Each data block with its access (optimized or standard), from the client's
- * browse of the blocks' type objects; null where it cannot tell (no browse,
- * or a PLC that gives no type information, as the s7commplus emulator).
+ * Each data block with its access (optimized or standard), from the browse of
+ * the blocks' type objects (the driver's browse port); null where it cannot
+ * tell (no browse, or a PLC that gives no type information, as the s7commplus
+ * emulator).
  */
 async function withAccess(
   blocks: { number: number; name: string }[],
-  client: SystemServices,
+  client: AnyClient,
   io: CliIo,
 ): Promise<{ number: number; name: string; optimized: boolean | null }[]> {
   let table: SymbolTable | undefined;
-  if (client.browse && blocks.length > 0) {
+  const browse = driverOf(client).browse;
+  if (browse && blocks.length > 0) {
     try {
-      table = await client.browse({ signal: io.signal });
+      table = await browse(client, { signal: io.signal });
     } catch (err) {
       if (io.signal.aborted) throw err;
       if (!(err instanceof PlcError) || isLinkError(err)) throw err;
