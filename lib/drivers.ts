@@ -1,12 +1,15 @@
 /**
  * The protocols, one entry each: its URLs (schemes, parameters, defaults),
- * how to make its client, and what it can do. lib/url.ts, createClient()
- * and connect() read this registry and switch on no protocol: a new protocol
- * is its own folder (docs/architecture.md, "How to add a protocol") and one
- * line in DRIVERS.
+ * how to make its client, and what it can do (its capability ports:
+ * diagnose, browse, subscribe). lib/url.ts, createClient(), connect(), the
+ * doctor (lib/doctor/), the CLI and the Node-RED nodes read this registry and
+ * test no scheme: a new protocol is its own folder (docs/architecture.md,
+ * "How to add a protocol") and one line in DRIVERS; a capability of a driver
+ * is its folder's part and one field of its entry.
  */
 import type { BindingInterface } from '@serialport/bindings-interface';
 import type { ClientOptions } from './client/options';
+import type { DiagnosePort } from './doctor-steps';
 import { PlcError } from './errors';
 import { FetchWriteClient } from './fetchwrite/client';
 import { serveFetchWrite } from './fetchwrite/serve';
@@ -17,12 +20,15 @@ import { serveFreeport } from './freeport/serve';
 import { FREEPORT_URLS } from './freeport/url';
 import type { UrlScheme } from './link/driver';
 import { S7Client } from './s7/client';
+import { S7_DOCTOR } from './s7/doctor';
 import { serveS7 } from './s7/serve';
 import { S7_URLS } from './s7/url';
 import { S7PlusClient } from './s7plus/client';
+import { S7PLUS_DOCTOR } from './s7plus/doctor';
 import { S7PLUS_URLS } from './s7plus/url';
 import type { Served, ServeFlags } from './sim/serve';
-import type { PlcClient, Protocol } from './types';
+import type { SymbolTable } from './symbols/model';
+import type { PlcClient, Protocol, RequestOptions, TagSubscription } from './types';
 
 /**
  * `symbols` (a compiled SymbolTable) lets reads and writes name tags as the
@@ -41,8 +47,28 @@ export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
   password?: string;
 }
 
+/**
+ * What a driver offers beyond reads and writes, each an optional port of its
+ * entry: a caller asks the entry (`driverOf(endpoint).browse`), never the
+ * URL's scheme. What several drivers share of a capability lives in a folder
+ * above the protocols (the doctor's walk and URL handling in lib/doctor/),
+ * each driver's part in its own folder. Alarms (both generations) come next,
+ * as an `alarms` port beside these.
+ */
+interface DriverPorts<E, C> {
+  /** The connection doctor's steps of this protocol (`plcwire doctor`, diagnose(), Test connection in Node-RED). */
+  readonly diagnose?: DiagnosePort<E>;
+  /** The PLC's own tag table, names and types as its program declares them (`plcwire browse`, Browse PLC). */
+  browse?(client: C, options?: RequestOptions): Promise<SymbolTable>;
+  /** The PLC reports changes of `tags`, sampled every `cycle` ms (`plcwire watch`, the read node's push mode). */
+  subscribe?(client: C, tags: readonly string[], options?: { cycle?: number }): Promise<TagSubscription>;
+}
+
+/** The names of the capability ports. */
+export type Capability = keyof DriverPorts<unknown, unknown>;
+
 /** One protocol in the registry. */
-export interface DriverEntry<E extends { readonly protocol: Protocol }, C extends PlcClient> {
+export interface DriverEntry<E extends { readonly protocol: Protocol }, C extends PlcClient> extends DriverPorts<E, C> {
   /** Its URL schemes and parameters, parsed to its endpoint and formatted back (lib/url.ts). */
   readonly urls: UrlScheme<E>;
   /**
@@ -56,6 +82,10 @@ export interface DriverEntry<E extends { readonly protocol: Protocol }, C extend
   readonly noSymbols?: string;
   /** Its client can ask a data block's length, so strictSymbols can check a symbol table's layout against the PLC. */
   readonly blockLength: boolean;
+  /** Why the protocol itself cannot tell a block's length, when that is so for every PLC it reaches (the CLI's layout note). */
+  readonly noBlockLength?: string;
+  /** Its client takes the PLC's password (ConnectOptions.password: the CLI's PLCWIRE_PASSWORD and --password-file, a node's credential). */
+  readonly password: boolean;
   /** `plcwire serve <protocol>`: starts its simulator from the command line's flags. */
   serve(flags: ServeFlags): Promise<Served>;
 }
@@ -72,12 +102,22 @@ function entry<E extends { readonly protocol: Protocol }, C extends PlcClient>(e
 
 /** Every protocol, by name: adding a protocol is one line here (its entry from its own folder). */
 export const DRIVERS = Object.freeze({
-  s7: entry({ urls: S7_URLS, createClient: (e, o) => new S7Client(e, common(o)), symbols: true, blockLength: true, serve: serveS7 }),
+  s7: entry({
+    urls: S7_URLS,
+    createClient: (e, o) => new S7Client(e, common(o)),
+    symbols: true,
+    blockLength: true,
+    password: false,
+    serve: serveS7,
+    diagnose: S7_DOCTOR,
+  }),
   fetchwrite: entry({
     urls: FETCHWRITE_URLS,
     createClient: (e, o) => new FetchWriteClient(e, common(o)),
     symbols: true,
     blockLength: false,
+    noBlockLength: 'FETCH/WRITE does not report the length of data blocks',
+    password: false,
     serve: serveFetchWrite,
   }),
   freeport: entry({
@@ -88,6 +128,7 @@ export const DRIVERS = Object.freeze({
     noSymbols:
       "freeport cannot read or write by symbol: it reaches only each station's data area (ST<station>,…), a few bytes its PLC program fills, not V memory (DB1) by offset; reach the S7-200 over s7:// (a CP 243-1) to use its V memory symbols",
     blockLength: false,
+    password: false,
     serve: serveFreeport,
   }),
   s7plus: entry({
@@ -95,6 +136,10 @@ export const DRIVERS = Object.freeze({
     createClient: (e, o) => new S7PlusClient(e, { ...common(o), ...(o.password !== undefined ? { password: o.password } : {}) }),
     symbols: true,
     blockLength: false,
+    password: true,
+    diagnose: S7PLUS_DOCTOR,
+    browse: (client, options) => client.browse(options),
+    subscribe: (client, tags, options) => client.subscribe(tags, options),
     // Its simulator is the S7 one's (S7CommPlus on the same port as PUT/GET, as a CPU serves it) once that serves it.
     // As on a CPU, S7CommPlus is served by the S7 simulator of an S7-1200/1500 on the PUT/GET port (the called TSAP decides).
     serve: (flags) =>
@@ -142,9 +187,18 @@ export type ClientFor<U extends string | Endpoint> = U extends Endpoint
       : C
     : never;
 
-/** The registry's entry of an endpoint's protocol. */
-export function driverOf(endpoint: Endpoint): DriverEntry<Endpoint, AnyClient> {
-  return DRIVERS[endpoint.protocol] as DriverEntry<Endpoint, AnyClient>;
+/** The registry's entry of an endpoint's (or a client's) protocol. */
+export function driverOf(of: { readonly protocol: Protocol }): DriverEntry<Endpoint, AnyClient> {
+  return DRIVERS[of.protocol] as DriverEntry<Endpoint, AnyClient>;
+}
+
+/** The URL schemes of the drivers offering `what`, as a user writes them: "s7:// or s7plus://" (for messages). */
+export function schemesOffering(what: Capability | 'password'): string {
+  const names = Object.values(DRIVERS)
+    .filter((d) => (what === 'password' ? d.password : (d as DriverPorts<unknown, unknown>)[what] !== undefined))
+    .flatMap((d) => Object.keys(d.urls.schemes))
+    .map((s) => `${s}://`);
+  return names.length > 1 ? `${names.slice(0, -1).join(', ')} or ${names.at(-1)}` : names.join('');
 }
 
 /** The client of an endpoint, by its protocol's entry; a symbol table given to a protocol without symbols is refused (NOT_SUPPORTED). */

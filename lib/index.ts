@@ -1,9 +1,13 @@
 /**
  * @plcwire/node-red-siemens — connect Node.js to Siemens PLCs over S7comm
- * (ISO-on-TCP), FETCH/WRITE and S7-200 freeport, with a simulator for each.
+ * (ISO-on-TCP, PUT/GET), S7CommPlus over TLS (S7-1200/1500: optimized blocks
+ * by name), FETCH/WRITE and S7-200 freeport, with a simulator for each (the
+ * S7 simulator of an S7-1200/1500 profile serves S7CommPlus on its port).
  *
  *   const plc = await connect('s7://192.168.0.2?rack=0&slot=1');
  *   await plc.read(['DB1,INT2', 'DB1.DBD4:REAL', 'M0.1']);
+ *   const cpu = await connect('s7plus://192.168.0.1?fingerprint=<SHA-256 of its certificate>');
+ *   await cpu.read(['"Tank".Level']);
  */
 export { connect, createClient, type AnyClient, type ClientFor, type ConnectOptions } from './connect';
 export * from './errors';

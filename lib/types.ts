@@ -90,6 +90,28 @@ export type LinkState = 'idle' | 'connecting' | 'connected' | 'reconnecting' | '
 
 export type Protocol = 's7' | 'fetchwrite' | 'freeport' | 's7plus';
 
+/**
+ * A subscription a driver's PLC feeds (DriverEntry.subscribe; the S7CommPlus
+ * client's S7PlusSubscription): `data` with every tag's latest result and the
+ * ones that changed, `active` when (re)created, `lost` and `error`.
+ */
+export interface TagSubscription {
+  on(event: 'data', listener: (d: SubscriptionNotice) => void): unknown;
+  on(event: 'lost' | 'error', listener: (err: PlcError) => void): unknown;
+  on(event: 'active', listener: () => void): unknown;
+  close(): Promise<void>;
+}
+
+/** One notification of a TagSubscription. */
+export interface SubscriptionNotice {
+  /** Every tag's latest result, by the address or name as given. */
+  results: Record<string, TagResult<PlcValue>>;
+  /** The tags whose value or quality changed with this notification. */
+  changed: string[];
+  /** The first notification after the subscription was (re)created: it carries every value. */
+  initial: boolean;
+}
+
 export interface RequestOptions {
   /** Abort the request (it rejects with code ABORTED). */
   signal?: AbortSignal;

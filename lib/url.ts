@@ -10,7 +10,10 @@
  *   freeport:///dev/ttyUSB0?baud=9600&parity=none&databits=8&stopbits=1&timeout=1000&retries=2&gap=10
  *   freeport://COM3?baud=9600                            (Windows)
  *   freeport+tcp://host:4001?timeout=1000                (serial device server)
+ *   s7plus://host[:102]?fingerprint=<SHA-256, 64 hex>&type=hmi|es|pg&timeout=5000&maxItems=20
+ *   s7plus://host?ca=FILE | insecure=true | tls=false    (S7-1200/1500 over TLS: trust by CA, the bench, plain V1)
  *
+ * An s7plus:// PLC's password never goes into a URL (ConnectOptions.password).
  * Every protocol also takes `readOnly=true` and `allow=<address or area>,…`
  * (a write allow-list), and `strictSymbols=true` (reads and writes by name
  * refused in a data block whose length differs from the sources',

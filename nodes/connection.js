@@ -4,6 +4,7 @@ const { ClientPool, withoutCredentials } = require('../dist/lib/flows/client-poo
 const { settleWithin } = require('./shared/user');
 const symbols = require('../dist/lib/flows/symbol-config');
 const s7plusAdmin = require('./shared/s7plus-admin');
+const { testConnection } = require('../dist/lib/doctor/request');
 
 /** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
 const pool = new ClientPool();
@@ -339,83 +340,40 @@ module.exports = function (RED) {
     res.json(plc.S7_CPU_PRESETS);
   });
 
-  /** Whether text is an S7 address (anything else the doctor takes for a name). */
-  function isAddress(text) {
-    try {
-      plc.parseAddress(text);
-      return true;
-    } catch {
-      return false;
-    }
-  }
-
-  /** The longest a Test connection may take (the doctor's deadline; a request may ask for less). */
-  const DOCTOR_TIMEOUT_MS = 15000;
-
   /**
    * Test connection: POST { url, addresses?, timeout?, symbolSources?,
    * dbNumbers?, strictSymbols?, id?, password? } → the library's connection doctor, { ok,
-   * steps: [{ step, ok, detail, hint? }] }; names among the addresses resolve
-   * through the sources as the connection's reads will (a `symbols` step
-   * names the file and line when they do not compile). It never
-   * outlives its request: when the editor closes it (dialog closed, page left),
-   * the walk is aborted, and the doctor closes every socket it opened on every
-   * path. Nothing is written to the PLC. An s7plus:// URL walks S7CommPlus
-   * (TLS, session, password, browse) with the password typed in the dialog or
-   * the node's credential (by id); no answer carries it.
+   * steps: [{ step, ok, detail, hint? }] } (lib/doctor/request.ts: names
+   * resolve through the dialog's sources as the connection's reads will, a
+   * `symbols` step names the file and line when they do not compile). It
+   * never outlives its request: when the editor closes it (dialog closed, page
+   * left), the walk is aborted and closes every socket it opened. The password
+   * typed in the dialog or the node's credential (by id) goes to a driver that
+   * takes one; no answer carries it.
    */
   RED.httpAdmin.post('/plcwire/doctor', canRead, function (req, res) {
     const body = req.body || {};
-    const url = String(body.url || '').trim();
-    const password = /^s7plus:/i.test(url) ? s7plusAdmin.passwordOf(RED, body) : undefined;
-    let addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 100).map(String) : [];
-    // The dialog's sources as it holds them (not yet deployed ones too), compiled as the connection node compiles them at start.
-    const compiled = symbols.compileCached(symbolConfig(body));
-    let sourcesStep;
-    if (compiled.problems) {
-      // Names cannot be looked up: they are left out, and one step says why, with the file and line of the first error.
-      const names = addresses.filter((a) => !isAddress(a));
-      addresses = addresses.filter(isAddress);
-      const p = compiled.problems[0];
-      const more = compiled.problems.length > 1 ? RED._('plcwire-connection.errors.more', { n: compiled.problems.length - 1 }) : '';
-      sourcesStep = {
-        step: 'symbols',
-        ok: false,
-        detail:
-          RED._('plcwire-connection.doctor.sources', { problem: p.message }) +
-          more +
-          (names.length > 0 ? RED._('plcwire-connection.doctor.namesNotChecked', { names: names.join(', ') }) : ''),
-        hint: RED._('plcwire-connection.doctor.sourcesHint'),
-      };
-    }
-    const asked = Number(body.timeout);
-    const timeout = asked > 0 ? Math.min(asked, DOCTOR_TIMEOUT_MS) : DOCTOR_TIMEOUT_MS;
     const stop = new AbortController();
     const onClose = () => {
       if (!res.writableEnded) stop.abort();
     };
     res.on('close', onClose);
-    plc
-      .diagnose(url, addresses, {
-        timeout,
-        signal: stop.signal,
-        ...(compiled.table ? { symbols: compiled.table, strictSymbols: body.strictSymbols === true } : {}),
-        ...(password !== undefined ? { password } : {}),
-      })
-      .then(
-        (report) => report,
-        (err) => {
-          // ABORTED while the request is still there: the deadline ended the walk in the middle of a step.
-          const late = err && err.code === 'ABORTED' && !stop.signal.aborted;
-          const detail = late ? `no result within ${timeout} ms` : err && err.message ? err.message : String(err);
-          return { ok: false, steps: [{ step: 'doctor', ok: false, detail }], code: late ? 'TIMEOUT' : err && err.code };
-        },
-      )
-      .then((answer) => {
-        if (sourcesStep) answer = { ...answer, ok: false, steps: [...answer.steps, sourcesStep] };
-        res.off('close', onClose);
-        if (!stop.signal.aborted && !res.writableEnded) res.json(answer);
-      });
+    testConnection({
+      body,
+      // The dialog's sources as it holds them (not yet deployed ones too), compiled as the connection node compiles them at start.
+      compiled: symbols.compileCached(symbolConfig(body)),
+      password: () => s7plusAdmin.passwordOf(RED, body),
+      signal: stop.signal,
+      words: {
+        sources: (problem) => RED._('plcwire-connection.doctor.sources', { problem }),
+        more: (n) => RED._('plcwire-connection.errors.more', { n }),
+        namesNotChecked: (names) => RED._('plcwire-connection.doctor.namesNotChecked', { names }),
+        sourcesHint: RED._('plcwire-connection.doctor.sourcesHint'),
+      },
+    }).then((answer) => {
+      res.off('close', onClose);
+      if (!stop.signal.aborted && !res.writableEnded) res.json(answer);
+    });
   });
 
   /** Serial ports for the freeport dialog. */

@@ -120,6 +120,31 @@ const LINES = new Map<string, number>([...GRAPH.keys()].map((f) => [f, lineCount
  */
 const ISO_IMPURE: readonly string[] = ['lib/iso/connect.ts', 'lib/iso/frames.ts'];
 
+/** The protocol folders, and ISO-on-TCP below the two that speak it (s7, s7plus). */
+const PROTOCOL_FOLDER = /^lib\/(s7|s7plus|fetchwrite|freeport|iso)\//;
+
+/**
+ * Imports from one protocol folder into another that are still there, each `from -> to`. The S7 simulator's
+ * S7CommPlus service: removed by the simulator composition (an S7-1200/1500 simulator serving both protocols
+ * on one port, composed above lib/s7 and lib/s7plus).
+ */
+const ALLOWED_CROSSINGS: readonly string[] = ['lib/s7/serve.ts -> lib/s7plus/server/serve.ts'];
+
+/** Every file from which one of `targets` is reached by imports (type imports included), the targets too. */
+function reaching(graph: Map<string, Edge[]>, targets: readonly string[]): Set<string> {
+  const found = new Set(targets);
+  for (let grown = true; grown;) {
+    grown = false;
+    for (const [file, edges] of graph) {
+      if (!found.has(file) && edges.some((e) => e.to !== undefined && found.has(e.to))) {
+        found.add(file);
+        grown = true;
+      }
+    }
+  }
+  return found;
+}
+
 const isCodec = (file: string) =>
   file.startsWith('lib/s7/codec/') ||
   file.startsWith('lib/s7plus/codec/') ||
@@ -202,7 +227,7 @@ describe('architecture of lib/', () => {
   });
 
   it('the shared link layer (lib/link/) imports nothing of a protocol, type imports included', () => {
-    const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|fetchwrite|freeport)\//.test(to);
+    const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|s7plus|fetchwrite|freeport)\//.test(to);
     const links = [...GRAPH.keys()].filter((f) => f.startsWith('lib/link/'));
     expect(links).to.include.members(['lib/link/serial.ts', 'lib/link/supervisor.ts', 'lib/link/driver.ts']);
     expect(
@@ -213,7 +238,7 @@ describe('architecture of lib/', () => {
     ).to.deep.equal([]);
   });
 
-  it('ISO-on-TCP (lib/iso/) imports nothing of a protocol over it (s7, fetchwrite, freeport), type imports included', () => {
+  it('ISO-on-TCP (lib/iso/) imports nothing of a protocol over it (s7, s7plus, fetchwrite, freeport), type imports included', () => {
     const iso = [...GRAPH.keys()].filter((f) => f.startsWith('lib/iso/'));
     expect(iso).to.include.members(['lib/iso/tpkt.ts', 'lib/iso/cotp.ts', 'lib/iso/constants.ts']);
     // S7 reaches TPKT and COTP through lib/iso/: the rule guards a real edge.
@@ -221,7 +246,7 @@ describe('architecture of lib/', () => {
     expect(
       violations(
         (f) => f.startsWith('lib/iso/'),
-        (e) => e.to !== undefined && /^lib\/(s7|fetchwrite|freeport)\//.test(e.to),
+        (e) => e.to !== undefined && /^lib\/(s7|s7plus|fetchwrite|freeport)\//.test(e.to),
       ),
     ).to.deep.equal([]);
   });
@@ -238,13 +263,56 @@ describe('architecture of lib/', () => {
   });
 
   it('the tag client (lib/client/) imports nothing of a protocol, type imports included', () => {
-    const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|fetchwrite|freeport)\//.test(to);
+    const protocol = (to: string) => to === 'lib/url.ts' || to === 'lib/connect.ts' || /^lib\/(s7|s7plus|fetchwrite|freeport)\//.test(to);
     expect(
       violations(
         (f) => f.startsWith('lib/client/'),
         (e) => e.to !== undefined && protocol(e.to),
       ),
     ).to.deep.equal([]);
+  });
+
+  it('a protocol folder imports no other protocol folder, and nothing that leads to lib/url.ts or lib/drivers.ts, type imports included', () => {
+    const protocolOf = (file: string) => PROTOCOL_FOLDER.exec(file)?.[1];
+    expect([...GRAPH.keys()].filter((f) => protocolOf(f) !== undefined).length).to.be.greaterThan(100);
+    const registry = reaching(GRAPH, ['lib/url.ts', 'lib/drivers.ts']);
+    // The registry really is reached from above: the rule guards real edges.
+    expect(registry.has('lib/doctor/index.ts') && registry.has('lib/connect.ts')).to.equal(true);
+    const bad: string[] = [];
+    for (const [file, edges] of GRAPH) {
+      const own = protocolOf(file);
+      if (own === undefined) continue;
+      for (const e of edges) {
+        if (e.to === undefined) continue;
+        const other = protocolOf(e.to);
+        if (other !== undefined && other !== own && other !== 'iso' && !ALLOWED_CROSSINGS.includes(`${file} -> ${e.to}`))
+          bad.push(`${file} imports ${e.spec} (another protocol)`);
+        if (own === 'iso' && other !== undefined && other !== 'iso') bad.push(`${file} imports ${e.spec} (a protocol over ISO-on-TCP)`);
+        if (registry.has(e.to)) bad.push(`${file} imports ${e.spec} (which leads to the registry)`);
+      }
+    }
+    expect(bad).to.deep.equal([]);
+  });
+
+  it('every crossing ALLOWED_CROSSINGS names still exists (an entry that is no longer needed goes)', () => {
+    const edges = new Set([...GRAPH].flatMap(([file, es]) => es.map((e) => `${file} -> ${e.to ?? e.spec}`)));
+    expect(ALLOWED_CROSSINGS.filter((c) => !edges.has(c))).to.deep.equal([]);
+  });
+
+  it('the doctor (lib/doctor/) stands above the protocols: no protocol folder imports it; their steps see its walk through lib/doctor-steps.ts, which imports no protocol', () => {
+    expect(GRAPH.get('lib/s7/doctor/index.ts')!.some((e) => e.to === 'lib/doctor-steps.ts')).to.equal(true);
+    expect(GRAPH.get('lib/doctor/index.ts')!.some((e) => e.to === 'lib/drivers.ts')).to.equal(true);
+    const bad = [
+      ...violations(
+        (f) => PROTOCOL_FOLDER.test(f),
+        (e) => e.to?.startsWith('lib/doctor/') === true,
+      ),
+      ...violations(
+        (f) => f === 'lib/doctor-steps.ts',
+        (e) => e.to !== undefined && (PROTOCOL_FOLDER.test(e.to) || e.to === 'lib/url.ts' || e.to === 'lib/drivers.ts'),
+      ),
+    ];
+    expect(bad).to.deep.equal([]);
   });
 
   it(`no file in lib/ is over ${MAX_LINES} lines, except the ones LONG_FILES names with a reason`, () => {

@@ -306,6 +306,16 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
         expect(refused.err).to.include('refused the password (wrong password');
         expect(refused.out + refused.err).not.to.include(wrong);
         expect(await read()).to.deep.equal({ 'DB1.DBW4:INT': 98 });
+        // A wrong password is a connection that could not be made: one exit code (3) in read, write and doctor, as the README's table says.
+        const readWrong = await done(['read', guarded.url, 'DB1.DBW4:INT'], { PLCWIRE_PASSWORD: wrong });
+        const doctorWrong = await done(['doctor', guarded.url], { PLCWIRE_PASSWORD: wrong });
+        expect(doctorWrong.out).to.match(/^FAIL password: /m);
+        expect([refused.code, readWrong.code, doctorWrong.code], readWrong.err).to.deep.equal([
+          EXIT.CONNECTION,
+          EXIT.CONNECTION,
+          EXIT.CONNECTION,
+        ]);
+        expect(readWrong.out + readWrong.err + doctorWrong.out + doctorWrong.err).not.to.include(wrong);
       } finally {
         await stop(guarded.sim);
       }

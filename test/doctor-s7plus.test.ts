@@ -80,6 +80,20 @@ describe('doctor on s7plus:// (our simulator)', function () {
     await noConnections(server);
   });
 
+  it("the url step is the registry's: a URL that does not parse gets its scheme's hint, a protocol without a doctor the schemes that have one; each told to onStep, nothing connected", async () => {
+    const told: DoctorStep[] = [];
+    const plus = await diagnose('s7plus://127.0.0.1?password=x', [], { onStep: (s) => told.push(s) });
+    expect(plus.ok).to.equal(false);
+    expect(plus.steps.map((s) => s.step)).to.deep.equal(['url']);
+    expect(plus.steps[0]!.hint).to.contain('s7plus://<host>');
+    expect(plus.steps[0]!.detail).to.not.contain('=x');
+    const s7 = await diagnose('s7://127.0.0.1?slot=99');
+    expect(s7.steps[0]!.hint).to.contain('s7://<host>');
+    const other = await diagnose('freeport+tcp://127.0.0.1:1');
+    expect(other.steps[0]!.detail).to.equal('the doctor checks s7:// or s7plus:// connections; this URL is freeport');
+    expect(told).to.deep.equal(plus.steps);
+  });
+
   it('walks every step of a pinned connection and reads a name of the optimized DB, one of the standard DB and an address, each with its value and type', async () => {
     const { server, url, fingerprint } = await simulator();
     const seen: DoctorStep[] = [];

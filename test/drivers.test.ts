@@ -110,6 +110,28 @@ describe('drivers: the protocol registry', () => {
     }
   });
 
+  it('no file outside lib/drivers.ts and the protocol folders tests a scheme: the doctor, the CLI, lib/flows and the nodes ask the registry', () => {
+    // The protocol folders may name their own scheme (lib/s7/url.ts isS7Endpoint); nodes/*.html are the edit dialogs, which show each protocol's fields.
+    const own = /^lib\/(?:s7|s7plus|fetchwrite|freeport|iso)\/|^lib\/drivers\.ts$/;
+    const files = [...sourceFiles('lib', '.ts'), ...sourceFiles('nodes', '.js')].filter((f) => !own.test(f));
+    expect(files).to.include.members(['lib/doctor/index.ts', 'lib/cli/system.ts', 'lib/cli/s7plus.ts', 'nodes/connection.js']);
+    const found = files.flatMap((f) => schemeTests(fs.readFileSync(path.join(ROOT, f), 'utf8')).map((t) => `${f}: ${t}`));
+    expect(found).to.deep.equal([]);
+  });
+
+  it('the scheme-test finder finds what it is meant to find', () => {
+    const samples = [
+      'if (/^\\s*s7plus:/i.test(url)) return 1;',
+      "if (endpoint.protocol !== 's7plus') throw e;",
+      'if ("s7" === p) x();',
+      "switch (p) { case 'fetchwrite': break; }",
+      "if (url.startsWith('freeport+tcp:')) x();",
+    ];
+    for (const code of samples) expect(schemeTests(code), code).to.have.length(1);
+    // Words and keys are not tests: messages, comments, a lookup by protocol.
+    expect(schemeTests("// protocol === 's7'\nthrow new Error('give an s7plus:// URL'); DRIVERS['s7'];")).to.deep.equal([]);
+  });
+
   it('connect.ts, url.ts and the serve command name no protocol: they read the registry', () => {
     for (const file of ['lib/connect.ts', 'lib/url.ts', 'lib/cli/serve.ts']) {
       const code = fs
@@ -121,3 +143,28 @@ describe('drivers: the protocol registry', () => {
     }
   });
 });
+
+/** Files under `dir` (relative to the repository root) ending in `ext`, node_modules left out. */
+function sourceFiles(dir: string, ext: string): string[] {
+  return fs.readdirSync(path.join(ROOT, dir), { withFileTypes: true }).flatMap((e) => {
+    const rel = `${dir}/${e.name}`;
+    if (e.isDirectory()) return e.name === 'node_modules' ? [] : sourceFiles(rel, ext);
+    return e.name.endsWith(ext) ? [rel] : [];
+  });
+}
+
+const SCHEME = String.raw`(?:s7plus|s7|fetchwrite|freeport(?:\+tcp)?)`;
+
+/** Where code (comments left out) tests a URL scheme or protocol name: a comparison, a case, a regex or a string prefix. */
+const SCHEME_TESTS = [
+  new RegExp(String.raw`[=!]==?\s*['"\`]${SCHEME}['"\`]`, 'g'),
+  new RegExp(String.raw`['"\`]${SCHEME}['"\`]\s*[=!]==?`, 'g'),
+  new RegExp(String.raw`\bcase\s+['"\`]${SCHEME}['"\`]`, 'g'),
+  new RegExp(String.raw`\/\^[^/\n]*${SCHEME}\\?:`, 'g'),
+  new RegExp(String.raw`\.(?:startsWith|includes|match|test)\(\s*['"\`]${SCHEME}`, 'g'),
+];
+
+function schemeTests(code: string): string[] {
+  const bare = code.replace(/\/\*[\s\S]*?\*\//g, '').replace(/(^|[^:])\/\/.*$/gm, '$1');
+  return SCHEME_TESTS.flatMap((re) => [...bare.matchAll(re)].map((m) => m[0]));
+}

@@ -16,7 +16,7 @@ import { FetchWriteClient } from '../lib/fetchwrite/client';
 import { FetchWriteServer, type FetchWriteRequestEvent } from '../lib/fetchwrite/server';
 import { describe as describeSymbols, resolveAddress } from '../lib/flows/symbol-config';
 import { S7Client } from '../lib/s7/client';
-import { diagnose } from '../lib/s7/doctor';
+import { diagnose } from '../lib/doctor';
 import { S7Server, type S7RequestEvent } from '../lib/s7/server';
 import { compileSymbols } from '../lib/symbols';
 import type { SymbolEntry, SymbolTable } from '../lib/symbols/model';

@@ -14,7 +14,7 @@ export const EXIT = Object.freeze({
   TAG_ERROR: 1,
   /** Bad command line, URL, address, value or source file: nothing was sent. */
   USAGE: 2,
-  /** Could not connect, or the connection was lost. */
+  /** Could not connect (also: the PLC refused the password, or its certificate is not trusted), or the connection was lost. */
   CONNECTION: 3,
   /** A write or a control command was refused for safety (read-only, allow-list, no control=true, or no --yes). */
   REFUSED: 4,
@@ -44,7 +44,18 @@ export function fail(io: CliIo, err: unknown, debug: boolean): number {
   return code;
 }
 
+/**
+ * Errors `client.connect()` rejected with (withClient): whatever their code, the command could not connect, as
+ * the doctor's failed connection steps say (a refused password is ACCESS_DENIED, which for a tag is a tag error).
+ */
+const CONNECT_FAILURES = new WeakSet<object>();
+
 export function exitCode(err: unknown): number {
+  const code = exitCodeOf(err);
+  return code === EXIT.TAG_ERROR && typeof err === 'object' && err !== null && CONNECT_FAILURES.has(err) ? EXIT.CONNECTION : code;
+}
+
+function exitCodeOf(err: unknown): number {
   if (err instanceof UsageError) return EXIT.USAGE;
   if (err instanceof TagErrors) {
     // The tag errors' most telling code: bad input, then a refusal, then the link, else the tags themselves.
@@ -78,7 +89,10 @@ export async function withClient<R>(client: AnyClient, io: CliIo, work: (client:
   const onAbort = () => void client.close();
   io.signal.addEventListener('abort', onAbort, { once: true });
   try {
-    await client.connect();
+    await client.connect().catch((err: unknown) => {
+      if (typeof err === 'object' && err !== null) CONNECT_FAILURES.add(err);
+      throw err;
+    });
     return await work(client);
   } catch (err) {
     if (io.signal.aborted) throw new PlcError('ABORTED', 'interrupted');

@@ -4,6 +4,7 @@
  * code a script can switch on (see EXIT and the README's CLI reference).
  */
 import { createClient, type AnyClient } from '../connect';
+import { driverOf } from '../drivers';
 import { NAME_HINT } from '../address/parse';
 import { AddressError, PlcError, TagErrors, type TagResult } from '../errors';
 import type { SymbolTable } from '../symbols/model';
@@ -17,7 +18,7 @@ import { serve, SERVE_FLAGS } from './serve';
 import { realsShown } from '../symbols/reals';
 import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
 import { browse, browsedValueFromText, isPlcName, passwordOption } from './s7plus';
-import { canSubscribe, watchPushed } from './watch-push';
+import { subscriberOf, watchPushed } from './watch-push';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { textOf, toJson, valueFromText, type TypedTag } from './values';
 
@@ -254,7 +255,7 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
   const results = await withClient(client, io, async (c) => {
     await layoutChecked(c, table, io);
     if (browsedNames.length > 0) {
-      const browsed = await (c as AnyClient & { browse(o: { signal: AbortSignal }): Promise<SymbolTable> }).browse({ signal: io.signal });
+      const browsed = await driverOf(c).browse!(c, { signal: io.signal }); // isPlcName: only a driver that browses has such names
       for (const { address, text } of browsedNames) values[address] = browsedValueFromText(browsed, address, text);
     }
     return c.writeDetailed(values, { signal: io.signal });
@@ -330,7 +331,8 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     polled = addresses.filter((a) => tags.includes(a));
     void readAndPrint(fresh);
   };
-  const push = canSubscribe(client) ? watchPushed(client, addresses, { cycle, interval, report, print, poll }) : undefined;
+  const subscribe = subscriberOf(client);
+  const push = subscribe ? watchPushed(client, subscribe, addresses, { cycle, interval, report, print, poll }) : undefined;
   if (push) polled = [];
   client.start();
   try {

@@ -9,12 +9,11 @@
  * message of this file quotes it.
  */
 import type { AnyClient, ConnectOptions } from '../connect';
-import { PlcError, ValueError } from '../errors';
+import { ValueError } from '../errors';
 import type { SymbolEntry, SymbolTable } from '../symbols/model';
 import { wholeBlock } from '../symbols/resolve';
 import { unknownName } from '../s7plus/client/names';
 import { entryTree, expandStruct } from '../symbols/struct-tree';
-import type { RequestOptions } from '../types';
 import { parseUrl, type Endpoint } from '../url';
 import { UsageError, stringFlag, withTimeout, type ParsedArgs } from './args';
 import { readInputFile } from './files';
@@ -23,6 +22,7 @@ import { printSymbolRows } from './symbols';
 import { valueFromText, type TypedTag } from './values';
 import { validateValue, type TagShape } from '../values';
 import { createClient } from '../connect';
+import { driverOf, schemesOffering } from '../drivers';
 
 /** The environment variable that gives an s7plus:// connection its password. */
 const PASSWORD_ENV = 'PLCWIRE_PASSWORD';
@@ -39,9 +39,9 @@ export function passwordOption(
 ): Pick<ConnectOptions, 'password'> {
   const file = stringFlag(args, 'password-file');
   if (args.flags.has('password-file') && file === undefined) throw new UsageError('--password-file needs a file name');
-  if (endpoint.protocol !== 's7plus') {
+  if (!driverOf(endpoint).password) {
     if (file !== undefined)
-      throw new UsageError(`--password-file is for s7plus:// URLs (S7CommPlus); ${endpoint.protocol}:// has no password`);
+      throw new UsageError(`--password-file is for ${schemesOffering('password')} URLs; ${endpoint.protocol}:// has no password`);
     return {};
   }
   if (file !== undefined) return { password: passwordFromFile(file) };
@@ -62,31 +62,21 @@ function passwordFromFile(file: string): string {
   return first;
 }
 
-/** A client that reads the PLC's own symbol table (S7CommPlus). */
-interface Browsing {
-  browse(options?: RequestOptions): Promise<SymbolTable>;
-}
-
-function canBrowse(client: AnyClient): client is AnyClient & Browsing {
-  return typeof (client as Partial<Browsing>).browse === 'function';
-}
-
 /** `plcwire browse <url> [--json]`: the PLC's tags as `plcwire symbols` lists compiled ones. */
 export async function browse(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const url = rest[0];
-  if (url === undefined) throw new UsageError('browse needs an s7plus:// url');
+  if (url === undefined) throw new UsageError(`browse needs an ${schemesOffering('browse')} url`);
   if (rest.length > 1) throw new UsageError(`unexpected argument "${rest[1]}"`);
   if (args.flags.has('csv') && args.flags.has('json')) throw new UsageError('give --json or --csv, not both');
   const endpoint = withTimeout(parseUrl(url), args);
-  if (endpoint.protocol !== 's7plus') {
+  const driver = driverOf(endpoint);
+  if (!driver.browse) {
     throw new UsageError(
-      `browse asks the PLC for its tags over S7CommPlus: give an s7plus:// URL (for ${endpoint.protocol}://, list the sources with plcwire symbols)`,
+      `browse asks the PLC for its tags: give an ${schemesOffering('browse')} URL (for ${endpoint.protocol}://, list the sources with plcwire symbols)`,
     );
   }
   const client = createClient(endpoint, passwordOption(endpoint, args));
-  // Asked of the client, not of the protocol: a client without browse() says so before connecting.
-  if (!canBrowse(client)) throw new PlcError('NOT_SUPPORTED', `${url.split('?')[0]}: this client cannot browse the PLC yet`);
-  const table = await withClient(client, io, (c) => (c as AnyClient & Browsing).browse({ signal: io.signal }));
+  const table = await withClient(client, io, (c) => driver.browse!(c, { signal: io.signal }));
   printSymbolRows(table, args, io);
   return EXIT.OK;
 }
@@ -96,7 +86,7 @@ export async function browse(rest: string[], args: ParsedArgs, io: CliIo): Promi
  * client/names.ts plusSyntax), whose type only the browse tells.
  */
 export function isPlcName(client: AnyClient, address: string): boolean {
-  if (client.protocol !== 's7plus') return false;
+  if (!driverOf(client).browse) return false;
   return typeof (client.tag(address) as { symbol?: unknown }).symbol === 'string';
 }
 

@@ -8,6 +8,7 @@
  */
 import { isAddress } from '../address';
 import type { AnyClient, ConnectOptions } from '../connect';
+import { DRIVERS } from '../drivers';
 import { ValueError } from '../errors';
 import { compileSymbols } from '../symbols/compile';
 import type { SymbolEntry, SymbolSource, SymbolTable } from '../symbols/model';
@@ -248,7 +249,7 @@ export function reportLayout(client: AnyClient, io: CliIo, strict: boolean): voi
     io.stderr.write(`warning: ${finding}: ${consequence}; recompile the sources or download the block\n`);
   });
   client.on('layoutUnknown', (e: LayoutUnknownEvent) => {
-    io.stderr.write(`note: ${layoutUnknownText(client.protocol, e)}\n`);
+    io.stderr.write(`note: ${layoutUnknownText(DRIVERS[client.protocol].noBlockLength, e)}\n`);
   });
 }
 
@@ -256,14 +257,14 @@ export function reportLayout(client: AnyClient, io: CliIo, strict: boolean): voi
  * The note for a PLC that cannot tell its blocks' lengths, in a user's words:
  * what it means (a changed DB is not detected) and what to do (export the
  * sources again after every change). An S7-1200/1500 answers block info
- * "function not implemented" (NOT_SUPPORTED); FETCH/WRITE has no such
- * service. Any other reason (a protection level, say) is named as the client
+ * "function not implemented" (NOT_SUPPORTED); a protocol without such a
+ * service says so in its registry entry (noBlockLength: FETCH/WRITE). Any other reason (a protection level, say) is named as the client
  * gives it.
  */
-function layoutUnknownText(protocol: string, e: LayoutUnknownEvent): string {
+function layoutUnknownText(noBlockLength: string | undefined, e: LayoutUnknownEvent): string {
   const blocks = e.checks.map((c) => blockName(c.block, c.db)).join(', ');
   const advice = `so a DB changed in the PLC's project (${blocks}) is not detected here; export the sources again after every change`;
-  if (protocol === 'fetchwrite') return `FETCH/WRITE does not report the length of data blocks, ${advice}`;
+  if (noBlockLength !== undefined) return `${noBlockLength}, ${advice}`;
   if (e.error.code === 'NOT_SUPPORTED') {
     return `this CPU does not report the length of its data blocks (S7-1200 and S7-1500 do not), ${advice.replace("the PLC's project", 'TIA Portal')}`;
   }

@@ -1,7 +1,7 @@
 /**
  * The system commands: info and blocks (whatever the URL's client offers: the
  * S7Client's services, the S7CommPlus client's CPU state and data blocks),
- * szl, diag, clock, cpu (S7 only) and doctor (lib/s7/doctor/). Control (cpu, clock --set) is
+ * szl, diag, clock, cpu (S7 only) and doctor (lib/doctor/, each driver's steps through its diagnose port). Control (cpu, clock --set) is
  * refused before connecting unless the URL says control=true, and needs
  * --yes from a script or for a PLC that is not this machine.
  */
@@ -11,6 +11,8 @@ import { S7Client } from '../s7/client';
 import { BLOCK_TYPES, type BlockType } from '../s7/constants';
 import { decodeDiagnosticBuffer } from '../s7/codec/diagnostics';
 import { diagnose, type DoctorStep } from '../doctor';
+import { driverOf, schemesOffering } from '../drivers';
+import { isS7Endpoint } from '../s7/url';
 import {
   decodeCommunication,
   decodeComponentIdentification,
@@ -36,7 +38,7 @@ function s7Endpoint(rest: string[], what: string, args: ParsedArgs): S7Endpoint 
   const url = rest[0];
   if (url === undefined) throw new UsageError(`${what} needs a PLC url`);
   const endpoint = withTimeout(parseUrl(url), args);
-  if (endpoint.protocol !== 's7') throw new UsageError(`${what} speaks S7 only: give an s7:// URL`);
+  if (!isS7Endpoint(endpoint)) throw new UsageError(`${what} speaks S7 only: give an s7:// URL`);
   return endpoint;
 }
 
@@ -54,7 +56,6 @@ interface SystemServices {
   certificate?: { fingerprint: string; subject: string; validFrom: string; validTo: string } | undefined;
   listBlocks?(options?: RequestOptions): Promise<Record<string, number>>;
   dataBlocks?(options?: RequestOptions): Promise<{ number: number; name: string }[]>;
-  browse?(options?: RequestOptions): Promise<SymbolTable>;
 }
 
 /** The URL's client (with the password of an s7plus:// URL), unconnected, seen through the services it may offer. */
@@ -242,19 +243,21 @@ export async function blocks(rest: string[], args: ParsedArgs, io: CliIo): Promi
 }
 
 /**
- * Each data block with its access (optimized or standard), from the client's
- * browse of the blocks' type objects; null where it cannot tell (no browse,
- * or a PLC that gives no type information, as the s7commplus emulator).
+ * Each data block with its access (optimized or standard), from the browse of
+ * the blocks' type objects (the driver's browse port); null where it cannot
+ * tell (no browse, or a PLC that gives no type information, as the s7commplus
+ * emulator).
  */
 async function withAccess(
   blocks: { number: number; name: string }[],
-  client: SystemServices,
+  client: AnyClient,
   io: CliIo,
 ): Promise<{ number: number; name: string; optimized: boolean | null }[]> {
   let table: SymbolTable | undefined;
-  if (client.browse && blocks.length > 0) {
+  const browse = driverOf(client).browse;
+  if (browse && blocks.length > 0) {
     try {
-      table = await client.browse({ signal: io.signal });
+      table = await browse(client, { signal: io.signal });
     } catch (err) {
       if (io.signal.aborted) throw err;
       if (!(err instanceof PlcError) || isLinkError(err)) throw err;
@@ -315,8 +318,10 @@ export async function doctor(rest: string[], args: ParsedArgs, io: CliIo): Promi
   if (url === undefined) throw new UsageError('doctor needs a PLC url');
   // A URL that does not parse is a usage error, as for every command; the doctor itself starts at the name.
   const endpoint = parseUrl(url);
-  if (endpoint.protocol !== 's7' && endpoint.protocol !== 's7plus')
-    throw new UsageError('doctor checks S7 and S7CommPlus connections: give an s7:// or s7plus:// URL');
+  if (!driverOf(endpoint).diagnose) {
+    const schemes = schemesOffering('diagnose');
+    throw new UsageError(`doctor checks ${schemes} connections: give an ${schemes} URL`);
+  }
   // The password of an s7plus:// URL (PLCWIRE_PASSWORD, --password-file): to the client only, never in a step.
   const password = passwordOption(endpoint, args);
   const json = args.flags.has('json');

@@ -6,17 +6,18 @@
  * `--interval` ms instead, and stderr says which and why.
  */
 import type { AnyClient } from '../connect';
+import { driverOf } from '../drivers';
 import { TagErrors, type PlcError, type TagResult } from '../errors';
-import type { S7PlusSubscription, SubscribeOptions, SubscriptionData } from '../s7plus/client';
+import type { SubscriptionNotice, TagSubscription } from '../types';
 
-/** A client whose PLC reports changes (S7CommPlus). */
-interface Subscribing {
-  subscribe(tags: readonly string[], options?: SubscribeOptions): Promise<S7PlusSubscription>;
+/** How `client` has its PLC report changes: its driver's subscribe port (lib/drivers.ts), bound to it; undefined without one. */
+export function subscriberOf(client: AnyClient): Subscriber | undefined {
+  const subscribe = driverOf(client).subscribe;
+  return subscribe && ((tags, options) => subscribe(client, tags, options));
 }
 
-export function canSubscribe(client: AnyClient): client is AnyClient & Subscribing {
-  return typeof (client as Partial<Subscribing>).subscribe === 'function';
-}
+/** Subscribes tags on one client. */
+type Subscriber = (tags: readonly string[], options: { cycle: number }) => Promise<TagSubscription>;
 
 export interface PushWatch {
   /** Ends the subscription. Always resolves. */
@@ -41,8 +42,8 @@ export interface PushWatchOptions {
  * connection while it has not succeeded); the subscription itself is created
  * again by the client after a reconnect.
  */
-export function watchPushed(client: AnyClient & Subscribing, addresses: readonly string[], o: PushWatchOptions): PushWatch {
-  let sub: S7PlusSubscription | undefined;
+export function watchPushed(client: AnyClient, subscribe: Subscriber, addresses: readonly string[], o: PushWatchOptions): PushWatch {
+  let sub: TagSubscription | undefined;
   let trying = false;
   let stopped = false;
   const polled = new Set<string>();
@@ -53,7 +54,7 @@ export function watchPushed(client: AnyClient & Subscribing, addresses: readonly
     for (const t of fresh) o.report(`${t} cannot be subscribed (${why(t)}): polled every ${o.interval} ms instead`);
     o.poll([...polled]);
   };
-  const onData = (d: SubscriptionData) => {
+  const onData = (d: SubscriptionNotice) => {
     const shown: Record<string, TagResult<unknown>> = {};
     const refused: string[] = [];
     for (const t of d.changed) {
@@ -66,7 +67,7 @@ export function watchPushed(client: AnyClient & Subscribing, addresses: readonly
   };
   const trySubscribe = async (tags: readonly string[]): Promise<void> => {
     try {
-      const s = await client.subscribe(tags, { cycle: o.cycle });
+      const s = await subscribe(tags, { cycle: o.cycle });
       if (stopped) return void (await s.close());
       sub = s;
       s.on('data', onData);

@@ -1,30 +1,22 @@
 /**
  * A read node's push mode ("when the PLC reports a change"): the node's
- * table subscribed on an S7CommPlus client (client.subscribe()), each
+ * table subscribed through the client's driver (its subscribe port in
+ * lib/drivers.ts: an S7CommPlus client's client.subscribe()), each
  * notification turned into the table's per-tag outcomes, as a poll's are.
  * Subscribed when the link comes up and not yet subscribed (or on another
  * client: a new connection node); the client creates the subscription again
  * after a reconnect by itself. Nothing here is Node-RED's.
  */
+import type { AnyClient } from '../connect';
+import { driverOf } from '../drivers';
 import type { PlcError } from '../errors';
+import type { PlcClient, TagSubscription } from '../types';
 import type { TagRow } from '../tags/table';
 import { outcomes, type TagOutcome } from './outcome';
 
-/** What the push mode needs of a client: subscribe(), as the S7CommPlus client has it. */
-interface PushClient {
-  subscribe(tags: readonly string[], options?: { cycle?: number }): Promise<PushSubscription>;
-}
-
-interface PushSubscription {
-  on(event: 'data', listener: (d: { results: Record<string, never> }) => void): unknown;
-  on(event: 'lost' | 'error', listener: (err: PlcError) => void): unknown;
-  on(event: 'active', listener: () => void): unknown;
-  close(): Promise<void>;
-}
-
-/** True when `client` can have its PLC report changes (an s7plus:// client). */
-export function canPush(client: unknown): client is PushClient {
-  return typeof (client as Partial<PushClient> | undefined)?.subscribe === 'function';
+/** True when `client` can have its PLC report changes: its driver offers the subscribe port (s7plus://). */
+export function canPush(client: PlcClient | undefined): client is PlcClient {
+  return client !== undefined && driverOf(client).subscribe !== undefined;
 }
 
 export interface ReadPushEvents {
@@ -38,8 +30,8 @@ export interface ReadPushEvents {
 
 export class ReadPush {
   private readonly addresses: string[];
-  private client: PushClient | undefined;
-  private sub: PushSubscription | undefined;
+  private client: PlcClient | undefined;
+  private sub: TagSubscription | undefined;
   private pending: Promise<unknown> | undefined;
   private closed = false;
 
@@ -52,14 +44,14 @@ export class ReadPush {
   }
 
   /** The link is up on `client`: subscribes unless it is subscribed on it already (or subscribing). */
-  linkUp(client: PushClient): void {
+  linkUp(client: PlcClient): void {
     if (this.closed || this.pending || this.addresses.length === 0) return;
     if (this.sub && this.client === client) return;
     const old = this.sub;
     this.sub = undefined;
     this.client = client;
     const pending = (old ? old.close() : Promise.resolve())
-      .then(() => client.subscribe(this.addresses, { cycle: this.cycle }))
+      .then(() => driverOf(client).subscribe!(client as AnyClient, this.addresses, { cycle: this.cycle }))
       .then(
         async (sub) => {
           if (this.closed) return sub.close();

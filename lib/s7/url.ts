@@ -45,6 +45,11 @@ const DEFAULTS = Object.freeze({
   maxItems: DEFAULT_MAX_ITEMS,
 });
 
+/** True for an endpoint of an s7:// URL: the CPU services only S7Client has (SZL, diagnostic buffer, clock, RUN/STOP). */
+export function isS7Endpoint(e: { readonly protocol: string }): e is S7Endpoint {
+  return e.protocol === 's7';
+}
+
 export const S7_URLS: UrlScheme<S7Endpoint> = Object.freeze({
   protocol: 's7',
   schemes: { s7: ['rack', 'slot', 'localTsap', 'remoteTsap', 'type', 'pdu', 'timeout', 'maxItems', 'control'] },

@@ -72,6 +72,11 @@ export function normalizeFingerprint(text: string): string | undefined {
   return /^[0-9a-f]{64}$/.test(hex) ? hex : undefined;
 }
 
+/** True for an endpoint of an s7plus:// URL (the PLC certificate of the connection dialog is S7CommPlus's alone). */
+export function isS7PlusEndpoint(e: { readonly protocol: string }): e is S7PlusEndpoint {
+  return e.protocol === 's7plus';
+}
+
 export const S7PLUS_URLS: UrlScheme<S7PlusEndpoint> = Object.freeze({
   protocol: 's7plus',
   schemes: { s7plus: PARAMS },

@@ -19,6 +19,7 @@ const symbols = require('../../dist/lib/flows/symbol-config');
 const { openTunnel } = require('../../dist/lib/s7plus/client/tunnel');
 const { initSsl, peerCertificate } = require('../../dist/lib/s7plus/client/handshake');
 const { startTls } = require('../../dist/lib/s7plus/transport/handshake');
+const { isS7PlusEndpoint } = require('../../dist/lib/s7plus/url');
 
 /** The longest either request may take. */
 const DEADLINE_MS = 15000;
@@ -26,7 +27,7 @@ const DEADLINE_MS = 15000;
 /** The s7plus:// endpoint of a request's URL; throws the parser's error or INVALID_URL for any other URL. */
 function s7plusEndpoint(url) {
   const endpoint = plc.parseUrl(String(url || '').trim());
-  if (endpoint.protocol !== 's7plus') {
+  if (!isS7PlusEndpoint(endpoint)) {
     throw new plc.PlcError('INVALID_URL', 'the PLC certificate and Browse PLC need an s7plus:// URL (S7CommPlus)');
   }
   return endpoint;

@@ -4,7 +4,7 @@
  * addressings it tries when the URL's is refused, and the family an order
  * code or module type names.
  */
-import type { S7Endpoint } from '../../url';
+import type { S7Endpoint } from '../url';
 import { hex4 } from '../../values/text';
 import { S7_CPU_PRESETS, type S7CpuPreset } from '../presets';
 import type { PlcInfo } from '../client';

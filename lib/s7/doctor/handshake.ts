@@ -13,7 +13,7 @@ import type { PlcError } from '../../errors';
 import { IsoConnectError, requestIsoConnection, type IsoRefusal } from '../../iso/connect';
 import { DR_CONGESTION } from '../../iso/constants';
 import { IsoFrames } from '../../iso/frames';
-import type { S7Endpoint } from '../../url';
+import type { S7Endpoint } from '../url';
 import { exchangeSetup } from '../client/handshake';
 import { TPDU_SIZE_CODE, headerError } from '../constants';
 import { hex4 } from '../../values/text';

@@ -3,6 +3,7 @@
  * hint of a failed (or passed with a warning) step. The step's detail (what
  * was seen) stays with the step; these say what to do about it.
  */
+import { NETWORK_HINT } from '../../iso/hints';
 import { usualAddressing, type Addressing } from './families';
 
 /** Where a CPU's protection is set: TIA Portal for an S7-1200/1500, the hardware configuration or mode selector for the others. */
@@ -12,20 +13,8 @@ const protectionSetting = (modern: boolean): string =>
     : "the CPU's protection settings in the hardware configuration, or the mode selector";
 
 export const HINT = {
+  ...NETWORK_HINT,
   url: 'Write the URL as s7://<host>[:port]?rack=0&slot=1 (README, "URLs").',
-  notS7: 'Give an s7:// URL.',
-  deadline: "Give the doctor more time (the timeout option, or --timeout), or raise the URL's timeout on a slow link.",
-  noDns: "Check this machine's DNS settings, or use the PLC's IP address in the URL.",
-  unknownHost:
-    "Check the spelling of the host name, or use the PLC's IP address in the URL (TIA Portal: the CPU's Properties → PROFINET interface → Ethernet addresses).",
-  filtered: (port: number): string =>
-    'The PLC is off or unplugged, in another subnet without a route, or a firewall drops port ' +
-    `${port}. Check that this machine is in the PLC's subnet (e.g. 192.168.0.x/24 for 192.168.0.1), that the PLC answers ping, and any firewall between.`,
-  refused: `Check that the address is the PLC's (not a PC's or an HMI's) and the port: S7 uses 102; a gateway or simulator may use another (add :port to the URL).`,
-  noRoute: "Check the IP address, this machine's subnet and gateway, and the cable.",
-  notIsoOnTcp:
-    'This is probably not an S7 PLC (another device or service on that address and port), or a communication processor that hangs: check the address, and power-cycle the CP.',
-  otherProtocol: 'Another protocol listens on this port: check the address and the port (S7 uses 102).',
   congestion:
     'All connections of the CPU are in use: close other clients (HMI, SCADA, TIA Portal online, other scripts) or give the CPU more connection resources in its hardware configuration.',
   /** The rack/slot or TSAP the CPU was found to accept (or none), then the usual values of each family. */

@@ -8,8 +8,6 @@ const SECURE =
 
 export const PLUS_HINT = {
   url: 'Write the URL as s7plus://<host>[:102]?fingerprint=<SHA-256 of the PLC\'s certificate> (README, "Optimized blocks (S7CommPlus)").',
-  notPlus: 'Give an s7plus:// URL (or s7:// for PUT/GET).',
-  deadline: "Give the doctor more time (the timeout option, or --timeout), or raise the URL's timeout on a slow link.",
   refusedTsap:
     'The CPU does not take S7CommPlus connections on this port: an S7-300/400 (or an S7-1200/1500 behind a CP, or a gateway) speaks PUT/GET only: use s7:// with standard-access data blocks. ' +
     'On an S7-1200/1500, all of its connections may be in use: close other clients (HMI, TIA Portal online).',

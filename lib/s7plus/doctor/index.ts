@@ -1,10 +1,10 @@
 /**
- * The connection doctor of an s7plus:// URL: the walk TCP → COTP (the
+ * The connection doctor's steps of an s7plus:// URL: TCP → COTP (the
  * S7CommPlus TSAPs) → InitSSL → TLS (the PLC's certificate, and whether it
  * was pinned, signed by the given CA, or accepted unchecked) → session
  * (protocol version, session id) → password → identity → browse → each given
- * name or address, in the report shape of the S7 doctor (lib/s7/doctor:
- * steps with ok, detail and a hint in words). The handshake steps are the
+ * name or address, run inside the walk of lib/doctor/ (steps with ok,
+ * detail and a hint in words, as the S7 doctor's). The handshake steps are the
  * client's own: openS7PlusSession tells each step that passed (OpenOptions
  * onStep), so a failure is the step after the last one told. Nothing is
  * written to the PLC; the one connection is closed on every path, and the
@@ -14,38 +14,39 @@ import { PlcError } from '../../errors';
 import { IsoConnectError } from '../../iso/connect';
 import { openTcp } from '../../link/tcp';
 import { S7_TAG_SYNTAX } from '../../address';
-import type { DiagnoseOptions, DoctorReport } from '../../s7/doctor';
+import { NETWORK_HINT } from '../../iso/hints';
+import type { DiagnosePort, DoctorSteps } from '../../doctor-steps';
 import type { SymbolTable } from '../../symbols/model';
-import { formatUrl, parseUrl } from '../../url';
 import { realsShown } from '../../symbols/reals';
 import { textOf } from '../../values/text';
 import { S7PlusClient } from '../client';
 import type { HandshakeStep } from '../client/handshake';
 import { CertificateError } from '../transport/trust';
 import type { S7PlusEndpoint } from '../url';
-import { HINT as S7_HINT } from '../../s7/doctor/hints';
 import { PLUS_HINT } from './hints';
-import { DoctorWalk } from '../../s7/doctor/walk';
-
-export interface PlusDiagnoseOptions extends DiagnoseOptions {
-  /** The PLC's password (legitimation): never in a step, a hint or the report. */
-  password?: string;
-}
 
 /**
- * Diagnoses the connection to an S7-1200/1500 over S7CommPlus. Resolves a
- * report whose steps end at the first failure; rejects only with ABORTED
- * when `options.signal` aborts.
+ * The S7CommPlus doctor as the registry's diagnose port (lib/drivers.ts): the
+ * steps of a connection to an S7-1200/1500, run inside the walk of lib/doctor/
+ * once it parsed the URL. `options.password` (legitimation) is never in a
+ * step, a hint or the report; the one connection is closed before it returns.
  */
-export async function diagnosePlus(url: string, names: readonly string[] = [], options: PlusDiagnoseOptions = {}): Promise<DoctorReport> {
-  const doctor = new PlusDoctor(options);
-  try {
-    await doctor.run(url, names);
-  } finally {
-    await doctor.dispose();
-  }
-  return doctor.report();
-}
+export const S7PLUS_DOCTOR: DiagnosePort<S7PlusEndpoint> = Object.freeze({
+  urlHint: PLUS_HINT.url,
+  async run(
+    endpoint: S7PlusEndpoint,
+    names: readonly string[],
+    steps: DoctorSteps,
+    formatUrl: (e: S7PlusEndpoint) => string,
+  ): Promise<void> {
+    const doctor = new PlusDoctor(steps, formatUrl);
+    try {
+      await doctor.run(endpoint, names);
+    } finally {
+      await doctor.dispose();
+    }
+  },
+});
 
 /** protocol.py AccessLevel, in words (client/legitimation.ts Protection.level). */
 const ACCESS_LEVELS: Readonly<Record<number, string>> = {
@@ -59,48 +60,34 @@ const ACCESS_LEVELS: Readonly<Record<number, string>> = {
 /** The handshake steps in their order; `password` only when one is given. */
 type HandshakeName = 'cotp' | 'InitSSL' | 'TLS' | 'session' | 'password';
 
-class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
+class PlusDoctor {
   private client: S7PlusClient | undefined;
   /** The handshake step that runs now: the one a connect failure belongs to. */
   private next: HandshakeName = 'cotp';
 
-  constructor(options: PlusDiagnoseOptions) {
-    super(options, PLUS_HINT.deadline);
-  }
+  /** `formatUrl`: an endpoint as the URL a user pastes (the pinned URL of a hint). */
+  constructor(
+    private readonly w: DoctorSteps,
+    private readonly formatUrl: (e: S7PlusEndpoint) => string,
+  ) {}
 
-  override async dispose(): Promise<void> {
-    await super.dispose();
+  async dispose(): Promise<void> {
     await this.client?.close();
   }
 
-  async run(url: string, names: readonly string[]): Promise<void> {
-    await this.walk(async () => {
-      const e = this.url(url);
-      await this.handshake(e);
-      await this.identity();
-      const table = await this.browse();
-      for (const n of names) await this.check(n, table);
-    });
+  async run(e: S7PlusEndpoint, names: readonly string[]): Promise<void> {
+    await this.handshake(e);
+    await this.identity();
+    const table = await this.browse();
+    for (const n of names) await this.check(n, table);
   }
 
   // ---------------------------------------------------------------- steps
 
-  private url(url: string): S7PlusEndpoint {
-    let e;
-    try {
-      e = parseUrl(url);
-    } catch (err) {
-      this.fail('url', (err as Error).message, PLUS_HINT.url);
-    }
-    if (e.protocol !== 's7plus')
-      this.fail('url', `this doctor checks S7CommPlus connections; this URL is ${e.protocol}`, PLUS_HINT.notPlus);
-    return e;
-  }
-
   /** The URL `e` with `fingerprint=` pinning this certificate (and no insecure=true): what to try next. */
   private pinned(e: S7PlusEndpoint, fingerprint: string): string {
     const { insecure: _insecure, ca: _ca, ...rest } = e;
-    return formatUrl({ ...rest, fingerprint });
+    return this.formatUrl({ ...rest, fingerprint });
   }
 
   /** TCP on a socket of its own, closed at once: a refusal or silence is told apart from the PLC's later answers. */
@@ -109,27 +96,27 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
       const socket = await openTcp({
         host: e.host,
         port: e.port,
-        timeout: Math.min(e.timeout, this.ms),
-        signal: this.signal,
+        timeout: Math.min(e.timeout, this.w.ms),
+        signal: this.w.signal,
         keepAliveMs: 0,
       });
       socket.destroy();
     } catch (err) {
-      this.failed('tcp', err, (p) => this.tcpFailure(e, where, p));
+      this.w.failed('tcp', err, (p) => this.tcpFailure(e, where, p));
     }
-    this.pass('tcp', `${where} accepts TCP connections`);
+    this.w.pass('tcp', `${where} accepts TCP connections`);
   }
 
   /** One connection by the client's own handshake; each step it tells becomes a passed step. */
   private async handshake(e: S7PlusEndpoint): Promise<void> {
     const where = `${e.host}:${e.port}`;
     await this.tcp(e, where);
-    const password = this.options.password;
+    const password = this.w.options.password;
     const client = new S7PlusClient(
-      { ...e, timeout: Math.max(1, Math.min(e.timeout, this.ms)) },
+      { ...e, timeout: Math.max(1, Math.min(e.timeout, this.w.ms)) },
       {
         ...(password !== undefined ? { password } : {}),
-        ...(this.options.symbols ? { symbols: this.options.symbols } : {}),
+        ...(this.w.options.symbols ? { symbols: this.w.options.symbols } : {}),
         handshake: (passed) => this.passed(e, where, passed),
       },
     );
@@ -137,30 +124,30 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
     client.on('error', () => undefined);
     client.on('insecure', () => undefined); // the TLS step says it
     const onAbort = () => void client.close();
-    this.signal.addEventListener('abort', onAbort, { once: true });
+    this.w.signal.addEventListener('abort', onAbort, { once: true });
     try {
       await client.connect();
     } catch (err) {
       const step = this.next;
-      this.failed(step, err, (p) => this.handshakeFailure(e, where, step, p));
+      this.w.failed(step, err, (p) => this.handshakeFailure(e, where, step, p));
     } finally {
-      this.signal.removeEventListener('abort', onAbort);
+      this.w.signal.removeEventListener('abort', onAbort);
     }
-    if (password === undefined) this.pass('password', 'none given: the session has the access the CPU grants without a password');
+    if (password === undefined) this.w.pass('password', 'none given: the session has the access the CPU grants without a password');
   }
 
   private passed(e: S7PlusEndpoint, where: string, passed: HandshakeStep | { step: string; detail?: string }): void {
     switch (passed.step) {
       case 'cotp':
-        this.pass(
+        this.w.pass(
           'cotp',
           `the CPU accepted the S7CommPlus connection request (called TSAP "SIMATIC-ROOT-${e.role.toUpperCase()}", calling TSAP 0x0600)`,
         );
         this.next = 'InitSSL';
         return;
       case 'InitSSL':
-        this.pass('InitSSL', 'the CPU answered InitSSL: it speaks S7CommPlus');
-        if (!e.tls) this.pass('TLS', 'tls=false: plain S7CommPlus V1, as the URL asks', PLUS_HINT.plainText);
+        this.w.pass('InitSSL', 'the CPU answered InitSSL: it speaks S7CommPlus');
+        if (!e.tls) this.w.pass('TLS', 'tls=false: plain S7CommPlus V1, as the URL asks', PLUS_HINT.plainText);
         this.next = e.tls ? 'TLS' : 'session';
         return;
       case 'TLS': {
@@ -171,7 +158,7 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
             : trust === 'ca'
               ? 'is signed by the CA of ca='
               : 'was accepted unchecked (insecure=true)';
-        this.pass(
+        this.w.pass(
           'TLS',
           `${protocol}; the PLC's certificate ${how}: SHA-256 ${c.fingerprint}, subject ${c.subject}, valid ${c.validFrom} to ${c.validTo}`,
           trust === 'insecure' ? PLUS_HINT.insecure(this.pinned(e, c.fingerprint)) : undefined,
@@ -181,14 +168,17 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
       }
       case 'session': {
         const { sessionId, version } = passed as Extract<HandshakeStep, { step: 'session' }>;
-        this.pass('session', `S7CommPlus V${version}${version >= 2 ? ' with integrity ids' : ''}, session id 0x${sessionId.toString(16)}`);
+        this.w.pass(
+          'session',
+          `S7CommPlus V${version}${version >= 2 ? ' with integrity ids' : ''}, session id 0x${sessionId.toString(16)}`,
+        );
         this.next = 'password';
         return;
       }
       case 'password': {
         const { protection: p } = passed as Extract<HandshakeStep, { step: 'password' }>;
         const access = ACCESS_LEVELS[p.level] ?? `access level ${p.level}`;
-        this.pass(
+        this.w.pass(
           'password',
           p.legitimated
             ? `the PLC took the password${p.form ? ` (${p.form} legitimation)` : ''}: the session has ${access}`
@@ -199,7 +189,7 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
       default: {
         // A step this doctor does not know: shown as the client tells it.
         const detail = 'detail' in passed && typeof passed.detail === 'string' ? passed.detail : 'passed';
-        this.pass(passed.step, detail);
+        this.w.pass(passed.step, detail);
       }
     }
   }
@@ -208,7 +198,7 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
     let cause: unknown = p;
     while (cause instanceof Error && !(cause instanceof IsoConnectError)) cause = cause.cause;
     if (step === 'cotp') return this.cotpFailure(e, p, cause instanceof IsoConnectError ? cause : undefined);
-    if (step === 'InitSSL') this.fail('InitSSL', p.message, /closed the connection/.test(p.message) ? PLUS_HINT.notPlusCpu : undefined);
+    if (step === 'InitSSL') this.w.fail('InitSSL', p.message, /closed the connection/.test(p.message) ? PLUS_HINT.notPlusCpu : undefined);
     if (step === 'TLS') {
       if (p instanceof CertificateError) {
         const c = p.certificate;
@@ -216,14 +206,14 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
           `the PLC's certificate was refused (${p.problem}): SHA-256 ${c.fingerprint}, subject ${c.subject}, issuer ${c.issuer}, ` +
           `valid ${c.notBefore.toISOString()} to ${c.notAfter.toISOString()}`;
         const url = this.pinned(e, c.fingerprint);
-        if (p.problem === 'expired' || p.problem === 'not-yet-valid') this.fail('TLS', detail, PLUS_HINT.expired);
-        if (p.problem === 'not-signed-by-ca') this.fail('TLS', detail, PLUS_HINT.notSignedByCa + url);
-        this.fail('TLS', detail, PLUS_HINT.pin(url));
+        if (p.problem === 'expired' || p.problem === 'not-yet-valid') this.w.fail('TLS', detail, PLUS_HINT.expired);
+        if (p.problem === 'not-signed-by-ca') this.w.fail('TLS', detail, PLUS_HINT.notSignedByCa + url);
+        this.w.fail('TLS', detail, PLUS_HINT.pin(url));
       }
-      this.fail('TLS', p.message, PLUS_HINT.tlsRefused);
+      this.w.fail('TLS', p.message, PLUS_HINT.tlsRefused);
     }
-    if (step === 'session') this.fail('session', p.message, e.tls ? PLUS_HINT.session : PLUS_HINT.plainAsked);
-    this.fail(step, p.message, step === 'password' ? PLUS_HINT.password : undefined);
+    if (step === 'session') this.w.fail('session', p.message, e.tls ? PLUS_HINT.session : PLUS_HINT.plainAsked);
+    this.w.fail(step, p.message, step === 'password' ? PLUS_HINT.password : undefined);
   }
 
   private tcpFailure(e: S7PlusEndpoint, where: string, p: PlcError): never {
@@ -233,46 +223,47 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
       code = (c as NodeJS.ErrnoException).code?.startsWith('E') ? (c as NodeJS.ErrnoException).code : undefined;
       c = c.cause;
     }
-    if (p.code === 'TIMEOUT') this.fail('tcp', `no answer from ${where}: ${p.message}`, S7_HINT.filtered(e.port));
+    if (p.code === 'TIMEOUT') this.w.fail('tcp', `no answer from ${where}: ${p.message}`, NETWORK_HINT.filtered(e.port));
     if (code === 'ECONNREFUSED')
-      this.fail(
+      this.w.fail(
         'tcp',
         `${where} refused the connection (ECONNREFUSED): the host is up, but nothing listens on port ${e.port}`,
-        S7_HINT.refused,
+        NETWORK_HINT.refused,
       );
-    if (code === 'ENOTFOUND' || code === 'EAI_AGAIN') this.fail('tcp', `"${e.host}" does not resolve (${code})`, S7_HINT.unknownHost);
-    if (code === 'EHOSTUNREACH' || code === 'ENETUNREACH') this.fail('tcp', `no route to ${where} (${code})`, S7_HINT.noRoute);
-    this.fail('tcp', p.message);
+    if (code === 'ENOTFOUND' || code === 'EAI_AGAIN')
+      this.w.fail('tcp', `"${e.host}" does not resolve (${code})`, NETWORK_HINT.unknownHost);
+    if (code === 'EHOSTUNREACH' || code === 'ENETUNREACH') this.w.fail('tcp', `no route to ${where} (${code})`, NETWORK_HINT.noRoute);
+    this.w.fail('tcp', p.message);
   }
 
   private cotpFailure(e: S7PlusEndpoint, p: PlcError, iso: IsoConnectError | undefined): never {
     const r = iso?.refusal;
     if (r?.kind === 'silent' || (!iso && p.code === 'TIMEOUT'))
-      this.fail('cotp', `port ${e.port} accepts TCP but nothing answered the connection request: ${p.message}`, S7_HINT.notIsoOnTcp);
-    if (r?.kind === 'garbage') this.fail('cotp', `the answer is not ISO-on-TCP: ${r.message}`, S7_HINT.otherProtocol);
-    if (!iso) this.fail('cotp', p.message);
+      this.w.fail('cotp', `port ${e.port} accepts TCP but nothing answered the connection request: ${p.message}`, NETWORK_HINT.notIsoOnTcp);
+    if (r?.kind === 'garbage') this.w.fail('cotp', `the answer is not ISO-on-TCP: ${r.message}`, NETWORK_HINT.otherProtocol);
+    if (!iso) this.w.fail('cotp', p.message);
     const role = `SIMATIC-ROOT-${e.role.toUpperCase()}`;
-    this.fail('cotp', `the CPU refused the S7CommPlus connection request (called TSAP "${role}"): ${p.message}`, PLUS_HINT.refusedTsap);
+    this.w.fail('cotp', `the CPU refused the S7CommPlus connection request (called TSAP "${role}"): ${p.message}`, PLUS_HINT.refusedTsap);
   }
 
   private async identity(): Promise<void> {
     const client = this.client!;
     try {
-      const info = await client.info({ signal: this.signal });
+      const info = await client.info({ signal: this.w.signal });
       const who = info.orderCode
         ? `${info.orderCode}${info.firmware ? ` firmware ${info.firmware}` : ''}`
         : 'the CPU does not say what it is (no device string in its session)';
-      this.pass('identity', `${who}; in ${info.state}`, info.state === 'STOP' ? PLUS_HINT.inStop : undefined);
+      this.w.pass('identity', `${who}; in ${info.state}`, info.state === 'STOP' ? PLUS_HINT.inStop : undefined);
     } catch (err) {
-      this.failed('identity', err, (p) => this.fail('identity', p.message));
+      this.w.failed('identity', err, (p) => this.w.fail('identity', p.message));
     }
   }
 
   private async browse(): Promise<SymbolTable | undefined> {
     const client = this.client!;
     try {
-      const blocks = await client.dataBlocks({ signal: this.signal });
-      const table = await client.browse({ signal: this.signal });
+      const blocks = await client.dataBlocks({ signal: this.w.signal });
+      const table = await client.browse({ signal: this.w.signal });
       const optimized = table.blocks.filter((b) => b.optimized === true).length;
       const typed = table.blocks.length;
       const detail =
@@ -280,10 +271,10 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
           ? 'the PLC program has no data blocks'
           : `${blocks.length} data block${blocks.length === 1 ? '' : 's'} (${optimized} optimized, ${typed - optimized} standard` +
             `${typed < blocks.length ? `, ${blocks.length - typed} without type information` : ''}), ${table.entries.length} entries`;
-      this.pass('browse', detail, blocks.length > 0 && typed === 0 ? PLUS_HINT.noTypes : undefined);
+      this.w.pass('browse', detail, blocks.length > 0 && typed === 0 ? PLUS_HINT.noTypes : undefined);
       return table;
     } catch (err) {
-      return this.failed('browse', err, (p) => this.fail('browse', p.message));
+      return this.w.failed('browse', err, (p) => this.w.fail('browse', p.message));
     }
   }
 
@@ -298,12 +289,12 @@ class PlusDoctor extends DoctorWalk<PlusDiagnoseOptions> {
     const step = `${address ? 'address' : 'symbol'} ${text}`;
     const client = this.client!;
     try {
-      const r = (await client.readDetailed([text], { signal: this.signal }))[text]!;
-      if (!r.ok) this.fail(step, r.error.message, address ? PLUS_HINT.address : PLUS_HINT.name);
+      const r = (await client.readDetailed([text], { signal: this.w.signal }))[text]!;
+      if (!r.ok) this.w.fail(step, r.error.message, address ? PLUS_HINT.address : PLUS_HINT.name);
       const type = address ? client.tag(text).type : (table?.lookup(text)?.type ?? '');
-      this.pass(step, `${text} = ${textOf(realsShown(client, table, text, r.value))}${type ? ` (${type})` : ''}`);
+      this.w.pass(step, `${text} = ${textOf(realsShown(client, table, text, r.value))}${type ? ` (${type})` : ''}`);
     } catch (err) {
-      this.failed(step, err, (p) => this.fail(step, p.message, address ? PLUS_HINT.address : PLUS_HINT.name));
+      this.w.failed(step, err, (p) => this.w.fail(step, p.message, address ? PLUS_HINT.address : PLUS_HINT.name));
     }
   }
 }
