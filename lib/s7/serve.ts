@@ -25,8 +25,10 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   const layout = loadLayout(flags, flags.string('layout'));
   // An S7-1200/1500 serves S7CommPlus on the same port, its blocks (optimized ones too) from --source.
   const s7plus = await servePlus(flags, profile);
-  // --source: the data blocks of DB sources, at their declared lengths with their start values.
-  const symbols = s7plus ? s7plus.model.table : flags.source();
+  // --source: the data blocks of DB sources, at their declared lengths with their start values. With S7CommPlus they
+  // are its program's (optimized ones too, laid out for the simulator's storage), which S7Server takes itself when
+  // the program has data blocks; without --source the profile's (or --layout's) data blocks stay (issue #31).
+  const symbols = s7plus ? undefined : flags.source();
   // --max-items: serve at most N items per job, as snap7's server (20) and the devices built on it.
   const maxItems = flags.has('max-items') ? flags.int('max-items', 20, 1, 255) : undefined;
   const server = new S7Server({
@@ -42,7 +44,7 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
   const url = `s7://${hostPart(host)}:${port}?${REACH[profile].query}`;
   // What PUT/GET serves is told from the sources' own table, in which an optimized block has no length.
-  const shown = s7plus ? (flags.source() ?? symbols) : symbols;
+  const shown = s7plus ? flags.source() : symbols;
   if (shown) for (const line of servedBlocks(shown)) say(line);
   say(`try: plcwire read "${url}" ${shown ? flags.tryByName(shown) : REACH[profile].addresses}`);
   if (s7plus?.fingerprint) {
