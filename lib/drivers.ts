@@ -17,7 +17,7 @@ import { serveFreeport } from './freeport/serve';
 import { FREEPORT_URLS } from './freeport/url';
 import type { UrlScheme } from './link/driver';
 import { S7Client } from './s7/client';
-import { serveS7 } from './s7/serve';
+import { serveS7 } from './cpu/serve';
 import { S7_URLS } from './s7/url';
 import { S7PlusClient } from './s7plus/client';
 import { S7PLUS_URLS } from './s7plus/url';

@@ -247,6 +247,18 @@ describe('architecture of lib/', () => {
     ).to.deep.equal([]);
   });
 
+  it('no file of lib/s7/ imports lib/s7plus/: the S7-1200/1500 CPU serving both on one port is composed above them (lib/cpu/)', () => {
+    // The composition imports both: the rule guards a real pair of folders.
+    const cpu = GRAPH.get('lib/cpu/serve.ts')!.map((e) => e.to);
+    expect(cpu).to.include.members(['lib/s7/server/index.ts', 'lib/s7plus/server/serve.ts']);
+    expect(
+      violations(
+        (f) => f.startsWith('lib/s7/'),
+        (e) => e.to?.startsWith('lib/s7plus/') === true,
+      ),
+    ).to.deep.equal([]);
+  });
+
   it(`no file in lib/ is over ${MAX_LINES} lines, except the ones LONG_FILES names with a reason`, () => {
     expect(overLong(LINES, LONG_FILES, MAX_LINES)).to.deep.equal([]);
   });

@@ -86,10 +86,8 @@ export class S7Server extends EventEmitter {
     this.profile = resolved;
     const layout = options.layout ? toMemoryLayout(options.layout) : resolved.layout;
     this.plus = options.s7plus;
-    // The S7CommPlus program's data blocks when it has any (a CPU holds the blocks downloaded to it); a program without
-    // data blocks (no --source) leaves the layout's, as on a CPU nobody downloaded DBs to (issue #31).
-    const program = options.s7plus?.model.table;
-    const symbols = options.symbols ?? (program && program.blocks.length > 0 ? program : undefined);
+    // The S7CommPlus program's data blocks, when it has any (a CPU holds those downloaded to it); else the layout's.
+    const symbols = options.symbols ?? (options.s7plus?.model.table.blocks.length ? options.s7plus.model.table : undefined);
     this.memory = options.memory ?? (symbols ? memoryFromSymbols(symbols, layout) : new PlcMemory(layout));
     if (options.maxItems !== undefined && !(Number.isInteger(options.maxItems) && options.maxItems >= 1 && options.maxItems <= 255)) {
       throw new TypeError(`maxItems must be a whole number 1..255, got ${String(options.maxItems)}`);

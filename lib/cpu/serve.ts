@@ -1,9 +1,15 @@
-/** `plcwire serve s7`: the S7 simulator from the command line (lib/sim/serve.ts). */
+/**
+ * `plcwire serve s7`: a simulated S7 CPU from the command line (lib/sim/serve.ts). The S7 simulator (lib/s7/server)
+ * serves PUT/GET; for an S7-1200 or S7-1500 this composes it with the S7CommPlus service (lib/s7plus/server) on the
+ * same port and memory, as the CPU serves both (the COTP CR's called TSAP decides). It sits above both protocol
+ * folders, so neither imports the other.
+ */
 import { hostPart } from '../link/url-params';
 import type { MemoryLayout } from '../sim/memory';
 import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
-import { S7Server, type S7Profile } from './server';
-import { reloadOnChange, servePlus } from '../s7plus/server/serve';
+import { S7Server, type S7Profile } from '../s7/server';
+import { servePlus } from '../s7plus/server/serve';
+import { reloadOnChange } from './reload';
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
 
@@ -17,6 +23,17 @@ const REACH: Readonly<Record<S7Profile, { query: string; addresses: string }>> =
   logo: { query: 'localTsap=0100&remoteTsap=0200', addresses: 'VW0 V1024.0' },
 });
 
+/** The profiles whose CPUs speak S7CommPlus beside PUT/GET. */
+const PLUS_PROFILES: ReadonlySet<S7Profile> = new Set(['s7-1200', 's7-1500']);
+
+/** The S7CommPlus flags on a CPU without S7CommPlus: a usage error. */
+function refusePlusFlags(flags: ServeFlags, profile: S7Profile): undefined {
+  const given = ['tls-cert', 'tls-key', 'password-file'].filter((flag) => flags.has(flag));
+  if (given.length > 0)
+    throw flags.usage(`--tls-cert, --tls-key and --password-file are for an S7-1200 or S7-1500 (S7CommPlus), not ${profile}`);
+  return undefined;
+}
+
 export async function serveS7(flags: ServeFlags): Promise<Served> {
   const { host, say } = flags;
   const profile = (flags.string('profile') ?? 's7-1500').toLowerCase() as S7Profile;
@@ -24,7 +41,7 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   // Without --layout the profile's own memory (DB1 only for s7-200 and logo).
   const layout = loadLayout(flags, flags.string('layout'));
   // An S7-1200/1500 serves S7CommPlus on the same port, its blocks (optimized ones too) from --source.
-  const s7plus = await servePlus(flags, profile);
+  const s7plus = PLUS_PROFILES.has(profile) ? await servePlus(flags) : refusePlusFlags(flags, profile);
   // --source: the data blocks of DB sources, at their declared lengths with their start values. With S7CommPlus they
   // are its program's (optimized ones too, laid out for the simulator's storage), which S7Server takes itself when
   // the program has data blocks; without --source the profile's (or --layout's) data blocks stay (issue #31).
