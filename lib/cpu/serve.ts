@@ -28,9 +28,8 @@ const PLUS_PROFILES: ReadonlySet<S7Profile> = new Set(['s7-1200', 's7-1500']);
 
 /** The S7CommPlus flags on a CPU without S7CommPlus: a usage error. */
 function refusePlusFlags(flags: ServeFlags, profile: S7Profile): undefined {
-  const given = ['tls-cert', 'tls-key', 'password-file'].filter((flag) => flags.has(flag));
-  if (given.length > 0)
-    throw flags.usage(`--tls-cert, --tls-key and --password-file are for an S7-1200 or S7-1500 (S7CommPlus), not ${profile}`);
+  if (['tls-cert', 'tls-key', 'tls-dir', 'password-file'].some((flag) => flags.has(flag)))
+    throw flags.usage(`--tls-cert, --tls-key, --tls-dir and --password-file are for an S7-1200 or S7-1500 (S7CommPlus), not ${profile}`);
   return undefined;
 }
 
@@ -68,6 +67,8 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
     const protectedNote = !s7plus.protected ? '' : ', protected: writes need the password';
     say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}${protectedNote}`);
     say(`  s7plus://${hostPart(host)}:${port}?fingerprint=${s7plus.fingerprint}`);
+    const tlsDir = flags.string('tls-dir');
+    if (tlsDir !== undefined) say(`  the certificate is kept in ${tlsDir}: the same fingerprint at every start`);
   }
   // A download: the program loaded again on SIGHUP or when a --source file changes.
   const stopWatching = s7plus && flags.hasSource() ? reloadOnChange(s7plus, server.memory, flags) : undefined;
