@@ -11,7 +11,7 @@ import { PlcMemory } from '../../sim/memory';
 import { memoryFromSymbols } from '../../symbols/memory';
 import { ProtocolError } from '../../errors';
 import { HeaderError, MIN_PDU_SIZE, Rosctr, S7Function } from '../constants';
-import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, MAX_FRAME, tpduBytes } from '../../iso/constants';
+import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, MAX_FRAME, TPDU_SIZE_CODE, tpduBytes } from '../../iso/constants';
 import { jobItemCount, s7Rosctr } from '../codec/pdu-decode';
 import { isControlJob } from '../codec/control';
 import type { DiagnosticEntry } from '../codec/diagnostics';
@@ -28,8 +28,6 @@ export type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from '
 
 /** The CPU's COTP source reference. */
 const CPU_REF = 0x0001;
-/** The largest TPDU a CPU confirms (code 0x0A = 1024 bytes). */
-const MAX_TPDU = 0x0a;
 /** Jobs a client may queue beyond AmQ before it is treated as hostile. */
 const MAX_QUEUED = 256;
 
@@ -232,6 +230,8 @@ export class S7Server extends EventEmitter {
   }
 
   private onData(conn: Connection, chunk: Buffer): void {
+    // An S7CommPlus link reads the socket itself (its COTP tunnel) once it confirmed the CR.
+    if (conn.plus) return;
     const socket = conn.socket;
     let frames: Buffer[];
     try {
@@ -316,7 +316,7 @@ export class S7Server extends EventEmitter {
     const plus = this.plus?.claims(frame) ? this.plus : undefined;
     const wrongTsap = plus ? undefined : tsapRefusal(this.profile, cr.callingTsap, cr.calledTsap);
     if (wrongTsap !== undefined) return refuse('wrong-tsap', DR_ADDRESS_UNKNOWN, wrongTsap);
-    const tpdu = tpduBytes(cr.tpduSize) ? Math.min(cr.tpduSize, MAX_TPDU) : MAX_TPDU;
+    const tpdu = tpduBytes(cr.tpduSize) ? Math.min(cr.tpduSize, TPDU_SIZE_CODE) : TPDU_SIZE_CODE;
     // A PDU travels in one TPDU (3 bytes of COTP DT header): a CPU offers the largest of its sizes that fits.
     let limit = this.profile.pduSize;
     while (limit + 3 > tpduBytes(tpdu) && limit > 240) limit >>= 1;
