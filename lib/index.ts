@@ -104,6 +104,8 @@ export { IDENTITIES as S7_IDENTITIES, STOP_CAUSES, type CpuIdentity, type Simula
 export type { CpuServices, ServiceSession } from './s7/server/services';
 /** S7CommPlus on the S7 simulator's port (`new S7Server({ s7plus: new S7PlusService({ sources, tls }) })`), issue #25. */
 export { S7PlusService, type S7PlusOptions } from './s7plus/server';
+/** The simulator's certificate kept in a directory: `new S7PlusService({ sources, tls: await certificateInDirectory(dir) })`. */
+export { certificateInDirectory, CERTIFICATE_FILES } from './s7plus/transport/cert-dir';
 /** The S7CommPlus client (`connect('s7plus://…')` gives one) and its subscriptions: `client.subscribe(tags, { cycle })`. */
 export {
   S7PlusClient,
@@ -168,4 +170,5 @@ export { PlcMemory, DEFAULT_LAYOUT, type MemoryLayout, type MemoryAccess, type M
 export { DemoProcess, DEMO_SYMBOLS, DEMO_TAGS, type ProcessSnapshot } from './plant/process';
 export { PLANT_DB_NUMBERS, PLANT_SOURCE, TANK_DB_NUMBERS, TANK_SOURCE } from './plant/source';
 export { TankBlock, TANK_SYMBOLS, type TankSnapshot } from './plant/tank';
-export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantPorts } from './plant/plant';
+export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantOptions, type PlantPorts } from './plant/plant';
+export { demoCertificateDir } from './plant/certificate-dir';

@@ -255,7 +255,7 @@ describe('demo flow: the dashboard shows what the PLC holds', () => {
       insecure?: boolean;
       tls?: boolean;
     };
-    expect(endpoint).to.include({ protocol: 's7plus', fingerprint: fingerprint.toLowerCase() });
+    expect(endpoint).to.include({ protocol: 's7plus', fingerprint });
     expect(endpoint.insecure ?? false).to.equal(false);
     const bare = parseUrl(String(node('conn.plus').url)) as { fingerprint?: string; insecure?: boolean; tls?: boolean };
     expect([bare.fingerprint, bare.insecure ?? false, bare.tls ?? true]).to.deep.equal([undefined, false, true]);

@@ -8,7 +8,8 @@ import * as util from 'node:util';
 import { createClient } from '../lib/connect';
 import { PlcError } from '../lib/errors';
 import { S7PlusClient } from '../lib/s7plus/client';
-import { normalizeFingerprint } from '../lib/s7plus/url';
+import { normalizeFingerprint } from '../lib/s7plus/transport/fingerprint';
+import { parseFingerprint } from '../lib/s7plus/transport/trust';
 import { DEFAULTS, endpointKey, endpointName, formatUrl, parseUrl } from '../lib/url';
 
 const PIN = 'fe06cd29ad6cfb8ba333f3b410ebc5c33cb62493f317c44e104e8f4b09bf827a';
@@ -38,10 +39,14 @@ describe('s7plus client: URLs', () => {
     expect(DEFAULTS).to.include({ s7plusPort: 102, s7plusMaxItems: 20 });
   });
 
-  it('takes a fingerprint with colons, spaces or either case, and keeps 64 lower-case hex digits', () => {
-    expect(parseUrl(`s7plus://plc?fingerprint=${PIN_COLONS}`)).to.include({ fingerprint: PIN });
-    expect(parseUrl(`s7plus://plc?fingerprint=${PIN.toUpperCase()}`)).to.include({ fingerprint: PIN });
-    expect(normalizeFingerprint(PIN_COLONS.replace(/:/g, ' '))).to.equal(PIN);
+  it('takes a fingerprint with colons, spaces or either case, and keeps 64 upper-case hex digits (the form fingerprint256 gives)', () => {
+    const upper = PIN.toUpperCase();
+    expect(parseUrl(`s7plus://plc?fingerprint=${PIN_COLONS}`)).to.include({ fingerprint: upper });
+    expect(parseUrl(`s7plus://plc?fingerprint=${PIN}`)).to.include({ fingerprint: upper });
+    expect(formatUrl(parseUrl(`s7plus://plc?fingerprint=${PIN}`))).to.equal(`s7plus://plc?fingerprint=${upper}`);
+    expect(normalizeFingerprint(PIN_COLONS.replace(/:/g, ' '))).to.equal(upper);
+    // The trust decision reads it by the same rule.
+    expect(parseFingerprint(PIN_COLONS.toLowerCase())).to.equal(upper);
     expect(normalizeFingerprint(PIN.slice(2))).to.equal(undefined);
     const err = refused(`s7plus://plc?fingerprint=${PIN.slice(1)}`);
     expect(err.message).to.contain('not a SHA-256 fingerprint (64 hex digits');
@@ -64,7 +69,7 @@ describe('s7plus client: URLs', () => {
     const plain = parseUrl('s7plus://plc?tls=false');
     expect(plain).to.include({ tls: false });
     expect(formatUrl(plain)).to.equal('s7plus://plc?tls=false');
-    expect(formatUrl(parseUrl(`s7plus://plc?fingerprint=${PIN_COLONS}`))).to.equal(`s7plus://plc?fingerprint=${PIN}`);
+    expect(formatUrl(parseUrl(`s7plus://plc?fingerprint=${PIN_COLONS}`))).to.equal(`s7plus://plc?fingerprint=${PIN.toUpperCase()}`);
     expect(endpointName(parseUrl('s7plus://[::1]:1102'))).to.equal('s7plus://[::1]:1102');
     expect(endpointKey(parseUrl('s7plus://PLC'))).to.equal(endpointKey(parseUrl(`s7plus://plc?fingerprint=${PIN}`)));
     expect(endpointKey(parseUrl('s7plus://plc'))).to.not.equal(endpointKey(parseUrl('s7plus://plc?type=es')));

@@ -110,6 +110,8 @@ Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reach
   --source file      serve the data blocks of these DB sources, at their declared lengths with their start values;
                      for s7-1200/1500 also a TIA tag table (.xlsx, .csv): its I/Q/M names over s7plus://. Editing a
                      --source file, or SIGHUP, loads the program again, as a download (clients browse again)
+  --tls-dir DIR      s7-1200/1500: keep the certificate in DIR (cert.pem, key.pem with mode 0600), made on the first
+                     start and the same after, so a pinned fingerprint= still holds; else made anew at every start
 example:
   plcwire serve s7 --port 10102 --profile s7-1200 --source Plant.db --db Plant=1`,
   demo: `usage: plcwire demo

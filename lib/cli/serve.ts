@@ -22,6 +22,7 @@ export const SERVE_FLAGS = [
   'max-items',
   'tls-cert',
   'tls-key',
+  'tls-dir',
   'password-file',
 ];
 

@@ -17,6 +17,12 @@ export const FRAME_OVERHEAD = TPKT_HEADER + COTP_DT_HEADER;
  */
 export const MAX_FRAME = 0x10000 + 16;
 
+/**
+ * The TPDU size code S7 clients ask for in a COTP CR and S7 CPUs confirm at most: 0x0A = 1024 bytes (an S7-1500
+ * offers PDU 960 only with it; S7CommPlus clients ask for it too: s7commplus (MIT) transport.py).
+ */
+export const TPDU_SIZE_CODE = 0x0a;
+
 /** COTP disconnect reasons (ISO 8073 = RFC 905, §13.5.3, class 0): 1 congestion at the TSAP (all connections in use). */
 export const DR_CONGESTION = 1;
 /** 3: the called TSAP (address) is unknown. */

@@ -81,8 +81,11 @@ export function encodeConnectionRequest(c: CotpRequest, order: CotpParamOrder = 
   return encodeConnection(CotpType.CR, { ...c, destinationRef: 0 }, order);
 }
 
-/** COTP Connection Confirm; default order as an S7 CPU answers (TPDU size first, as in test/fixtures/s7.ts DOC.connectionConfirm). */
-export function encodeConnectionConfirm(c: CotpConnection, order: CotpParamOrder = 'size-first'): Buffer {
+/**
+ * COTP Connection Confirm; default order as an S7 CPU answers (TPDU size first, as in test/fixtures/s7.ts DOC.connectionConfirm).
+ * The TSAPs echo the CR's: numbers (2 bytes) or byte strings (an S7CommPlus CR's).
+ */
+export function encodeConnectionConfirm(c: CotpRequest & { destinationRef: number }, order: CotpParamOrder = 'size-first'): Buffer {
   return encodeConnection(CotpType.CC, c, order);
 }
 

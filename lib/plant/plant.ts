@@ -8,8 +8,8 @@
  * bytes holding its start values, and DB2 "Tank" with optimized access
  * (TANK_SOURCE), which PUT/GET refuses and S7CommPlus serves by name. As a
  * CPU with secure PG/HMI communication it speaks S7CommPlus over TLS on the
- * PUT/GET port, with a certificate made at start: its fingerprint pins the
- * s7plus:// URL (`urls.s7plus`). The CP (FETCH/WRITE) serves the same
+ * PUT/GET port, with a certificate made at start (or kept in `tlsDir`): its
+ * fingerprint pins the s7plus:// URL (`urls.s7plus`). The CP (FETCH/WRITE) serves the same
  * memory, as a CP in the CPU's rack does.
  */
 import { FetchWriteServer } from '../fetchwrite/server';
@@ -18,6 +18,7 @@ import { hostPart } from '../link/url-params';
 import { S7Server } from '../s7/server';
 import { S7PlusService } from '../s7plus/server';
 import { generateCertificate } from '../s7plus/transport/cert';
+import { certificateInDirectory } from '../s7plus/transport/cert-dir';
 import type { PlcMemory } from '../sim/memory';
 import { compileSymbols } from '../symbols';
 import type { SymbolTable } from '../symbols/model';
@@ -55,11 +56,28 @@ export interface Plant {
   close(): Promise<void>;
 }
 
-export async function startPlant(options: { host?: string; ports?: Partial<PlantPorts>; periodMs?: number } = {}): Promise<Plant> {
+export interface PlantOptions {
+  host?: string;
+  ports?: Partial<PlantPorts>;
+  periodMs?: number;
+  /**
+   * A directory that keeps the S7-1200's certificate between runs (made on the first, lib/s7plus/transport/cert-dir.ts),
+   * so the pinned `urls.s7plus` stays the same; `npm start` gives demoCertificateDir(). Default: one made at start.
+   */
+  tlsDir?: string;
+}
+
+/** The demo S7-1200's certificate. */
+const DEMO_CERTIFICATE = Object.freeze({ commonName: 'plcwire demo S7-1200', keyType: 'ec' as const });
+
+export async function startPlant(options: PlantOptions = {}): Promise<Plant> {
   const host = options.host ?? '127.0.0.1';
   const want = { ...DEMO_PORTS, ...options.ports };
   const symbols = compileSymbols([PLANT_SOURCE], { db: PLANT_DB_NUMBERS });
-  const certificate = await generateCertificate({ commonName: 'plcwire demo S7-1200', keyType: 'ec' });
+  const certificate =
+    options.tlsDir === undefined
+      ? await generateCertificate(DEMO_CERTIFICATE)
+      : await certificateInDirectory(options.tlsDir, DEMO_CERTIFICATE, 'tlsDir');
   const s7plus = new S7PlusService({
     sources: [PLANT_SOURCE, TANK_SOURCE],
     db: { ...PLANT_DB_NUMBERS, ...TANK_DB_NUMBERS },

@@ -32,8 +32,8 @@ export const MAX_PDU_SIZE = 0xffff;
 
 /** Parallel jobs (AmQ) a client asks for in setup communication; the PLC answers with what it grants. */
 export const REQUESTED_AMQ = 8;
-/** TPDU size code a client asks for in its COTP connection request: 0x0A = 1024 bytes (S7-1500 offers PDU 960 only with it). */
-export const TPDU_SIZE_CODE = 0x0a;
+/** TPDU size code a client asks for in its COTP connection request (ISO-on-TCP's, shared with S7CommPlus). */
+export { TPDU_SIZE_CODE } from '../iso/constants';
 export const enum Rosctr {
   Job = 1,
   Ack = 2,

@@ -16,6 +16,7 @@ import { DEFAULT_TIMEOUT } from '../client/options';
 import { PlcError } from '../errors';
 import type { UrlScheme } from '../link/driver';
 import { hostPart, portOf, requireHost, urlError, type SafetyOptions, type UrlParams } from '../link/url-params';
+import { normalizeFingerprint } from './transport/fingerprint';
 
 /** The called TSAP names of the S7CommPlus roles (s7commplus (MIT), protocol.py, ConnectionType). */
 export type S7PlusRole = 'hmi' | 'es' | 'pg';
@@ -61,16 +62,6 @@ const PARAMS = ['fingerprint', 'ca', 'insecure', 'tls', 'timeout', 'maxItems', '
 
 /** Where the password goes instead of the URL (the refusal says it, and the docs). */
 const PASSWORD_HINT = 'give it as connect(url, { password }), in PLCWIRE_PASSWORD or with --password-file';
-
-/**
- * A SHA-256 fingerprint as the URL (or a TIA/openssl/browser dialog) writes
- * it, to 64 lower-case hex digits: colons, spaces and case ignored; undefined
- * when it is not one.
- */
-export function normalizeFingerprint(text: string): string | undefined {
-  const hex = text.replace(/[\s:]/g, '').toLowerCase();
-  return /^[0-9a-f]{64}$/.test(hex) ? hex : undefined;
-}
 
 /** True for an endpoint of an s7plus:// URL (the PLC certificate of the connection dialog is S7CommPlus's alone). */
 export function isS7PlusEndpoint(e: { readonly protocol: string }): e is S7PlusEndpoint {

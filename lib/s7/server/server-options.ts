@@ -48,7 +48,11 @@ interface S7PlusEndpoint {
   readonly optimizedDbs: ReadonlySet<number>;
   /** True when a COTP CR calls an S7CommPlus TSAP. */
   claims(frame: Buffer): boolean;
-  /** Confirms the CR `frame` on `socket` and serves the connection from `cpu`; `hostile` reports a frame that breaks the protocol (the simulator then drops the connection). */
+  /**
+   * Confirms the CR `frame` on `socket` and serves the connection from `cpu`, reading the socket itself from then on
+   * (the simulator hands it over and reads no more of it); `hostile` reports a frame that breaks the protocol (the
+   * simulator then drops the connection).
+   */
   open(
     frame: Buffer,
     socket: Socket,
@@ -62,7 +66,7 @@ interface S7PlusEndpoint {
   ): S7PlusLink;
 }
 
-/** One S7CommPlus connection: the simulator gives it every frame after the CR, and tells it when the socket closed. */
+/** One S7CommPlus connection: the simulator gives it the frames it cut after the CR in the CR's own chunk (none from a client that waits for the confirm), and tells it when the socket closed. */
 export interface S7PlusLink {
   onFrame(frame: Buffer): void;
   dispose(): void;

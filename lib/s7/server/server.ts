@@ -11,7 +11,7 @@ import { PlcMemory } from '../../sim/memory';
 import { memoryFromSymbols } from '../../symbols/memory';
 import { ProtocolError } from '../../errors';
 import { HeaderError, MIN_PDU_SIZE, Rosctr, S7Function } from '../constants';
-import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, MAX_FRAME, tpduBytes } from '../../iso/constants';
+import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, MAX_FRAME, TPDU_SIZE_CODE, tpduBytes } from '../../iso/constants';
 import { jobItemCount, s7Rosctr } from '../codec/pdu-decode';
 import { isControlJob } from '../codec/control';
 import type { DiagnosticEntry } from '../codec/diagnostics';
@@ -28,8 +28,6 @@ export type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from '
 
 /** The CPU's COTP source reference. */
 const CPU_REF = 0x0001;
-/** The largest TPDU a CPU confirms (code 0x0A = 1024 bytes). */
-const MAX_TPDU = 0x0a;
 /** Jobs a client may queue beyond AmQ before it is treated as hostile. */
 const MAX_QUEUED = 256;
 
@@ -86,7 +84,8 @@ export class S7Server extends EventEmitter {
     this.profile = resolved;
     const layout = options.layout ? toMemoryLayout(options.layout) : resolved.layout;
     this.plus = options.s7plus;
-    const symbols = options.symbols ?? options.s7plus?.model.table;
+    // The S7CommPlus program's data blocks, when it has any (a CPU holds those downloaded to it); else the layout's.
+    const symbols = options.symbols ?? (options.s7plus?.model.table.blocks.length ? options.s7plus.model.table : undefined);
     this.memory = options.memory ?? (symbols ? memoryFromSymbols(symbols, layout) : new PlcMemory(layout));
     if (options.maxItems !== undefined && !(Number.isInteger(options.maxItems) && options.maxItems >= 1 && options.maxItems <= 255)) {
       throw new TypeError(`maxItems must be a whole number 1..255, got ${String(options.maxItems)}`);
@@ -231,6 +230,8 @@ export class S7Server extends EventEmitter {
   }
 
   private onData(conn: Connection, chunk: Buffer): void {
+    // An S7CommPlus link reads the socket itself (its COTP tunnel) once it confirmed the CR.
+    if (conn.plus) return;
     const socket = conn.socket;
     let frames: Buffer[];
     try {
@@ -315,7 +316,7 @@ export class S7Server extends EventEmitter {
     const plus = this.plus?.claims(frame) ? this.plus : undefined;
     const wrongTsap = plus ? undefined : tsapRefusal(this.profile, cr.callingTsap, cr.calledTsap);
     if (wrongTsap !== undefined) return refuse('wrong-tsap', DR_ADDRESS_UNKNOWN, wrongTsap);
-    const tpdu = tpduBytes(cr.tpduSize) ? Math.min(cr.tpduSize, MAX_TPDU) : MAX_TPDU;
+    const tpdu = tpduBytes(cr.tpduSize) ? Math.min(cr.tpduSize, TPDU_SIZE_CODE) : TPDU_SIZE_CODE;
     // A PDU travels in one TPDU (3 bytes of COTP DT header): a CPU offers the largest of its sizes that fits.
     let limit = this.profile.pduSize;
     while (limit + 3 > tpduBytes(tpdu) && limit > 240) limit >>= 1;

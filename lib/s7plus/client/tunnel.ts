@@ -9,12 +9,10 @@
  */
 import { ConnectionError } from '../../errors';
 import { IsoConnectError, isoConnect } from '../../iso/connect';
+import { TPDU_SIZE_CODE } from '../../iso/constants';
 import { CotpTunnel } from '../transport/tunnel';
 import { LOCAL_TSAP, RemoteTsap as REMOTE_TSAP } from '../constants';
 import type { S7PlusRole } from '../url';
-
-/** TPDU size code 0x0A: 1024 bytes (what s7commplus asks for, and what a CC without the parameter leaves). */
-const TPDU_SIZE_CODE = 0x0a;
 
 /**
  * TCP and COTP CR → CC by the ISO connect step every driver over ISO-on-TCP

@@ -1,38 +1,43 @@
 /**
- * One S7CommPlus connection on the simulator's socket: the COTP CR it was
- * opened with, COTP data frames carrying S7CommPlus frames in plain text
- * until InitSSL, then TLS records carried in COTP data frames (the TPKT and
- * COTP headers stay in clear, as on a CPU: s7commplus (MIT) server.py and
- * connection.py `_activate_tls`), Node's TLS running over a Duplex of ours.
+ * One S7CommPlus connection on the simulator's socket, through the transport
+ * the client uses (lib/s7plus/transport): the COTP tunnel (`CotpTunnel`: DT
+ * frames cut to the confirmed TPDU size, their payloads as one stream)
+ * carries S7CommPlus frames in plain text until InitSSL, then TLS records
+ * (`acceptTls`), the TPKT and COTP headers staying in clear as on a CPU
+ * (s7commplus (MIT) server.py and connection.py `_activate_tls`). Frames are
+ * cut by the codec's `S7pFrameReader`.
  */
-import { Duplex } from 'node:stream';
-import * as tls from 'node:tls';
-import { ProtocolError } from '../../errors';
-import { OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH } from '../constants';
+import type { Socket } from 'node:net';
+import type * as tls from 'node:tls';
+import { ConnectionError, ProtocolError } from '../../errors';
+import { OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH, S7P_PROTOCOL_ID } from '../constants';
+import { S7pFrameReader, type S7pMessage } from '../codec/frame';
+import { acceptTls } from '../transport/server-tls';
+import { CotpTunnel } from '../transport/tunnel';
 import { PlusSession, type SessionOptions } from './session';
-import type { CpuSide } from './services';
-import { connectionConfirm, connectionRequest, dataFrame } from './tsap';
+import { ResetConnection, type CpuSide } from './services';
+import { connectionConfirm, connectionRequest } from './tsap';
 
 /** The largest S7CommPlus frame put in one TLS write: the client reads a record at a time (connection.py `_recv_s7_data`). */
 const MAX_FRAME_DATA = 16000;
-/** Cleartext buffered while waiting for the rest of a frame. */
-const MAX_PENDING = 1 << 20;
+/** How long a client may take for its TLS handshake after InitSSL. */
+const TLS_HANDSHAKE_MS = 10_000;
 
 export interface ConnectionHost {
   readonly cpu: CpuSide;
   readonly secureContext: tls.SecureContext | undefined;
   readonly session: Omit<SessionOptions, 'tls' | 'push' | 'exporter'>;
-  /** Writes bytes to the socket. */
-  send(bytes: Buffer): void;
-  /** Ends the connection (reset, or after DeleteObject). */
+  /** The accepted socket, which this connection reads and writes from the CR's confirm on. */
+  readonly socket: Socket;
+  /** Ends the connection: `reason` is a frame that broke the protocol (the simulator reports it and drops the socket). */
   close(reason?: Error): void;
 }
 
 export class PlusConnection {
   private readonly session: PlusSession;
-  private pending: Buffer = Buffer.alloc(0);
-  private unit: Buffer[] = [];
-  private tunnel: Duplex | undefined;
+  private readonly tunnel: CotpTunnel;
+  private readonly frames = new S7pFrameReader();
+  private readonly onPlain = (bytes: Buffer) => this.receive(bytes);
   private secure: tls.TLSSocket | undefined;
   private closed = false;
 
@@ -48,53 +53,75 @@ export class PlusConnection {
       push: (frame) => this.push(frame),
       exporter: () => this.secure?.exportKeyingMaterial(OMS_EXPORTER_LENGTH, OMS_EXPORTER_LABEL, Buffer.alloc(0)),
     });
-    host.send(connectionConfirm(cr));
+    const confirm = connectionConfirm(cr);
+    host.socket.write(confirm.frame);
+    this.tunnel = new CotpTunnel(host.socket, { tpduSize: confirm.tpduBytes });
+    this.tunnel.on('data', this.onPlain);
+    this.tunnel.on('error', (err: Error) => this.fail(err));
   }
 
-  /** A TPKT frame from the socket. */
-  onFrame(frame: Buffer): void {
-    if (this.closed) return;
-    if (frame.length < 7 || frame[5] !== 0xf0)
-      throw new ProtocolError(`COTP ${frame.length < 6 ? 'frame too short' : `type 0x${frame[5]!.toString(16)}`} where data was expected`);
-    this.unit.push(frame.subarray(7));
-    if ((frame[6]! & 0x80) === 0) return;
-    const payload = Buffer.concat(this.unit);
-    this.unit = [];
-    if (this.tunnel) this.tunnel.push(payload);
-    else this.onClear(payload);
+  /** A frame the S7 simulator cut before the tunnel took the socket over: nothing may come before the confirm. */
+  onFrame(): void {
+    throw new ProtocolError('S7CommPlus: data before the COTP connection confirm');
   }
 
-  /** The socket closed: end TLS too. */
+  /** The socket closed: end TLS and the tunnel too. */
   dispose(): void {
     this.closed = true;
     this.session.close();
     this.secure?.destroy();
-    this.tunnel?.destroy();
+    this.tunnel.destroy();
   }
 
-  private onClear(bytes: Buffer): void {
-    this.pending = this.pending.length === 0 ? bytes : Buffer.concat([this.pending, bytes]);
-    if (this.pending.length > MAX_PENDING) throw new ProtocolError(`more than ${MAX_PENDING} bytes without a whole S7CommPlus frame`);
-    while (this.pending.length >= 4 && !this.closed) {
-      if (this.pending[0] !== 0x72) throw new ProtocolError(`S7CommPlus frame starts with 0x${this.pending[0]!.toString(16)}`);
-      const total = 4 + this.pending.readUInt16BE(2) + 4;
-      if (this.pending.length < total) return;
-      const frame = this.pending.subarray(0, total);
-      this.pending = this.pending.subarray(total);
-      this.step(frame);
+  /**
+   * A link error: a frame that broke the protocol (or TLS) is reported; a peer that left, and our write racing its
+   * close (the stream's ERR_STREAM_WRITE_AFTER_END, a reset), just end the connection.
+   */
+  private fail(err: Error): void {
+    if (this.closed) return;
+    this.closed = true;
+    this.session.close();
+    const code = (err as NodeJS.ErrnoException).code ?? '';
+    const left = err instanceof ConnectionError || /^(ERR_STREAM_|ECONNRESET$|EPIPE$)/.test(code);
+    this.host.close(left ? undefined : err);
+  }
+
+  private receive(bytes: Buffer): void {
+    let messages: S7pMessage[];
+    try {
+      messages = this.frames.push(bytes);
+    } catch (err) {
+      return this.fail(err as Error);
+    }
+    for (const message of messages) {
+      if (this.closed) return;
+      try {
+        this.step(message);
+      } catch (err) {
+        return this.fail(err as Error);
+      }
     }
   }
 
-  private step(frame: Buffer): void {
-    const step = this.session.handle(frame);
+  private step(message: S7pMessage): void {
+    const { version, data } = message;
+    if (data.length > 0xffff) throw new ResetConnection(`a request of ${data.length} bytes of data, more than one frame takes`);
+    const frame = Buffer.concat([Buffer.of(S7P_PROTOCOL_ID, version, data.length >> 8, data.length & 0xff), data]);
+    const step = this.session.handle(Buffer.concat([frame, Buffer.of(S7P_PROTOCOL_ID, version, 0, 0)]));
     if (step.reply) this.reply(step.reply);
     if (step.startTls) this.startTls();
     if (step.close) {
       this.closed = true;
       this.session.close();
       if (this.secure) this.secure.end(() => this.host.close());
-      else this.host.close();
+      else this.tunnel.end(() => this.host.close());
     }
+  }
+
+  /** Writes to the peer: through TLS once it runs, else into the tunnel (DT frames of the confirmed TPDU size). */
+  private write(bytes: Buffer): void {
+    if (this.secure) this.secure.write(bytes);
+    else this.tunnel.write(bytes);
   }
 
   /** Sends a response, split over several frames when long (the trailer after the last only, as a CPU splits). */
@@ -104,46 +131,31 @@ export class PlusConnection {
     const pieces: Buffer[] = [];
     for (let at = 0; at < data.length || pieces.length === 0; at += MAX_FRAME_DATA) pieces.push(data.subarray(at, at + MAX_FRAME_DATA));
     pieces.forEach((piece, i) => {
-      const head = Buffer.from([0x72, version, 0, 0]);
+      const head = Buffer.from([S7P_PROTOCOL_ID, version, 0, 0]);
       head.writeUInt16BE(piece.length, 2);
       const last = i === pieces.length - 1;
-      const out = Buffer.concat([head, piece, ...(last ? [frame.subarray(frame.length - 4)] : [])]);
-      if (this.secure) this.secure.write(out);
-      else this.host.send(dataFrame(out));
+      this.write(Buffer.concat([head, piece, ...(last ? [frame.subarray(frame.length - 4)] : [])]));
     });
   }
 
   /** A notification: one frame, sent as a response is. */
   private push(frame: Buffer): void {
-    if (this.closed) return;
-    if (this.secure) this.secure.write(frame);
-    else this.host.send(dataFrame(frame));
+    if (!this.closed) this.write(frame);
   }
 
+  /** After the InitSSL answer: the tunnel's bytes are TLS records from now on, the frames inside them S7CommPlus. */
   private startTls(): void {
-    const host = this.host;
-    const tunnel = new Duplex({
-      read() {},
-      write(chunk: Buffer, _enc, done) {
-        // TLS records in COTP data frames no longer than a TPDU of 1024 bytes can carry.
-        for (let at = 0; at < chunk.length; at += 1021) host.send(dataFrame(chunk.subarray(at, at + 1021)));
-        done();
+    if (this.frames.buffered > 0) throw new ProtocolError('S7CommPlus: data after InitSSL before the TLS handshake');
+    this.tunnel.off('data', this.onPlain);
+    const peer = `${this.host.socket.remoteAddress ?? 'a client'}:${this.host.socket.remotePort ?? 0}`;
+    acceptTls(this.tunnel, this.host.secureContext!, { timeout: TLS_HANDSHAKE_MS, peer }).then(
+      (secure) => {
+        if (this.closed) return void secure.destroy();
+        this.secure = secure;
+        secure.on('data', (bytes: Buffer) => this.receive(bytes));
+        secure.on('error', (err: Error) => this.fail(err));
       },
-    });
-    this.tunnel = tunnel;
-    const secure = new tls.TLSSocket(tunnel, {
-      isServer: true,
-      secureContext: this.host.secureContext,
-      requestCert: false,
-    });
-    this.secure = secure;
-    secure.on('data', (bytes: Buffer) => {
-      try {
-        this.onClear(bytes);
-      } catch (err) {
-        this.host.close(err as Error);
-      }
-    });
-    secure.on('error', (err: Error) => this.host.close(err));
+      (err: Error) => this.fail(err),
+    );
   }
 }

@@ -7,11 +7,12 @@
  */
 import { X509Certificate } from 'node:crypto';
 import type { Socket } from 'node:net';
-import * as tls from 'node:tls';
+import type * as tls from 'node:tls';
 import type { PlcMemory } from '../../sim/memory';
 import type { CompileOptions, SymbolSource } from '../../symbols/model';
 import { formatDeviceString } from '../codec/identity';
 import { fingerprint256 } from '../transport/cert';
+import { serverSecureContext } from '../transport/server-tls';
 import { PlusConnection } from './connection';
 import { dataBlockImages } from '../../symbols/memory';
 import { buildPlusModel, type PlusModel } from './model';
@@ -74,12 +75,7 @@ export class S7PlusService {
     this.device = options.device;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
     if (options.tls) {
-      this.secureContext = tls.createSecureContext({
-        cert: options.tls.cert,
-        key: options.tls.key,
-        minVersion: 'TLSv1.2',
-        maxVersion: 'TLSv1.3',
-      });
+      this.secureContext = serverSecureContext(options.tls);
       this.fingerprint = fingerprint256(new X509Certificate(options.tls.cert).raw);
     }
   }
@@ -163,7 +159,7 @@ export class S7PlusService {
           // The device string given to the service (a test's firmware) before the profile's.
           device: this.device ?? device,
         },
-        send: (bytes) => socket.write(bytes),
+        socket,
         close: (reason) => (reason ? hostile(reason) : socket.end()),
       },
       frame,

@@ -10,7 +10,7 @@ import type { PlcMemory } from '../../sim/memory';
 import type { AreaName } from '../../types';
 import { ProtocolError } from '../../errors';
 import type { LayoutNode } from '../../symbols/layout-nodes';
-import { DataType, ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
+import { DataType, dbAccessArea, ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
 import { Reader, Writer } from '../codec/bytes';
 import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
 import { resolveAreaLid, resolveLids, type PlusDb, type PlusModel } from './model';
@@ -42,12 +42,17 @@ export function explore(cpu: CpuSide, body: Buffer): Buffer {
   const r = new Reader(body);
   const id = r.u32('the Explore id');
   const ok = (objects: Buffer) => Buffer.concat([encodeUVlq64(0n), objects, Buffer.alloc(4)]);
-  if (id === Ids.NativeThePlcProgramRID) return ok(blockList(cpu.model));
+  if (id === Ids.NativeThePlcProgramRID) return ok(blockList(cpu.model, unnamedDbs(cpu)));
   if (id === Ids.NativeTheCpuExecUnitRID) return ok(cpuExecUnit(cpu.mode() === 'RUN' ? OperatingState.Run : OperatingState.Stop));
   if (id === Ids.ObjectOmsTypeInfoContainer) return ok(typeInfoContainer(cpu.model, exploreAttributes(r)));
   // One type object for its modification time (s7commplus (MIT) client.py _read_type_info_time).
   if (isTypeObject(cpu.model, id)) return ok(typeObjectAttributes(cpu.model, id, exploreAttributes(r)));
   return Buffer.concat([encodeUVlq64(EXPLORE_NO_SUCH_OBJECT), Buffer.alloc(8)]);
+}
+
+/** The memory's data blocks no source declares (a profile's or a layout's when no program was given): standard, by address only. */
+function unnamedDbs(cpu: CpuSide): number[] {
+  return cpu.memory.dataBlockNumbers().filter((number) => !dbOf(cpu.model, dbAccessArea(number)));
 }
 
 /** The attribute ids an Explore asks for, after its id (codec/explore.ts: request id, three flags, filter count, count, ids). */
@@ -123,7 +128,11 @@ function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
   }
   if ((item.area & 0xffff0000) >>> 0 !== Ids.DBAccessAreaBase || item.subArea !== Ids.DBValueActual) return undefined;
   const db = dbOf(cpu.model, item.area);
-  if (!db) return undefined;
+  if (!db) {
+    // A data block of the memory that no source declares: standard access, reached by address alone.
+    const number = item.area & 0xffff;
+    return blob ? range(lids, 'DB', number, cpu.memory.area('DB', number)?.length ?? 0) : undefined;
+  }
   if (lids.length === 1 && lids[0] === 1) return { kind: 'rid', rid: db.type.rid };
   // By address: standard DBs only; an optimized one has no offsets to give.
   if (blob) return db.optimized ? undefined : range(lids, 'DB', db.number, db.length);

@@ -7,7 +7,7 @@
  * client.py `_parse_explore_datablocks`, server.py `_cpu_exec_unit_object`.
  */
 import type { ArrayNode } from '../../symbols/layout-nodes';
-import { DataType, ElementId, Ids, SoftDataType } from '../constants';
+import { DataType, dbAccessArea, ElementId, Ids, SoftDataType } from '../constants';
 import { encodeSVlq32, encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
 import type { PlusMember, PlusModel, PlusType } from './model';
 
@@ -57,10 +57,14 @@ function wstring(text: string): Buffer {
   return Buffer.concat([encodeUVlq32(bytes.length), bytes]);
 }
 
-/** thePLCProgram explored: one DataBlock object per DB (name, number). */
-export function blockList(model: PlusModel): Buffer {
+/**
+ * thePLCProgram explored: one DataBlock object per DB (name, number), the program's and then `unnamed`, the
+ * memory's data blocks no source declares (a layout's), each named as STEP 7 names a DB without symbol (`DB10`).
+ */
+export function blockList(model: PlusModel, unnamed: readonly number[] = []): Buffer {
   const parts: Buffer[] = [];
-  for (const db of model.dbs) {
+  const blocks = [...model.dbs, ...unnamed.map((number) => ({ rid: dbAccessArea(number), name: `DB${number}`, number }))];
+  for (const db of blocks) {
     parts.push(objectHead(db.rid, Ids.DBClassRID));
     parts.push(attribute(Ids.ObjectVariableTypeName, DataType.WString, wstring(db.name)));
     parts.push(attribute(Ids.BlockBlockNumber, DataType.UDInt, encodeUVlq32(db.number)));

@@ -70,27 +70,35 @@ function readText(file: string, flag: string): string {
 }
 
 /**
- * Runs the server side of TLS over an accepted tunnel. Resolves the TLS
- * socket once the handshake is done; on failure, a deadline or a client
+ * The simulator's TLS settings with its certificate and key, made once (a CPU's: TLS 1.2 and 1.3, the S7 suites and
+ * groups, no tickets): what acceptTls() serves every connection with.
+ */
+export function serverSecureContext(certificate: { readonly cert: string | Buffer; readonly key: string | Buffer }): tls.SecureContext {
+  return tls.createSecureContext({
+    cert: certificate.cert,
+    key: certificate.key,
+    minVersion: 'TLSv1.2',
+    maxVersion: 'TLSv1.3',
+    ciphers: S7_CIPHERS,
+    ecdhCurve: S7_GROUPS,
+    secureOptions: S7_SECURE_OPTIONS,
+  });
+}
+
+/**
+ * Runs the server side of TLS over an accepted tunnel, with `certificate` (or its serverSecureContext(), made once
+ * for many connections). Resolves the TLS socket once the handshake is done; on failure, a deadline or a client
  * that leaves, everything is destroyed and the promise rejects.
  */
 export function acceptTls(
   tunnel: Duplex,
-  certificate: ServerCertificate,
+  certificate: Pick<ServerCertificate, 'cert' | 'key'> | tls.SecureContext,
   options: { timeout: number; peer: string },
 ): Promise<tls.TLSSocket> {
   const { timeout, peer } = options;
+  const secureContext = 'context' in certificate ? certificate : serverSecureContext(certificate);
   return new Promise((resolve, reject) => {
-    const socket = new tls.TLSSocket(tunnel, {
-      isServer: true,
-      cert: certificate.cert,
-      key: certificate.key,
-      minVersion: 'TLSv1.2',
-      ciphers: S7_CIPHERS,
-      ecdhCurve: S7_GROUPS,
-      secureOptions: S7_SECURE_OPTIONS,
-      requestCert: false,
-    });
+    const socket = new tls.TLSSocket(tunnel, { isServer: true, secureContext, requestCert: false });
     const timer = setTimeout(() => fail(new TimeoutError(`the TLS handshake with ${peer} did not complete within ${timeout} ms`)), timeout);
     const onError = (err: Error) => fail(tlsFailure(err, peer, 'handshake'));
     const onClose = () => fail(new ConnectionError('CONNECTION_LOST', `${peer} left during the TLS handshake`));

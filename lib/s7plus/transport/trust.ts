@@ -16,6 +16,7 @@ import * as net from 'node:net';
 import type * as tls from 'node:tls';
 import { PlcError } from '../../errors';
 import { fingerprint256 } from './cert';
+import { fingerprintProblem, normalizeFingerprint } from './fingerprint';
 
 /**
  * TLS 1.2 suites S7 PLCs accept, ECDHE first (forward secrecy), RSA key
@@ -89,13 +90,12 @@ export class CertificateError extends PlcError {
  * value should be.
  */
 export function parseFingerprint(text: string): string {
-  const hex = text.replace(/[:\s]/g, '').toUpperCase();
-  if (/^[0-9A-F]{64}$/.test(hex)) return hex;
+  const hex = normalizeFingerprint(text);
+  if (hex) return hex;
   const shown = text.length > 80 ? `${text.slice(0, 77)}...` : text;
-  const why = /[^0-9A-F]/.test(hex)
-    ? `"${hex.match(/[^0-9A-F]/)![0]}" is not a hex digit`
-    : `it has ${hex.length} hex digits${hex.length === 40 ? ' (a SHA-1 fingerprint?)' : ''}`;
-  return badUrl(`fingerprint=${shown}: ${why}; give the SHA-256 of the PLC's certificate as 64 hex digits (colons and case are ignored)`);
+  return badUrl(
+    `fingerprint=${shown}: ${fingerprintProblem(text)}; give the SHA-256 of the PLC's certificate as 64 hex digits (colons and case are ignored)`,
+  );
 }
 
 function badUrl(problem: string): never {
