@@ -201,6 +201,8 @@ describe('S7CommPlus legitimation: our client against our simulator protected wi
       show(err);
       expect(err.code, tag).to.equal('ACCESS_DENIED');
       expect(err.tag).to.equal(tag);
+      // The PLC's own code, by address and by name alike (one mapper of item errors keeps it).
+      expect(err.plcCode, tag).to.equal(0x8104);
       expect(err.message).to.include(
         `${tag}: the PLC refused the write: s7plus://127.0.0.1:${server.port} gives this connection read access only`,
       );

@@ -14,9 +14,10 @@ import type { PlcValue, Tag } from '../../types';
 import { decodeTag, encodeTag } from '../../values';
 import { blobValue, classicBlobAddress, type ItemAddress } from '../codec/variables';
 import type { PValue } from '../codec/pvalue';
-import { Ids, ITEM_ERROR_UNRESOLVED } from '../constants';
+import { Ids } from '../constants';
 import { readAsk, writeAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
+import { itemRefusal } from './refusals';
 import type { S7PlusSession } from './session';
 
 /** The native objects of the I, Q and M areas (s7commplus (MIT), protocol.py Ids.NATIVE_THE_*_AREA_RID). */
@@ -47,20 +48,6 @@ export function itemAddress(tag: Tag): ItemAddress | PlcError {
   };
 }
 
-/** The PLC's refusal of one item, in words with its code (0x8104: it has no such object, e.g. no such DB or offset). */
-function itemError(tag: Tag, code: bigint): PlcError {
-  if (code === ITEM_ERROR_UNRESOLVED) {
-    return new PlcError('OBJECT_DOES_NOT_EXIST', `${tag.address}: the PLC has no such item (no such data block or area, or past its end)`, {
-      tag: tag.address,
-      plcCode: Number(code),
-    });
-  }
-  return new PlcError('PLC_ERROR', `${tag.address}: the PLC refused the item (0x${code.toString(16)})`, {
-    tag: tag.address,
-    plcCode: Number(code & 0xffffn),
-  });
-}
-
 export function bytesOf(v: PValue): Buffer | undefined {
   const blob = v.value as { data?: unknown } | undefined;
   return blob && Buffer.isBuffer(blob.data) ? blob.data : undefined;
@@ -81,7 +68,7 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
   await inChunks(wanted, limits, send, (chunk, body) => {
     if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
       if (chunk.length > 1) return 'again';
-      fail(chunk[0]!, itemError(tags[chunk[0]!]!, body.returnValue));
+      fail(chunk[0]!, itemRefusal(body.returnValue, { tag: tags[chunk[0]!]!.address }));
       return;
     }
     chunk.forEach((i, k) => {
@@ -110,7 +97,7 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
         fail(
           i,
           code !== undefined
-            ? itemError(tag, code)
+            ? itemRefusal(code, { tag: tag.address })
             : new PlcError('PROTOCOL_ERROR', `${tag.address}: the PLC did not answer this item`, { tag: tag.address }),
         );
     });
@@ -156,12 +143,12 @@ export async function writeTags(
   await inChunks(ready, limits, send, (chunk, body) => {
     if (body.returnValue !== 0n && body.errors.size === 0) {
       if (chunk.length > 1) return 'again';
-      results[chunk[0]!.i] = { ok: false, error: itemError(items[chunk[0]!.i]!.tag, body.returnValue) };
+      results[chunk[0]!.i] = { ok: false, error: itemRefusal(body.returnValue, { tag: items[chunk[0]!.i]!.tag.address, write: true }) };
       return;
     }
     chunk.forEach((c, k) => {
       const code = body.errors.get(k + 1);
-      if (code !== undefined) results[c.i] = { ok: false, error: itemError(items[c.i]!.tag, code) };
+      if (code !== undefined) results[c.i] = { ok: false, error: itemRefusal(code, { tag: items[c.i]!.tag.address, write: true }) };
     });
   });
   return results;

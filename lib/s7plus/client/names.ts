@@ -22,6 +22,7 @@ import type { PValue } from '../codec/pvalue';
 import type { ItemAddress } from '../codec/variables';
 import { readAsk, writeAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
+import { itemRefusal } from './refusals';
 import { readTags, writeTags } from './io';
 import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } from './name-values';
 import type { S7PlusSession } from './session';
@@ -232,11 +233,7 @@ async function readNamed(
       const v = body.values.get(n + 1);
       if (!v) {
         const code = body.errors.get(n + 1) ?? body.returnValue;
-        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = new PlcError(
-          'OBJECT_DOES_NOT_EXIST',
-          `${e.name}: the PLC refused it (0x${code.toString(16)}); was its program changed?`,
-          { tag: e.name },
-        );
+        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = itemRefusal(code, { tag: e.name, name: e.name });
         return;
       }
       try {
@@ -309,12 +306,7 @@ export async function writeMixed(
     chunk.forEach((c, k) => {
       const code = body.errors.get(k + 1) ?? (body.returnValue !== 0n ? body.returnValue : undefined);
       if (code !== undefined && results[c.i]!.ok)
-        results[c.i] = {
-          ok: false,
-          error: new PlcError('PLC_ERROR', `${c.name}: the PLC refused the write (0x${code.toString(16)})`, {
-            tag: items[c.i]!.tag.address,
-          }),
-        };
+        results[c.i] = { ok: false, error: itemRefusal(code, { tag: items[c.i]!.tag.address, name: c.name, write: true }) };
     });
   });
   return results;
