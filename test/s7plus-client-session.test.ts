@@ -13,6 +13,8 @@ import { ConnectionError, PlcError } from '../lib/errors';
 import { createClient } from '../lib/connect';
 import { encodeFrames, S7pFrameReader } from '../lib/s7plus/codec/frame';
 import { encodeInitSslResponse } from '../lib/s7plus/codec/session';
+import { blobValue, classicBlobAddress, encodeGetMultiVariablesResponse } from '../lib/s7plus/codec/variables';
+import { readAsk } from '../lib/s7plus/client/asks';
 import { decodeUVlq32, encodeUVlq32 } from '../lib/s7plus/codec/vlq';
 import { FunctionCode, ProtocolVersion } from '../lib/s7plus/constants';
 import { S7PlusSession, type Ask } from '../lib/s7plus/client/session';
@@ -282,6 +284,68 @@ describe('s7plus client: the session', () => {
     const err = await rejection(p);
     expect(err).to.be.instanceOf(ConnectionError);
     expect(err.code).to.equal('CLOSED');
+  });
+});
+
+describe("s7plus client: the answer's IntegrityId", () => {
+  /** A read of DB1.DBW0 and the PLC's answer to it (sequence `seq`), with `integrityId` after its body. */
+  const read = () => readAsk([classicBlobAddress(1, 0, 2)]);
+  function answer(seq: number, integrityId: number | undefined): Buffer {
+    const header = { functionCode: FunctionCode.GetMultiVariables, sequence: seq, transportFlags: 0x34 };
+    const values = new Map([[1, blobValue(Buffer.from([0x12, 0x34]))]]);
+    const body = { returnValue: 0n, values, errors: new Map<number, bigint>() };
+    return encodeFrames(2, encodeGetMultiVariablesResponse(integrityId === undefined ? { header, body } : { header, body, integrityId }));
+  }
+
+  it("an answer that carries the request's IntegrityId is taken, and one that carries none", async () => {
+    const { session, plc } = open();
+    session.startIntegrity();
+    for (const [i, id] of [0, undefined, 2].entries()) {
+      const p = session.request(read());
+      await until(() => plc.seen.length === i + 1);
+      plc.end.write(answer(plc.seen[i]!.seq, id));
+      expect((await p).values.size).to.equal(1);
+    }
+    expect(session.alive).to.equal(true);
+    session.destroy();
+  });
+
+  it("once the PLC echoed a request's IntegrityId, an answer with another (one bit flipped) drops the link with PROTOCOL_ERROR naming both; what waits fails too", async () => {
+    const { session, plc, lost, ours } = open();
+    session.startIntegrity();
+    for (const i of [0, 1]) {
+      const p = session.request(read());
+      await until(() => plc.seen.length === i + 1);
+      plc.end.write(answer(plc.seen[i]!.seq, i));
+      await p;
+    }
+    const p = session.request(read());
+    const queued = session.request(read());
+    await until(() => plc.seen.length === 3);
+    const frame = answer(plc.seen[2]!.seq, 2);
+    // The IntegrityId is the answer's last byte before the frame's trailer (4 bytes): 2 → 3.
+    frame[frame.length - 5]! ^= 0x01;
+    plc.end.write(frame);
+    const err = await rejection(p);
+    expect(err.code).to.equal('PROTOCOL_ERROR');
+    expect(err.message).to.contain("carries IntegrityId 3, not the request's 2");
+    expect((await rejection(queued)).code).to.equal('PROTOCOL_ERROR');
+    expect(lost).to.have.length(1);
+    expect(session.alive).to.equal(false);
+    expect(ours.destroyed).to.equal(true);
+  });
+
+  it('a PLC that numbers its answers its own way (the s7commplus emulator answers 0) is not judged', async () => {
+    const { session, plc } = open();
+    session.startIntegrity();
+    for (const i of [0, 1, 2]) {
+      const p = session.request(read());
+      await until(() => plc.seen.length === i + 1);
+      plc.end.write(answer(plc.seen[i]!.seq, 0));
+      await p;
+    }
+    expect(session.alive).to.equal(true);
+    session.destroy();
   });
 });
 

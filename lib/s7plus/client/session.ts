@@ -102,11 +102,13 @@ export class S7PlusSession {
   private writeId = 0;
   private readonly cutter = new S7pFrameReader();
   private readonly waiting = new Fifo<Job>();
-  /** The request on the wire: its job, sequence number, and whether it carried an IntegrityId. */
-  private current: { job: Job; seq: number; integrity: boolean } | undefined;
+  /** The request on the wire: its job and sequence number. */
+  private current: { job: Job; seq: number } | undefined;
   /** Its answer, by sequence number, with its deadline (one at a time: the PLC answers in order). */
   private readonly inFlight = new PendingRequests<S7pMessage>();
   private stale = 0;
+  /** Whether the PLC answers each request with its IntegrityId (learnt from the first answer that can tell: see answered()). */
+  private echoes: boolean | undefined;
   private dead: PlcError | undefined;
   private readonly maxQueued: number;
   /** The frame version of the last answer (the CreateObject answer's tells the protocol version the PLC speaks). */
@@ -247,12 +249,10 @@ export class S7PlusSession {
     const fn = job.ask.functionCode;
     const counted = this.integrity && o.integrity !== false;
     const isRead = READ_FUNCTIONS.has(fn);
+    const integrityId = counted ? (isRead ? this.readId : this.writeId) : undefined;
     let frame: Buffer;
     try {
-      frame = encodeFrames(
-        o.version ?? this.version,
-        this.stamp(job.ask, seq, counted ? (isRead ? this.readId : this.writeId) : undefined),
-      );
+      frame = encodeFrames(o.version ?? this.version, this.stamp(job.ask, seq, integrityId));
     } catch (err) {
       // Nothing went out: the numbers are not spent.
       this.nextSeq = seq;
@@ -271,10 +271,10 @@ export class S7PlusSession {
       this.settle(job, undefined, undefined);
       return this.pump();
     }
-    this.current = { job, seq, integrity: counted };
+    this.current = { job, seq };
     const what = `${this.wiring.name} did not answer request 0x${fn.toString(16)} (sequence ${seq}) within ${this.wiring.timeout} ms`;
     this.inFlight.add(seq, this.wiring.timeout, `request 0x${fn.toString(16)} to ${this.wiring.name}`, undefined, what).then(
-      (m) => this.answered(job, m, counted),
+      (m) => this.answered(job, m, seq, integrityId),
       // Its deadline (a TimeoutError: the link drops), or the link already lost (then a no-op).
       (err: PlcError) => this.lose(err),
     );
@@ -327,19 +327,42 @@ export class S7PlusSession {
     this.pump();
   }
 
-  /** The answer of `job`'s request: its body as the session decodes it (`integrity`: the request carried an IntegrityId). */
-  private answered(job: Job, m: S7pMessage, integrity: boolean): void {
+  /**
+   * The answer of `job`'s request (sequence `seq`, `sent`: the IntegrityId it
+   * carried): its body as the session decodes it, and its IntegrityId judged.
+   * No public source says what a CPU puts there: the s7commplus (MIT)
+   * emulator its own read or write counter (server.py _process_request), a
+   * V1 server a legacy 0. So a session learns it from the PLC: once an
+   * answer carries its request's non-zero IntegrityId, the PLC echoes, and
+   * every later answer carrying another is refused as a wrong sequence
+   * number is (the link dropped); an answer whose request carried a
+   * non-zero one and that carries another before that tells a PLC that
+   * numbers its own way, which is then not judged. An answer without one
+   * is taken (a PLC's DeleteObject of its session answers without).
+   */
+  private answered(job: Job, m: S7pMessage, seq: number, sent: number | undefined): void {
     const fn = job.ask.functionCode;
     if (m.data.readUInt16BE(3) === FunctionCode.Error) {
       return this.settle(job, new ProtocolError(`${this.wiring.name} answered request 0x${fn.toString(16)} with an error PDU`));
     }
-    let body: unknown;
+    let res: Response<unknown>;
     try {
-      body = (job.ask as Ask<unknown, unknown>).decode(m.data, { integrity }).body;
+      res = (job.ask as Ask<unknown, unknown>).decode(m.data, { integrity: sent !== undefined });
     } catch (err) {
       return this.settle(job, toPlcError(err, 'PROTOCOL_ERROR'));
     }
-    this.settle(job, undefined, body);
+    const got = res.integrityId;
+    if (got !== undefined && sent !== undefined && sent !== 0 && this.echoes === undefined) this.echoes = got === sent;
+    else if (got !== undefined && got !== sent && this.echoes) {
+      this.lose(
+        new ProtocolError(
+          `${this.wiring.name}: the answer to request 0x${fn.toString(16)} (sequence ${seq}) carries IntegrityId ${res.integrityId}, ` +
+            `not the request's ${sent ?? '(none)'}`,
+        ),
+      );
+      return this.settle(job, this.dead);
+    }
+    this.settle(job, undefined, res.body);
   }
 
   /**
