@@ -17,7 +17,7 @@ import type { PValue } from '../codec/pvalue';
 import { Ids } from '../constants';
 import { readAsk, writeAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
-import { itemRefusal } from './refusals';
+import { itemAnswer, itemRefusal, notAnswered, untrustedValue } from './refusals';
 import type { S7PlusSession } from './session';
 
 /** The native objects of the I, Q and M areas (s7commplus (MIT), protocol.py Ids.NATIVE_THE_*_AREA_RID). */
@@ -73,33 +73,21 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
     }
     chunk.forEach((i, k) => {
       const tag = tags[i]!;
-      const value = body.values.get(k + 1);
-      const code = body.errors.get(k + 1);
-      if (value) {
-        const data = bytesOf(value);
-        if (!data)
-          return fail(
-            i,
-            new PlcError(
-              'PROTOCOL_ERROR',
-              `${tag.address}: the PLC answered a value of type 0x${value.type.toString(16)}, not the bytes asked for`,
-              {
-                tag: tag.address,
-              },
-            ),
-          );
-        try {
-          values[i] = decodeTag(tag, data, 0);
-        } catch (err) {
-          fail(i, err as PlcError);
-        }
-      } else
-        fail(
-          i,
-          code !== undefined
-            ? itemRefusal(code, { tag: tag.address })
-            : new PlcError('PROTOCOL_ERROR', `${tag.address}: the PLC did not answer this item`, { tag: tag.address }),
-        );
+      const answer = itemAnswer(body, k + 1);
+      if (answer === undefined) return fail(i, notAnswered(tag.address));
+      if ('code' in answer) return fail(i, itemRefusal(answer.code, { tag: tag.address, request: answer.request }));
+      const untrusted = untrustedValue(answer, tag.address);
+      if (untrusted) return fail(i, untrusted);
+      const data = bytesOf(answer);
+      if (!data) {
+        const what = `${tag.address}: the PLC answered a value of type 0x${answer.type.toString(16)}, not the bytes asked for`;
+        return fail(i, new PlcError('PROTOCOL_ERROR', what, { tag: tag.address }));
+      }
+      try {
+        values[i] = decodeTag(tag, data, 0);
+      } catch (err) {
+        fail(i, err as PlcError);
+      }
     });
   });
   return { values, errors };
@@ -147,8 +135,11 @@ export async function writeTags(
       return;
     }
     chunk.forEach((c, k) => {
-      const code = body.errors.get(k + 1);
-      if (code !== undefined) results[c.i] = { ok: false, error: itemRefusal(code, { tag: items[c.i]!.tag.address, write: true }) };
+      const answer = itemAnswer(body, k + 1);
+      if (answer && 'code' in answer) {
+        const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, write: true, request: answer.request });
+        results[c.i] = { ok: false, error };
+      }
     });
   });
   return results;

@@ -22,7 +22,7 @@ import type { PValue } from '../codec/pvalue';
 import type { ItemAddress } from '../codec/variables';
 import { readAsk, writeAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
-import { itemRefusal } from './refusals';
+import { itemAnswer, itemRefusal, notAnswered, untrustedValue } from './refusals';
 import { readTags, writeTags } from './io';
 import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } from './name-values';
 import type { S7PlusSession } from './session';
@@ -230,16 +230,16 @@ async function readNamed(
   await inChunks(plan.indexes, limits, send, (chunk, body) => {
     chunk.forEach((k, n) => {
       const e = leaves[k]!;
-      const v = body.values.get(n + 1);
-      if (!v) {
-        const code = body.errors.get(n + 1) ?? body.returnValue;
-        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = itemRefusal(code, { tag: e.name, name: e.name });
-        return;
-      }
+      const fail = (err: PlcError) => ((failed ??= new Array<PlcError | undefined>(leaves.length))[k] = err);
+      const answer = itemAnswer(body, n + 1);
+      if (answer === undefined) return void fail(notAnswered(e.name));
+      if ('code' in answer) return void fail(itemRefusal(answer.code, { tag: e.name, name: e.name, request: answer.request }));
+      const untrusted = untrustedValue(answer, e.name);
+      if (untrusted) return void fail(untrusted);
       try {
-        leafValues[k] = valueOf(e, v, plan.shapes[k]);
+        leafValues[k] = valueOf(e, answer, plan.shapes[k]);
       } catch (err) {
-        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = toPlcError(err, 'PROTOCOL_ERROR');
+        fail(toPlcError(err, 'PROTOCOL_ERROR'));
       }
     });
   });
@@ -304,9 +304,11 @@ export async function writeMixed(
     );
   await inChunks(ready, limits, send, (chunk, body) => {
     chunk.forEach((c, k) => {
-      const code = body.errors.get(k + 1) ?? (body.returnValue !== 0n ? body.returnValue : undefined);
-      if (code !== undefined && results[c.i]!.ok)
-        results[c.i] = { ok: false, error: itemRefusal(code, { tag: items[c.i]!.tag.address, name: c.name, write: true }) };
+      const answer = itemAnswer(body, k + 1);
+      if (answer && 'code' in answer && results[c.i]!.ok) {
+        const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, name: c.name, write: true, request: answer.request });
+        results[c.i] = { ok: false, error };
+      }
     });
   });
   return results;

@@ -23,6 +23,7 @@ import type { Notification, SubscriptionItem } from '../codec/subscription';
 import type { PValue } from '../codec/pvalue';
 import type { ItemAddress } from '../codec/variables';
 import { bytesOf, itemAddress } from './io';
+import { untrustedValue } from './refusals';
 import { isNamed, resolveName } from './names';
 import { assemble, itemOf, leavesOf, valueOf } from './name-values';
 
@@ -235,6 +236,8 @@ export class S7PlusSubscription extends EventEmitter {
   }
 
   private decode(planned: Planned, entry: SymbolEntry | undefined, v: PValue): PlcValue | PlcError {
+    const untrusted = untrustedValue(v, planned.address);
+    if (untrusted) return untrusted;
     try {
       if (entry) return valueOf(entry, v);
       const data = bytesOf(v);
