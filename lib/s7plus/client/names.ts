@@ -24,6 +24,7 @@ import { readAsk, writeAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
 import { itemAnswer, itemRefusal, notAnswered, untrustedValue } from './refusals';
 import { readTags, writeTags } from './io';
+import { explainOptimized } from './optimized';
 import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } from './name-values';
 import type { S7PlusSession } from './session';
 
@@ -84,6 +85,19 @@ function unknownName(table: SymbolTable, name: string): PlcError {
   return new PlcError('INVALID_ADDRESS', `unknown name ${name} on the PLC${hint}`, { tag: name });
 }
 
+const isAddress = (tag: Tag) => !isNamed(tag);
+const slotsOf = (errors: (PlcError | undefined)[]) => ({
+  errorAt: (i: number) => errors[i],
+  replace: (i: number, err: PlcError) => (errors[i] = err),
+});
+const resultSlots = (results: TagResult<void>[]) => ({
+  errorAt: (i: number) => {
+    const r = results[i]!;
+    return r.ok ? undefined : r.error;
+  },
+  replace: (i: number, error: PlcError) => (results[i] = { ok: false, error }),
+});
+
 /** True when `table` has the name: a member, or a data block named alone. */
 function knows(table: SymbolTable, name: string): boolean {
   return table.lookup(name) !== undefined || wholeBlock(table, name) !== undefined;
@@ -122,7 +136,11 @@ export async function readMixed(
   signal?: AbortSignal,
 ): Promise<ReadValues> {
   const named = tags.flatMap((t, i) => (isNamed(t) ? [i] : []));
-  if (named.length === 0) return readTags(session, tags, limits, signal);
+  if (named.length === 0) {
+    const r = await readTags(session, tags, limits, signal);
+    if (r.errors) await explainOptimized(tags, slotsOf(r.errors), () => program.table(), isAddress);
+    return r;
+  }
   const values: PlcValue[] = new Array<PlcValue>(tags.length);
   const errors: (PlcError | undefined)[] = new Array<PlcError | undefined>(tags.length);
   const addressed = tags.flatMap((t, i) => (isNamed(t) ? [] : [i]));
@@ -134,6 +152,7 @@ export async function readMixed(
       signal,
     );
     addressed.forEach((i, k) => ((values[i] = r.values[k]!), (errors[i] = r.errors?.[k])));
+    await explainOptimized(tags, slotsOf(errors), () => program.table(), isAddress);
   }
   // A value read by LID counts only when the program had not changed by the time it came: the check runs after the
   // read, so a download before or during it is seen, and the names are read again through the new table.
@@ -264,7 +283,13 @@ export async function writeMixed(
   program: Program,
   signal?: AbortSignal,
 ): Promise<TagResult<void>[]> {
-  if (!items.some((it) => isNamed(it.tag))) return writeTags(session, items, limits, signal);
+  const tags = items.map((it) => it.tag);
+  const explain = (results: TagResult<void>[]) => explainOptimized(tags, resultSlots(results), () => program.table(), isAddress);
+  if (!items.some((it) => isNamed(it.tag))) {
+    const r = await writeTags(session, items, limits, signal);
+    await explain(r);
+    return r;
+  }
   const results: TagResult<void>[] = items.map(() => ({ ok: true, value: undefined }));
   const addressed = items.flatMap((it, i) => (isNamed(it.tag) ? [] : [i]));
   if (addressed.length > 0) {
@@ -275,6 +300,7 @@ export async function writeMixed(
       signal,
     );
     addressed.forEach((i, k) => (results[i] = r[k]!));
+    await explain(results);
   }
   // A write by a stale LID would land in another member: the program is checked first (browsed again if it changed).
   const known = await program.table();
