@@ -19,7 +19,7 @@ import { startTls } from '../transport/handshake';
 import type { CertificateInfo } from '../transport/trust';
 import { openTunnel } from './tunnel';
 import { deviceString } from '../codec/identity';
-import { legitimate, type Protection } from './legitimation';
+import { legitimate, protectionWithoutPassword, type Protection } from './legitimation';
 
 /** The PLC's certificate of a TLS connection, as the client tells it (`client.certificate`, the `insecure` event). */
 export interface PeerCertificate {
@@ -157,7 +157,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
         signal,
       });
       o.onStep?.({ step: 'password', protection });
-    }
+    } else protection = await protectionWithoutPassword(session, signal);
     if (o.signal.aborted) throw abortError(`connecting to ${o.name}`, o.signal);
     return { session, certificate, device, ...(protection ? { protection } : {}) };
   } catch (err) {

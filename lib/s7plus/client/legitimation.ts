@@ -46,7 +46,7 @@ import type { S7PlusSession } from './session';
 export interface Protection {
   /** AccessLevel: 0 none configured, 1 full access, 2 read access, 3 HMI access, 4 no access. */
   level: number;
-  /** True when the PLC took the password; false when it wanted none (full access without it). */
+  /** True when the PLC took the password; false when none was given, or the PLC wanted none (full access without it). */
   legitimated: boolean;
   /** The form used, when one was. */
   form?: LegitimationForm;
@@ -192,6 +192,17 @@ async function attribute(session: S7PlusSession, address: number, signal: AbortS
 /** The session's protection level (EffectiveProtectionLevel, 1842). */
 async function protectionLevel(session: S7PlusSession, signal?: AbortSignal): Promise<number> {
   return protectionLevelOf(await attribute(session, Ids.EffectiveProtectionLevel, signal));
+}
+
+/**
+ * What a session without a password may do: the protection level the PLC
+ * reports, read once after the session setup as the s7commplus client reads
+ * it on every connect (MIT, connection.py connect, _get_effective_protection_level);
+ * undefined when the PLC tells none. A refused write later asks no more.
+ */
+export async function protectionWithoutPassword(session: S7PlusSession, signal?: AbortSignal): Promise<Protection | undefined> {
+  const level = await knownLevel(session, signal);
+  return level === undefined ? undefined : { level, legitimated: false };
 }
 
 /** The level of `session`, read once; undefined when the PLC does not tell it (never throws). */
