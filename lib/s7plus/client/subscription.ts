@@ -48,6 +48,22 @@ export interface SubscriptionChange {
   previous: TagResult<PlcValue> | undefined;
 }
 
+/** The events of a subscription and their arguments: `sub.on('chnage', …)` does not compile. */
+export interface S7PlusSubscriptionEvents {
+  state: [state: SubscriptionState];
+  /** Created on a session: the first notification after it carries every value. */
+  active: [];
+  /** The link went; the subscription is created again when the link is back. */
+  lost: [error: PlcError];
+  /** Every notification. */
+  data: [data: SubscriptionData];
+  /** Per tag whose value or quality changed. */
+  change: [change: SubscriptionChange];
+  /** Only emitted when someone listens. */
+  error: [error: PlcError];
+  closed: [];
+}
+
 export interface SubscribeOptions {
   /** How often the PLC samples the tags, ms (default 100; 10 to 3600000). */
   cycle?: number;
@@ -84,7 +100,7 @@ export interface SubscriptionOwner {
   remove(sub: S7PlusSubscription): Promise<void>;
 }
 
-export class S7PlusSubscription extends EventEmitter {
+export class S7PlusSubscription extends EventEmitter<S7PlusSubscriptionEvents> {
   readonly tags: readonly string[];
   readonly cycle: number;
   #state: SubscriptionState = 'subscribing';
