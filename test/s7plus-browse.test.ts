@@ -7,6 +7,7 @@
  */
 import { expect } from 'chai';
 import { createClient } from '../lib/connect';
+import type { PlcError } from '../lib/errors';
 import type { S7PlusClient } from '../lib/s7plus/client';
 import { S7Server } from '../lib/s7/server';
 import { S7PlusService } from '../lib/s7plus/server';
@@ -14,8 +15,8 @@ import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { compileSymbols } from '../lib/symbols';
 import type { SymbolEntry } from '../lib/symbols/model';
 import { browseTable } from '../lib/s7plus/client/browse';
-import type { S7PlusSession } from '../lib/s7plus/client/session';
-import { decodeExploreRequest, encodeExploreResponse } from '../lib/s7plus/codec/explore';
+import type { Ask, S7PlusSession } from '../lib/s7plus/client/session';
+import { encodeExploreResponse, type ExploreRequest } from '../lib/s7plus/codec/explore';
 import { newObject, type PObject } from '../lib/s7plus/codec/object';
 import { encodeGetMultiVariablesResponse } from '../lib/s7plus/codec/variables';
 import { DataType, dbAccessArea, ElementId, FunctionCode, Ids, SoftDataType } from '../lib/s7plus/constants';
@@ -124,6 +125,21 @@ describe('S7CommPlus browse and names (our client, our simulator)', function () 
     const nope = detailed['"Nope".X']!;
     expect(nope.ok).to.equal(false);
     expect(!nope.ok && nope.error).to.include({ code: 'INVALID_ADDRESS' });
+  });
+
+  it('an address in the optimized DB (DB2.DBW0) says the block is optimized and which name to use, not "no such item"; a standard DB still reads', async () => {
+    for (const r of [await client.readDetailed(['DB2.DBW0:INT', 'DB1.DBW0:INT']), await client.writeDetailed({ 'DB2.DBW0:INT': 1 })]) {
+      const refused = r['DB2.DBW0:INT']!;
+      expect(refused.ok).to.equal(false);
+      const err = (refused as { error: PlcError }).error;
+      expect(err.code).to.equal('OPTIMIZED_BLOCK');
+      expect(err.plcCode).to.equal(0x8104);
+      expect(err.message).to.include('DB2.DBW0:INT: DB2 ("Recipe") has optimized access').and.include('e.g. "Recipe".Target');
+    }
+    expect((await client.readDetailed(['DB1.DBW0:INT']))['DB1.DBW0:INT']).to.include({ ok: true });
+    // A DB the PLC does not have keeps the PLC's own words.
+    const missing = (await client.readDetailed(['DB99.DBW0:INT']))['DB99.DBW0:INT']!;
+    expect(!missing.ok && missing.error.code).to.equal('OBJECT_DOES_NOT_EXIST');
   });
 
   it('readOnly and a write allow-list by name hold as for s7://', async () => {
@@ -292,19 +308,19 @@ function hostileSession(vartype: Buffer, varname: Buffer): S7PlusSession {
     ],
   };
   const fake = {
-    integrityOn: false,
     alive: true,
-    request(fn: number, encode: (sequence: number, sessionId: number, integrityId?: number) => Buffer): Promise<Buffer> {
-      if (fn === FunctionCode.GetMultiVariables)
-        return Promise.resolve(
+    request(ask: Ask<unknown, unknown>): Promise<unknown> {
+      const answer = (data: Buffer) => Promise.resolve(ask.decode(data, { integrity: false }).body);
+      if (ask.functionCode === FunctionCode.GetMultiVariables)
+        return answer(
           encodeGetMultiVariablesResponse({
             header,
             body: { returnValue: 0n, values: new Map([[1, { flags: 0, type: DataType.RID, value: 0x92000001 }]]), errors: new Map() },
           }),
         );
-      const { body } = decodeExploreRequest(encode(1, 1), { integrity: false });
-      const objects = body.exploreId === Ids.ObjectOmsTypeInfoContainer ? [type] : [db];
-      return Promise.resolve(encodeExploreResponse({ header, body: { returnValue: 0n, objects } }));
+      const { exploreId } = ask.body as ExploreRequest;
+      const objects = exploreId === Ids.ObjectOmsTypeInfoContainer ? [type] : [db];
+      return answer(encodeExploreResponse({ header, body: { returnValue: 0n, objects } }));
     },
   };
   return fake as unknown as S7PlusSession;

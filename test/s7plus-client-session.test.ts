@@ -13,9 +13,11 @@ import { ConnectionError, PlcError } from '../lib/errors';
 import { createClient } from '../lib/connect';
 import { encodeFrames, S7pFrameReader } from '../lib/s7plus/codec/frame';
 import { encodeInitSslResponse } from '../lib/s7plus/codec/session';
+import { blobValue, classicBlobAddress, encodeGetMultiVariablesResponse } from '../lib/s7plus/codec/variables';
+import { readAsk } from '../lib/s7plus/client/asks';
 import { decodeUVlq32, encodeUVlq32 } from '../lib/s7plus/codec/vlq';
 import { FunctionCode, ProtocolVersion } from '../lib/s7plus/constants';
-import { S7PlusSession, type Encode } from '../lib/s7plus/client/session';
+import { S7PlusSession, type Ask } from '../lib/s7plus/client/session';
 import { cotpAccept, countingServer } from './support/s7plus-tls';
 import { until } from './support/wait';
 
@@ -88,25 +90,33 @@ async function rejection(p: Promise<unknown>): Promise<PlcError> {
 
 const PAYLOAD = Buffer.from([1, 2, 3, 0, 0, 0, 0]);
 
-/** A request of function `fn` with PAYLOAD, its IntegrityId before the trailing 4 bytes (as the codec's encoders place it). */
-function enc(fn: number): Encode {
-  return (seq, sessionId, integrityId) => {
-    const head = Buffer.alloc(14);
-    head[0] = 0x31;
-    head.writeUInt16BE(fn, 3);
-    head.writeUInt16BE(seq, 7);
-    head.writeUInt32BE(sessionId, 9);
-    head[13] = 0x34;
-    const id = integrityId === undefined ? Buffer.alloc(0) : encodeUVlq32(integrityId);
-    return Buffer.concat([head, PAYLOAD.subarray(0, 3), id, PAYLOAD.subarray(3)]);
+/**
+ * A request of function `fn` with PAYLOAD, its IntegrityId before the trailing 4 bytes (as the codec's encoders place
+ * it); its answer is the message as it came.
+ */
+function ask(fn: number): Ask<null, Buffer> {
+  return {
+    functionCode: fn,
+    body: null,
+    encode: ({ header, integrityId }) => {
+      const head = Buffer.alloc(14);
+      head[0] = 0x31;
+      head.writeUInt16BE(header.functionCode, 3);
+      head.writeUInt16BE(header.sequence, 7);
+      head.writeUInt32BE(header.sessionId, 9);
+      head[13] = header.transportFlags;
+      const id = integrityId === undefined ? Buffer.alloc(0) : encodeUVlq32(integrityId);
+      return Buffer.concat([head, PAYLOAD.subarray(0, 3), id, PAYLOAD.subarray(3)]);
+    },
+    decode: (data) => ({ header: { functionCode: fn, sequence: data.readUInt16BE(7), transportFlags: data[9]! }, body: data }),
   };
 }
 
 describe('s7plus client: the session', () => {
   it('numbers requests one by one and sends the next only once the one before is answered', async () => {
     const { session, plc } = open();
-    const a = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
-    const b = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables));
+    const a = session.request(ask(FunctionCode.GetMultiVariables));
+    const b = session.request(ask(FunctionCode.SetMultiVariables));
     await until(() => plc.seen.length === 1);
     await new Promise((r) => setImmediate(r));
     expect(plc.seen, 'one in flight').to.have.length(1);
@@ -132,7 +142,7 @@ describe('s7plus client: the session', () => {
       FunctionCode.SetMultiVariables,
     ];
     for (const [i, fn] of order.entries()) {
-      const p = session.request(fn, enc(fn));
+      const p = session.request(ask(fn));
       await until(() => plc.seen.length === i + 1);
       plc.answer(fn, plc.seen[i]!.seq);
       await p;
@@ -141,7 +151,7 @@ describe('s7plus client: the session', () => {
     expect(plc.seen.map((s) => [...s.body.subarray(0, 3)])).to.deep.equal(order.map(() => [1, 2, 3]));
     expect(session.integrityIds).to.deep.equal({ read: 3, write: 2 });
     // The session setup write carries none and advances neither counter.
-    const setup = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables), { integrity: false });
+    const setup = session.request(ask(FunctionCode.SetMultiVariables), { integrity: false });
     await until(() => plc.seen.length === 6);
     expect(plc.seen[5]!.body).to.deep.equal(PAYLOAD);
     plc.answer(FunctionCode.SetMultiVariables, plc.seen[5]!.seq);
@@ -159,7 +169,7 @@ describe('s7plus client: the session', () => {
     );
     const plc = new FakePlc(theirs);
     for (const seq of [0xffff, 0]) {
-      const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+      const p = session.request(ask(FunctionCode.GetMultiVariables));
       await until(() => plc.seen.at(-1)?.seq === seq);
       plc.answer(FunctionCode.GetMultiVariables, seq);
       await p;
@@ -169,7 +179,7 @@ describe('s7plus client: the session', () => {
 
   it('ignores an answer to an earlier sequence number (a request given up on) and takes the right one', async () => {
     const { session, plc } = open();
-    const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const p = session.request(ask(FunctionCode.GetMultiVariables));
     await until(() => plc.seen.length === 1);
     plc.answer(FunctionCode.GetMultiVariables, 4, Buffer.from([0x00, 0x01]));
     plc.answer(FunctionCode.GetMultiVariables, 5, Buffer.from([0x00, 0x02]));
@@ -204,8 +214,8 @@ describe('s7plus client: the session', () => {
   ] as const) {
     it(`${what} drops the link: every request fails with ${code}, the stream is destroyed, the client told once`, async () => {
       const { session, plc, lost, ours } = open();
-      const inFlight = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
-      const queued = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables));
+      const inFlight = session.request(ask(FunctionCode.GetMultiVariables));
+      const queued = session.request(ask(FunctionCode.SetMultiVariables));
       await until(() => plc.seen.length === 1);
       act(plc);
       const err = await rejection(inFlight);
@@ -215,13 +225,13 @@ describe('s7plus client: the session', () => {
       expect(lost).to.have.length(1);
       expect(session.alive).to.equal(false);
       expect(ours.destroyed).to.equal(true);
-      expect((await rejection(session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables)))).code).to.equal(code);
+      expect((await rejection(session.request(ask(FunctionCode.GetMultiVariables)))).code).to.equal(code);
     });
   }
 
   it('a request unanswered within the timeout drops the link with TIMEOUT (its numbers are spent on both sides)', async () => {
     const { session, plc, lost } = open(50);
-    const err = await rejection(session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables)));
+    const err = await rejection(session.request(ask(FunctionCode.GetMultiVariables)));
     expect(err.code).to.equal('TIMEOUT');
     expect(err.message).to.contain('did not answer request 0x54c (sequence 5) within 50 ms');
     expect(plc.seen).to.have.length(1);
@@ -230,10 +240,10 @@ describe('s7plus client: the session', () => {
 
   it('a request aborted while it waits leaves the queue without spending a sequence number', async () => {
     const { session, plc } = open();
-    const first = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const first = session.request(ask(FunctionCode.GetMultiVariables));
     const ac = new AbortController();
-    const second = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables), { signal: ac.signal });
-    const third = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const second = session.request(ask(FunctionCode.GetMultiVariables), { signal: ac.signal });
+    const third = session.request(ask(FunctionCode.GetMultiVariables));
     ac.abort();
     expect((await rejection(second)).code).to.equal('ABORTED');
     await until(() => plc.seen.length === 1);
@@ -268,12 +278,74 @@ describe('s7plus client: the session', () => {
 
   it('destroy() fails what waits with CLOSED and never throws twice', async () => {
     const { session } = open();
-    const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const p = session.request(ask(FunctionCode.GetMultiVariables));
     session.destroy();
     session.destroy();
     const err = await rejection(p);
     expect(err).to.be.instanceOf(ConnectionError);
     expect(err.code).to.equal('CLOSED');
+  });
+});
+
+describe("s7plus client: the answer's IntegrityId", () => {
+  /** A read of DB1.DBW0 and the PLC's answer to it (sequence `seq`), with `integrityId` after its body. */
+  const read = () => readAsk([classicBlobAddress(1, 0, 2)]);
+  function answer(seq: number, integrityId: number | undefined): Buffer {
+    const header = { functionCode: FunctionCode.GetMultiVariables, sequence: seq, transportFlags: 0x34 };
+    const values = new Map([[1, blobValue(Buffer.from([0x12, 0x34]))]]);
+    const body = { returnValue: 0n, values, errors: new Map<number, bigint>() };
+    return encodeFrames(2, encodeGetMultiVariablesResponse(integrityId === undefined ? { header, body } : { header, body, integrityId }));
+  }
+
+  it("an answer that carries the request's IntegrityId is taken, and one that carries none", async () => {
+    const { session, plc } = open();
+    session.startIntegrity();
+    for (const [i, id] of [0, undefined, 2].entries()) {
+      const p = session.request(read());
+      await until(() => plc.seen.length === i + 1);
+      plc.end.write(answer(plc.seen[i]!.seq, id));
+      expect((await p).values.size).to.equal(1);
+    }
+    expect(session.alive).to.equal(true);
+    session.destroy();
+  });
+
+  it("once the PLC echoed a request's IntegrityId, an answer with another (one bit flipped) drops the link with PROTOCOL_ERROR naming both; what waits fails too", async () => {
+    const { session, plc, lost, ours } = open();
+    session.startIntegrity();
+    for (const i of [0, 1]) {
+      const p = session.request(read());
+      await until(() => plc.seen.length === i + 1);
+      plc.end.write(answer(plc.seen[i]!.seq, i));
+      await p;
+    }
+    const p = session.request(read());
+    const queued = session.request(read());
+    await until(() => plc.seen.length === 3);
+    const frame = answer(plc.seen[2]!.seq, 2);
+    // The IntegrityId is the answer's last byte before the frame's trailer (4 bytes): 2 → 3.
+    frame[frame.length - 5]! ^= 0x01;
+    plc.end.write(frame);
+    const err = await rejection(p);
+    expect(err.code).to.equal('PROTOCOL_ERROR');
+    expect(err.message).to.contain("carries IntegrityId 3, not the request's 2");
+    expect((await rejection(queued)).code).to.equal('PROTOCOL_ERROR');
+    expect(lost).to.have.length(1);
+    expect(session.alive).to.equal(false);
+    expect(ours.destroyed).to.equal(true);
+  });
+
+  it('a PLC that numbers its answers its own way (the s7commplus emulator answers 0) is not judged', async () => {
+    const { session, plc } = open();
+    session.startIntegrity();
+    for (const i of [0, 1, 2]) {
+      const p = session.request(read());
+      await until(() => plc.seen.length === i + 1);
+      plc.end.write(answer(plc.seen[i]!.seq, 0));
+      await p;
+    }
+    expect(session.alive).to.equal(true);
+    session.destroy();
   });
 });
 

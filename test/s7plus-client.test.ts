@@ -88,7 +88,7 @@ describe('s7plus client against the s7commplus emulator', function () {
     before(async () => (peer = await startS7CommPlusServer(python, { dbs: [DB1], tls: files, version: 1 })));
     after(() => peer?.stop());
 
-    it('connects with the certificate pinned (colons and case ignored), sets the session up with IntegrityIds at 0, and closes with a DeleteObject', async () => {
+    it('connects with the certificate pinned (colons and case ignored), sets the session up with IntegrityIds from 0, and closes with a DeleteObject', async () => {
       const pin = cert.fingerprint.replace(/(..)(?!$)/g, '$1:').toLowerCase();
       const client = createClient(`s7plus://127.0.0.1:${peer.port}?fingerprint=${pin}&timeout=5000`);
       await client.connect();
@@ -96,14 +96,15 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(client.certificate?.fingerprint).to.equal(cert.fingerprint.toUpperCase());
       expect(client.certificate?.subject).to.contain('plcwire test PLC');
       const session = (client as unknown as { session: { integrityIds: unknown; version: number } }).session;
-      expect(session.integrityIds).to.deep.equal({ read: 0, write: 0 });
+      // The IntegrityIds start at 0 after the setup; the protection level read (as s7commplus's client does) took read 0.
+      expect(session.integrityIds).to.deep.equal({ read: 1, write: 0 });
       expect(session.version).to.equal(2);
-      // CreateObject and the session setup.
-      expect(client.stats.requestsSent).to.equal(2);
+      // CreateObject, the session setup, the protection level.
+      expect(client.stats.requestsSent).to.equal(3);
       const deletes = peer.events.filter((e) => e.event === 'deleteObject').length;
       await client.close();
       // The DeleteObject went out and was answered before the link closed.
-      expect(client.stats.requestsSent).to.equal(3);
+      expect(client.stats.requestsSent).to.equal(4);
       await peer.waitForEvent((e) => e.event === 'deleteObject' && peer.events.filter((x) => x.event === 'deleteObject').length > deletes);
       await noConnections(peer);
     });
@@ -135,13 +136,14 @@ describe('s7plus client against the s7commplus emulator', function () {
         'DB1.DBB12': 0x5a,
       });
       const session = (client as unknown as { session: { integrityIds: unknown } }).session;
-      expect(session.integrityIds).to.deep.equal({ read: 2, write: 1 });
+      // Two reads, one write, and the protection level read at connect.
+      expect(session.integrityIds).to.deep.equal({ read: 3, write: 1 });
       expect(await client.cpuState()).to.equal('RUN');
       await peer.setCpuState('STOP');
       expect(await client.cpuState()).to.equal('STOP');
       await peer.setCpuState('RUN');
       expect((await client.dataBlocks()).map((b) => b.number)).to.deep.equal([1]);
-      expect(session.integrityIds).to.deep.equal({ read: 5, write: 1 });
+      expect(session.integrityIds).to.deep.equal({ read: 6, write: 1 });
       await client.close();
     });
 
@@ -247,7 +249,8 @@ describe('s7plus client against the s7commplus emulator', function () {
       expect(session.version).to.equal(1);
       expect(client.certificate).to.equal(undefined);
       await client.close();
-      expect(client.stats.requestsSent).to.equal(3);
+      // CreateObject, the session setup, the protection level, the DeleteObject.
+      expect(client.stats.requestsSent).to.equal(4);
       await noConnections(peer);
     });
 

@@ -192,7 +192,8 @@ describe('S7CommPlus legitimation: our client against our simulator protected wi
   it('without the password: reads work; each write is refused with ACCESS_DENIED saying read access only and how to give it; nothing changes', async () => {
     const c = client();
     await c.connect();
-    expect(c.protection).to.equal(undefined);
+    // Without a password, the level the PLC grants (read access).
+    expect(c.protection).to.deep.equal({ level: 2, legitimated: false });
     expect(await c.read(['DB1.DBW4:INT', '"Recipe".Step'])).to.deep.equal({ 'DB1.DBW4:INT': 7, '"Recipe".Step': 3 });
     const results = await c.writeDetailed({ 'DB1.DBW4:INT': 99, '"Recipe".Step': 5 });
     for (const [tag, r] of Object.entries(results)) {
@@ -201,6 +202,8 @@ describe('S7CommPlus legitimation: our client against our simulator protected wi
       show(err);
       expect(err.code, tag).to.equal('ACCESS_DENIED');
       expect(err.tag).to.equal(tag);
+      // The PLC's own code, by address and by name alike (one mapper of item errors keeps it).
+      expect(err.plcCode, tag).to.equal(0x8104);
       expect(err.message).to.include(
         `${tag}: the PLC refused the write: s7plus://127.0.0.1:${server.port} gives this connection read access only`,
       );

@@ -48,12 +48,13 @@ const CLIENTS = {
       // The client's live session (BaseClient's `session`): what its reads go through.
       const session = plc.session;
       for (const chunk of chunks) {
-        await session.request(FunctionCode.GetMultiVariables, (sequence, sessionId, integrityId) =>
-          v.encodeGetMultiVariablesRequest({
-            ...v.readRequest(sequence, sessionId, chunk),
-            ...(integrityId === undefined ? {} : { integrityId }),
-          }),
-        );
+        // An Ask (lib/s7plus/client/session.ts) whose answer is left undecoded: the session stamps and sends it.
+        await session.request({
+          functionCode: FunctionCode.GetMultiVariables,
+          body: v.readBody(chunk),
+          encode: v.encodeGetMultiVariablesRequest,
+          decode: (data) => ({ header: undefined, body: data }),
+        });
       }
     };
     let first = true;

@@ -17,7 +17,7 @@ import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../u
 import { openS7PlusSession } from './handshake';
 import { BrowsedProgram } from './program';
 import { browseTable } from './browse';
-import type { Limits } from './io';
+import type { Limits } from './chunks';
 import { plusSyntax, readMixed, writeMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';
@@ -78,7 +78,7 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   certificate: PeerCertificate | undefined;
   /** The device string of the live session (order code, firmware: codec/identity.ts); undefined when the PLC sends none. */
   device: string | undefined;
-  /** What the password step of the live connection found (its protection level); undefined when no password was given. */
+  /** The protection level of the live connection: what the password step found, or without a password the level the PLC grants (undefined when it tells none). */
   protection: Protection | undefined;
   readonly #password: string | undefined;
   private readonly onHandshakeStep: ((passed: HandshakeStep) => void) | undefined;

@@ -29,28 +29,24 @@ import type { Tag } from '../../types';
 import {
   challengeOf,
   credentialsBlobValue,
-  decodeSetVariableResponse,
   encodeCredentials,
-  encodeSetVariableRequest,
   legacyAnswerValue,
-  legitimateRequest,
   legitimationForm,
   paomString,
   protectionLevelOf,
-  sessionAttributeRequest,
   setVariableRefused,
   type LegitimationForm,
 } from '../codec/legitimation';
 import type { PValue } from '../codec/pvalue';
-import { decodeSubStreamedResponse, encodeSubStreamedRequest } from '../codec/substreamed';
-import { AccessLevel, FunctionCode, Ids, LegitimationType, OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH, TransportFlags } from '../constants';
+import { AccessLevel, Ids, LegitimationType, OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH } from '../constants';
+import { legitimateAsk, sessionAttributeAsk } from './asks';
 import type { S7PlusSession } from './session';
 
 /** What the password step found and did: the session's protection level after it, and whether a password lowered it. */
 export interface Protection {
   /** AccessLevel: 0 none configured, 1 full access, 2 read access, 3 HMI access, 4 no access. */
   level: number;
-  /** True when the PLC took the password; false when it wanted none (full access without it). */
+  /** True when the PLC took the password; false when none was given, or the PLC wanted none (full access without it). */
   legitimated: boolean;
   /** The form used, when one was. */
   form?: LegitimationForm;
@@ -153,18 +149,7 @@ export async function legitimate(session: S7PlusSession, o: LegitimateOptions): 
     address = Ids.Legitimate;
     value = credentialsBlobValue(newAnswer(o.password, challenge, exporterSecret(o.tls)));
   }
-  const answer = decodeSetVariableResponse(
-    await session.request(
-      FunctionCode.SetVariable,
-      (sequence, sessionId, integrityId) =>
-        encodeSetVariableRequest({
-          ...legitimateRequest(sequence, sessionId, address, value),
-          ...(integrityId === undefined ? {} : { integrityId }),
-        }),
-      { signal: o.signal },
-    ),
-    { integrity: session.integrityOn },
-  ).body;
+  const answer = await session.request(legitimateAsk(session.sessionId, address, value), { signal: o.signal });
   const wrong = (detail: string, plcCode?: number) =>
     new PlcError('ACCESS_DENIED', `${o.name} refused the password (wrong password: ${detail})`, {
       ...(plcCode === undefined ? {} : { plcCode }),
@@ -196,17 +181,7 @@ function exporterSecret(socket: TLSSocket): Buffer {
 
 /** GetVarSubStreamed of one attribute of the session object: its value (ProtocolError for a refusal). */
 async function attribute(session: S7PlusSession, address: number, signal: AbortSignal | undefined): Promise<PValue | undefined> {
-  const answer = await session.request(
-    FunctionCode.GetVarSubStreamed,
-    (sequence, sessionId, integrityId) =>
-      encodeSubStreamedRequest({
-        header: { functionCode: FunctionCode.GetVarSubStreamed, sequence, sessionId, transportFlags: TransportFlags.Normal },
-        body: sessionAttributeRequest(sessionId, address),
-        ...(integrityId === undefined ? {} : { integrityId }),
-      }),
-    { signal },
-  );
-  const res = decodeSubStreamedResponse(answer, FunctionCode.GetVarSubStreamed, { integrity: session.integrityOn }).body;
+  const res = await session.request(sessionAttributeAsk(session.sessionId, address), { signal });
   if (res.returnValue !== 0n)
     throw new ProtocolError(`S7CommPlus: the PLC refused the read of session attribute ${address} (0x${res.returnValue.toString(16)})`, {
       plcCode: Number(res.returnValue & 0xffffn),
@@ -217,6 +192,17 @@ async function attribute(session: S7PlusSession, address: number, signal: AbortS
 /** The session's protection level (EffectiveProtectionLevel, 1842). */
 async function protectionLevel(session: S7PlusSession, signal?: AbortSignal): Promise<number> {
   return protectionLevelOf(await attribute(session, Ids.EffectiveProtectionLevel, signal));
+}
+
+/**
+ * What a session without a password may do: the protection level the PLC
+ * reports, read once after the session setup as the s7commplus client reads
+ * it on every connect (MIT, connection.py connect, _get_effective_protection_level);
+ * undefined when the PLC tells none. A refused write later asks no more.
+ */
+export async function protectionWithoutPassword(session: S7PlusSession, signal?: AbortSignal): Promise<Protection | undefined> {
+  const level = await knownLevel(session, signal);
+  return level === undefined ? undefined : { level, legitimated: false };
 }
 
 /** The level of `session`, read once; undefined when the PLC does not tell it (never throws). */

@@ -19,17 +19,12 @@ import type { SymbolEntry, SymbolTable } from '../../symbols/model';
 import type { PlcValue, Tag } from '../../types';
 import type { TagShape } from '../../values';
 import type { PValue } from '../codec/pvalue';
-import {
-  decodeGetMultiVariablesResponse,
-  decodeSetMultiVariablesResponse,
-  encodeGetMultiVariablesRequest,
-  encodeSetMultiVariablesRequest,
-  readRequest,
-  writeRequest,
-  type ItemAddress,
-} from '../codec/variables';
-import { FunctionCode } from '../constants';
-import { readTags, sized, writeTags, type Limits } from './io';
+import type { ItemAddress } from '../codec/variables';
+import { readAsk, writeAsk } from './asks';
+import { inChunks, type Limits } from './chunks';
+import { itemAnswer, itemRefusal, notAnswered, untrustedValue } from './refusals';
+import { readTags, writeTags } from './io';
+import { explainOptimized } from './optimized';
 import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } from './name-values';
 import type { S7PlusSession } from './session';
 
@@ -90,6 +85,19 @@ export function unknownName(table: SymbolTable, name: string): PlcError {
   return new PlcError('INVALID_ADDRESS', `unknown name ${name} on the PLC${hint}`, { tag: name });
 }
 
+const isAddress = (tag: Tag) => !isNamed(tag);
+const slotsOf = (errors: (PlcError | undefined)[]) => ({
+  errorAt: (i: number) => errors[i],
+  replace: (i: number, err: PlcError) => (errors[i] = err),
+});
+const resultSlots = (results: TagResult<void>[]) => ({
+  errorAt: (i: number) => {
+    const r = results[i]!;
+    return r.ok ? undefined : r.error;
+  },
+  replace: (i: number, error: PlcError) => (results[i] = { ok: false, error }),
+});
+
 /** True when `table` has the name: a member, or a data block named alone. */
 function knows(table: SymbolTable, name: string): boolean {
   return table.lookup(name) !== undefined || wholeBlock(table, name) !== undefined;
@@ -104,21 +112,6 @@ export function resolveName(table: SymbolTable, tag: NamedTag): SymbolEntry | Pl
   if (leavesOf(table, entry).some((leaf) => !leaf.access || leaf.access.lids.length === 0))
     return new PlcError('NOT_SUPPORTED', `${tag.address}: the PLC's browse gives no access path for it`, { tag: tag.address });
   return entry;
-}
-
-/** Sends `count` items in requests of at most the item limit (io.ts `sized`: a reset on a large request lowers it). */
-async function requestChunks(
-  session: S7PlusSession,
-  count: number,
-  limits: Limits,
-  send: (from: number, to: number) => Promise<Buffer>,
-  take: (from: number, to: number, answer: Buffer) => void,
-): Promise<void> {
-  for (let at = 0; at < count;) {
-    const to = Math.min(count, at + limits.maxItems());
-    take(at, to, await sized(session, to - at, limits, () => send(at, to)));
-    at = to;
-  }
 }
 
 /**
@@ -143,7 +136,11 @@ export async function readMixed(
   signal?: AbortSignal,
 ): Promise<ReadValues> {
   const named = tags.flatMap((t, i) => (isNamed(t) ? [i] : []));
-  if (named.length === 0) return readTags(session, tags, limits, signal);
+  if (named.length === 0) {
+    const r = await readTags(session, tags, limits, signal);
+    if (r.errors) await explainOptimized(tags, slotsOf(r.errors), () => program.table(), isAddress);
+    return r;
+  }
   const values: PlcValue[] = new Array<PlcValue>(tags.length);
   const errors: (PlcError | undefined)[] = new Array<PlcError | undefined>(tags.length);
   const addressed = tags.flatMap((t, i) => (isNamed(t) ? [] : [i]));
@@ -155,6 +152,7 @@ export async function readMixed(
       signal,
     );
     addressed.forEach((i, k) => ((values[i] = r.values[k]!), (errors[i] = r.errors?.[k])));
+    await explainOptimized(tags, slotsOf(errors), () => program.table(), isAddress);
   }
   // A value read by LID counts only when the program had not changed by the time it came: the check runs after the
   // read, so a download before or during it is seen, and the names are read again through the new table.
@@ -188,6 +186,8 @@ interface NamedPlan {
   readonly wanted: readonly { readonly i: number; readonly entry: SymbolEntry; readonly from: number; readonly to: number }[];
   readonly unresolved: readonly { readonly i: number; readonly error: PlcError }[];
   readonly leaves: readonly SymbolEntry[];
+  /** 0 … leaves.length - 1: what the chunker cuts. */
+  readonly indexes: readonly number[];
   readonly items: readonly ItemAddress[];
   readonly shapes: readonly TagShape[];
 }
@@ -211,7 +211,15 @@ function planOf(tags: readonly Tag[], named: readonly number[], table: SymbolTab
     leaves.push(...leavesOf(table, entry));
     wanted.push({ i, entry, from, to: leaves.length });
   }
-  const plan: NamedPlan = { table, wanted, unresolved, leaves, items: leaves.map(itemOf), shapes: leaves.map(shapeOf) };
+  const plan: NamedPlan = {
+    table,
+    wanted,
+    unresolved,
+    leaves,
+    indexes: leaves.map((_, k) => k),
+    items: leaves.map(itemOf),
+    shapes: leaves.map(shapeOf),
+  };
   PLANS.set(tags, plan);
   return plan;
 }
@@ -237,36 +245,22 @@ async function readNamed(
   // Each leaf's value, or its error, by its index in plan.leaves.
   const leafValues = new Array<PlcValue>(leaves.length);
   let failed: (PlcError | undefined)[] | undefined;
-  const send = (from: number, to: number) =>
-    session.request(
-      FunctionCode.GetMultiVariables,
-      (sequence, sessionId, integrityId) =>
-        encodeGetMultiVariablesRequest({
-          ...readRequest(sequence, sessionId, plan.items.slice(from, to) as ItemAddress[]),
-          ...(integrityId === undefined ? {} : { integrityId }),
-        }),
-      { signal },
-    );
-  await requestChunks(session, leaves.length, limits, send, (from, to, answer) => {
-    const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
-    for (let k = from; k < to; k++) {
+  const send = (chunk: number[]) => session.request(readAsk(chunk.map((k) => plan.items[k]!)), { signal });
+  await inChunks(plan.indexes, limits, send, (chunk, body) => {
+    chunk.forEach((k, n) => {
       const e = leaves[k]!;
-      const v = body.values.get(k - from + 1);
-      if (!v) {
-        const code = body.errors.get(k - from + 1) ?? body.returnValue;
-        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = new PlcError(
-          'OBJECT_DOES_NOT_EXIST',
-          `${e.name}: the PLC refused it (0x${code.toString(16)}); was its program changed?`,
-          { tag: e.name },
-        );
-        continue;
-      }
+      const fail = (err: PlcError) => ((failed ??= new Array<PlcError | undefined>(leaves.length))[k] = err);
+      const answer = itemAnswer(body, n + 1);
+      if (answer === undefined) return void fail(notAnswered(e.name));
+      if ('code' in answer) return void fail(itemRefusal(answer.code, { tag: e.name, name: e.name, request: answer.request }));
+      const untrusted = untrustedValue(answer, e.name);
+      if (untrusted) return void fail(untrusted);
       try {
-        leafValues[k] = valueOf(e, v, plan.shapes[k]);
+        leafValues[k] = valueOf(e, answer, plan.shapes[k]);
       } catch (err) {
-        (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = toPlcError(err, 'PROTOCOL_ERROR');
+        fail(toPlcError(err, 'PROTOCOL_ERROR'));
       }
-    }
+    });
   });
   for (const { i, entry, from, to } of plan.wanted) {
     let bad: PlcError | undefined;
@@ -289,7 +283,13 @@ export async function writeMixed(
   program: Program,
   signal?: AbortSignal,
 ): Promise<TagResult<void>[]> {
-  if (!items.some((it) => isNamed(it.tag))) return writeTags(session, items, limits, signal);
+  const tags = items.map((it) => it.tag);
+  const explain = (results: TagResult<void>[]) => explainOptimized(tags, resultSlots(results), () => program.table(), isAddress);
+  if (!items.some((it) => isNamed(it.tag))) {
+    const r = await writeTags(session, items, limits, signal);
+    await explain(r);
+    return r;
+  }
   const results: TagResult<void>[] = items.map(() => ({ ok: true, value: undefined }));
   const addressed = items.flatMap((it, i) => (isNamed(it.tag) ? [] : [i]));
   if (addressed.length > 0) {
@@ -300,6 +300,7 @@ export async function writeMixed(
       signal,
     );
     addressed.forEach((i, k) => (results[i] = r[k]!));
+    await explain(results);
   }
   // A write by a stale LID would land in another member: the program is checked first (browsed again if it changed).
   const known = await program.table();
@@ -319,33 +320,21 @@ export async function writeMixed(
       results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
     }
   });
-  const send = (from: number, to: number) =>
+  const send = (chunk: typeof ready) =>
     session.request(
-      FunctionCode.SetMultiVariables,
-      (sequence, sessionId, integrityId) =>
-        encodeSetMultiVariablesRequest({
-          ...writeRequest(
-            sequence,
-            sessionId,
-            ready.slice(from, to).map((c) => c.address),
-            ready.slice(from, to).map((c) => c.value),
-          ),
-          ...(integrityId === undefined ? {} : { integrityId }),
-        }),
+      writeAsk(
+        chunk.map((c) => c.address),
+        chunk.map((c) => c.value),
+      ),
       { signal },
     );
-  await requestChunks(session, ready.length, limits, send, (from, to, answer) => {
-    const chunk = ready.slice(from, to);
-    const { body } = decodeSetMultiVariablesResponse(answer, { integrity: session.integrityOn });
+  await inChunks(ready, limits, send, (chunk, body) => {
     chunk.forEach((c, k) => {
-      const code = body.errors.get(k + 1) ?? (body.returnValue !== 0n ? body.returnValue : undefined);
-      if (code !== undefined && results[c.i]!.ok)
-        results[c.i] = {
-          ok: false,
-          error: new PlcError('PLC_ERROR', `${c.name}: the PLC refused the write (0x${code.toString(16)})`, {
-            tag: items[c.i]!.tag.address,
-          }),
-        };
+      const answer = itemAnswer(body, k + 1);
+      if (answer && 'code' in answer && results[c.i]!.ok) {
+        const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, name: c.name, write: true, request: answer.request });
+        results[c.i] = { ok: false, error };
+      }
     });
   });
   return results;

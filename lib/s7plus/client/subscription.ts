@@ -23,6 +23,7 @@ import type { Notification, SubscriptionItem } from '../codec/subscription';
 import type { PValue } from '../codec/pvalue';
 import type { ItemAddress } from '../codec/variables';
 import { bytesOf, itemAddress } from './io';
+import { untrustedValue } from './refusals';
 import { isNamed, resolveName } from './names';
 import { assemble, itemOf, leavesOf, valueOf } from './name-values';
 
@@ -45,6 +46,22 @@ export interface SubscriptionChange {
   result: TagResult<PlcValue>;
   /** Undefined for the first value. */
   previous: TagResult<PlcValue> | undefined;
+}
+
+/** The events of a subscription and their arguments: `sub.on('chnage', …)` does not compile. */
+export interface S7PlusSubscriptionEvents {
+  state: [state: SubscriptionState];
+  /** Created on a session: the first notification after it carries every value. */
+  active: [];
+  /** The link went; the subscription is created again when the link is back. */
+  lost: [error: PlcError];
+  /** Every notification. */
+  data: [data: SubscriptionData];
+  /** Per tag whose value or quality changed. */
+  change: [change: SubscriptionChange];
+  /** Only emitted when someone listens. */
+  error: [error: PlcError];
+  closed: [];
 }
 
 export interface SubscribeOptions {
@@ -83,7 +100,7 @@ export interface SubscriptionOwner {
   remove(sub: S7PlusSubscription): Promise<void>;
 }
 
-export class S7PlusSubscription extends EventEmitter {
+export class S7PlusSubscription extends EventEmitter<S7PlusSubscriptionEvents> {
   readonly tags: readonly string[];
   readonly cycle: number;
   #state: SubscriptionState = 'subscribing';
@@ -235,6 +252,8 @@ export class S7PlusSubscription extends EventEmitter {
   }
 
   private decode(planned: Planned, entry: SymbolEntry | undefined, v: PValue): PlcValue | PlcError {
+    const untrusted = untrustedValue(v, planned.address);
+    if (untrusted) return untrusted;
     try {
       if (entry) return valueOf(entry, v);
       const data = bytesOf(v);
