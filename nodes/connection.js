@@ -4,9 +4,13 @@ const { ClientPool, withoutCredentials } = require('../dist/lib/flows/client-poo
 const { settleWithin } = require('./shared/user');
 const symbols = require('../dist/lib/flows/symbol-config');
 const s7plusAdmin = require('./shared/s7plus-admin');
+const { checkAddresses } = require('../dist/lib/flows/name-check');
+const { PlcTables } = require('../dist/lib/flows/plc-tables');
 
 /** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
 const pool = new ClientPool();
+/** The PLCs' browsed tables the editor's name checks use (s7plus://), kept a few seconds per PLC. */
+const plcTables = new PlcTables();
 /** A link that stayed connected this long has ended its outage: the next error goes to Catch again. */
 const STABLE_MS = 5000;
 
@@ -242,8 +246,11 @@ module.exports = function (RED) {
    * Address validation for the editor with the library's own parser (the
    * driver of the URL's protocol) and, when the connection has symbol
    * sources, its compiled table: POST { url?, addresses: [...],
-   * symbolSources?, dbNumbers? } → { url, symbols: { ok } | { ok: false, errors },
-   * results: { address: { ok, type, count } | { ok, symbol, address, type, kind } | { ok: false, code, message } } }.
+   * symbolSources?, dbNumbers?, id?, password? } → { url, symbols: { ok } | { ok: false, errors },
+   * results: { address: { ok, type, count } | { ok, symbol, address, type, kind } | { ok: false, code, message }
+   * | { ok, symbol, type: '?', unchecked } } }. A name the URL's client reads by name (s7plus://) is checked
+   * against the sources, else the PLC's browsed table (lib/flows/name-check.ts): the PLC's type, or invalid
+   * with the closest names; `unchecked` says why when the PLC could not be browsed.
    */
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
     const body = req.body || {};
@@ -268,10 +275,17 @@ module.exports = function (RED) {
         table = undefined;
       }
     }
-    const results = {};
-    for (const address of addresses) results[address] = symbols.resolveAddress(address, parser.parse, table);
-    parser.done();
-    res.json({ url: { ok: true }, symbols: symbolAnswer, results });
+    // Names the URL's client reads by name (s7plus://): the PLC's own table, from the deployed connection's client or a browse.
+    const url = String(body.url || '');
+    const browse = () => {
+      const link = pool.linkOf(url);
+      const password = link ? undefined : s7plusAdmin.passwordOf(RED, body);
+      return plcTables.tableOf(url, { live: link && link.client, ...(password !== undefined ? { password } : {}) });
+    };
+    checkAddresses(addresses, { parse: parser.parse, table, ...(body.url ? { browse } : {}) }).then((results) => {
+      parser.done();
+      if (!res.writableEnded) res.json({ url: { ok: true }, symbols: symbolAnswer, results });
+    });
   });
 
   /**

@@ -117,6 +117,46 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
     });
   });
 
+  describe('POST /plcwire/validate on s7plus:// (issue #31: BYTE for every name, typos included)', () => {
+    const validate = (body: object) => helper.request().post('/plcwire/validate').send(body).expect(200);
+
+    it('without sources and without a deployed connection: the PLC browsed, its type; a typo invalid with the closest names', async () => {
+      await helper.load(ALL_NODES, []);
+      const res = await validate({ url, addresses: ['"Recipe".Step', '"Recipe".Stepp', '"Recipe".Inlet', 'DB1.DBW4:INT'] });
+      expect(res.body.url).to.deep.equal({ ok: true });
+      expect(res.body.results['"Recipe".Step']).to.include({ ok: true, type: 'INT', kind: 'elementary' });
+      expect(res.body.results['"Recipe".Inlet']).to.include({ ok: true, kind: 'struct' });
+      const typo = res.body.results['"Recipe".Stepp'];
+      expect(typo).to.include({ ok: false, code: 'INVALID_ADDRESS' });
+      expect(typo.message).to.include('unknown symbol "Recipe".Stepp').and.include('"Recipe".Step');
+      // An absolute address keeps the parser's answer.
+      expect(res.body.results['DB1.DBW4:INT']).to.include({ ok: true, type: 'INT' });
+      await until(() => server.connectionCount === 0, 3000, 'the browse made for the question closed its connection');
+    });
+
+    it("with the connection deployed: its client's table, no connection of the question's own", async () => {
+      await helper.load(ALL_NODES, [
+        { id: 'c1', type: 'plcwire-connection', name: 'press', url },
+        { id: 'r1', type: 'plcwire-read', connection: 'c1', tags: [{ name: 'step', address: '"Recipe".Step' }], interval: 0 },
+      ]);
+      const conn = helper.getNode('c1');
+      await until(() => conn.linkStatus.state === 'connected', 10000, 'connected');
+      const before = server.connectionCount;
+      const res = await validate({ url, addresses: ['"Recipe".Nope'] });
+      expect(res.body.results['"Recipe".Nope']).to.include({ ok: false, code: 'INVALID_ADDRESS' });
+      expect(res.body.results['"Recipe".Nope'].message).to.include('unknown symbol "Recipe".Nope');
+      expect(server.connectionCount).to.equal(before);
+    });
+
+    it('a PLC that cannot be browsed: the name is not checked, and the answer says why instead of a type', async () => {
+      await helper.load(ALL_NODES, []);
+      const res = await validate({ url: 's7plus://127.0.0.1:1?timeout=1000', addresses: ['"Recipe".Step'] });
+      const answer = res.body.results['"Recipe".Step'];
+      expect(answer).to.include({ ok: true, type: '?' });
+      expect(answer.unchecked).to.include('the PLC could not be browsed');
+    });
+  });
+
   describe('read and write nodes by name (no sources: the PLC browsed)', () => {
     it('a write node writes a member of the optimized block and a struct by name; a read node reads them back', async () => {
       const at = { z: 'tab', x: 100, y: 100 };
