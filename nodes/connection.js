@@ -6,13 +6,12 @@ const symbols = require('../dist/lib/flows/symbol-config');
 const s7plusAdmin = require('./shared/s7plus-admin');
 const { checkAddresses } = require('../dist/lib/flows/name-check');
 const { PlcTables } = require('../dist/lib/flows/plc-tables');
+const { OutageReports } = require('../dist/lib/flows/outage');
 
 /** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
 const pool = new ClientPool();
 /** The PLCs' browsed tables the editor's name checks use (s7plus://), kept a few seconds per PLC. */
 const plcTables = new PlcTables();
-/** A link that stayed connected this long has ended its outage: the next error goes to Catch again. */
-const STABLE_MS = 5000;
 
 /**
  * plcwire-connection (config): properties `url`, and for tags by name
@@ -54,10 +53,8 @@ module.exports = function (RED) {
     /** Data blocks whose length on the PLC differs from their source's, by DB number, since the link came up. */
     const mismatches = new Map();
     let link;
-    /** True once this outage's first error went to Catch: one message per outage, until the link has stayed up. */
-    let reported = false;
-    /** Ends the outage when the link has stayed connected for STABLE_MS (a link that flaps is one outage). */
-    let stable;
+    /** One Catch message per outage, until the link has stayed up (lib/flows/outage.ts). */
+    const outage = new OutageReports(() => node.linkStatus.state === 'connected');
 
     Object.defineProperty(node, 'client', { get: () => link && link.client });
 
@@ -87,16 +84,7 @@ module.exports = function (RED) {
     /** Tells every user the link's status (after it or what it shows changed). */
     function broadcast() {
       const status = node.linkStatus;
-      if (status.state !== 'connected') {
-        clearTimeout(stable);
-        stable = undefined;
-      } else if (reported && stable === undefined) {
-        stable = setTimeout(() => {
-          stable = undefined;
-          if (node.linkStatus.state === 'connected') reported = false;
-        }, STABLE_MS);
-        stable.unref();
-      }
+      outage.state(status.state);
       for (const user of Object.values(registered)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
     }
 
@@ -132,14 +120,9 @@ module.exports = function (RED) {
       node.on('close', () => RED.events.removeListener('flows:started', report));
     }
 
-    /**
-     * The first error of an outage goes to Catch, once; the ones after it (each reconnect that fails, in whatever
-     * words, and each loss of a link that came up for less than STABLE_MS) only to the status. A PLC that is off, or
-     * silent, or a link that flaps within one fault, is one Catch message, not one per attempt (issue #26).
-     */
+    /** The first error of an outage goes to Catch, once; the ones after it only to the status (lib/flows/outage.ts, issue #26). */
     function reportError(err) {
-      if (reported) return;
-      reported = true;
+      if (!outage.first()) return;
       // Catch messages end up in debug sidebars and files: never with the URL's user info.
       const url = withoutCredentials(node.url);
       node.error(err, { topic: link ? link.name : url, payload: { url, state: node.linkStatus.state, code: err && err.code } });
@@ -208,7 +191,7 @@ module.exports = function (RED) {
     };
 
     node.on('close', function (removed, done) {
-      clearTimeout(stable);
+      outage.close();
       registered = {};
       node.users = {};
       settleWithin(shut()).then(() => done());
