@@ -123,9 +123,11 @@ module.exports = function (RED) {
     /** The first error of an outage goes to Catch, once; the ones after it only to the status (lib/flows/outage.ts, issue #26). */
     function reportError(err) {
       if (!outage.first()) return;
-      // Catch messages end up in debug sidebars and files: never with the URL's user info.
+      // Catch messages end up in debug sidebars and files: never with the URL's user info. The whole text is in the
+      // payload too (a Debug node shows the payload): a refused certificate's message holds the fingerprint= to pin.
       const url = withoutCredentials(node.url);
-      node.error(err, { topic: link ? link.name : url, payload: { url, state: node.linkStatus.state, code: err && err.code } });
+      const payload = { url, state: node.linkStatus.state, code: err && err.code, message: err && err.message ? err.message : String(err) };
+      node.error(err, { topic: link ? link.name : url, payload });
     }
 
     const onStatus = (status) => {

@@ -63,3 +63,19 @@ export class OutageReports {
     this.stable = undefined;
   }
 }
+
+/**
+ * Why a link retries, when waiting alone will not help and the status should
+ * say so instead of "retry in N s" (issue #31): the PLC's certificate is not
+ * trusted (pin it: `fingerprint=`), is out of its dates, or the PLC refused
+ * the password. Undefined for every other error (the PLC may come back).
+ */
+export type RetryReason = 'not-trusted' | 'expired' | 'not-yet-valid' | 'password';
+
+export function retryReason(error: unknown): RetryReason | undefined {
+  const e = error as { code?: unknown; problem?: unknown } | null | undefined;
+  if (!e || typeof e !== 'object') return undefined;
+  if (e.code === 'ACCESS_DENIED') return 'password';
+  if (e.code !== 'CERTIFICATE_UNTRUSTED') return undefined;
+  return e.problem === 'expired' || e.problem === 'not-yet-valid' ? e.problem : 'not-trusted';
+}

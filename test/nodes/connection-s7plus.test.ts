@@ -10,7 +10,8 @@ import { S7Server } from '../../lib/s7/server';
 import { S7PlusService } from '../../lib/s7plus/server';
 import { generateCertificate } from '../../lib/s7plus/transport/cert';
 import { DB_NUMBERS, SOURCES } from '../fixtures/s7plus';
-import { ALL_NODES, helper, Recorder, until } from './support';
+import { loadCatalogs, withCatalog, type Catalogs, type Locale } from './catalogs';
+import { ALL_NODES, helper, nodes, Recorder, until } from './support';
 
 const SECRET = 'n0de-red-Secret!';
 
@@ -193,6 +194,75 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       helper.getNode('r1').receive({});
       const msg = await read.next(() => true, 10000, 'the read');
       expect(msg.payload).to.deep.equal({ step: 12, inlet: { Open: true, Position: 7 } });
+    });
+  });
+
+  describe('a link that retries because waiting will not help says why (issue #31: "retry in 30 s")', () => {
+    let catalogs: Catalogs;
+    before(async () => {
+      catalogs = await loadCatalogs();
+    });
+    const at = { z: 'tab', x: 100, y: 100 };
+    /** The read node's modules with RED._ of the real catalog of `locale`. */
+    const translated = (locale: Locale) =>
+      ALL_NODES.map((m) => (m === nodes.read ? withCatalog(nodes.read, catalogs.translator(locale, 'plcwire-read')) : m));
+    const flowTo = (target: string) => [
+      { id: 'tab', type: 'tab', label: 'plcwire' },
+      { id: 'c1', type: 'plcwire-connection', name: 'press', url: target },
+      { id: 'r1', type: 'plcwire-read', ...at, connection: 'c1', tags: [{ name: 'step', address: '"Recipe".Step' }], interval: 0 },
+      { id: 'catcher', type: 'catch', ...at, scope: null, uncaught: false, wires: [['caught']] },
+      { id: 'caught', type: 'helper', ...at },
+    ];
+    /** Every status text the node has shown (the helper spies on the nodes' status()). */
+    const shownBy = (node: any): string[] =>
+      node.status
+        .getCalls()
+        .filter((c: { thisValue: unknown }) => c.thisValue === node)
+        .map((c: { args: [{ text: string }] }) => c.args[0].text);
+    const expected: Record<Locale, string> = { 'en-US': 'not trusted: pin it', de: 'Zertifikat pinnen', 'zh-CN': '证书不受信任：请固定' };
+
+    for (const locale of ['en-US', 'de', 'zh-CN'] as const) {
+      it(`${locale}: an unpinned certificate: the status says to pin it, Catch has the whole message with the fingerprint=`, async () => {
+        const unpinned = `s7plus://127.0.0.1:${server.port}?timeout=3000`;
+        await helper.load(translated(locale), flowTo(unpinned));
+        const caught = new Recorder(helper.getNode('caught'));
+        const read = helper.getNode('r1');
+        const reported = await caught.next((m) => m.error.source.type === 'plcwire-connection', 10000, "the connection's error on Catch");
+        await until(() => shownBy(read).includes(expected[locale]), 10000, `the status "${expected[locale]}"`);
+        const shown = shownBy(read);
+        expect(
+          shown.some((t) => /retry|neu in|重连/.test(t)),
+          shown.join(' | '),
+        ).to.equal(false);
+        expect(reported.payload).to.include({ code: 'CERTIFICATE_UNTRUSTED', url: unpinned });
+        // The whole text, fingerprint to pin included, within what a Debug node shows uncut (debugMaxLength 1000).
+        expect(reported.payload.message).to.include(`fingerprint=${service.fingerprint!}`);
+        expect(reported.payload.message.length).to.be.lessThan(1000);
+      });
+    }
+
+    it('a refused password: the status says so, in place of "retry in 30 s"', async () => {
+      const cert = await generateCertificate();
+      const plus = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key }, password: SECRET });
+      const locked = new S7Server({ port: 0, profile: 's7-1500', s7plus: plus });
+      await locked.listen();
+      try {
+        const target = `s7plus://127.0.0.1:${locked.port}?fingerprint=${plus.fingerprint!}&timeout=3000`;
+        await helper.load(translated('en-US'), flowTo(target), { c1: { password: `${SECRET}-stale` } });
+        const read = helper.getNode('r1');
+        await until(
+          () => shownBy(read).includes('password refused'),
+          10000,
+          `the status "password refused" (shown: ${shownBy(read).join(' | ')})`,
+        );
+        expect(
+          shownBy(read).some((t) => t.startsWith('retry in')),
+          shownBy(read).join(' | '),
+        ).to.equal(false);
+      } finally {
+        await helper.unload();
+        await locked.close();
+      }
     });
   });
 
