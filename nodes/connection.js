@@ -4,7 +4,7 @@ const { ClientPool, withoutCredentials } = require('../dist/lib/flows/client-poo
 const { settleWithin } = require('./shared/user');
 const symbols = require('../dist/lib/flows/symbol-config');
 const s7plusAdmin = require('./shared/s7plus-admin');
-const { checkAddresses } = require('../dist/lib/flows/name-check');
+const editor = require('../dist/lib/flows/editor-answers');
 const { PlcTables } = require('../dist/lib/flows/plc-tables');
 const { OutageReports } = require('../dist/lib/flows/outage');
 
@@ -202,74 +202,27 @@ module.exports = function (RED) {
 
   RED.nodes.registerType('plcwire-connection', PlcwireConnection, { credentials: { password: { type: 'password' } } });
 
-  /** The sources of a request body, the way a connection node's config carries them. */
-  function symbolConfig(body) {
-    return { symbolSources: body.symbolSources, dbNumbers: body.dbNumbers, strictSymbols: false };
-  }
-
   const canRead = RED.auth.needsPermission('plcwire.read');
   s7plusAdmin(RED, canRead);
 
   /**
-   * The address parser of a URL's protocol (the client's own, which knows the
-   * URL's settings), or the S7 parser when no URL is given. `done()` frees it.
-   * { error } when the URL itself is invalid.
-   */
-  function parserFor(url) {
-    if (!url) return { parse: plc.parseAddress, done: () => undefined };
-    try {
-      const client = plc.createClient(String(url));
-      return { parse: (a) => client.tag(a), done: () => client.close().catch(() => undefined) };
-    } catch (err) {
-      return { error: err };
-    }
-  }
-
-  const urlAnswer = (err) => ({ ok: false, code: err.code, message: err.message });
-
-  /**
-   * Address validation for the editor with the library's own parser (the
-   * driver of the URL's protocol) and, when the connection has symbol
-   * sources, its compiled table: POST { url?, addresses: [...],
-   * symbolSources?, dbNumbers?, id?, password? } → { url, symbols: { ok } | { ok: false, errors },
-   * results: { address: { ok, type, count } | { ok, symbol, address, type, kind } | { ok: false, code, message }
-   * | { ok, symbol, type: '?', unchecked } } }. A name the URL's client reads by name (s7plus://) is checked
-   * against the sources, else the PLC's browsed table (lib/flows/name-check.ts): the PLC's type, or invalid
-   * with the closest names; `unchecked` says why when the PLC could not be browsed.
+   * The editor's questions, answered by the library (lib/flows/editor-answers.ts):
+   * POST plcwire/validate { url?, addresses, symbolSources?, dbNumbers?, id?, password? } → { url, symbols, results }:
+   *   each address with the URL's own parser and the sources; a name an s7plus:// connection reads by name against
+   *   the sources, else the PLC's browsed table (the deployed connection's client, or a browse kept a few seconds;
+   *   the password typed or the node's credential): the PLC's type, invalid with the closest names, or `unchecked`.
+   * POST plcwire/csv { url?, text } → { url, tags, problems }; POST plcwire/csv/export { tags } → { csv };
+   * POST plcwire/url { url } | { endpoint } → { ok, url, endpoint, key }; GET plcwire/presets → the CPU presets.
    */
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
     const body = req.body || {};
-    const addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 1000).map(String) : [];
-    const parser = parserFor(body.url);
-    if (parser.error) {
-      res.json({ url: urlAnswer(parser.error), results: {} });
-      return;
-    }
-    const compiledSources = symbols.compileCached(symbolConfig(body));
-    let symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
-    // A protocol may refuse symbols (freeport): then names are no tags of this connection.
-    let table = compiledSources.table;
-    if (table && body.url) {
-      try {
-        plc
-          .createClient(String(body.url), { symbols: table })
-          .close()
-          .catch(() => undefined);
-      } catch (err) {
-        symbolAnswer = { ok: false, errors: [{ code: err.code, message: err.message }] };
-        table = undefined;
-      }
-    }
-    // Names the URL's client reads by name (s7plus://): the PLC's own table, from the deployed connection's client or a browse.
-    const url = String(body.url || '');
-    const browse = () => {
+    const browse = (url) => {
       const link = pool.linkOf(url);
       const password = link ? undefined : s7plusAdmin.passwordOf(RED, body);
       return plcTables.tableOf(url, { live: link && link.client, ...(password !== undefined ? { password } : {}) });
     };
-    checkAddresses(addresses, { parse: parser.parse, table, ...(body.url ? { browse } : {}) }).then((results) => {
-      parser.done();
-      if (!res.writableEnded) res.json({ url: { ok: true }, symbols: symbolAnswer, results });
+    editor.validateAnswer(body, browse).then((answer) => {
+      if (!res.writableEnded) res.json(answer);
     });
   });
 
@@ -281,62 +234,13 @@ module.exports = function (RED) {
    * compiled with the library's compileSymbols().
    */
   RED.httpAdmin.post('/plcwire/symbols', canRead, function (req, res) {
-    res.json(symbols.describe(symbols.compileCached(symbolConfig(req.body || {}))));
+    res.json(symbols.describe(symbols.compileCached(editor.symbolConfig(req.body || {}))));
   });
 
-  /**
-   * CSV import for the tag table: POST { url?, text } → { url, tags: [{ name, address }],
-   * problems: [{ line, code, name, address, message }] }, a type column checked
-   * with the parser of the URL's protocol (the S7 parser when the URL is invalid).
-   */
-  RED.httpAdmin.post('/plcwire/csv', canRead, function (req, res) {
-    const body = req.body || {};
-    let parser = parserFor(body.url);
-    const url = parser.error ? urlAnswer(parser.error) : { ok: true };
-    if (parser.error) parser = parserFor(undefined);
-    const { tags, problems } = plc.tagsFromCsv(String(body.text || ''), parser.parse);
-    parser.done();
-    res.json({ url, tags, problems });
-  });
-
-  /** Rows the editor may ask to export at most (a tag table of a node is far smaller). */
-  const MAX_EXPORT_ROWS = 100000;
-
-  /**
-   * CSV export for the tag table: POST { tags: [{ name, address }] } → { csv },
-   * written by the library's tagsToCsv, the form the import above reads back.
-   */
-  RED.httpAdmin.post('/plcwire/csv/export', canRead, function (req, res) {
-    const body = req.body || {};
-    const rows = Array.isArray(body.tags) ? body.tags.slice(0, MAX_EXPORT_ROWS) : [];
-    const tags = rows.map((t) => ({ name: String((t && t.name) ?? ''), address: String((t && t.address) ?? '') }));
-    res.json({ csv: plc.tagsToCsv(tags) });
-  });
-
-  /** URL ⇄ fields for the edit dialog, with the library's own parser and formatter. */
-  RED.httpAdmin.post('/plcwire/url', canRead, function (req, res) {
-    const body = req.body || {};
-    try {
-      if (body.endpoint) {
-        const url = plc.formatUrl(body.endpoint);
-        const endpoint = plc.parseUrl(url);
-        res.json({ ok: true, url: plc.formatUrl(endpoint), endpoint, key: plc.endpointKey(endpoint) });
-      } else {
-        const endpoint = plc.parseUrl(String(body.url || ''));
-        res.json({ ok: true, url: plc.formatUrl(endpoint), endpoint, key: plc.endpointKey(endpoint) });
-      }
-    } catch (err) {
-      res.json({ ok: false, code: err.code, message: err.message });
-    }
-  });
-
-  /**
-   * The CPU presets of the dialog, from the library (lib/url.ts, S7_CPU_PRESETS):
-   * { preset: { rack?, slot?, localTsap?, remoteTsap?, maxItems? } }, TSAPs as numbers.
-   */
-  RED.httpAdmin.get('/plcwire/presets', canRead, function (req, res) {
-    res.json(plc.S7_CPU_PRESETS);
-  });
+  RED.httpAdmin.post('/plcwire/csv', canRead, (req, res) => res.json(editor.csvImportAnswer(req.body || {})));
+  RED.httpAdmin.post('/plcwire/csv/export', canRead, (req, res) => res.json(editor.csvExportAnswer(req.body || {})));
+  RED.httpAdmin.post('/plcwire/url', canRead, (req, res) => res.json(editor.urlAnswer(req.body || {})));
+  RED.httpAdmin.get('/plcwire/presets', canRead, (req, res) => res.json(plc.S7_CPU_PRESETS));
 
   /** Whether text is an S7 address (anything else the doctor takes for a name). */
   function isAddress(text) {
@@ -369,7 +273,7 @@ module.exports = function (RED) {
     const password = /^s7plus:/i.test(url) ? s7plusAdmin.passwordOf(RED, body) : undefined;
     let addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 100).map(String) : [];
     // The dialog's sources as it holds them (not yet deployed ones too), compiled as the connection node compiles them at start.
-    const compiled = symbols.compileCached(symbolConfig(body));
+    const compiled = symbols.compileCached(editor.symbolConfig(body));
     let sourcesStep;
     if (compiled.problems) {
       // Names cannot be looked up: they are left out, and one step says why, with the file and line of the first error.
