@@ -4,7 +4,7 @@
  * test/nodered-symbols.test.ts and test/nodes/connection-s7plus.test.ts.
  */
 import { expect } from 'chai';
-import { csvExportAnswer, csvImportAnswer, urlAnswer, validateAnswer } from '../lib/flows/editor-answers';
+import { csvExportAnswer, csvImportAnswer, symbolConfig, urlAnswer, validateAnswer } from '../lib/flows/editor-answers';
 
 describe('flows: the editor answers', () => {
   it("urlAnswer formats fields with each scheme's own defaults and parses a URL into them, with the PLC key", () => {
@@ -29,5 +29,14 @@ describe('flows: the editor answers', () => {
     const back = csvImportAnswer({ url: 'nope://', text: csv });
     expect(back.url).to.include({ ok: false });
     expect(back.tags[0]).to.deep.equal({ name: 'level', address: 'DB1.DBD0:REAL' });
+  });
+
+  it("symbolConfig reads a request's sources as a connection's config, never strict (the editor checks, it does not refuse)", () => {
+    const sources = [{ name: 'Tank.db', content: 'x' }];
+    expect(symbolConfig({ symbolSources: sources, dbNumbers: [{ block: 'Tank', db: 1 }], strictSymbols: true })).to.deep.equal({
+      symbolSources: sources,
+      dbNumbers: [{ block: 'Tank', db: 1 }],
+      strictSymbols: false,
+    });
   });
 });

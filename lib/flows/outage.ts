@@ -9,7 +9,7 @@
  */
 
 /** A link that stayed connected this long has ended its outage: the next error goes to Catch again. */
-export const STABLE_MS = 5000;
+const STABLE_MS = 5000;
 
 /** How the stable time is waited for (tests give their own clock). */
 export interface StableTimer {

@@ -19,12 +19,12 @@ import { parseUrl } from '../url';
 import { browsePlc } from './plc-tables';
 import { describe, type SymbolsDescription } from './symbol-config';
 
-export type Failure = { ok: false; code: string; message: string };
+type Failure = { ok: false; code: string; message: string };
 export type CertificateAnswer = { ok: true; fingerprint: string; subject: string; validFrom: string; validTo: string } | Failure;
 export type BrowseAnswer = ({ ok: true } & SymbolsDescription) | Failure;
 
 /** An error as the dialog is told it. */
-export function failure(err: unknown): Failure {
+function failure(err: unknown): Failure {
   const e = toPlcError(err, 'PLC_ERROR');
   return { ok: false, code: e.code, message: e.message };
 }
