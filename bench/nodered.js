@@ -113,7 +113,7 @@ async function runNodeRed(name, fleet, row, round) {
   }
 }
 
-async function polling(row) {
+async function polling(row, names = modeNames) {
   const fleet = await startFleet(row.plcs, row.tags);
   const results = {};
   const pdusPerPoll = {};
@@ -124,8 +124,8 @@ async function polling(row) {
   };
   try {
     // The libraries alone first: they check every PLC's values, which the change ticker then moves.
-    const libs = modeNames.filter((m) => !MODES[m].flow);
-    const flows = modeNames.filter((m) => MODES[m].flow);
+    const libs = names.filter((m) => !MODES[m].flow);
+    const flows = names.filter((m) => MODES[m].flow);
     for (let round = 0; round < ROUNDS; round++) {
       for (const name of round % 2 ? [...libs].reverse() : libs) {
         const lib = MODES[name].library;
@@ -173,10 +173,10 @@ async function polling(row) {
   return results;
 }
 
-function pollingRows(row, results) {
+function pollingRows(row, results, names = modeNames) {
   const label = `${row.plcs} × ${row.tags}`;
   const rows = [];
-  for (const name of modeNames) {
+  for (const name of names) {
     const r = results[name];
     if (!r) continue;
     if (r.error) {
@@ -286,7 +286,26 @@ async function main() {
   console.log(`\n(${((Date.now() - t0) / 1000).toFixed(0)} s)`);
 }
 
-main().catch((err) => {
-  console.error(err);
-  process.exit(1);
-});
+/**
+ * `npm run bench`'s Node-RED section (bench/run.js): the library alone and a real Node-RED with our read node
+ * (object output) on the same PLCs, from one run, side by side, with the layer's ratio, so a move of logic into
+ * the per-poll path cannot hide a cost (issue #32). Both modes are alternated over the rounds.
+ */
+async function layerSection(row = { plcs: 50, tags: 100 }) {
+  const names = ['lib ours', 'ours object'];
+  const rows = pollingRows(row, await polling(row, names), names);
+  printTable(
+    `Node-RED layer: ${row.plcs} PLCs × ${row.tags} tags every ${INTERVAL_MS} ms, the library alone in a process beside a real Node-RED ${nodeRedVersion} with our read node (object output), ${DURATION_MS} ms timed after ${WARM_MS} ms, best of ${ROUNDS} rounds; load ${os.loadavg()[0].toFixed(1)} on ${os.cpus().length} CPUs`,
+    ['PLCs × tags', 'runtime / mode', 'polls/s', 'due/s', 'msgs/s', 'CPU', 'µs/poll (user+sys)', 'µs/tag-poll', 'RSS MiB', 'loop p99 ms'],
+    rows,
+  );
+}
+
+module.exports = { layerSection };
+
+if (require.main === module) {
+  main().catch((err) => {
+    console.error(err);
+    process.exit(1);
+  });
+}

@@ -2,7 +2,8 @@
 'use strict';
 // `npm run bench`: our S7 client beside nodes7 and @st-one-io/nodes7 on the
 // same servers (our simulator, snap7's server), then the latency model, the
-// planner's lower bound and the simulator's own requests per second.
+// planner's lower bound, the simulator's own requests per second, S7CommPlus,
+// and the Node-RED layer (the library alone beside our read node, bench/nodered.js).
 // Each server and each client runs in its own process; see bench/README.md.
 //
 //   node bench/run.js [--quick] [--clients ours,nodes7,st-one] [--tables 10,100] [--duration ms] [--latency ms]
@@ -14,6 +15,7 @@ const { TABLES, table, image } = require('./lib/tables');
 const { CLIENT_NAMES } = require('./lib/clients');
 const { plcwire, DIST } = require('./lib/peers');
 const { s7plusSection } = require('./s7plus');
+const { layerSection } = require('./nodered');
 
 const args = process.argv.slice(2);
 const opt = (name, dflt) => {
@@ -32,7 +34,7 @@ const tableNames = TABLES.map((t) => t.name).filter((n) => {
   const only = opt('tables');
   return !only || only.split(',').some((x) => n.startsWith(`${x} `));
 });
-const SECTIONS = ['comparison', 'latency', 'load', 's7plus'];
+const SECTIONS = ['comparison', 'latency', 'load', 's7plus', 'nodered'];
 const sections = opt('sections', SECTIONS.join(',')).split(',');
 for (const s of sections) if (!SECTIONS.includes(s)) throw new Error(`--sections: no section "${s}" (${SECTIONS.join(', ')})`);
 const SERVERS = [
@@ -309,6 +311,7 @@ async function main() {
   if (sections.includes('load')) await serverLoad();
   if (sections.includes('s7plus'))
     await s7plusSection({ durationMs: DURATION_MS, rounds: ROUNDS, countPolls: COUNT_POLLS, warmPolls: QUICK ? 100 : 500 });
+  if (sections.includes('nodered')) await layerSection();
   console.log(`\n(${((Date.now() - t0) / 1000).toFixed(0)} s)`);
 }
 

@@ -5,11 +5,14 @@ const { settleWithin } = require('./shared/user');
 const symbols = require('../dist/lib/flows/symbol-config');
 const s7plusAdmin = require('./shared/s7plus-admin');
 const { testConnection } = require('../dist/lib/doctor/request');
+const editor = require('../dist/lib/flows/editor-answers');
+const { PlcTables } = require('../dist/lib/flows/plc-tables');
+const { OutageReports } = require('../dist/lib/flows/outage');
 
 /** One client per PLC, shared by every connection node that names it (and agrees on its settings). */
 const pool = new ClientPool();
-/** A link that stayed connected this long has ended its outage: the next error goes to Catch again. */
-const STABLE_MS = 5000;
+/** The PLCs' browsed tables the editor's name checks use (s7plus://), kept a few seconds per PLC. */
+const plcTables = new PlcTables();
 
 /**
  * plcwire-connection (config): properties `url`, and for tags by name
@@ -51,10 +54,8 @@ module.exports = function (RED) {
     /** Data blocks whose length on the PLC differs from their source's, by DB number, since the link came up. */
     const mismatches = new Map();
     let link;
-    /** True once this outage's first error went to Catch: one message per outage, until the link has stayed up. */
-    let reported = false;
-    /** Ends the outage when the link has stayed connected for STABLE_MS (a link that flaps is one outage). */
-    let stable;
+    /** One Catch message per outage, until the link has stayed up (lib/flows/outage.ts). */
+    const outage = new OutageReports(() => node.linkStatus.state === 'connected');
 
     Object.defineProperty(node, 'client', { get: () => link && link.client });
 
@@ -84,16 +85,7 @@ module.exports = function (RED) {
     /** Tells every user the link's status (after it or what it shows changed). */
     function broadcast() {
       const status = node.linkStatus;
-      if (status.state !== 'connected') {
-        clearTimeout(stable);
-        stable = undefined;
-      } else if (reported && stable === undefined) {
-        stable = setTimeout(() => {
-          stable = undefined;
-          if (node.linkStatus.state === 'connected') reported = false;
-        }, STABLE_MS);
-        stable.unref();
-      }
+      outage.state(status.state);
       for (const user of Object.values(registered)) if (typeof user.onLinkStatus === 'function') user.onLinkStatus(status);
     }
 
@@ -129,17 +121,14 @@ module.exports = function (RED) {
       node.on('close', () => RED.events.removeListener('flows:started', report));
     }
 
-    /**
-     * The first error of an outage goes to Catch, once; the ones after it (each reconnect that fails, in whatever
-     * words, and each loss of a link that came up for less than STABLE_MS) only to the status. A PLC that is off, or
-     * silent, or a link that flaps within one fault, is one Catch message, not one per attempt (issue #26).
-     */
+    /** The first error of an outage goes to Catch, once; the ones after it only to the status (lib/flows/outage.ts, issue #26). */
     function reportError(err) {
-      if (reported) return;
-      reported = true;
-      // Catch messages end up in debug sidebars and files: never with the URL's user info.
+      if (!outage.first()) return;
+      // Catch messages end up in debug sidebars and files: never with the URL's user info. The whole text is in the
+      // payload too (a Debug node shows the payload): a refused certificate's message holds the fingerprint= to pin.
       const url = withoutCredentials(node.url);
-      node.error(err, { topic: link ? link.name : url, payload: { url, state: node.linkStatus.state, code: err && err.code } });
+      const payload = { url, state: node.linkStatus.state, code: err && err.code, message: err && err.message ? err.message : String(err) };
+      node.error(err, { topic: link ? link.name : url, payload });
     }
 
     const onStatus = (status) => {
@@ -205,7 +194,7 @@ module.exports = function (RED) {
     };
 
     node.on('close', function (removed, done) {
-      clearTimeout(stable);
+      outage.close();
       registered = {};
       node.users = {};
       settleWithin(shut()).then(() => done());
@@ -214,65 +203,28 @@ module.exports = function (RED) {
 
   RED.nodes.registerType('plcwire-connection', PlcwireConnection, { credentials: { password: { type: 'password' } } });
 
-  /** The sources of a request body, the way a connection node's config carries them. */
-  function symbolConfig(body) {
-    return { symbolSources: body.symbolSources, dbNumbers: body.dbNumbers, strictSymbols: false };
-  }
-
   const canRead = RED.auth.needsPermission('plcwire.read');
   s7plusAdmin(RED, canRead);
 
   /**
-   * The address parser of a URL's protocol (the client's own, which knows the
-   * URL's settings), or the S7 parser when no URL is given. `done()` frees it.
-   * { error } when the URL itself is invalid.
-   */
-  function parserFor(url) {
-    if (!url) return { parse: plc.parseAddress, done: () => undefined };
-    try {
-      const client = plc.createClient(String(url));
-      return { parse: (a) => client.tag(a), done: () => client.close().catch(() => undefined) };
-    } catch (err) {
-      return { error: err };
-    }
-  }
-
-  const urlAnswer = (err) => ({ ok: false, code: err.code, message: err.message });
-
-  /**
-   * Address validation for the editor with the library's own parser (the
-   * driver of the URL's protocol) and, when the connection has symbol
-   * sources, its compiled table: POST { url?, addresses: [...],
-   * symbolSources?, dbNumbers? } → { url, symbols: { ok } | { ok: false, errors },
-   * results: { address: { ok, type, count } | { ok, symbol, address, type, kind } | { ok: false, code, message } } }.
+   * The editor's questions, answered by the library (lib/flows/editor-answers.ts):
+   * POST plcwire/validate { url?, addresses, symbolSources?, dbNumbers?, id?, password? } → { url, symbols, results }:
+   *   each address with the URL's own parser and the sources; a name an s7plus:// connection reads by name against
+   *   the sources, else the PLC's browsed table (the deployed connection's client, or a browse kept a few seconds;
+   *   the password typed or the node's credential): the PLC's type, invalid with the closest names, or `unchecked`.
+   * POST plcwire/csv { url?, text } → { url, tags, problems }; POST plcwire/csv/export { tags } → { csv };
+   * POST plcwire/url { url } | { endpoint } → { ok, url, endpoint, key }; GET plcwire/presets → the CPU presets.
    */
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
     const body = req.body || {};
-    const addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, 1000).map(String) : [];
-    const parser = parserFor(body.url);
-    if (parser.error) {
-      res.json({ url: urlAnswer(parser.error), results: {} });
-      return;
-    }
-    const compiledSources = symbols.compileCached(symbolConfig(body));
-    let symbolAnswer = compiledSources.problems ? { ok: false, errors: compiledSources.problems } : { ok: true };
-    // A protocol may refuse symbols (freeport): then names are no tags of this connection.
-    let table = compiledSources.table;
-    if (table && body.url) {
-      try {
-        plc
-          .createClient(String(body.url), { symbols: table })
-          .close()
-          .catch(() => undefined);
-      } catch (err) {
-        symbolAnswer = { ok: false, errors: [{ code: err.code, message: err.message }] };
-        table = undefined;
-      }
-    }
-    const results = {};
-    for (const address of addresses) results[address] = symbols.resolveAddress(address, parser.parse, table);
-    parser.done();
-    res.json({ url: { ok: true }, symbols: symbolAnswer, results });
+    const browse = (url) => {
+      const link = pool.linkOf(url);
+      const password = link ? undefined : s7plusAdmin.passwordOf(RED, body);
+      return plcTables.tableOf(url, { live: link && link.client, ...(password !== undefined ? { password } : {}) });
+    };
+    editor.validateAnswer(body, browse).then((answer) => {
+      if (!res.writableEnded) res.json(answer);
+    });
   });
 
   /**
@@ -283,62 +235,13 @@ module.exports = function (RED) {
    * compiled with the library's compileSymbols().
    */
   RED.httpAdmin.post('/plcwire/symbols', canRead, function (req, res) {
-    res.json(symbols.describe(symbols.compileCached(symbolConfig(req.body || {}))));
+    res.json(symbols.describe(symbols.compileCached(editor.symbolConfig(req.body || {}))));
   });
 
-  /**
-   * CSV import for the tag table: POST { url?, text } → { url, tags: [{ name, address }],
-   * problems: [{ line, code, name, address, message }] }, a type column checked
-   * with the parser of the URL's protocol (the S7 parser when the URL is invalid).
-   */
-  RED.httpAdmin.post('/plcwire/csv', canRead, function (req, res) {
-    const body = req.body || {};
-    let parser = parserFor(body.url);
-    const url = parser.error ? urlAnswer(parser.error) : { ok: true };
-    if (parser.error) parser = parserFor(undefined);
-    const { tags, problems } = plc.tagsFromCsv(String(body.text || ''), parser.parse);
-    parser.done();
-    res.json({ url, tags, problems });
-  });
-
-  /** Rows the editor may ask to export at most (a tag table of a node is far smaller). */
-  const MAX_EXPORT_ROWS = 100000;
-
-  /**
-   * CSV export for the tag table: POST { tags: [{ name, address }] } → { csv },
-   * written by the library's tagsToCsv, the form the import above reads back.
-   */
-  RED.httpAdmin.post('/plcwire/csv/export', canRead, function (req, res) {
-    const body = req.body || {};
-    const rows = Array.isArray(body.tags) ? body.tags.slice(0, MAX_EXPORT_ROWS) : [];
-    const tags = rows.map((t) => ({ name: String((t && t.name) ?? ''), address: String((t && t.address) ?? '') }));
-    res.json({ csv: plc.tagsToCsv(tags) });
-  });
-
-  /** URL ⇄ fields for the edit dialog, with the library's own parser and formatter. */
-  RED.httpAdmin.post('/plcwire/url', canRead, function (req, res) {
-    const body = req.body || {};
-    try {
-      if (body.endpoint) {
-        const url = plc.formatUrl(body.endpoint);
-        const endpoint = plc.parseUrl(url);
-        res.json({ ok: true, url: plc.formatUrl(endpoint), endpoint, key: plc.endpointKey(endpoint) });
-      } else {
-        const endpoint = plc.parseUrl(String(body.url || ''));
-        res.json({ ok: true, url: plc.formatUrl(endpoint), endpoint, key: plc.endpointKey(endpoint) });
-      }
-    } catch (err) {
-      res.json({ ok: false, code: err.code, message: err.message });
-    }
-  });
-
-  /**
-   * The CPU presets of the dialog, from the library (lib/url.ts, S7_CPU_PRESETS):
-   * { preset: { rack?, slot?, localTsap?, remoteTsap?, maxItems? } }, TSAPs as numbers.
-   */
-  RED.httpAdmin.get('/plcwire/presets', canRead, function (req, res) {
-    res.json(plc.S7_CPU_PRESETS);
-  });
+  RED.httpAdmin.post('/plcwire/csv', canRead, (req, res) => res.json(editor.csvImportAnswer(req.body || {})));
+  RED.httpAdmin.post('/plcwire/csv/export', canRead, (req, res) => res.json(editor.csvExportAnswer(req.body || {})));
+  RED.httpAdmin.post('/plcwire/url', canRead, (req, res) => res.json(editor.urlAnswer(req.body || {})));
+  RED.httpAdmin.get('/plcwire/presets', canRead, (req, res) => res.json(plc.S7_CPU_PRESETS));
 
   /**
    * Test connection: POST { url, addresses?, timeout?, symbolSources?,
@@ -361,7 +264,7 @@ module.exports = function (RED) {
     testConnection({
       body,
       // The dialog's sources as it holds them (not yet deployed ones too), compiled as the connection node compiles them at start.
-      compiled: symbols.compileCached(symbolConfig(body)),
+      compiled: symbols.compileCached(editor.symbolConfig(body)),
       password: () => s7plusAdmin.passwordOf(RED, body),
       signal: stop.signal,
       words: {

@@ -98,11 +98,19 @@ module.exports = function (RED) {
       }
       return byAddress.get(address);
     }
+    /** Per client: the table's addresses that hold a REAL, each with its conversion (a poll converts those only). */
+    const realPlans = new WeakMap();
     function realsShown(client, values) {
-      for (const address of table.addresses) {
-        const convert = showOf(client, address);
-        if (convert) values[address] = convert(values[address]);
+      let plan = realPlans.get(client);
+      if (plan === undefined) {
+        plan = [];
+        for (const address of table.addresses) {
+          const convert = showOf(client, address);
+          if (convert) plan.push(address, convert);
+        }
+        realPlans.set(client, plan);
       }
+      for (let i = 0; i < plan.length; i += 2) values[plan[i]] = plan[i + 1](values[plan[i]]);
       return values;
     }
     function outcomesShown(client, list) {

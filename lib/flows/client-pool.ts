@@ -202,6 +202,15 @@ export class ClientPool<C extends PoolClient = AnyClient> {
     return link.owners.size === 0 ? link.close() : Promise.resolve();
   }
 
+  /** The open link to the PLC `url` names (by endpointKey), if any; undefined for an invalid URL too. */
+  linkOf(url: string): PooledLink<C> | undefined {
+    try {
+      return this.links.get(endpointKey(parseUrl(url)));
+    } catch {
+      return undefined;
+    }
+  }
+
   /** How many links are open. */
   get size(): number {
     return this.links.size;

@@ -8,8 +8,19 @@
 
 /** @typedef {(key: string, params?: object) => string} Translate  RED._ of the node's module */
 
+const { retryReason } = require('../../dist/lib/flows/outage');
+
+/** The status text of each RetryReason (lib/flows/outage.ts). */
+const RETRY_REASON_KEYS = {
+  'not-trusted': 'plcwire.status.notTrusted',
+  expired: 'plcwire.status.certificateExpired',
+  'not-yet-valid': 'plcwire.status.certificateNotYetValid',
+  password: 'plcwire.status.passwordRefused',
+};
+
 /**
- * The link state: connecting, connected, retry in N s, closed, bad connection
+ * The link state: connecting, connected, retry in N s (or why, when waiting will not help: the certificate is
+ * not trusted or out of its dates, the password was refused), closed, bad connection
  * (settings conflict: another connection node holds the PLC's link with other settings),
  * no connection. Connected with a notice of the connection (tags by name):
  * a data block whose length differs from its source's (`DB1 20≠24`: the
@@ -23,8 +34,12 @@ function linkStatus(t, status) {
       return { fill: 'green', shape: 'dot', text: t('plcwire.status.connected') };
     case 'connecting':
       return { fill: 'yellow', shape: 'ring', text: t('plcwire.status.connecting') };
-    case 'reconnecting':
+    case 'reconnecting': {
+      // A retry that waiting alone will not help says why instead (issue #31); the Catch message has the whole text.
+      const reason = RETRY_REASON_KEYS[retryReason(status.error)];
+      if (reason) return { fill: 'red', shape: 'ring', text: t(reason) };
       return { fill: 'red', shape: 'ring', text: t('plcwire.status.retryIn', { s: Math.max(1, Math.round((status.delay ?? 0) / 1000)) }) };
+    }
     case 'closed':
       return { fill: 'grey', shape: 'ring', text: t('plcwire.status.closed') };
     case 'invalid':

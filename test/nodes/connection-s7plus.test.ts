@@ -10,7 +10,8 @@ import { S7Server } from '../../lib/s7/server';
 import { S7PlusService } from '../../lib/s7plus/server';
 import { generateCertificate } from '../../lib/s7plus/transport/cert';
 import { DB_NUMBERS, SOURCES } from '../fixtures/s7plus';
-import { ALL_NODES, helper, Recorder, until } from './support';
+import { loadCatalogs, withCatalog, type Catalogs, type Locale } from './catalogs';
+import { ALL_NODES, helper, nodes, Recorder, until } from './support';
 
 const SECRET = 'n0de-red-Secret!';
 
@@ -117,6 +118,46 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
     });
   });
 
+  describe('POST /plcwire/validate on s7plus:// (issue #31: BYTE for every name, typos included)', () => {
+    const validate = (body: object) => helper.request().post('/plcwire/validate').send(body).expect(200);
+
+    it('without sources and without a deployed connection: the PLC browsed, its type; a typo invalid with the closest names', async () => {
+      await helper.load(ALL_NODES, []);
+      const res = await validate({ url, addresses: ['"Recipe".Step', '"Recipe".Stepp', '"Recipe".Inlet', 'DB1.DBW4:INT'] });
+      expect(res.body.url).to.deep.equal({ ok: true });
+      expect(res.body.results['"Recipe".Step']).to.include({ ok: true, type: 'INT', kind: 'elementary' });
+      expect(res.body.results['"Recipe".Inlet']).to.include({ ok: true, kind: 'struct' });
+      const typo = res.body.results['"Recipe".Stepp'];
+      expect(typo).to.include({ ok: false, code: 'INVALID_ADDRESS' });
+      expect(typo.message).to.include('unknown symbol "Recipe".Stepp').and.include('"Recipe".Step');
+      // An absolute address keeps the parser's answer.
+      expect(res.body.results['DB1.DBW4:INT']).to.include({ ok: true, type: 'INT' });
+      await until(() => server.connectionCount === 0, 3000, 'the browse made for the question closed its connection');
+    });
+
+    it("with the connection deployed: its client's table, no connection of the question's own", async () => {
+      await helper.load(ALL_NODES, [
+        { id: 'c1', type: 'plcwire-connection', name: 'press', url },
+        { id: 'r1', type: 'plcwire-read', connection: 'c1', tags: [{ name: 'step', address: '"Recipe".Step' }], interval: 0 },
+      ]);
+      const conn = helper.getNode('c1');
+      await until(() => conn.linkStatus.state === 'connected', 10000, 'connected');
+      const before = server.connectionCount;
+      const res = await validate({ url, addresses: ['"Recipe".Nope'] });
+      expect(res.body.results['"Recipe".Nope']).to.include({ ok: false, code: 'INVALID_ADDRESS' });
+      expect(res.body.results['"Recipe".Nope'].message).to.include('unknown symbol "Recipe".Nope');
+      expect(server.connectionCount).to.equal(before);
+    });
+
+    it('a PLC that cannot be browsed: the name is not checked, and the answer says why instead of a type', async () => {
+      await helper.load(ALL_NODES, []);
+      const res = await validate({ url: 's7plus://127.0.0.1:1?timeout=1000', addresses: ['"Recipe".Step'] });
+      const answer = res.body.results['"Recipe".Step'];
+      expect(answer).to.include({ ok: true, type: '?' });
+      expect(answer.unchecked).to.include('the PLC could not be browsed');
+    });
+  });
+
   describe('read and write nodes by name (no sources: the PLC browsed)', () => {
     it('a write node writes a member of the optimized block and a struct by name; a read node reads them back', async () => {
       const at = { z: 'tab', x: 100, y: 100 };
@@ -153,6 +194,75 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       helper.getNode('r1').receive({});
       const msg = await read.next(() => true, 10000, 'the read');
       expect(msg.payload).to.deep.equal({ step: 12, inlet: { Open: true, Position: 7 } });
+    });
+  });
+
+  describe('a link that retries because waiting will not help says why (issue #31: "retry in 30 s")', () => {
+    let catalogs: Catalogs;
+    before(async () => {
+      catalogs = await loadCatalogs();
+    });
+    const at = { z: 'tab', x: 100, y: 100 };
+    /** The read node's modules with RED._ of the real catalog of `locale`. */
+    const translated = (locale: Locale) =>
+      ALL_NODES.map((m) => (m === nodes.read ? withCatalog(nodes.read, catalogs.translator(locale, 'plcwire-read')) : m));
+    const flowTo = (target: string) => [
+      { id: 'tab', type: 'tab', label: 'plcwire' },
+      { id: 'c1', type: 'plcwire-connection', name: 'press', url: target },
+      { id: 'r1', type: 'plcwire-read', ...at, connection: 'c1', tags: [{ name: 'step', address: '"Recipe".Step' }], interval: 0 },
+      { id: 'catcher', type: 'catch', ...at, scope: null, uncaught: false, wires: [['caught']] },
+      { id: 'caught', type: 'helper', ...at },
+    ];
+    /** Every status text the node has shown (the helper spies on the nodes' status()). */
+    const shownBy = (node: any): string[] =>
+      node.status
+        .getCalls()
+        .filter((c: { thisValue: unknown }) => c.thisValue === node)
+        .map((c: { args: [{ text: string }] }) => c.args[0].text);
+    const expected: Record<Locale, string> = { 'en-US': 'not trusted: pin it', de: 'Zertifikat pinnen', 'zh-CN': '证书不受信任：请固定' };
+
+    for (const locale of ['en-US', 'de', 'zh-CN'] as const) {
+      it(`${locale}: an unpinned certificate: the status says to pin it, Catch has the whole message with the fingerprint=`, async () => {
+        const unpinned = `s7plus://127.0.0.1:${server.port}?timeout=3000`;
+        await helper.load(translated(locale), flowTo(unpinned));
+        const caught = new Recorder(helper.getNode('caught'));
+        const read = helper.getNode('r1');
+        const reported = await caught.next((m) => m.error.source.type === 'plcwire-connection', 10000, "the connection's error on Catch");
+        await until(() => shownBy(read).includes(expected[locale]), 10000, `the status "${expected[locale]}"`);
+        const shown = shownBy(read);
+        expect(
+          shown.some((t) => /retry|neu in|重连/.test(t)),
+          shown.join(' | '),
+        ).to.equal(false);
+        expect(reported.payload).to.include({ code: 'CERTIFICATE_UNTRUSTED', url: unpinned });
+        // The whole text, fingerprint to pin included, within what a Debug node shows uncut (debugMaxLength 1000).
+        expect(reported.payload.message).to.include(`fingerprint=${service.fingerprint!}`);
+        expect(reported.payload.message.length).to.be.lessThan(1000);
+      });
+    }
+
+    it('a refused password: the status says so, in place of "retry in 30 s"', async () => {
+      const cert = await generateCertificate();
+      const plus = new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: { cert: cert.cert, key: cert.key }, password: SECRET });
+      const locked = new S7Server({ port: 0, profile: 's7-1500', s7plus: plus });
+      await locked.listen();
+      try {
+        const target = `s7plus://127.0.0.1:${locked.port}?fingerprint=${plus.fingerprint!}&timeout=3000`;
+        await helper.load(translated('en-US'), flowTo(target), { c1: { password: `${SECRET}-stale` } });
+        const read = helper.getNode('r1');
+        await until(
+          () => shownBy(read).includes('password refused'),
+          10000,
+          `the status "password refused" (shown: ${shownBy(read).join(' | ')})`,
+        );
+        expect(
+          shownBy(read).some((t) => t.startsWith('retry in')),
+          shownBy(read).join(' | '),
+        ).to.equal(false);
+      } finally {
+        await helper.unload();
+        await locked.close();
+      }
     });
   });
 

@@ -46,6 +46,19 @@ function everyStatus(t: (key: string, params?: object) => string, type: string):
     })),
     { what: 'reconnecting 0.5 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 500 }), numbers: [1] },
     { what: 'reconnecting 30 s', status: status.linkStatus(t, { state: 'reconnecting', delay: 30_000 }), numbers: [30] },
+    // Retries that waiting alone will not help say why (issue #31).
+    ...[
+      { what: 'not trusted', error: { code: 'CERTIFICATE_UNTRUSTED', problem: 'not-trusted' } },
+      { what: 'wrong pin', error: { code: 'CERTIFICATE_UNTRUSTED', problem: 'wrong-pin' }, readme: false as const },
+      { what: 'certificate expired', error: { code: 'CERTIFICATE_UNTRUSTED', problem: 'expired' } },
+      { what: 'certificate not yet valid', error: { code: 'CERTIFICATE_UNTRUSTED', problem: 'not-yet-valid' } },
+      { what: 'password refused', error: { code: 'ACCESS_DENIED' } },
+    ].map(({ what, error, readme }) => ({
+      what,
+      status: status.linkStatus(t, { state: 'reconnecting', delay: 30_000, error }),
+      numbers: [],
+      ...(readme === false ? { readme } : {}),
+    })),
     {
       what: 'settings conflict',
       status: status.linkStatus(t, { state: 'invalid', error: { code: 'SETTINGS_CONFLICT' } }),

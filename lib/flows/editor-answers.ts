@@ -1,0 +1,140 @@
+/**
+ * What the Node-RED editor asks the runtime about a connection and its tag
+ * tables, answered by the library (the connection node only serves them,
+ * nodes/connection.js): addresses and names checked with the URL's own
+ * parser and the connection's sources (validate), CSV import and export, and
+ * URL ⇄ fields for the dialog. Requests are the editor's JSON bodies, loose
+ * by nature: every field is read defensively. No Node-RED.
+ */
+import { parseAddress } from '../address';
+import { createClient } from '../connect';
+import { toPlcError } from '../errors';
+import type { SymbolTable } from '../symbols';
+import type { DriverTag } from '../link/driver';
+import { tagsFromCsv, tagsToCsv, type TagRow, type TagTableProblem } from '../tags/table';
+import { endpointKey, formatUrl, parseUrl, type Endpoint } from '../url';
+import { checkAddresses, type NameAnswer } from './name-check';
+import { compileCached, type SymbolConfig } from './symbol-config';
+
+type Body = Record<string, unknown>;
+/** What the address parsers of every protocol give (an S7 Tag, a FreeportTag): what validate and the CSV import read. */
+type Parse = (address: string) => DriverTag & { type: string; count: number; isArray: boolean; stringLength: number };
+
+/** Addresses one validate question may ask about at most (a tag table of a node is far smaller). */
+const MAX_ADDRESSES = 1000;
+/** Rows the editor may ask to export at most. */
+const MAX_EXPORT_ROWS = 100000;
+
+/** An invalid URL as the editor is told it. */
+export type UrlProblem = { ok: false; code: string; message: string };
+
+const problemOf = (err: unknown): UrlProblem => {
+  const e = toPlcError(err, 'INVALID_URL');
+  return { ok: false, code: e.code, message: e.message };
+};
+
+const textOf = (value: unknown): string => (typeof value === 'string' ? value : value == null ? '' : String(value as number));
+
+/**
+ * The address parser of a URL's protocol (the client's own, which knows the
+ * URL's settings), or the S7 parser without a URL. `done()` frees it.
+ * { error } when the URL itself is invalid.
+ */
+function parserFor(url: string): { parse: Parse; done: () => void } | { error: UrlProblem } {
+  if (!url) return { parse: parseAddress as Parse, done: () => undefined };
+  try {
+    const client = createClient(url);
+    return { parse: (a) => client.tag(a), done: () => void client.close().catch(() => undefined) };
+  } catch (err) {
+    return { error: problemOf(err) };
+  }
+}
+
+/** The sources of a request body, the way a connection node's config carries them. */
+export function symbolConfig(body: Body): SymbolConfig {
+  return { symbolSources: body.symbolSources, dbNumbers: body.dbNumbers, strictSymbols: false };
+}
+
+export interface ValidateAnswer {
+  url: { ok: true } | UrlProblem;
+  symbols?: { ok: true } | { ok: false; errors: { code?: string; message: string }[] };
+  results: Record<string, NameAnswer>;
+}
+
+/**
+ * POST plcwire/validate { url?, addresses, symbolSources?, dbNumbers? }: each
+ * address with the URL's parser and the sources' table; a name the URL's
+ * client reads by name (s7plus://) against the sources, else the PLC's table
+ * (`browse`, asked only when such a name is there; lib/flows/name-check.ts).
+ */
+export async function validateAnswer(body: Body, browse?: (url: string) => Promise<SymbolTable>): Promise<ValidateAnswer> {
+  const url = textOf(body.url);
+  const addresses = Array.isArray(body.addresses) ? body.addresses.slice(0, MAX_ADDRESSES).map(textOf) : [];
+  const parser = parserFor(url);
+  if ('error' in parser) return { url: parser.error, results: {} };
+  const compiled = compileCached(symbolConfig(body));
+  let symbols: ValidateAnswer['symbols'] = compiled.problems ? { ok: false, errors: compiled.problems } : { ok: true };
+  // A protocol may refuse symbols (freeport): then names are no tags of this connection.
+  let table = compiled.table;
+  if (table && url) {
+    try {
+      void createClient(url, { symbols: table })
+        .close()
+        .catch(() => undefined);
+    } catch (err) {
+      const e = toPlcError(err, 'NOT_SUPPORTED');
+      symbols = { ok: false, errors: [{ code: e.code, message: e.message }] };
+      table = undefined;
+    }
+  }
+  try {
+    const results = await checkAddresses(addresses, {
+      parse: parser.parse,
+      table,
+      ...(url && browse ? { browse: () => browse(url) } : {}),
+    });
+    return { url: { ok: true }, symbols, results };
+  } finally {
+    parser.done();
+  }
+}
+
+/**
+ * POST plcwire/csv { url?, text } → { url, tags, problems }: the tag table of
+ * a CSV text, a type column checked with the parser of the URL's protocol
+ * (the S7 parser when the URL is invalid).
+ */
+export function csvImportAnswer(body: Body): { url: { ok: true } | UrlProblem; tags: TagRow[]; problems: TagTableProblem[] } {
+  let parser = parserFor(textOf(body.url));
+  const url = 'error' in parser ? parser.error : ({ ok: true } as const);
+  if ('error' in parser) parser = parserFor('') as { parse: Parse; done: () => void };
+  try {
+    return { url, ...tagsFromCsv(textOf(body.text), parser.parse) };
+  } finally {
+    parser.done();
+  }
+}
+
+/** POST plcwire/csv/export { tags: [{ name, address }] } → { csv }, the form csvImportAnswer reads back. */
+export function csvExportAnswer(body: Body): { csv: string } {
+  const rows = Array.isArray(body.tags) ? (body.tags as unknown[]).slice(0, MAX_EXPORT_ROWS) : [];
+  const tags = rows.map((t) => {
+    const row = (t && typeof t === 'object' ? t : {}) as Body;
+    return { name: textOf(row.name), address: textOf(row.address) };
+  });
+  return { csv: tagsToCsv(tags) };
+}
+
+/**
+ * POST plcwire/url { url } | { endpoint } → { ok, url, endpoint, key }: a URL
+ * parsed into the dialog's fields, or fields formatted into a URL (every
+ * scheme's own format and defaults), with the key of the PLC it reaches.
+ */
+export function urlAnswer(body: Body): { ok: true; url: string; endpoint: Endpoint; key: string } | UrlProblem {
+  try {
+    const endpoint = body.endpoint ? parseUrl(formatUrl(body.endpoint as Endpoint)) : parseUrl(textOf(body.url));
+    return { ok: true, url: formatUrl(endpoint), endpoint, key: endpointKey(endpoint) };
+  } catch (err) {
+    return problemOf(err);
+  }
+}
