@@ -8,6 +8,8 @@
  *   - a read node in push mode on an s7plus:// connection as narrow as the
  *     tray (Node-RED makes the tray body as wide as the form's unwrapped
  *     width at opening: a long hint on one line made it wider than the tray);
+ *   - switching to "when the PLC reports a change" shows the PLC's sample
+ *     time, 100 ms unless given, and leaves the node valid.
  * "Whole" is measured, not guessed: an element's scrollWidth within its
  * clientWidth, its box within the tray's, a select's text within its box.
  * PLCWIRE_SCREENSHOT_DIR=<dir> keeps a screenshot of each dialog.
@@ -241,6 +243,67 @@ describe('editor in Chromium: the S7CommPlus dialogs, whole at 1024x700 and 1600
       } finally {
         await context.close();
       }
+    }
+  });
+
+  it('switching a read node without a sample time to "when the PLC reports a change" shows 100 ms and leaves it valid; the example flow imports valid', async () => {
+    const { context, page, errors } = await openEditor(browser, red, 'en-US', 'read-classic');
+    try {
+      await page.setViewportSize({ width: 1024, height: 700 });
+      const example = JSON.parse(fs.readFileSync(path.join(ROOT, 'examples/S7CommPlus optimized DB by name.json'), 'utf8')) as any[];
+      const reads = example.filter((n) => n.type === 'plcwire-read');
+      expect(reads.length).to.be.at.least(1);
+      const ids: string[] = await page.evaluate((nodes) => {
+        const RED = (globalThis as any).RED;
+        const { nodeMap } = RED.view.importNodes(nodes, { generateIds: true, addFlow: true });
+        return Object.values(nodeMap as Record<string, any>)
+          .filter((n: any) => n.type === 'plcwire-read')
+          .map((n: any) => n.id)
+          .filter((id: string, i: number, all: string[]) => all.indexOf(id) === i);
+      }, example);
+      expect(ids.length).to.equal(reads.length);
+      for (const id of ids) {
+        await page.evaluate((n) => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node(n)), id);
+        await page.waitForSelector('#node-input-mode', { state: 'visible', timeout: 10_000 });
+        await page.selectOption('#node-input-mode', 'push');
+        expect(await page.isVisible('#node-input-cycle')).to.equal(true);
+        expect(await page.inputValue('#node-input-cycle'), 'the sample time shown').to.equal('100');
+        expect(await page.getAttribute('#node-input-cycle', 'placeholder')).to.equal('100');
+        await closed(page, '#node-dialog-ok');
+        const node = await page.evaluate((n) => {
+          const x = (globalThis as any).RED.nodes.node(n);
+          return { mode: x.mode, cycle: Number(x.cycle), valid: x.valid };
+        }, id);
+        expect(node).to.deep.equal({ mode: 'push', cycle: 100, valid: true });
+      }
+      // A push node whose sample time is missing from the flow is valid too: the runtime samples every 100 ms.
+      const valid = await page.evaluate(() => {
+        const RED = (globalThis as any).RED;
+        const { nodeMap } = RED.view.importNodes(
+          [
+            {
+              id: 'bare',
+              type: 'plcwire-read',
+              x: 100,
+              y: 400,
+              connection: 'plus',
+              mode: 'push',
+              interval: 1000,
+              output: 'object',
+              deadband: 0,
+              tags: [{ name: 'step', address: '"Recipe".Step' }],
+            },
+          ],
+          { generateIds: true },
+        );
+        const n: any = Object.values(nodeMap as Record<string, any>).find((x: any) => x.type === 'plcwire-read');
+        RED.editor.validateNode(n);
+        return { valid: n.valid, errors: n.validationErrors ?? [] };
+      });
+      expect(valid).to.deep.equal({ valid: true, errors: [] });
+      expect(errors.map((e) => e.message)).to.deep.equal([]);
+    } finally {
+      await context.close();
     }
   });
 });
