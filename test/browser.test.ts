@@ -453,7 +453,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     );
   });
 
-  it('the temperature moves on the dashboard (the heater warms the tank with the motor stopped)', async () => {
+  it('the temperature moves on the dashboard (the heater and the running motor warm the tank)', async () => {
     // The gauge's text: title, scale ends, value and unit ("Temperature 0 80 26.2 °C").
     const shown = () =>
       page
@@ -477,19 +477,37 @@ describe('browser: the npm start demo in headless Chromium', function () {
     );
   });
 
-  it('the motor switch follows the PLC: set or cleared by another client, it moves', async () => {
+  it("the demo starts the feed motor: the switch shows it on and the S7CommPlus group's feed drive (the same motor) turns; cleared or set by another client, the switch moves", async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
-    const input = page.locator('.plcwire-motor input[type=checkbox]');
     await page.waitForFunction(
       () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]') !== null,
       undefined,
       { timeout: 15_000 },
     );
-    expect(db1[4]! & 0x01).to.equal(0);
-    expect(await input.isChecked()).to.equal(false);
+    expect(db1[4]! & 0x01, '"Plant".MotorRun set by npm start').to.equal(1);
+    await page.waitForFunction(
+      () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true,
+      undefined,
+      { timeout: 10_000 },
+    );
+    // "Tank".Drive read over S7CommPlus: a speed, a current and a lit lamp, not "0 rpm · 0.0 A".
+    await page.waitForFunction(
+      () => {
+        const drive = (globalThis as any).document.querySelector('.plcwire-ui-plus-drive');
+        return /[1-9]\d* rpm · [1-9]\d*\.\d A/.test(drive?.innerText ?? '') && drive.querySelector('.plcwire-lamp-on') !== null;
+      },
+      undefined,
+      { timeout: 20_000 },
+    );
     const other = createClient(demo.plant.urls.s7);
     try {
       await other.connect();
+      await other.write({ 'DB1.DBX4.0': false });
+      await page.waitForFunction(
+        () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === false,
+        undefined,
+        { timeout: 10_000 },
+      );
       await other.write({ 'DB1.DBX4.0': true });
       await page.waitForFunction(
         () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true,
