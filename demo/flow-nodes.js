@@ -188,9 +188,10 @@ const watchdog = (prefix, seconds, y, widgets) => [
 
 /**
  * A link's state lamp `ui.link.<prefix>` from its read node's status: the lamp's colour is the status fill.
- * `name` labels the lamp and the status node, unless `short` names the status node (the editor's source column is narrow).
+ * `name` labels the lamp and the status node, unless `short` names the status node (the editor's source column is narrow);
+ * `width` is the widget's: the group's own width where the other rows span it, so the lamps line up at its right edge.
  */
-const linkLamp = (prefix, name, readId, g, order, y, short = name) => [
+const linkLamp = (prefix, name, readId, g, order, y, short = name, width = 3) => [
   { id: `st.${prefix}`, type: 'status', name: short, scope: [readId], ...at(X.source, y), wires: [[`st.text.${prefix}`]] },
   change(
     `st.text.${prefix}`,
@@ -203,7 +204,7 @@ const linkLamp = (prefix, name, readId, g, order, y, short = name) => [
     y,
     [`ui.link.${prefix}`],
   ),
-  stateLamp(`ui.link.${prefix}`, g, name, order, 3, y),
+  stateLamp(`ui.link.${prefix}`, g, name, order, width, y),
 ];
 
 /** A plcwire read node polling `tags` every `interval` ms, one message per tag. */

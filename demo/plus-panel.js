@@ -98,7 +98,8 @@ function plusPanel(top) {
     // Half a row more below the write node, for its status.
     n.template('ui.plus.drive', 'ui.g.plus', 'Feed drive', 3, 6, row(2.5), DRIVE),
     n.template('ui.plus.levels', 'ui.g.plus', 'Level history', 4, 6, row(3.5), LEVELS),
-    ...n.linkLamp('plus', 'S7CommPlus link', 'plus.read', 'ui.g.plus', 5, row(4.5), 'TLS link'),
+    // As wide as the group, as the rows above: its lamp under theirs.
+    ...n.linkLamp('plus', 'S7CommPlus link', 'plus.read', 'ui.g.plus', 5, row(4.5), 'TLS link', 6),
     ...n.watchdog('plus', 3, row(5.5), PLUS_WIDGETS),
   ];
 }

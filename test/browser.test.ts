@@ -453,7 +453,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
     );
   });
 
-  it('the temperature moves on the dashboard (the heater warms the tank with the motor stopped)', async () => {
+  it('the temperature moves on the dashboard (the heater and the running motor warm the tank)', async () => {
     // The gauge's text: title, scale ends, value and unit ("Temperature 0 80 26.2 °C").
     const shown = () =>
       page
@@ -477,19 +477,37 @@ describe('browser: the npm start demo in headless Chromium', function () {
     );
   });
 
-  it('the motor switch follows the PLC: set or cleared by another client, it moves', async () => {
+  it("the demo starts the feed motor: the switch shows it on and the S7CommPlus group's feed drive (the same motor) turns; cleared or set by another client, the switch moves", async () => {
     const db1 = demo.plant.memory.area('DB', 1)!;
-    const input = page.locator('.plcwire-motor input[type=checkbox]');
     await page.waitForFunction(
       () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]') !== null,
       undefined,
       { timeout: 15_000 },
     );
-    expect(db1[4]! & 0x01).to.equal(0);
-    expect(await input.isChecked()).to.equal(false);
+    expect(db1[4]! & 0x01, '"Plant".MotorRun set by npm start').to.equal(1);
+    await page.waitForFunction(
+      () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true,
+      undefined,
+      { timeout: 10_000 },
+    );
+    // "Tank".Drive read over S7CommPlus: a speed, a current and a lit lamp, not "0 rpm · 0.0 A".
+    await page.waitForFunction(
+      () => {
+        const drive = (globalThis as any).document.querySelector('.plcwire-ui-plus-drive');
+        return /[1-9]\d* rpm · [1-9]\d*\.\d A/.test(drive?.innerText ?? '') && drive.querySelector('.plcwire-lamp-on') !== null;
+      },
+      undefined,
+      { timeout: 20_000 },
+    );
     const other = createClient(demo.plant.urls.s7);
     try {
       await other.connect();
+      await other.write({ 'DB1.DBX4.0': false });
+      await page.waitForFunction(
+        () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === false,
+        undefined,
+        { timeout: 10_000 },
+      );
       await other.write({ 'DB1.DBX4.0': true });
       await page.waitForFunction(
         () => (globalThis as any).document.querySelector('.plcwire-motor input[type=checkbox]').checked === true,
@@ -835,6 +853,72 @@ describe('browser: the npm start demo in headless Chromium', function () {
         expect(await cpuButtons(own)).to.deep.equal({ stop: true, start: false });
         if (process.env.PLCWIRE_SCREENSHOT_DIR)
           await own.screenshot({ path: path.join(process.env.PLCWIRE_SCREENSHOT_DIR, `dashboard-${width}.png`), fullPage: true });
+      } finally {
+        await own.close();
+      }
+    });
+  }
+
+  for (const [width, height] of [
+    [412, 915],
+    [1280, 800],
+  ] as const) {
+    it(`at ${width}x${height}: the S7CommPlus group's title whole, its setpoint slider wide enough to drag, the level history on one line, its link lamp under the feed drive's`, async () => {
+      const own = await browser.newPage({ viewport: { width, height } });
+      try {
+        await own.goto(demo.dashboard, { waitUntil: 'domcontentloaded' });
+        await own.waitForFunction(
+          () =>
+            ((globalThis as any).document.querySelector('.plcwire-ui-plus-levels')?.innerText ?? '').match(/\d+\.\d/g)?.length === 5 &&
+            /plcwire-lamp-green/.test((globalThis as any).document.querySelector('.plcwire-ui-link-plus .plcwire-lamp')?.className ?? ''),
+          undefined,
+          { timeout: 20_000 },
+        );
+        const seen = await own.evaluate(() => {
+          const doc = (globalThis as any).document;
+          const box = (e: any) => {
+            const r = e.getBoundingClientRect();
+            return { left: r.left, right: r.right, top: r.top, bottom: r.bottom, width: r.width, height: r.height };
+          };
+          const group = doc.getElementById('nrdb-ui-group-ui.g.plus');
+          const title = group.querySelector('.v-card-title');
+          const track = group.querySelector('.plcwire-setpoint .v-slider-track');
+          const thumb = group.querySelector('.plcwire-setpoint .v-slider-thumb');
+          thumb.scrollIntoView({ block: 'center' });
+          const t = box(thumb);
+          const hit = doc.elementFromPoint(t.left + t.width / 2, t.top + t.height / 2);
+          const levels = group.querySelector('.plcwire-ui-plus-levels .plcwire-lamp-text');
+          const label = group.querySelector('.plcwire-ui-plus-levels .plcwire-lamp-row > span');
+          const lineHeight = (e: any) => parseFloat((globalThis as any).getComputedStyle(e).lineHeight) || 24;
+          return {
+            group: box(group.querySelector('.v-card-text')),
+            title: { text: title.textContent, scroll: title.scrollWidth, client: title.clientWidth, ...box(title) },
+            track: box(track),
+            thumbOnTop: thumb.contains(hit),
+            levels: { lines: Math.round(box(levels).height / lineHeight(levels)), ...box(levels) },
+            label: { lines: Math.round(box(label).height / lineHeight(label)) },
+            lamps: {
+              drive: box(group.querySelector('.plcwire-ui-plus-drive .plcwire-lamp')).right,
+              link: box(group.querySelector('.plcwire-ui-link-plus .plcwire-lamp')).right,
+            },
+          };
+        });
+        if (process.env.PLCWIRE_SCREENSHOT_DIR)
+          await own
+            .locator('#nrdb-ui-group-ui\\.g\\.plus')
+            .screenshot({ path: path.join(process.env.PLCWIRE_SCREENSHOT_DIR, `plus-group-${width}.png`) });
+        const report = JSON.stringify(seen);
+        expect(seen.title.text, report).to.equal('S7-1200 optimized DB "Tank" over S7CommPlus (TLS)');
+        expect(seen.title.scroll, `the title is not cut ${report}`).to.be.at.most(seen.title.client + 1);
+        // A thumb a finger can drag: a track of 150 px at least (2.5 px per 0.5 °C step), the thumb on top where it is drawn.
+        expect(seen.track.width, `slider track ${report}`).to.be.at.least(150);
+        expect(seen.track.left).to.be.at.least(seen.group.left - 0.5);
+        expect(seen.track.right).to.be.at.most(seen.group.right + 0.5);
+        expect(seen.thumbOnTop, 'nothing over the thumb').to.equal(true);
+        expect(seen.levels.lines, `level history on one line ${report}`).to.equal(1);
+        expect(seen.label.lines, `its label on one line ${report}`).to.equal(1);
+        expect(seen.levels.right).to.be.at.most(seen.group.right + 0.5);
+        expect(Math.abs(seen.lamps.link - seen.lamps.drive), `the link lamp under the feed drive's ${report}`).to.be.at.most(1);
       } finally {
         await own.close();
       }

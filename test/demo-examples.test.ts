@@ -87,7 +87,14 @@ describe('examples: each imported into the running `npm start` demo and deployed
     broker = new TestBroker();
     await broker.start();
     ports = { s7, fetch: fetchPort, write, freeport, mqtt: broker.port };
-    demo = await startDemo({ port, plantPorts: { s7, fetch: fetchPort, write, freeport }, quiet: true, log: () => undefined });
+    // The motor standing, as `plcwire demo` starts it: the gateway's write starts it.
+    demo = await startDemo({
+      port,
+      plantPorts: { s7, fetch: fetchPort, write, freeport },
+      quiet: true,
+      log: () => undefined,
+      feedMotor: 'stopped',
+    });
     comms = new WebSocket(`${demo.editor.replace(/^http/, 'ws')}comms`);
     await new Promise((resolve, reject) => {
       comms.once('open', resolve);

@@ -108,6 +108,16 @@ describe('nodes: the read node when the PLC reports a change (s7plus://)', funct
     expect(change.payload).to.equal(75.9);
   });
 
+  it('a flow without a sample time (from before the push mode, or the example switched to push) subscribes and reports changes', async () => {
+    const bare = flow(url).map((n) => (n.id === 'r1' ? { ...n, cycle: undefined } : n));
+    await writer.write({ '"Recipe".Step': 2 });
+    await helper.load(ALL_NODES, bare);
+    const out = new Recorder(helper.getNode('out'));
+    expect((await out.next((m) => m.topic === 'step', 10000, 'the first value of step')).payload).to.equal(2);
+    await writer.write({ '"Recipe".Step': 3 });
+    expect((await out.next((m) => m.topic === 'step', 5000, 'the change of step')).payload).to.equal(3);
+  });
+
   it('is subscribed again after the link was reset, and a redeploy leaves no connection', async () => {
     await writer.write({ '"Recipe".Step': 1 });
     await helper.load(ALL_NODES, flow(url));
