@@ -538,6 +538,17 @@ describe('plcwire CLI', function () {
         .and.match(/plcwire serve s7 /);
     });
 
+    it('--version prints the version of package.json (exit 0); serve --help names --tls-cert, --tls-key and --password-file', async () => {
+      const pkg = JSON.parse(fs.readFileSync(path.resolve(__dirname, '../../package.json'), 'utf8')) as { version: string };
+      const v = run(['--version']);
+      expect(await v.exit, v.output().err).to.equal(0);
+      expect(v.output().out).to.equal(`${pkg.version}\n`);
+      const serveHelp = await cli(['serve', '--help']);
+      for (const option of ['--tls-cert', '--tls-key', '--password-file'])
+        expect(serveHelp.out).to.match(new RegExp(`^ {2}${option} `, 'm'));
+      expect((await cli(['--help'])).out).to.match(/--version/);
+    });
+
     it('prints usage and exits 2 without a command', async () => {
       const r = run([]);
       expect(await r.exit).to.equal(2);
