@@ -294,7 +294,10 @@ interface Running {
 }
 
 function shell(command: string, cwd: string): Running {
-  const child = spawn('sh', ['-c', command], { cwd, stdio: ['ignore', 'pipe', 'pipe'], env: { ...process.env, PLCWIRE_PASSWORD: '' } });
+  // As a user without a password in the environment runs it.
+  const env = { ...process.env };
+  delete env.PLCWIRE_PASSWORD;
+  const child = spawn('sh', ['-c', command], { cwd, stdio: ['ignore', 'pipe', 'pipe'], env });
   let out = '';
   let err = '';
   child.stdout!.on('data', (d: Buffer) => (out += d.toString()));
