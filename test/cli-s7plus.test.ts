@@ -398,6 +398,28 @@ describe('plcwire on s7plus:// (the installed binary against the S7-1500 simulat
     });
   });
 
+  it('serve with an optimized source only (demo/Tank.db): the try: line is the s7plus:// read by name it serves, pinned, and works as printed', async () => {
+    const tank = path.resolve(__dirname, '../../demo/Tank.db');
+    const only = run(['serve', 's7', '--profile', 's7-1500', '--port', '0', '--source', tank, '--db', 'Tank=2']);
+    try {
+      await until(() => /Ctrl-C stops/.test(only.output().out + only.output().err), 20000, 'the simulator to start');
+      const fp = /certificate SHA-256 ([0-9A-F]{64})/.exec(only.output().out)![1]!;
+      const line = /^try: plcwire (.+)$/m.exec(only.output().out)![1]!;
+      expect(line).to.match(new RegExp(`^read "s7plus://127\\.0\\.0\\.1:\\d+\\?fingerprint=${fp}" '"Tank"\\.Phase'$`));
+      // As a user pastes it into a shell.
+      const child = spawn('sh', ['-c', `"${process.execPath}" "${BIN}" ${line}`], { stdio: ['ignore', 'pipe', 'pipe'] });
+      let out = '';
+      let err = '';
+      child.stdout.on('data', (d: Buffer) => (out += d.toString()));
+      child.stderr.on('data', (d: Buffer) => (err += d.toString()));
+      const [code] = await once(child, 'exit');
+      expect(code, err).to.equal(0);
+      expect(out).to.equal('"Tank".Phase = "Filling"\n');
+    } finally {
+      await stop(only);
+    }
+  });
+
   describe('browse', () => {
     it('refuses a URL that is not s7plus:// (the sources are listed by plcwire symbols)', async () => {
       const r = await done(['browse', s7url]);

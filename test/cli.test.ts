@@ -13,7 +13,7 @@ import { compileSymbols } from '../lib/symbols/compile';
 import type { DataTypeName } from '../lib/types';
 import { encodeInto, JS_TYPES } from '../lib/values';
 import { freePort } from './support/net';
-import { until } from './support/wait';
+import { until, waitFor } from './support/wait';
 
 const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
 
@@ -39,6 +39,19 @@ function run(args: string[]): { child: ChildProcess; output: () => { out: string
   child.stderr!.on('data', (d: Buffer) => (err += d.toString()));
   const exit = once(child, 'exit').then(([code]) => code as number);
   return { child, output: () => ({ out, err }), exit };
+}
+
+/** `promise`, or a rejection naming `what` once `deadline` (ms since the epoch) has passed. */
+async function beforeDeadline<T>(promise: Promise<T>, deadline: number, what: string): Promise<T> {
+  let timer: NodeJS.Timeout | undefined;
+  const late = new Promise<never>((_, reject) => {
+    timer = setTimeout(() => reject(new Error(`${what}: not done before the test's deadline`)), Math.max(0, deadline - Date.now()));
+  });
+  try {
+    return await Promise.race([promise, late]);
+  } finally {
+    clearTimeout(timer);
+  }
 }
 
 /**
@@ -339,10 +352,18 @@ describe('plcwire CLI', function () {
   });
 
   describe('the installed binary', () => {
-    it('demo prints try: lines that work as printed (by address; from the shipped Plant.db, by name; the optimized DB browsed and by name over s7plus://), until Ctrl-C', async () => {
+    it('demo prints try: lines that work as printed (by address; from the shipped Plant.db, by name; the optimized DB browsed and by name over s7plus://), until Ctrl-C', async function () {
+      // One deadline for the whole (the demo's start and every line it prints, run one after the other),
+      // not one per step: on a loaded machine (2 cores, load 4-5) a step takes what it takes.
+      const WHOLE_MS = 120_000;
+      this.timeout(WHOLE_MS + 10_000);
+      const deadline = Date.now() + WHOLE_MS;
       const demo = run(['demo']);
+      const children: ChildProcess[] = [];
       try {
-        await until(() => /^Ctrl-C stops\.$/m.test(demo.output().out), 20000, 'the demo prints what to try');
+        const started = waitFor(demo.child.stdout!, 'data', WHOLE_MS, () => /^Ctrl-C stops\.$/m.test(demo.output().out));
+        const died = demo.exit.then((code) => Promise.reject(new Error(`the demo exited (${code}) before it printed what to try`)));
+        await beforeDeadline(Promise.race([started, died]), deadline, 'the demo prints what to try');
         const lines = [...demo.output().out.matchAll(/^ {2}npx plcwire (.+)$/gm)].map((m) => m[1]!);
         expect(lines.some((l) => l.includes('"Plant".Level') && l.includes('--symbols'))).to.equal(true);
         // The S7CommPlus lines: pinned by the printed fingerprint, never insecure, no source file.
@@ -356,11 +377,12 @@ describe('plcwire CLI', function () {
           // As a user pastes it into a shell; `watch` runs until Ctrl-C, so the same arguments are read once.
           const command = line.replace(/^watch /, 'read ');
           const child = spawn('sh', ['-c', `"${process.execPath}" "${BIN}" ${command}`], { stdio: ['ignore', 'pipe', 'pipe'] });
+          children.push(child);
           let out = '';
           let err = '';
           child.stdout.on('data', (d: Buffer) => (out += d.toString()));
           child.stderr.on('data', (d: Buffer) => (err += d.toString()));
-          const [code] = await once(child, 'exit');
+          const [code] = await beforeDeadline(once(child, 'exit'), deadline, command);
           expect(code, `${command}\n${err}`).to.equal(0);
           // browse lists the PLC's names with their types; read and write show name = value.
           if (command.startsWith('browse '))
@@ -370,9 +392,10 @@ describe('plcwire CLI', function () {
           else expect(out, command).to.match(/ = /);
         }
       } finally {
+        for (const child of children) if (child.exitCode === null) child.kill('SIGKILL');
         demo.child.kill('SIGINT');
       }
-      expect(await demo.exit).to.equal(0);
+      expect(await beforeDeadline(demo.exit, deadline + 5000, 'the demo exits on Ctrl-C')).to.equal(0);
     });
 
     it('serve s7 runs the simulator until Ctrl-C, and read/write talk to it', async () => {
@@ -536,6 +559,17 @@ describe('plcwire CLI', function () {
       expect(global.out)
         .to.match(/^usage:\n {2}plcwire read /)
         .and.match(/plcwire serve s7 /);
+    });
+
+    it('--version prints the version of package.json (exit 0); serve --help names --tls-cert, --tls-key and --password-file', async () => {
+      const pkg = JSON.parse(fs.readFileSync(path.resolve(__dirname, '../../package.json'), 'utf8')) as { version: string };
+      const v = run(['--version']);
+      expect(await v.exit, v.output().err).to.equal(0);
+      expect(v.output().out).to.equal(`${pkg.version}\n`);
+      const serveHelp = await cli(['serve', '--help']);
+      for (const option of ['--tls-cert', '--tls-key', '--password-file'])
+        expect(serveHelp.out).to.match(new RegExp(`^ {2}${option} `, 'm'));
+      expect((await cli(['--help'])).out).to.match(/--version/);
     });
 
     it('prints usage and exits 2 without a command', async () => {

@@ -1,5 +1,5 @@
 /**
- * The demo plant's DB1 as a PLC source (lib/plant/source.ts, demo/Plant.db):
+ * The demo plant's DB1 as a PLC source (lib/plant/source.ts, demo/Plant.db; its optimized DB2, demo/Tank.db):
  * the file a user opens is the text the library ships, written the way TIA
  * Portal's "Generate source from blocks" writes it, and a standard-access
  * data block the parser reads as the programmer declared it.
@@ -11,7 +11,7 @@ import { formatAddress, parseAddress } from '../lib/address';
 import { connect } from '../lib/connect';
 import { startPlant } from '../lib/plant/plant';
 import { DEMO_SYMBOLS, DEMO_TAGS, DemoProcess, THERMAL } from '../lib/plant/process';
-import { PLANT_DB_NUMBERS, PLANT_SOURCE } from '../lib/plant/source';
+import { PLANT_DB_NUMBERS, PLANT_SOURCE, TANK_DB_NUMBERS, TANK_SOURCE } from '../lib/plant/source';
 import { PlcMemory } from '../lib/sim/memory';
 import { compileSymbols } from '../lib/symbols';
 import { dataBlockImages } from '../lib/symbols/memory';
@@ -25,14 +25,27 @@ const ROOT = path.resolve(__dirname, '../..');
 const FILE = path.join(ROOT, 'demo/Plant.db');
 
 describe('demo plant: DB1 as a TIA source', () => {
-  it('demo/Plant.db is the shipped source as TIA writes a file: UTF-8 with a BOM, CRLF line ends', () => {
-    const bytes = fs.readFileSync(FILE);
-    expect([...bytes.subarray(0, 3)]).to.deep.equal([0xef, 0xbb, 0xbf]);
-    const text = bytes.subarray(3).toString('utf8');
-    expect(text.split('\r\n').length).to.be.greaterThan(10);
-    expect(text.replace(/\r\n/g, '')).to.not.include('\n');
-    expect(text.replace(/\r\n/g, '\n')).to.equal(PLANT_SOURCE.content);
-    expect(path.basename(FILE)).to.equal(PLANT_SOURCE.name);
+  for (const [file, source] of [
+    [FILE, PLANT_SOURCE],
+    [path.join(ROOT, 'demo/Tank.db'), TANK_SOURCE],
+  ] as const) {
+    it(`demo/${source.name} is the shipped source as TIA writes a file: UTF-8 with a BOM, CRLF line ends`, () => {
+      const bytes = fs.readFileSync(file);
+      expect([...bytes.subarray(0, 3)]).to.deep.equal([0xef, 0xbb, 0xbf]);
+      const text = bytes.subarray(3).toString('utf8');
+      expect(text.split('\r\n').length).to.be.greaterThan(10);
+      expect(text.replace(/\r\n/g, '')).to.not.include('\n');
+      expect(text.replace(/\r\n/g, '\n')).to.equal(source.content);
+      expect(path.basename(file)).to.equal(source.name);
+    });
+  }
+
+  it('demo/Tank.db (the README\'s example of an optimized source) declares the optimized DB "Tank" the demo CPU serves as DB2, needing no other file', () => {
+    const [tank, ...others] = parseBlockSource({ name: 'Tank.db', content: fs.readFileSync(path.join(ROOT, 'demo/Tank.db')) });
+    expect(others).to.deep.equal([]);
+    expect(tank).to.include({ kind: 'db', name: 'Tank', optimized: true });
+    const table = compileSymbols([TANK_SOURCE], { db: TANK_DB_NUMBERS });
+    expect(table.blocks.map((b) => ({ name: b.name, db: b.db, length: b.length }))).to.deep.equal([{ name: 'Tank', db: 2, length: null }]);
   });
 
   it('declares one global DB "Plant" with standard access, numbered by PLANT_DB_NUMBERS, a member for every demo tag', () => {

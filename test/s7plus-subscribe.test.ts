@@ -161,6 +161,13 @@ describe('S7CommPlus subscriptions (our client, our simulator)', function () {
     expect(addressErr).to.be.instanceOf(TagErrors);
     const cycleErr = await client.subscribe(['"Recipe".Step'], { cycle: 1 }).catch((e: unknown) => e);
     expect(cycleErr).to.be.instanceOf(PlcError).and.include({ code: 'INVALID_VALUE' });
+    expect((cycleErr as Error).message).to.equal('subscribe(): cycle is 1 ms; give whole ms from 10 to 3600000');
+  });
+
+  it("cycle: '100' (a string, as a form gives it) is refused as a string, not as if 100 were out of range", async () => {
+    const err = await client.subscribe(['"Recipe".Step'], { cycle: '100' as unknown as number }).catch((e: unknown) => e);
+    expect(err).to.be.instanceOf(PlcError).and.include({ code: 'INVALID_VALUE' });
+    expect((err as Error).message).to.equal('subscribe(): cycle must be a number (whole ms from 10 to 3600000), not the string "100"');
   });
 
   it("an item the PLC does not report is that tag's error (NOT_SUPPORTED), the others flow", async () => {

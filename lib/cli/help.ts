@@ -104,12 +104,17 @@ examples:
   plcwire doctor "s7plus://192.168.0.1" '"Recipe".Step'`,
   serve: `usage: plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo]
                    [--layout file.json] [--max-items N] [--source Tank.db... --db Tank=1...]
+                   [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE]
        plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
        plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
 Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reaches it.
   --source file      serve the data blocks of these DB sources, at their declared lengths with their start values;
                      for s7-1200/1500 also a TIA tag table (.xlsx, .csv): its I/Q/M names over s7plus://. Editing a
                      --source file, or SIGHUP, loads the program again, as a download (clients browse again)
+  --tls-cert file    s7-1200/1500: the certificate (PEM) S7CommPlus over TLS presents, instead of one made at start
+  --tls-key file     s7-1200/1500: its private key (PEM); --tls-cert and --tls-key go together
+  --password-file F  s7-1200/1500: protect the CPU with the password on the first line of F: a session without
+                     it reads only
   --tls-dir DIR      s7-1200/1500: keep the certificate in DIR (cert.pem, key.pem with mode 0600), made on the first
                      start and the same after, so a pinned fingerprint= still holds; else made anew at every start
 example:

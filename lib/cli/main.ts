@@ -3,6 +3,8 @@
  * the simulators. Every failure is one readable line on stderr and an exit
  * code a script can switch on (see EXIT and the README's CLI reference).
  */
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
 import { createClient, type AnyClient } from '../connect';
 import { driverOf } from '../drivers';
 import { NAME_HINT } from '../address/parse';
@@ -36,11 +38,12 @@ const USAGE = `usage:
   plcwire cpu   <url> stop|start|cold-start [--yes] [--json]   (the URL needs control=true)
   plcwire doctor <url> [address|symbol...] [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
   plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json] [--max-items N]
-                   [--source Tank.db... --db Tank=1...]
+                   [--source Tank.db... --db Tank=1...] [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE]
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
   plcwire demo
-options: --debug prints stack traces; --help (-h) prints this text, plcwire <command> --help that command's.
+options: --debug prints stack traces; --help (-h) prints this text, plcwire <command> --help that command's;
+      --version the package's version.
 symbols: names as TIA writes them ('"Tank".Motor.Speed', Tank.Motor.Speed); a STRUCT reads as an object
       and is written as JSON ('"Tank".Motor={"Speed":1.5}'); --db numbers the blocks of TIA sources;
       a DB whose length in the PLC differs from the sources' is a warning, --strict-symbols refuses its names.
@@ -51,7 +54,7 @@ password (s7plus:// only): PLCWIRE_PASSWORD or --password-file FILE (its first l
 exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
 const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', 'password-file', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
-const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'strict-symbols'];
+const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'version', 'strict-symbols'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
   let args: ParsedArgs;
@@ -71,6 +74,10 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
   }
   const debug = args.flags.has('debug');
   const [command, ...rest] = args.positionals;
+  if (args.flags.has('version')) {
+    io.stdout.write(`${packageVersion()}\n`);
+    return EXIT.OK;
+  }
   // `plcwire read --help`, `plcwire help read`: that command's usage, options and an example.
   const asked = command === 'help' ? rest[0] : args.flags.has('help') ? command : undefined;
   const help = asked === undefined ? undefined : commandHelp(asked);
@@ -120,6 +127,12 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
   } catch (err) {
     return fail(io, err, debug);
   }
+}
+
+/** The version of the package this command belongs to (its package.json, beside dist/). */
+function packageVersion(): string {
+  const pkg = JSON.parse(readFileSync(join(__dirname, '../../../package.json'), 'utf8')) as { version: string };
+  return pkg.version;
 }
 
 function endpointArg(rest: string[], what: string): { endpoint: Endpoint; addresses: string[] } {

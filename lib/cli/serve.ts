@@ -43,7 +43,7 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
     sourceFiles: () => sourceFilesFlag(args, 'source'),
     sourcePaths: () => listFlag(args, 'source'),
     hasSource: () => args.lists.has('source'),
-    tryByName: (table) => tryByName(table, args),
+    tryRead: (url, table, s7plusUrl) => tryRead(args, url, table, s7plusUrl),
     usage: (message) => new UsageError(message),
     readFile: readInputFile,
     listen,
@@ -56,15 +56,22 @@ export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promis
 }
 
 /**
- * The read command for the first elementary member of the sources that a
- * read by address reaches (not one of an optimized block), by name:
- * `--symbols Tank.db --db Tank=1 '"Tank".Level'`.
+ * The command that reads the first elementary member of the sources, by name:
+ * over `url` with the sources when a read by address reaches it
+ * (`read "s7://…" --symbols Tank.db --db Tank=1 '"Tank".Level'`); when every
+ * member lies in an optimized block, over `s7plusUrl`, where the PLC's browse
+ * gives the names (`read "s7plus://…?fingerprint=…" '"Tank".Phase'`); with
+ * neither, `symbols`, which shows what the sources declare and why nothing
+ * has an address.
  */
-function tryByName(table: SymbolTable, args: ParsedArgs): string {
-  const first = table.entries.find((e) => e.kind === 'elementary' && e.db !== null && e.address !== null);
-  const files = listFlag(args, 'source').map((f) => `--symbols ${shellWord(f)}`);
+function tryRead(args: ParsedArgs, url: string, table: SymbolTable, s7plusUrl: string | undefined): string {
+  const elementary = table.entries.filter((e) => e.kind === 'elementary' && e.db !== null);
+  const byAddress = elementary.find((e) => e.address !== null);
+  const sources = listFlag(args, 'source').map(shellWord);
   const dbs = listFlag(args, 'db').map((d) => `--db ${shellWord(d)}`);
-  return [...files, ...dbs, ...(first ? [shellWord(first.name)] : [])].join(' ');
+  if (byAddress) return [`plcwire read "${url}"`, ...sources.map((f) => `--symbols ${f}`), ...dbs, shellWord(byAddress.name)].join(' ');
+  if (s7plusUrl !== undefined && elementary[0]) return `plcwire read "${s7plusUrl}" ${shellWord(elementary[0].name)}`;
+  return ['plcwire symbols', ...sources, ...dbs].join(' ');
 }
 
 /** A word a POSIX shell passes through unchanged: bare when it is plain, else in single quotes. */

@@ -62,11 +62,12 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   // What PUT/GET serves is told from the sources' own table, in which an optimized block has no length.
   const shown = s7plus ? flags.source() : symbols;
   if (shown) for (const line of servedBlocks(shown)) say(line);
-  say(`try: plcwire read "${url}" ${shown ? flags.tryByName(shown) : REACH[profile].addresses}`);
+  const plusUrl = s7plus?.fingerprint ? `s7plus://${hostPart(host)}:${port}?fingerprint=${s7plus.fingerprint}` : undefined;
+  say(`try: ${shown ? flags.tryRead(url, shown, plusUrl) : `plcwire read "${url}" ${REACH[profile].addresses}`}`);
   if (s7plus?.fingerprint) {
     const protectedNote = !s7plus.protected ? '' : ', protected: writes need the password';
     say(`S7CommPlus over TLS on the same port, certificate SHA-256 ${s7plus.fingerprint}${protectedNote}`);
-    say(`  s7plus://${hostPart(host)}:${port}?fingerprint=${s7plus.fingerprint}`);
+    say(`  ${plusUrl}`);
     const tlsDir = flags.string('tls-dir');
     if (tlsDir !== undefined) say(`  the certificate is kept in ${tlsDir}: the same fingerprint at every start`);
   }

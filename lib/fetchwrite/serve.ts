@@ -19,6 +19,7 @@ export async function serveFetchWrite(flags: ServeFlags): Promise<Served> {
     ports.fetchPort === ports.writePort ? `port=${ports.fetchPort}` : `fetchPort=${ports.fetchPort}&writePort=${ports.writePort}`;
   say(`FETCH/WRITE simulator listening on ${host}: fetch ${ports.fetchPort}, write ${ports.writePort}`);
   if (symbols) for (const line of servedBlocks(symbols)) say(line);
-  say(`try: plcwire read "fetchwrite://${hostPart(host)}?${query}" ${symbols ? flags.tryByName(symbols) : 'DB1,INT0 MB0'}`);
+  const url = `fetchwrite://${hostPart(host)}?${query}`;
+  say(`try: ${symbols ? flags.tryRead(url, symbols) : `plcwire read "${url}" DB1,INT0 MB0`}`);
   return { close: () => server.close() };
 }

@@ -23,8 +23,12 @@ export interface ServeFlags {
   sourcePaths(): string[];
   /** True when --source was given (also when it names no file). */
   hasSource(): boolean;
-  /** The read command that reads the first member of the sources by name. */
-  tryByName(table: SymbolTable): string;
+  /**
+   * The command that reads the first member of the sources by name: over `url`
+   * with the sources; when no member has an address (optimized blocks only), over
+   * `s7plusUrl` by the name the PLC's browse gives; else the symbols command.
+   */
+  tryRead(url: string, table: SymbolTable, s7plusUrl?: string): string;
   /** An error the CLI reports as a usage error (exit code 2). */
   usage(message: string): Error;
   /** A file named on the command line (--layout); a missing one is the CLI's "no such file" error. */

@@ -121,9 +121,7 @@ export class S7PlusSubscription extends EventEmitter<S7PlusSubscriptionEvents> {
     super();
     if (!Array.isArray(tags) || tags.length === 0 || !tags.every((t) => typeof t === 'string'))
       throw new PlcError('INVALID_ADDRESS', 'subscribe() takes a non-empty array of addresses or names');
-    const cycle = options.cycle ?? DEFAULT_CYCLE_MS;
-    if (!Number.isInteger(cycle) || cycle < MIN_CYCLE_MS || cycle > MAX_CYCLE_MS)
-      throw new PlcError('INVALID_VALUE', `subscribe(): cycle is ${String(cycle)}; give whole ms from ${MIN_CYCLE_MS} to ${MAX_CYCLE_MS}`);
+    const cycle = checkedCycle(options.cycle ?? DEFAULT_CYCLE_MS);
     this.tags = Object.freeze([...new Set(tags)]);
     this.cycle = cycle;
     // Parse errors before anything goes to the PLC.
@@ -310,4 +308,19 @@ function sameResult(a: TagResult<PlcValue>, b: TagResult<PlcValue>): boolean {
   if (a.ok && b.ok) return isDeepStrictEqual(a.value, b.value);
   if (!a.ok && !b.ok) return a.error.code === b.error.code && a.error.message === b.error.message;
   return false;
+}
+
+/**
+ * The sampling cycle in whole ms. A string ('100', as a form or a flow's JSON
+ * gives it) is refused as a string, not as if 100 were out of range.
+ */
+function checkedCycle(cycle: unknown): number {
+  const range = `whole ms from ${MIN_CYCLE_MS} to ${MAX_CYCLE_MS}`;
+  if (typeof cycle !== 'number') {
+    const given = typeof cycle === 'string' ? `the string ${JSON.stringify(cycle)}` : `of type ${typeof cycle}`;
+    throw new PlcError('INVALID_VALUE', `subscribe(): cycle must be a number (${range}), not ${given}`);
+  }
+  if (!Number.isInteger(cycle) || cycle < MIN_CYCLE_MS || cycle > MAX_CYCLE_MS)
+    throw new PlcError('INVALID_VALUE', `subscribe(): cycle is ${cycle} ms; give ${range}`);
+  return cycle;
 }
