@@ -617,6 +617,19 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect(r.code).to.equal(EXIT.USAGE);
   });
 
+  it('szl prints the count a header-only extract announces, and 0x0131 by the index its record carries (issue #31)', async () => {
+    const url = await start('s7-300');
+    let r = await plcwire(['szl', url, '0x0f11']);
+    expect(r.code, r.err).to.equal(0);
+    expect(r.out).to.match(/^SZL 0x0f11 index 0x0000: 3 record\(s\) of 28 bytes exist \(header only, none sent\)$/m);
+    r = await plcwire(['szl', url, '0x0f11', '--json']);
+    expect(JSON.parse(r.out)).to.deep.include({ id: '0x0f11', count: 3, records: [] });
+    r = await plcwire(['szl', url, '0x0131', '1', '--json']);
+    expect((JSON.parse(r.out) as { decoded: unknown }).decoded).to.deep.equal([
+      { index: 1, maxPdu: 240, maxConnections: 16, mpiRate: 187_500, busRate: 10_000_000 },
+    ]);
+  });
+
   it('diag --max gives the most recent entries, newest first', async () => {
     const url = await start('s7-300');
     server.stop('programming-error');
