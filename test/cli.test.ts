@@ -411,6 +411,12 @@ describe('plcwire CLI', function () {
           expect(r.output().err).to.match(/DB2,INT0.*0x0A/);
           const slot = run(['read', `s7://127.0.0.1:${port}?rack=0&slot=1&timeout=2000`, 'VW10']);
           expect(await slot.exit).to.equal(EXIT.CONNECTION);
+          // The simulator says which connection it refused and why (issue #31: never silently).
+          await until(
+            () => /^refused 127\.0\.0\.1:\d+ \(wrong-tsap\): .+ — frame 03/m.test(srv.output().out),
+            10000,
+            'serve logs the refusal',
+          );
         } finally {
           srv.child.kill('SIGINT');
         }

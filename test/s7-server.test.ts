@@ -18,7 +18,7 @@ import { PlcError } from '../lib/errors';
 import { S7Client } from '../lib/s7/client';
 import { decodeUserdata } from '../lib/s7/codec/userdata';
 import { headerError, remoteTsapFor } from '../lib/s7/constants';
-import { PROFILES, S7Server, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
+import { PROFILES, S7Server, refusalLine, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
 import type { MemoryAccess } from '../lib/sim/memory';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { CAPTURE, DOC, hex, show } from './fixtures/s7';
@@ -739,9 +739,16 @@ describe('S7Server', () => {
         const bad = await open(server);
         const good = await open(server);
         const refused = waitFor<S7RefusedEvent>(server, 'refused');
-        bad.peer.send(frame(bad));
+        const sent = frame(bad);
+        bad.peer.send(sent);
         await bad.peer.closedWithin();
-        expect((await refused).reason).to.equal('protocol-error');
+        // Never silently: the event names the client and the frame (issue #31).
+        const e = await refused;
+        expect(e.reason).to.equal('protocol-error');
+        expect(e.peer).to.match(/^127\.0\.0\.1:\d+$/);
+        expect(e.frame).to.be.a('string').and.not.equal('');
+        expect(refusalLine(e)).to.match(/^refused 127\.0\.0\.1:\d+ \(protocol-error\): .+ — frame [0-9a-f]+/);
+        if (sent.length <= 64) expect(e.frame).to.equal(sent.toString('hex'));
         good.peer.send(encodeReadRequest(1, [db(1, 0)]));
         expect((await good.peer.nextS7()).kind).to.equal('read-ack');
         expect(server.connectionCount).to.equal(1);

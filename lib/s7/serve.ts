@@ -2,7 +2,7 @@
 import { hostPart } from '../link/url-params';
 import type { MemoryLayout } from '../sim/memory';
 import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
-import { S7Server, type S7Profile } from './server';
+import { S7Server, refusalLine, type S7Profile, type S7RefusedEvent } from './server';
 import { reloadOnChange, servePlus } from '../s7plus/server/serve';
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
@@ -38,6 +38,8 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
     ...(maxItems !== undefined ? { maxItems } : {}),
     ...(s7plus ? { s7plus } : {}),
   });
+  // No connection is closed without a line saying which frame and why.
+  server.on('refused', (e: S7RefusedEvent) => say(refusalLine(e)));
   const port = await flags.listen(() => server.listen(), 'port');
   say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
   const url = `s7://${hostPart(host)}:${port}?${REACH[profile].query}`;
