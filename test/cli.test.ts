@@ -623,6 +623,35 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect(r.code).to.equal(EXIT.USAGE);
   });
 
+  it('read and write print TIME, DATE, TIME_OF_DAY, S5TIME and DATE_AND_TIME as TIA does; --json keeps the numbers (issue #31)', async () => {
+    const url = await start('s7-300');
+    const tags = ['DB1,TIME0', 'DB1,DATE4', 'DB1,TOD6', 'DB1,S5TIME10', 'DB1,DT12'];
+    let r = await plcwire(['write', url, 'DB1,TIME0=5000', 'DB1,DATE4=2024-01-31', 'DB1,TOD6=43200000', 'DB1,S5TIME10=127000']);
+    expect(r.code, r.err).to.equal(0);
+    expect(r.out)
+      .to.match(/^DB1,TIME0 = T#5S ok$/m)
+      .and.match(/^DB1,DATE4 = D#2024-01-31 ok$/m);
+    r = await plcwire(['write', url, 'DB1,DT12=2024-01-31T12:00:01.250Z']);
+    expect(r.code, r.err).to.equal(0);
+    r = await plcwire(['read', url, ...tags]);
+    expect(r.code, r.err).to.equal(0);
+    expect(r.out.trim().split('\n')).to.deep.equal([
+      'DB1,TIME0 = T#5S',
+      'DB1,DATE4 = D#2024-01-31',
+      'DB1,TOD6 = TOD#12:00:00.000',
+      'DB1,S5TIME10 = S5T#2M_7S',
+      'DB1,DT12 = DT#2024-01-31-12:00:01.250',
+    ]);
+    r = await plcwire(['read', url, ...tags, '--json']);
+    expect(JSON.parse(r.out)).to.deep.equal({
+      'DB1,TIME0': 5000,
+      'DB1,DATE4': '2024-01-31T00:00:00.000Z',
+      'DB1,TOD6': 43_200_000,
+      'DB1,S5TIME10': 127_000,
+      'DB1,DT12': '2024-01-31T12:00:01.250Z',
+    });
+  });
+
   it('szl prints the count a header-only extract announces, and 0x0131 by the index its record carries (issue #31)', async () => {
     const url = await start('s7-300');
     let r = await plcwire(['szl', url, '0x0f11']);
