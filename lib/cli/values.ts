@@ -4,7 +4,7 @@ import type { SymbolTable } from '../symbols/model';
 import type { DataTypeName, PlcScalar, PlcValue } from '../types';
 import { textOf, valueToText } from '../values/text';
 import { timeText } from '../values/time-text';
-export { textOf, valueToText };
+export { valueToText };
 
 /** What the CLI asks a client to tell a target's type: its tag, and the PLC's own table where it browsed one. */
 interface TypedClient {

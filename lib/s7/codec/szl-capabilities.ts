@@ -19,7 +19,7 @@ import { decodeCommunication, type CommunicationCapabilities } from './szl-state
 import type { SzlList } from './szl-list';
 
 /** Index 2: the test and commissioning functions the CPU offers. */
-export interface TestFunctions {
+interface TestFunctions {
   index: 2;
   /** The functions whose bit is set in funkt_0..funkt_2, by name. */
   functions: string[];
@@ -46,7 +46,7 @@ export interface OperatorFunctions {
 }
 
 /** An index whose layout this library does not decode: its bytes as hex. */
-export interface RawCapabilities {
+interface RawCapabilities {
   index: number;
   record: string;
 }
@@ -135,7 +135,7 @@ function operatorFunctions(r: Buffer): OperatorFunctions {
 }
 
 /** One record of SZL 0x0131, by the index its first word carries. */
-export function decodeCommunicationRecord(r: Buffer): CommunicationRecord {
+function decodeCommunicationRecord(r: Buffer): CommunicationRecord {
   if (r.length < RECORD) throw new ProtocolError(`SZL 0x0131: a record of ${r.length} bytes, expected ${RECORD}`);
   const index = r.readUInt16BE(0);
   switch (index) {

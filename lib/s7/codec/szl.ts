@@ -40,11 +40,4 @@ export {
   type CpuState,
   type Led,
 } from './szl-state';
-export {
-  decodeCommunicationRecord,
-  decodeCommunicationRecords,
-  type CommunicationRecord,
-  type TestFunctions,
-  type OperatorFunctions,
-  type RawCapabilities,
-} from './szl-capabilities';
+export { decodeCommunicationRecords, type OperatorFunctions } from './szl-capabilities';
