@@ -46,7 +46,7 @@ import {
   parseSzl,
 } from '../lib/s7/codec/szl';
 import { show } from './fixtures/s7';
-import { CONTROL, CPU315, SNAP7, UD } from './fixtures/s7-userdata';
+import { CONTROL, CPU315, PLC4X, SNAP7, UD } from './fixtures/s7-userdata';
 
 const list = (id: number, index: number, recordLength: number, bytes: Buffer) => ({
   id,
@@ -144,7 +144,7 @@ describe('S7 userdata codec', () => {
       }
     });
 
-    it('every wrong parameter length, data length, item length and parameter length byte is a ProtocolError', () => {
+    it('every wrong parameter length, data length, item length and parameter length byte is a ProtocolError (but a request item that overstates its length)', () => {
       for (const [name, frame] of frames) {
         for (const [at, width] of [
           [13, 2],
@@ -159,10 +159,25 @@ describe('S7 userdata codec', () => {
             if (v < 0 || v > (width === 2 ? 0xffff : 0xff)) continue;
             if (width === 2) bad.writeUInt16BE(v, at);
             else bad[at] = v;
+            // A request's item that announces more than the S7 header holds is read by the header (Apache PLC4X's
+            // SZL request, fixtures PLC4X.szlRequest): the bytes present are the data. Anything else is an error.
+            const request = frame[21] === 0x11;
+            if (request && at === 17 + frame.readUInt16BE(13) + 2 && delta > 0) {
+              expect(decodeUserdata(bad).data, `${name}: byte ${at} ${base} → ${v}`).to.deep.equal(decodeUserdata(frame).data);
+              continue;
+            }
             expect(() => decodeUserdata(bad), `${name}: byte ${at} ${base} → ${v}`).to.throw(ProtocolError);
           }
         }
       }
+    });
+
+    it("Apache PLC4X's SZL request (item announces 12 bytes, the header holds 4) gives SZL ID and index; an answer that does so is refused", () => {
+      const u = decodeUserdata(PLC4X.szlRequest);
+      expect(u.data.toString('hex')).to.equal('00110000');
+      const answer = Buffer.from(UD.szlLastOfTwo);
+      answer.writeUInt16BE(0x0030, answer.length - 38); // announces 48 bytes, 36 arrived
+      expect(() => decodeUserdata(answer)).to.throw(ProtocolError, /announces 48 bytes, 36 present/);
     });
 
     it('a wrong parameter head, a "last data unit" byte other than 00/01 and a non-userdata PDU are ProtocolErrors', () => {
