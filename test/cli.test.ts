@@ -434,6 +434,12 @@ describe('plcwire CLI', function () {
           expect(r.output().err).to.match(/DB2,INT0.*0x0A/);
           const slot = run(['read', `s7://127.0.0.1:${port}?rack=0&slot=1&timeout=2000`, 'VW10']);
           expect(await slot.exit).to.equal(EXIT.CONNECTION);
+          // The simulator says which connection it refused and why (issue #31: never silently).
+          await until(
+            () => /^refused 127\.0\.0\.1:\d+ \(wrong-tsap\): .+ — frame 03/m.test(srv.output().out),
+            10000,
+            'serve logs the refusal',
+          );
         } finally {
           srv.child.kill('SIGINT');
         }
@@ -649,6 +655,48 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect(r.err).to.contain('SZL');
     r = await plcwire(['szl', url, 'xyz']);
     expect(r.code).to.equal(EXIT.USAGE);
+  });
+
+  it('read and write print TIME, DATE, TIME_OF_DAY, S5TIME and DATE_AND_TIME as TIA does; --json keeps the numbers (issue #31)', async () => {
+    const url = await start('s7-300');
+    const tags = ['DB1,TIME0', 'DB1,DATE4', 'DB1,TOD6', 'DB1,S5TIME10', 'DB1,DT12'];
+    let r = await plcwire(['write', url, 'DB1,TIME0=5000', 'DB1,DATE4=2024-01-31', 'DB1,TOD6=43200000', 'DB1,S5TIME10=127000']);
+    expect(r.code, r.err).to.equal(0);
+    expect(r.out)
+      .to.match(/^DB1,TIME0 = T#5S ok$/m)
+      .and.match(/^DB1,DATE4 = D#2024-01-31 ok$/m);
+    r = await plcwire(['write', url, 'DB1,DT12=2024-01-31T12:00:01.250Z']);
+    expect(r.code, r.err).to.equal(0);
+    r = await plcwire(['read', url, ...tags]);
+    expect(r.code, r.err).to.equal(0);
+    expect(r.out.trim().split('\n')).to.deep.equal([
+      'DB1,TIME0 = T#5S',
+      'DB1,DATE4 = D#2024-01-31',
+      'DB1,TOD6 = TOD#12:00:00.000',
+      'DB1,S5TIME10 = S5T#2M_7S',
+      'DB1,DT12 = DT#2024-01-31-12:00:01.250',
+    ]);
+    r = await plcwire(['read', url, ...tags, '--json']);
+    expect(JSON.parse(r.out)).to.deep.equal({
+      'DB1,TIME0': 5000,
+      'DB1,DATE4': '2024-01-31T00:00:00.000Z',
+      'DB1,TOD6': 43_200_000,
+      'DB1,S5TIME10': 127_000,
+      'DB1,DT12': '2024-01-31T12:00:01.250Z',
+    });
+  });
+
+  it('szl prints the count a header-only extract announces, and 0x0131 by the index its record carries (issue #31)', async () => {
+    const url = await start('s7-300');
+    let r = await plcwire(['szl', url, '0x0f11']);
+    expect(r.code, r.err).to.equal(0);
+    expect(r.out).to.match(/^SZL 0x0f11 index 0x0000: 3 record\(s\) of 28 bytes exist \(header only, none sent\)$/m);
+    r = await plcwire(['szl', url, '0x0f11', '--json']);
+    expect(JSON.parse(r.out)).to.deep.include({ id: '0x0f11', count: 3, records: [] });
+    r = await plcwire(['szl', url, '0x0131', '1', '--json']);
+    expect((JSON.parse(r.out) as { decoded: unknown }).decoded).to.deep.equal([
+      { index: 1, maxPdu: 240, maxConnections: 16, mpiRate: 187_500, busRate: 10_000_000 },
+    ]);
   });
 
   it('diag --max gives the most recent entries, newest first', async () => {

@@ -16,7 +16,11 @@ import { skipBecause } from './support/skip';
 
 const ROOT = path.resolve(__dirname, '../..');
 const SCRIPT = path.join(ROOT, 'test/support/install-peers.js');
-const { AWLSIM_VERSION, S7COMMPLUS_VERSION } = require(SCRIPT) as { AWLSIM_VERSION: string; S7COMMPLUS_VERSION: string };
+const { AWLSIM_VERSION, S7COMMPLUS_VERSION, PLC4X_VERSION } = require(SCRIPT) as {
+  AWLSIM_VERSION: string;
+  S7COMMPLUS_VERSION: string;
+  PLC4X_VERSION: string;
+};
 
 /**
  * A tree with the script at its usual place and, if `awlsim` is given, a venv
@@ -105,16 +109,26 @@ describe('install-peers: awlsim for the layout comparison', function () {
     dirs.push(dir);
     const r = install(dir, ['awlsin'], process.env, closedPort);
     expect(r.status).to.not.equal(0);
-    expect(r.stderr).to.include('install-peers: unknown set "awlsin" (interop, nr5, awlsim, s7commplus)');
+    expect(r.stderr).to.include('install-peers: unknown set "awlsin" (interop, nr5, awlsim, s7commplus, plc4x)');
   });
 
   it('is what npm test runs before the suite, with .ci/run using the same installer', () => {
     const pkg = JSON.parse(fs.readFileSync(path.join(ROOT, 'package.json'), 'utf8')) as { scripts: Record<string, string> };
     expect(pkg.scripts.pretest).to.match(/node test\/support\/install-peers\.js( \w+)* awlsim\b/);
     expect(pkg.scripts.pretest).to.match(/node test\/support\/install-peers\.js( \w+)* s7commplus\b/);
+    expect(pkg.scripts.pretest).to.match(/node test\/support\/install-peers\.js( \w+)* plc4x\b/);
     const ci = fs.readFileSync(path.join(ROOT, '.ci/run'), 'utf8');
     expect(ci).to.match(/^node test\/support\/install-peers\.js awlsim$/m);
     expect(ci).to.match(/^node test\/support\/install-peers\.js s7commplus$/m);
+    expect(ci).to.match(/^node test\/support\/install-peers\.js plc4x$/m);
+  });
+
+  it('plc4x: without java, javac or mvn warns which is missing and that the PLC4X test will skip, and exits 0', () => {
+    const { dir } = tree();
+    dirs.push(dir);
+    const r = install(dir, ['plc4x'], { ...process.env, PATH: emptyBin }, closedPort);
+    expect(r.status, r.stderr).to.equal(0);
+    expect(r.stderr).to.include(`Apache PLC4X ${PLC4X_VERSION} peer not built: no java (ENOENT); test/plc4x-interop.test.ts will skip.`);
   });
 });
 

@@ -18,10 +18,12 @@ import { PlcError } from '../lib/errors';
 import { S7Client } from '../lib/s7/client';
 import { decodeUserdata } from '../lib/s7/codec/userdata';
 import { headerError, remoteTsapFor } from '../lib/s7/constants';
-import { PROFILES, S7Server, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
+import { PROFILES, S7Server, refusalLine, type S7Profile, type S7RefusedEvent, type S7RequestEvent } from '../lib/s7/server';
 import type { MemoryAccess } from '../lib/sim/memory';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { CAPTURE, DOC, hex, show } from './fixtures/s7';
+import { PLC4X } from './fixtures/s7-userdata';
+import { decodeModuleIdentification, parseSzl } from '../lib/s7/codec/szl';
 import { until, waitFor } from './support/wait';
 
 /** A raw ISO-on-TCP peer built from our own encoders: frames in, frames out, nothing else. */
@@ -434,6 +436,41 @@ describe('S7Server', () => {
       expect(ack.items.map((i) => i.data.length)).to.deep.equal([0, 0, 0, 0, 0, 1]);
     });
 
+    it('serves every ANY-pointer data type code a CPU accepts: DATE, TIME_OF_DAY, TIME, S5TIME, DATE_AND_TIME, and 0x13 as PLC4X sends WCHAR', async () => {
+      const server = await start('s7-1500');
+      server.memory.area('DB', 1)!.set(Buffer.from('0102030405060708', 'hex'), 0);
+      const { peer } = await open(server);
+      // Codes 09 DATE, 0A TIME_OF_DAY, 0B TIME, 0C S5TIME, 0E DATE_AND_TIME, 13 (one 2-byte WCHAR), each count 1.
+      peer.send(
+        encodeReadRequest(
+          8,
+          [0x09, 0x0a, 0x0b, 0x0c, 0x0e, 0x13].map((ts) => db(1, 0, ts, 1)),
+        ),
+      );
+      const ack = await peer.nextS7();
+      if (ack.kind !== 'read-ack') throw new Error(ack.kind);
+      expect(ack.items.map((i) => i.returnCode)).to.deep.equal([0xff, 0xff, 0xff, 0xff, 0xff, 0xff]);
+      expect(ack.items.map((i) => i.data.toString('hex'))).to.deep.equal([
+        '0102',
+        '01020304',
+        '01020304',
+        '0102',
+        '0102030405060708',
+        '0102',
+      ]);
+    });
+
+    it("answers Apache PLC4X's identification request (SZL 0x0011; its item announces 12 bytes, carries 4) with the list, not a closed connection", async () => {
+      const server = await start('s7-1500');
+      const { peer } = await open(server);
+      peer.send(PLC4X.szlRequest);
+      const u = decodeUserdata(await peer.next());
+      expect(u.params.errorCode).to.equal(0);
+      const list = parseSzl(u.data);
+      expect(list.id).to.equal(0x0011);
+      expect(decodeModuleIdentification(list).orderCode).to.equal(server.cpu.identity.orderCode);
+    });
+
     it('writes bytes and single bits without touching neighbouring bits, and reports each item', async () => {
       const server = await start('s7-1200');
       const buf = server.memory.area('DB', 2)!;
@@ -739,9 +776,16 @@ describe('S7Server', () => {
         const bad = await open(server);
         const good = await open(server);
         const refused = waitFor<S7RefusedEvent>(server, 'refused');
-        bad.peer.send(frame(bad));
+        const sent = frame(bad);
+        bad.peer.send(sent);
         await bad.peer.closedWithin();
-        expect((await refused).reason).to.equal('protocol-error');
+        // Never silently: the event names the client and the frame (issue #31).
+        const e = await refused;
+        expect(e.reason).to.equal('protocol-error');
+        expect(e.peer).to.match(/^127\.0\.0\.1:\d+$/);
+        expect(e.frame).to.be.a('string').and.not.equal('');
+        expect(refusalLine(e)).to.match(/^refused 127\.0\.0\.1:\d+ \(protocol-error\): .+ — frame [0-9a-f]+/);
+        if (sent.length <= 64) expect(e.frame).to.equal(sent.toString('hex'));
         good.peer.send(encodeReadRequest(1, [db(1, 0)]));
         expect((await good.peer.nextS7()).kind).to.equal('read-ack');
         expect(server.connectionCount).to.equal(1);

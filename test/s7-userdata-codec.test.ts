@@ -28,10 +28,15 @@ import {
   encodePassword,
 } from '../lib/s7/codec';
 import { SERVICE_ERRORS, serviceError } from '../lib/s7/constants';
-import { decodeDiagnosticBuffer, describeEvent, encodeDiagnosticBuffer } from '../lib/s7/codec/diagnostics';
+import { EVENT_DESCRIPTIONS, decodeDiagnosticBuffer, describeEvent, encodeDiagnosticBuffer } from '../lib/s7/codec/diagnostics';
+import { STOP_CAUSES } from '../lib/s7/server/services';
 import {
+  decodeCommunication,
+  decodeCommunicationRecords,
   decodeComponentIdentification,
   decodeCpuState,
+  encodeCommunication,
+  type OperatorFunctions,
   decodeModuleIdentification,
   decodeProtection,
   encodeComponentIdentification,
@@ -41,7 +46,7 @@ import {
   parseSzl,
 } from '../lib/s7/codec/szl';
 import { show } from './fixtures/s7';
-import { CONTROL, CPU315, SNAP7, UD } from './fixtures/s7-userdata';
+import { CONTROL, CPU315, PLC4X, SNAP7, UD } from './fixtures/s7-userdata';
 
 const list = (id: number, index: number, recordLength: number, bytes: Buffer) => ({
   id,
@@ -139,7 +144,7 @@ describe('S7 userdata codec', () => {
       }
     });
 
-    it('every wrong parameter length, data length, item length and parameter length byte is a ProtocolError', () => {
+    it('every wrong parameter length, data length, item length and parameter length byte is a ProtocolError (but a request item that overstates its length)', () => {
       for (const [name, frame] of frames) {
         for (const [at, width] of [
           [13, 2],
@@ -154,10 +159,25 @@ describe('S7 userdata codec', () => {
             if (v < 0 || v > (width === 2 ? 0xffff : 0xff)) continue;
             if (width === 2) bad.writeUInt16BE(v, at);
             else bad[at] = v;
+            // A request's item that announces more than the S7 header holds is read by the header (Apache PLC4X's
+            // SZL request, fixtures PLC4X.szlRequest): the bytes present are the data. Anything else is an error.
+            const request = frame[21] === 0x11;
+            if (request && at === 17 + frame.readUInt16BE(13) + 2 && delta > 0) {
+              expect(decodeUserdata(bad).data, `${name}: byte ${at} ${base} → ${v}`).to.deep.equal(decodeUserdata(frame).data);
+              continue;
+            }
             expect(() => decodeUserdata(bad), `${name}: byte ${at} ${base} → ${v}`).to.throw(ProtocolError);
           }
         }
       }
+    });
+
+    it("Apache PLC4X's SZL request (item announces 12 bytes, the header holds 4) gives SZL ID and index; an answer that does so is refused", () => {
+      const u = decodeUserdata(PLC4X.szlRequest);
+      expect(u.data.toString('hex')).to.equal('00110000');
+      const answer = Buffer.from(UD.szlLastOfTwo);
+      answer.writeUInt16BE(0x0030, answer.length - 38); // announces 48 bytes, 36 arrived
+      expect(() => decodeUserdata(answer)).to.throw(ProtocolError, /announces 48 bytes, 36 present/);
     });
 
     it('a wrong parameter head, a "last data unit" byte other than 00/01 and a non-userdata PDU are ProtocolErrors', () => {
@@ -199,8 +219,77 @@ describe('S7 userdata codec', () => {
       expect(() => parseSzl(Buffer.from('0011', 'hex'))).to.throw(ProtocolError, /header/);
     });
 
-    it('a header-only extract (0x0Fxx) announces records and carries none', () => {
-      expect(parseSzl(Buffer.from('0F1100000' + '01C0004', 'hex'))).to.deep.equal({ id: 0x0f11, index: 0, recordLength: 28, records: [] });
+    it('a header-only extract (0x0Fxx) announces records and carries none; the count it announced is kept', () => {
+      expect(parseSzl(Buffer.from('0F1100000' + '01C0004', 'hex'))).to.deep.equal({
+        id: 0x0f11,
+        index: 0,
+        recordLength: 28,
+        records: [],
+        count: 4,
+      });
+      // A CPU 315-2 PN/DP: 10 component identification records of 34 bytes exist.
+      expect(parseSzl(CPU315.componentIdHeaderOnly)).to.deep.include({ id: 0x0f1c, recordLength: 34, records: [], count: 10 });
+      // The simulator sends back the count it was given.
+      const back = encodeSzl({ id: 0x0f1c, index: 0, recordLength: 34, records: [], count: 10 }, true);
+      expect(show(back)).to.equal(show(CPU315.componentIdHeaderOnly));
+    });
+
+    it('SZL 0x0131 index 2 of a CPU 315-2 PN/DP is the test and commissioning functions record, not index 1 (issue #31)', () => {
+      const l = list(0x0131, 2, 40, CPU315.communicationIndex2);
+      expect(decodeCommunicationRecords(l)).to.deep.equal([
+        {
+          index: 2,
+          // funkt_0 BE, funkt_1 FD, funkt_2 4F (bits 0-2 named, 3-7 reserved)
+          functions: [
+            'block status',
+            'variable status',
+            'output ISTACK',
+            'output BSTACK',
+            'output LSTACK',
+            'force selection',
+            'modify variable',
+            'breakpoint',
+            'exit HOLD',
+            'memory reset',
+            'disable job',
+            'enable job',
+            'delete job',
+            'read job list',
+            'read job',
+            'replace job',
+          ],
+          // trgereig_0 7D: bits 0, 2-6
+          triggers: ['immediately', 'main cycle start', 'main cycle end', 'RUN-STOP transition', 'after code address', 'code address area'],
+          forceableVariables: 10,
+          runtimeLimitSeconds: 0,
+        },
+      ]);
+      // The index-1 decoder no longer reads it as PDU size and connections.
+      expect(() => decodeCommunication(l)).to.throw(ProtocolError, /no index 1 record.*it sent index 2/);
+    });
+
+    it('SZL 0x0131 index 3 is the operator interface functions; an index without a public layout stays its record', () => {
+      const [three] = decodeCommunicationRecords(list(0x0131, 3, 40, CPU315.communicationIndex3));
+      expect(three).to.deep.include({
+        index: 3,
+        maxConsistentBytes: 240,
+        maxCyclicReadJobs: 16,
+        cyclicPeriodMinMs: 100,
+        cyclicPeriodMaxMs: 52_100,
+      });
+      expect((three as OperatorFunctions).functions).to.include.members(['read once', 'write once', 'bit memory', 'user DB', 'S7 timer']);
+      expect(decodeCommunicationRecords(list(0x0131, 9, 40, CPU315.communicationIndex9))).to.deep.equal([
+        { index: 9, record: CPU315.communicationIndex9.toString('hex') },
+      ]);
+      // Index 1 as the simulator sends it, through the same dispatch.
+      const one = encodeCommunication({ maxPdu: 960, maxConnections: 16, mpiRate: 187_500, busRate: 10_000_000 });
+      expect(decodeCommunicationRecords(one)).to.deep.equal([
+        { index: 1, maxPdu: 960, maxConnections: 16, mpiRate: 187_500, busRate: 10_000_000 },
+      ]);
+      expect(() => decodeCommunicationRecords(list(0x0131, 2, 20, CPU315.communicationIndex2.subarray(0, 20)))).to.throw(
+        ProtocolError,
+        /20 bytes/,
+      );
     });
 
     it('reads module identification of a CPU 315-2 PN/DP: order code, hardware 4, firmware V3.2.6', () => {
@@ -269,7 +358,7 @@ describe('S7 userdata codec', () => {
     });
 
     it('keeps the number of an event it does not describe, and encodes entries back byte for byte', () => {
-      expect(describeEvent(0x4711)).to.equal('event 0x4711');
+      expect(describeEvent(0xc711)).to.equal('event 0xc711');
       const entries = decodeDiagnosticBuffer(list(0x00a0, 0, 20, CPU315.diagnostics));
       expect(show(encodeSzl(encodeDiagnosticBuffer(entries)).subarray(8))).to.equal(show(CPU315.diagnostics));
       expect(encodeDiagnosticBuffer(entries, 1)).to.deep.include({ id: 0x01a0, index: 1 });
@@ -277,6 +366,41 @@ describe('S7 userdata codec', () => {
 
     it('entries of another size are a ProtocolError', () => {
       expect(() => decodeDiagnosticBuffer(list(0x00a0, 0, 10, CPU315.diagnostics))).to.throw(ProtocolError, /20/);
+    });
+
+    it('0x494E, as a real buffer holds it, is "STOP caused by power failure" (issue #31)', () => {
+      const entry = Buffer.from(CPU315.diagnostics.subarray(0, 20));
+      entry.writeUInt16BE(0x494e, 0);
+      expect(decodeDiagnosticBuffer(list(0x00a0, 0, 20, entry))[0]).to.deep.include({
+        eventId: 0x494e,
+        description: 'STOP caused by power failure',
+      });
+    });
+
+    it("the table's coverage: every event the simulator logs, every STOP cause, classes 1, 2, 3, 4 and 6 of the published lists", () => {
+      const logged = [0x1381, 0x1382, 0x1385, 0x4301, 0x4302, ...Object.values(STOP_CAUSES)];
+      for (const id of logged) expect(EVENT_DESCRIPTIONS, `0x${id.toString(16)}`).to.have.property(String(id));
+      const classes = new Set(Object.keys(EVENT_DESCRIPTIONS).map((k) => Number(k) >> 12));
+      expect([...classes].sort()).to.deep.equal([1, 2, 3, 4, 6]);
+      // Each text is its own (no copy-paste of one text under two IDs).
+      const texts = Object.values(EVENT_DESCRIPTIONS);
+      expect(new Set(texts).size).to.equal(texts.length);
+      // The STOP causes and defects of class 4 the manuals list: 0x4520-0x4532, 0x4541-0x4548, 0x4562-0x456F, 0x494D-0x494F.
+      const stops = [0x4520, 0x4521, 0x4522, 0x4523, 0x4524, 0x4525, 0x4527, 0x4528, 0x4530, 0x4531, 0x4532];
+      stops.push(0x4541, 0x4542, 0x4543, 0x4544, 0x4545, 0x4546, 0x4547, 0x4548);
+      stops.push(0x4562, 0x4563, 0x4567, 0x4568, 0x456a, 0x456b, 0x456c, 0x456d, 0x456e, 0x456f, 0x494d, 0x494e, 0x494f);
+      for (const id of stops) expect(describeEvent(id), `0x${id.toString(16)}`).to.match(/^(STOP|DEFECT)/);
+      // Coming and going of one asynchronous error differ in bit 8 only, and their texts say which.
+      expect(describeEvent(0x39c4)).to.equal('Distributed I/O: station failure');
+      expect(describeEvent(0x38c4)).to.equal('Distributed I/O: station back');
+    });
+
+    it('an ID without its own text is named by its class and whether it is coming or going', () => {
+      expect(describeEvent(0x39ff)).to.equal('asynchronous error 0x39ff, coming');
+      expect(describeEvent(0x38ff)).to.equal('asynchronous error 0x38ff, going');
+      expect(describeEvent(0xa001)).to.equal('user-defined event 0xa001, going');
+      expect(describeEvent(0x5144)).to.equal('mode run-time event 0x5144, coming');
+      expect(describeEvent(0x0001)).to.equal('event 0x0001');
     });
   });
 

@@ -22,7 +22,7 @@ import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS
 import { browse, browsedValueFromText, isPlcName, passwordOption } from './s7plus';
 import { subscriberOf, watchPushed } from './watch-push';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
-import { textOf, toJson, valueFromText, type TypedTag } from './values';
+import { textForPeople, toJson, valueFromText, type TypedTag } from './values';
 
 const USAGE = `usage:
   plcwire read  <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
@@ -218,7 +218,7 @@ async function read(rest: string[], args: ParsedArgs, io: CliIo): Promise<number
     }
   }
   if (json) io.stdout.write(`${toJson(values)}\n`);
-  else for (const a of addresses) if (values[a] !== null) io.stdout.write(`${a} = ${textOf(values[a])}\n`);
+  else for (const a of addresses) if (values[a] !== null) io.stdout.write(`${a} = ${textForPeople(client, table, a, values[a])}\n`);
   for (const e of errors) io.stderr.write(`plcwire: ${e.message}\n`);
   return errors.length === 0 ? EXIT.OK : exitCode(new TagErrors(results));
 }
@@ -279,7 +279,7 @@ async function write(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     for (const [a, r] of Object.entries(results)) out[a] = r.ok ? 'ok' : r.error.message;
     io.stdout.write(`${toJson(out)}\n`);
   } else {
-    for (const [a, r] of Object.entries(results)) if (r.ok) io.stdout.write(`${a} = ${textOf(values[a])} ok\n`);
+    for (const [a, r] of Object.entries(results)) if (r.ok) io.stdout.write(`${a} = ${textForPeople(client, table, a, values[a])} ok\n`);
   }
   for (const r of Object.values(results)) if (!r.ok) io.stderr.write(`plcwire: ${r.error.message}\n`);
   if (errors.length === 0) return EXIT.OK;
@@ -316,7 +316,7 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     const changed: Record<string, unknown> = {};
     for (const [a, r] of Object.entries(results)) {
       const value = r.ok ? realsShown(client, table, a, r.value) : undefined;
-      const text = r.ok ? textOf(value) : `error: ${r.error.message}`;
+      const text = r.ok ? textForPeople(client, table, a, value) : `error: ${r.error.message}`;
       if (last.get(a) === text) continue;
       last.set(a, text);
       if (r.ok) changed[a] = value;
@@ -325,7 +325,9 @@ async function watch(rest: string[], args: ParsedArgs, io: CliIo): Promise<numbe
     }
     if (Object.keys(changed).length > 0) {
       if (json) io.stdout.write(`${toJson({ time: new Date().toISOString(), values: changed })}\n`);
-      else for (const [a, v] of Object.entries(changed)) io.stdout.write(`${new Date().toISOString()} ${a} = ${textOf(v)}\n`);
+      else
+        for (const [a, v] of Object.entries(changed))
+          io.stdout.write(`${new Date().toISOString()} ${a} = ${textForPeople(client, table, a, v)}\n`);
     }
   };
   const readAndPrint = async (list: readonly string[]) => {

@@ -14,7 +14,7 @@ import { diagnose, type DoctorStep } from '../doctor';
 import { driverOf, schemesOffering } from '../drivers';
 import { isS7Endpoint } from '../s7/url';
 import {
-  decodeCommunication,
+  decodeCommunicationRecords,
   decodeComponentIdentification,
   decodeCpuState,
   decodeLeds,
@@ -130,7 +130,8 @@ const SZL_DECODERS: ReadonlyMap<number, (l: SzlList) => unknown> = new Map<numbe
   [0x0111, decodeModuleIdentification],
   [0x001c, decodeComponentIdentification],
   [0x011c, decodeComponentIdentification],
-  [0x0131, decodeCommunication],
+  [0x0031, decodeCommunicationRecords],
+  [0x0131, decodeCommunicationRecords],
   [0x0232, decodeProtection],
   [0x0424, decodeCpuState],
   [0x0019, decodeLeds],
@@ -159,15 +160,21 @@ export async function szl(rest: string[], args: ParsedArgs, io: CliIo): Promise<
   const list = await run(endpoint, io, (c) => c.readSzl(id, index, { signal: io.signal }));
   const hex = (n: number) => `0x${hex4(n)}`;
   const decoded = decodeSzl(list);
+  // A header-only extract (0x0Fxx) answers how many records exist: the count is the answer.
+  const headerOnly = (list.id & 0x0f00) === 0x0f00;
+  const count = list.count ?? list.records.length;
   const json = {
     id: hex(list.id),
     index: hex(list.index),
     recordLength: list.recordLength,
+    count,
     records: list.records.map((r) => r.toString('hex')),
     decoded,
   };
   print(io, args, json, () => [
-    `SZL ${json.id} index ${json.index}: ${list.records.length} record(s) of ${list.recordLength} bytes`,
+    headerOnly
+      ? `SZL ${json.id} index ${json.index}: ${count} record(s) of ${list.recordLength} bytes exist (header only, none sent)`
+      : `SZL ${json.id} index ${json.index}: ${list.records.length} record(s) of ${list.recordLength} bytes`,
     ...json.records.map((r, n) => `  ${n}: ${r}`),
     ...(decoded === undefined ? [] : [`decoded: ${toJson(decoded)}`]),
   ]);

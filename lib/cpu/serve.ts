@@ -7,7 +7,7 @@
 import { hostPart } from '../link/url-params';
 import type { MemoryLayout } from '../sim/memory';
 import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
-import { S7Server, type S7Profile } from '../s7/server';
+import { S7Server, refusalLine, type S7Profile, type S7RefusedEvent } from '../s7/server';
 import { servePlus } from '../s7plus/server/serve';
 import { reloadOnChange } from './reload';
 
@@ -56,6 +56,8 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
     ...(maxItems !== undefined ? { maxItems } : {}),
     ...(s7plus ? { s7plus } : {}),
   });
+  // No connection is closed without a line saying which frame and why.
+  server.on('refused', (e: S7RefusedEvent) => say(refusalLine(e)));
   const port = await flags.listen(() => server.listen(), 'port');
   say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
   const url = `s7://${hostPart(host)}:${port}?${REACH[profile].query}`;

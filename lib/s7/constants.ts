@@ -75,7 +75,12 @@ export const AREA_CODES: Readonly<Record<AreaName, S7Area>> = Object.freeze({
   T: S7Area.T,
 });
 
-/** Transport size of a request item (how `count` is counted). */
+/**
+ * Transport size of a request item (how `count` is counted): the data type
+ * code of the ANY pointer (Siemens, STEP 7 help "Format of the Parameter Type
+ * ANY": 01 BOOL … 08 REAL, 09 DATE, 0A TIME_OF_DAY, 0B TIME, 0C S5TIME,
+ * 0E DATE_AND_TIME, 13 STRING, 1C COUNTER, 1D TIMER).
+ */
 export const enum TransportSize {
   BIT = 0x01,
   BYTE = 0x02,
@@ -85,6 +90,13 @@ export const enum TransportSize {
   DWORD = 0x06,
   DINT = 0x07,
   REAL = 0x08,
+  DATE = 0x09,
+  TIME_OF_DAY = 0x0a,
+  TIME = 0x0b,
+  S5TIME = 0x0c,
+  DATE_AND_TIME = 0x0e,
+  /** STRING in the ANY table; Apache PLC4X asks for WCHAR with it (count 1 = one 2-byte WCHAR). */
+  STRING = 0x13,
   COUNTER = 0x1c,
   TIMER = 0x1d,
 }

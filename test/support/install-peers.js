@@ -12,7 +12,11 @@
 //            Python with the cryptography wheel), in a venv of its own,
 //            test/interop/.venv-s7commplus, so awlsim's venv is never touched:
 //            the independent S7CommPlus client and server of test/interop/s7commplus/
-// Usage: node test/support/install-peers.js interop [nr5] [awlsim] [s7commplus]
+//   plc4x:   Apache PLC4X PLC4X_VERSION (plc4j-api, plc4j-driver-s7 and their
+//            dependencies from Maven Central with mvn, into test/interop/plc4x/lib),
+//            and test/interop/plc4x/Plc4xPeer.java compiled with javac (Java 17),
+//            for test/plc4x-interop.test.ts
+// Usage: node test/support/install-peers.js interop [nr5] [awlsim] [s7commplus] [plc4x]
 // Already installed: does nothing (no network). A peer that cannot be installed
 // (no network, no python3) is not fatal: the rest still runs, and the tests that
 // need it fail or skip saying so.
@@ -25,6 +29,9 @@ const ROOT = path.resolve(__dirname, '../..');
 const AWLSIM_VERSION = '0.77.1';
 /** The s7commplus whose client and server emulator test/interop/s7commplus/ drives. */
 const S7COMMPLUS_VERSION = '0.3.0';
+/** The Apache PLC4X whose S7 driver test/interop/plc4x/ drives (its pom.xml names the same). */
+const PLC4X_VERSION = '0.13.1';
+const PLC4X_DIR = 'test/interop/plc4x';
 
 const PYTHON_PEERS = {
   awlsim: {
@@ -55,7 +62,7 @@ const NPM_PEERS = {
   },
   nr5: { dir: 'test/nr5', has: ['node_modules/node/bin/node', 'node_modules/node-red/package.json'] },
 };
-const SETS = [...Object.keys(NPM_PEERS), ...Object.keys(PYTHON_PEERS)];
+const SETS = [...Object.keys(NPM_PEERS), ...Object.keys(PYTHON_PEERS), 'plc4x'];
 
 function installNpmPeer(peer) {
   const cwd = path.join(ROOT, peer.dir);
@@ -115,12 +122,71 @@ function installPythonPeer(peer) {
   }
 }
 
+/** The files a built PLC4X peer has: the driver's jar and the compiled program, newer than its source. */
+function plc4xBuilt() {
+  const dir = path.join(ROOT, PLC4X_DIR);
+  const jar = path.join(dir, 'lib', `plc4j-driver-s7-${PLC4X_VERSION}.jar`);
+  const cls = path.join(dir, 'build', 'Plc4xPeer.class');
+  if (!fs.existsSync(jar) || !fs.existsSync(cls)) return false;
+  return fs.statSync(cls).mtimeMs >= fs.statSync(path.join(dir, 'Plc4xPeer.java')).mtimeMs;
+}
+
+/** Why the PLC4X peer cannot be built here (a missing tool), or undefined. */
+function plc4xMissingTool() {
+  for (const [tool, args] of [
+    ['java', ['-version']],
+    ['javac', ['-version']],
+    ['mvn', ['-v']],
+  ]) {
+    const r = spawnSync(tool, args, { encoding: 'utf8', timeout: 60_000 });
+    if (r.status !== 0) return `no ${tool} (${r.error?.code ?? `exit ${r.status}`})`;
+  }
+  return undefined;
+}
+
+/**
+ * Fetches PLC4X's jars with mvn and compiles the peer with javac, unless both
+ * are there. Not fatal: without java, javac, mvn or Maven Central it warns
+ * that test/plc4x-interop.test.ts will skip, and says why.
+ */
+function installPlc4x() {
+  if (plc4xBuilt()) return;
+  const skip = 'test/plc4x-interop.test.ts will skip';
+  const missing = plc4xMissingTool();
+  if (missing) {
+    console.warn(`Apache PLC4X ${PLC4X_VERSION} peer not built: ${missing}; ${skip}.`);
+    return;
+  }
+  console.log(`Building the Apache PLC4X ${PLC4X_VERSION} peer in ${PLC4X_DIR}`);
+  const cwd = path.join(ROOT, PLC4X_DIR);
+  const mvn = spawnSync(
+    'mvn',
+    ['-q', '-B', '-Dstyle.color=never', 'dependency:copy-dependencies', '-DoutputDirectory=lib', '-DincludeScope=runtime'],
+    {
+      cwd,
+      stdio: 'inherit',
+      timeout: 900_000,
+    },
+  );
+  if (mvn.status !== 0) {
+    console.warn(`Apache PLC4X ${PLC4X_VERSION} jars not fetched (mvn exited ${mvn.status ?? mvn.signal}); ${skip}.`);
+    return;
+  }
+  const javac = spawnSync('javac', ['-d', 'build', '-cp', `lib${path.sep}*`, 'Plc4xPeer.java'], {
+    cwd,
+    stdio: 'inherit',
+    timeout: 300_000,
+  });
+  if (javac.status !== 0) console.warn(`Plc4xPeer.java did not compile (javac exited ${javac.status ?? javac.signal}); ${skip}.`);
+}
+
 if (require.main === module) {
   for (const name of process.argv.slice(2)) {
     if (!SETS.includes(name)) throw new Error(`install-peers: unknown set "${name}" (${SETS.join(', ')})`);
-    if (PYTHON_PEERS[name]) installPythonPeer(PYTHON_PEERS[name]);
+    if (name === 'plc4x') installPlc4x();
+    else if (PYTHON_PEERS[name]) installPythonPeer(PYTHON_PEERS[name]);
     else installNpmPeer(NPM_PEERS[name]);
   }
 }
 
-module.exports = { AWLSIM_VERSION, S7COMMPLUS_VERSION };
+module.exports = { AWLSIM_VERSION, S7COMMPLUS_VERSION, PLC4X_VERSION, PLC4X_DIR, plc4xBuilt };

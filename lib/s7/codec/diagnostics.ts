@@ -14,7 +14,7 @@
 import { ProtocolError } from '../../errors';
 import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
 import { SZL, type SzlList } from './szl';
-import { hex4 } from '../../values/text';
+import { describeEvent } from './event-texts';
 
 const DIAGNOSTIC_ENTRY = 20;
 
@@ -22,7 +22,7 @@ export interface DiagnosticEntry {
   /** When the event happened (PLC clock fields as UTC, see readClock); an Invalid Date when the stamp is not a date. */
   time: Date;
   eventId: number;
-  /** Plain-text description for the common events; "event 0x…" for an ID this library does not describe. */
+  /** The event's text (event-texts.ts): its own, or its class and whether it is coming or going. */
   description: string;
   priority: number;
   ob: number;
@@ -34,44 +34,7 @@ export interface DiagnosticEntry {
   info3: number;
 }
 
-/**
- * Short descriptions of the events a user sees most: mode transitions, stop
- * causes, restarts, module failures and power. Written for this library;
- * other IDs keep their number.
- */
-export const EVENT_DESCRIPTIONS: Readonly<Record<number, string>> = Object.freeze({
-  0x1381: 'Manual warm restart requested',
-  0x1382: 'Automatic warm restart requested',
-  0x1383: 'Manual hot restart requested',
-  0x1384: 'Automatic hot restart requested',
-  0x1385: 'Manual cold restart requested',
-  0x1386: 'Automatic cold restart requested',
-  0x4300: 'Power on with backup',
-  0x4301: 'Mode transition STOP to STARTUP',
-  0x4302: 'Mode transition STARTUP to RUN',
-  0x4303: 'STOP by the mode selector',
-  0x4304: 'STOP by a programming device, operator panel or communication (PLC stop)',
-  0x4307: 'Memory reset started by a programming device',
-  0x4308: 'Memory reset started by the mode selector',
-  0x4309: 'Memory reset started automatically (power on without backup)',
-  0x430e: 'Memory reset done',
-  0x4520: 'DEFECT: STOP not possible',
-  0x4548: 'STOP by the I/O management',
-  0x4562: 'STOP by a programming error (OB not loaded or not possible)',
-  0x4563: 'STOP by an I/O access error (OB not loaded or not possible)',
-  0x4568: 'STOP by a time error (OB not loaded or not possible)',
-  0x38c4: 'Distributed I/O: station back',
-  0x39c4: 'Distributed I/O: station failure',
-  0x3861: 'Module inserted, type as configured',
-  0x3961: 'Module removed or not responding',
-  0x3922: 'Backup voltage failure (battery)',
-  0x3822: 'Backup voltage back (battery)',
-});
-
-/** The description of an event ID, or "event 0x4711" when this library has none. */
-export function describeEvent(eventId: number): string {
-  return EVENT_DESCRIPTIONS[eventId] ?? `event 0x${hex4(eventId)}`;
-}
+export { EVENT_DESCRIPTIONS, describeEvent } from './event-texts';
 
 /** Entries of a diagnostic buffer list, newest first as the CPU sends them. Throws ProtocolError on a record of the wrong size. */
 export function decodeDiagnosticBuffer(list: SzlList): DiagnosticEntry[] {

@@ -20,6 +20,12 @@ export interface SzlList {
   /** Bytes per record (LENTHDR). */
   recordLength: number;
   records: Buffer[];
+  /**
+   * The record count the CPU announced (N_DR). For a header-only extract
+   * (0x0Fxx: "how many records exist") it is the answer itself, with no
+   * records sent; otherwise records.length. Absent on lists built here.
+   */
+  count?: number;
 }
 
 /** SZL IDs this library decodes. */
@@ -62,7 +68,7 @@ export function parseSzl(bytes: Buffer): SzlList {
   const records: Buffer[] = [];
   if (!headerOnly)
     for (let i = 0; i < count; i++) records.push(Buffer.from(bytes.subarray(HEADER + i * recordLength, HEADER + (i + 1) * recordLength)));
-  return { id, index, recordLength, records };
+  return { id, index, recordLength, records, count };
 }
 
 /** The bytes of a list (header and records), as the simulator sends them before splitting into parts. */
@@ -71,7 +77,7 @@ export function encodeSzl(list: SzlList, headerOnly = false): Buffer {
   out.writeUInt16BE(list.id, 0);
   out.writeUInt16BE(list.index, 2);
   out.writeUInt16BE(list.recordLength, 4);
-  out.writeUInt16BE(list.records.length, 6);
+  out.writeUInt16BE(headerOnly ? (list.count ?? list.records.length) : list.records.length, 6);
   if (!headerOnly) {
     list.records.forEach((r, i) => {
       if (r.length !== list.recordLength)

@@ -23,8 +23,12 @@ const COMM_RECORD = 40;
 
 export function decodeCommunication(list: SzlList): CommunicationCapabilities {
   need(list, 18, 'communication capabilities');
-  const r = list.records.find((x) => x.readUInt16BE(0) === 1) ?? list.records[0];
-  if (!r) throw new ProtocolError('SZL 0x0131 index 1 has no record');
+  // The record that says it is index 1: another index has a layout of its own (szl-capabilities.ts).
+  const r = list.records.find((x) => x.readUInt16BE(0) === 1);
+  if (!r) {
+    const sent = list.records.map((x) => x.readUInt16BE(0)).join(', ');
+    throw new ProtocolError(`SZL 0x0131 has no index 1 record (general communication data)${sent ? `: it sent index ${sent}` : ''}`);
+  }
   return { maxPdu: r.readUInt16BE(2), maxConnections: r.readUInt16BE(4), mpiRate: r.readUInt32BE(6), busRate: r.readUInt32BE(10) };
 }
 

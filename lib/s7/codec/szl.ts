@@ -3,7 +3,8 @@
  * decoders for the common lists, with the encoders the simulator builds its
  * answers with, so both sides read one layout. This file gathers them: the
  * format in szl-list.ts, the identity lists in szl-identity.ts, the
- * capability and state lists in szl-state.ts.
+ * capability and state lists in szl-state.ts, the records of every index
+ * of 0x0131 in szl-capabilities.ts.
  *
  * A list as the CPU sends it: SZL ID (2), index (2), record length in bytes
  * (LENTHDR, 2), record count (N_DR, 2), then N_DR records. An answer larger
@@ -39,3 +40,4 @@ export {
   type CpuState,
   type Led,
 } from './szl-state';
+export { decodeCommunicationRecords, type OperatorFunctions } from './szl-capabilities';

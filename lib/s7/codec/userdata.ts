@@ -194,7 +194,13 @@ export function decodeUserdataParts(pduRef: number, p: Buffer, d: Buffer): Userd
   const returnCode = d[0]!;
   const transportSize = d[1]!;
   const len = dataLengthBytes(transportSize, d.readUInt16BE(2));
-  if (4 + len !== d.length) throw new ProtocolError(`userdata data item announces ${len} bytes, ${d.length - 4} present`);
+  // A request whose item announces more than the S7 header's data length holds is read by the header:
+  // Apache PLC4X 0.13.1 asks for SZL 0x0011 with an item that announces 12 bytes and carries the 4 of
+  // SZL ID and index (its default CPU identification), and CPUs answer it. Answers stay exact.
+  const request = params.method === UserdataMethod.Request && params.type === UserdataType.Request;
+  if (4 + len !== d.length && !(request && 4 + len > d.length)) {
+    throw new ProtocolError(`userdata data item announces ${len} bytes, ${d.length - 4} present`);
+  }
   return { pduRef, params, returnCode, transportSize, data: d.subarray(4) };
 }
 

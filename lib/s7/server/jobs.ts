@@ -88,6 +88,14 @@ ELEMENT[TransportSize.INT] = 2;
 ELEMENT[TransportSize.DWORD] = 4;
 ELEMENT[TransportSize.DINT] = 4;
 ELEMENT[TransportSize.REAL] = 4;
+// The other ANY-pointer data type codes a CPU accepts in a Read/Write Var item, with their sizes.
+ELEMENT[TransportSize.DATE] = 2;
+ELEMENT[TransportSize.TIME_OF_DAY] = 4;
+ELEMENT[TransportSize.TIME] = 4;
+ELEMENT[TransportSize.S5TIME] = 2;
+ELEMENT[TransportSize.DATE_AND_TIME] = 8;
+// Counted in 2-byte elements: Apache PLC4X 0.13.1 reads and writes one WCHAR as code 0x13, count 1, 2 bytes.
+ELEMENT[TransportSize.STRING] = 2;
 ELEMENT[TransportSize.COUNTER] = 2;
 ELEMENT[TransportSize.TIMER] = 2;
 

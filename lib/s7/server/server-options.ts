@@ -98,8 +98,28 @@ export interface S7RequestEvent {
   bytes: number;
 }
 
-/** Why a connection was refused or dropped ('refused' event). */
+/**
+ * Why a connection was refused or dropped ('refused' event): the simulator
+ * never closes a connection without one, so a log (plcwire serve prints them)
+ * says which frame and why.
+ */
 export interface S7RefusedEvent {
   reason: 'connection-limit' | 'refuse-fault' | 'wrong-tsap' | 'protocol-error';
   message: string;
+  /** The client, "address:port". */
+  peer: string;
+  /** The refused frame as hex (its first 64 bytes, "…" after them); absent when no frame is to blame. */
+  frame?: string;
+}
+
+/** The event of a refusal of `socket`'s connection, for `frame` when one is to blame. */
+export function refusal(reason: S7RefusedEvent['reason'], message: string, socket: Socket, frame?: Buffer): S7RefusedEvent {
+  const peer = `${socket.remoteAddress ?? '?'}:${socket.remotePort ?? '?'}`;
+  if (!frame) return { reason, message, peer };
+  return { reason, message, peer, frame: frame.subarray(0, 64).toString('hex') + (frame.length > 64 ? '…' : '') };
+}
+
+/** One line for a log: `refused 127.0.0.1:50123 (protocol-error): … — frame 0300…`. */
+export function refusalLine(e: S7RefusedEvent): string {
+  return `refused ${e.peer} (${e.reason}): ${e.message}${e.frame ? ` — frame ${e.frame}` : ''}`;
 }

@@ -20,11 +20,11 @@ import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconn
 import { firstItems } from './items';
 import { jobFunction, jobPduRef, refuseJob, serveRead, serveWrite, type JobContext } from './jobs';
 import { IDENTITIES, PROFILES, toMemoryLayout, tsapRefusal, type CpuProfile } from './profiles';
-import type { S7Faults, S7PlusLink, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
+import { refusal, type S7Faults, type S7PlusLink, type S7RefusedEvent, type S7RequestEvent, type S7ServerOptions } from './server-options';
 
 export { IDENTITIES, PROFILES, type CpuIdentity, type CpuProfile, type S7Profile } from './profiles';
 export { STOP_CAUSES, type SimulatorMode, type StopCause } from './services';
-export type { S7Faults, S7RefusedEvent, S7RequestEvent, S7ServerOptions } from './server-options';
+export { refusalLine, type S7Faults, type S7RefusedEvent, type S7RequestEvent, type S7ServerOptions } from './server-options';
 
 /** The CPU's COTP source reference. */
 const CPU_REF = 0x0001;
@@ -237,30 +237,26 @@ export class S7Server extends EventEmitter {
     try {
       frames = conn.reader.push(chunk);
     } catch (err) {
-      return this.hostile(conn, err);
+      return this.hostile(conn, err, chunk);
     }
     // Several answers to coalesced requests leave in one segment.
     socket.cork();
+    let current: Buffer | undefined;
     try {
-      for (const frame of frames) {
+      for (current of frames) {
         if (socket.destroyed) break;
-        this.onFrame(conn, frame);
+        this.onFrame(conn, current);
       }
     } catch (err) {
-      this.hostile(conn, err);
+      this.hostile(conn, err, current);
     } finally {
       if (!socket.destroyed) socket.uncork();
     }
   }
 
-  /** A frame that is not S7 (or breaks the protocol): a real CPU drops the connection. */
-  private hostile(conn: Connection, err: unknown): void {
-    if (this.listenerCount('refused') > 0) {
-      this.emit('refused', {
-        reason: 'protocol-error',
-        message: err instanceof Error ? err.message : String(err),
-      } satisfies S7RefusedEvent);
-    }
+  /** A frame that is not S7 (or breaks the protocol): a real CPU drops the connection; 'refused' says which and why. */
+  private hostile(conn: Connection, err: unknown, frame?: Buffer): void {
+    this.emit('refused', refusal('protocol-error', err instanceof Error ? err.message : String(err), conn.socket, frame));
     conn.socket.destroy();
   }
 
@@ -306,7 +302,7 @@ export class S7Server extends EventEmitter {
     const cr = decodeCotp(frame);
     if (cr.type !== 'CR') throw new ProtocolError(`expected a COTP connection request, got ${cr.type}`);
     const refuse = (reason: S7RefusedEvent['reason'], drReason: number, message: string) => {
-      this.emit('refused', { reason, message } satisfies S7RefusedEvent);
+      this.emit('refused', refusal(reason, message, conn.socket, reason === 'wrong-tsap' ? frame : undefined));
       conn.socket.end(encodeDisconnectRequest(cr.sourceRef, CPU_REF, drReason));
     };
     if (this.faults.refuseConnections) return refuse('refuse-fault', DR_CONGESTION, 'refuseConnections fault is on');
@@ -362,7 +358,7 @@ export class S7Server extends EventEmitter {
           try {
             conn.socket.write(this.answer(conn, frame));
           } catch (err) {
-            return this.hostile(conn, err);
+            return this.hostile(conn, err, frame);
           }
         }
         this.pump(conn);
