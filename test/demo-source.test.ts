@@ -14,7 +14,7 @@ import { DEMO_SYMBOLS, DEMO_TAGS, DemoProcess, THERMAL } from '../lib/plant/proc
 import { PLANT_DB_NUMBERS, PLANT_SOURCE, TANK_DB_NUMBERS, TANK_SOURCE } from '../lib/plant/source';
 import { PlcMemory } from '../lib/sim/memory';
 import { compileSymbols } from '../lib/symbols';
-import { dataBlockImages } from '../lib/symbols/memory';
+import { dataBlockImages } from '../lib/sim/symbol-memory';
 import type { DataBlockDecl, TypeRef } from '../lib/symbols/model';
 import { parseBlockSource } from '../lib/symbols/source-parser';
 

@@ -1,5 +1,5 @@
 /**
- * The simulators built from DB sources (lib/symbols/memory.ts): each data
+ * The simulators built from DB sources (lib/sim/symbol-memory.ts): each data
  * block at its declared length, holding what a CPU holds after the download
  * (start values, STRING/WSTRING max-length headers, DTL/DT initial values),
  * as our client sees it over a real socket. snap7's view of the same bytes is
@@ -13,7 +13,7 @@ import { FetchWriteServer } from '../lib/fetchwrite/server';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
 import { compileSymbols } from '../lib/symbols/compile';
-import { dataBlockImages, memoryFromSymbols } from '../lib/symbols/memory';
+import { dataBlockImages, memoryFromSymbols } from '../lib/sim/symbol-memory';
 import type { SymbolEntry, SymbolTable } from '../lib/symbols/model';
 import type { DataTypeName, PlcValue } from '../lib/types';
 import { parseUrl, type FetchWriteEndpoint, type S7Endpoint } from '../lib/url';

@@ -11,7 +11,7 @@ import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
 import { FrameReader } from '../link/framer';
 import { PlcMemory, type MemoryLayout } from '../sim/memory';
-import { memoryFromSymbols } from '../symbols/memory';
+import { memoryFromSymbols } from '../sim/symbol-memory';
 import type { SymbolTable } from '../symbols/model';
 import type { AreaName } from '../types';
 import { HEADER, MAX_DATA, OpCode, Org, byteLength, checkRequest, decodeRequest, encodeResponse, type FwRequest } from './codec';
@@ -27,7 +27,7 @@ export interface FetchWriteServerOptions {
   port?: number;
   memory?: PlcMemory;
   layout?: MemoryLayout;
-  /** Compiled DB sources: the data blocks are theirs, at their declared lengths with their start values (lib/symbols/memory.ts). */
+  /** Compiled DB sources: the data blocks are theirs, at their declared lengths with their start values (lib/sim/symbol-memory.ts). */
   symbols?: SymbolTable;
   /** How DB start addresses and lengths are counted (Siemens CPs: words). */
   dbUnit?: 'word' | 'byte';

@@ -47,7 +47,7 @@ export interface Served {
 /**
  * The data blocks built from --source, one line each: what a client's block
  * info will report. A block with optimized access has no standard-access
- * image to serve by address (lib/symbols/memory.ts): its line says so.
+ * image to serve by address (lib/sim/symbol-memory.ts): its line says so.
  */
 export function servedBlocks(table: SymbolTable): string[] {
   return table.blocks.map((b) =>

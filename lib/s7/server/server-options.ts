@@ -20,7 +20,7 @@ export interface S7ServerOptions {
   layout?: S7Layout;
   /**
    * Compiled DB sources (compileSymbols): the data blocks served are theirs,
-   * at their declared lengths and holding their start values (lib/symbols/memory.ts),
+   * at their declared lengths and holding their start values (lib/sim/symbol-memory.ts),
    * instead of the layout's; the other areas stay the layout's (or the profile's).
    */
   symbols?: SymbolTable;

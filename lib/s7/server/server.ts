@@ -8,7 +8,7 @@ import { EventEmitter } from 'node:events';
 import * as net from 'node:net';
 import { FrameReader } from '../../link/framer';
 import { PlcMemory } from '../../sim/memory';
-import { memoryFromSymbols } from '../../symbols/memory';
+import { memoryFromSymbols } from '../../sim/symbol-memory';
 import { ProtocolError } from '../../errors';
 import { HeaderError, MIN_PDU_SIZE, Rosctr, S7Function } from '../constants';
 import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, MAX_FRAME, TPDU_SIZE_CODE, tpduBytes } from '../../iso/constants';

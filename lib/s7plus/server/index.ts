@@ -14,7 +14,7 @@ import { formatDeviceString } from '../codec/identity';
 import { fingerprint256 } from '../transport/cert';
 import { serverSecureContext } from '../transport/server-tls';
 import { PlusConnection } from './connection';
-import { dataBlockImages } from '../../symbols/memory';
+import { dataBlockImages } from '../../sim/symbol-memory';
 import { buildPlusModel, type PlusModel } from './model';
 import { isS7PlusRequest } from './tsap';
 

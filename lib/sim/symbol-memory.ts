@@ -8,10 +8,10 @@
  * (DTL#1970-01-01-00:00:00, DT#1990-01-01-00:00:00), zeros elsewhere. So a
  * foreign client reading the simulator sees the bytes a real PLC shows.
  */
-import { PlcMemory, type MemoryLayout } from '../sim/memory';
+import { PlcMemory, type MemoryLayout } from './memory';
 import type { PlcValue } from '../types';
 import { encodeInto, type TagShape } from '../values';
-import type { SymbolEntry, SymbolTable } from './model';
+import type { SymbolEntry, SymbolTable } from '../symbols/model';
 
 /** What a CPU holds in a DTL or DATE_AND_TIME the source gives no start value (the types' documented initial values). */
 const TYPE_INITIAL: Partial<Record<string, PlcValue>> = Object.freeze({
