@@ -21,7 +21,8 @@ import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { compileSymbols } from '../lib/symbols';
 import type { SymbolSource } from '../lib/symbols/model';
-import { Ids } from '../lib/s7plus/constants';
+import { symbolCrc } from '../lib/s7plus/codec/symbol-crc';
+import { Ids, SoftDataType } from '../lib/s7plus/constants';
 import { DB_NUMBERS, S7PLUS_FIXTURES, SOURCES } from './fixtures/s7plus';
 import { startPlusSimulator } from './support/s7plus-sim';
 import { until, waitFor } from './support/wait';
@@ -67,9 +68,19 @@ describe('S7CommPlus browse of the PLC tag table (I/Q/M names)', function () {
       });
       expect(pick(b)).to.deep.equal(pick(c));
     }
-    expect(browsed.lookup('"Start_Button"')!.access).to.deep.equal({ area: Ids.NativeTheIAreaRID, lids: [0xa] });
+    // Each with the SymbolCrc of its name and type (issue #32).
+    const crc = (name: string, soft: number) => symbolCrc([{ name, soft }]);
+    expect(browsed.lookup('"Start_Button"')!.access).to.deep.equal({
+      area: Ids.NativeTheIAreaRID,
+      lids: [0xa],
+      symbolCrc: crc('Start_Button', SoftDataType.Bool),
+    });
     expect(browsed.lookup('"Motor on"')!.access!.area).to.equal(Ids.NativeTheQAreaRID);
-    expect(browsed.lookup('"Temperature"')!.access).to.deep.equal({ area: Ids.NativeTheMAreaRID, lids: [0xb] });
+    expect(browsed.lookup('"Temperature"')!.access).to.deep.equal({
+      area: Ids.NativeTheMAreaRID,
+      lids: [0xb],
+      symbolCrc: crc('Temperature', SoftDataType.Real),
+    });
     // Every DB entry is still there as before.
     expect(browsed.entries.filter((e) => e.db !== null).map((e) => e.name)).to.deep.equal(
       compiled.entries.filter((e) => e.db !== null).map((e) => e.name),
