@@ -14,8 +14,8 @@ import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { compileSymbols } from '../lib/symbols';
 import type { SymbolEntry } from '../lib/symbols/model';
 import { browseTable } from '../lib/s7plus/client/browse';
-import type { S7PlusSession } from '../lib/s7plus/client/session';
-import { decodeExploreRequest, encodeExploreResponse } from '../lib/s7plus/codec/explore';
+import type { Ask, S7PlusSession } from '../lib/s7plus/client/session';
+import { encodeExploreResponse, type ExploreRequest } from '../lib/s7plus/codec/explore';
 import { newObject, type PObject } from '../lib/s7plus/codec/object';
 import { symbolCrc } from '../lib/s7plus/codec/symbol-crc';
 import { encodeGetMultiVariablesResponse } from '../lib/s7plus/codec/variables';
@@ -294,19 +294,19 @@ function hostileSession(vartype: Buffer, varname: Buffer): S7PlusSession {
     ],
   };
   const fake = {
-    integrityOn: false,
     alive: true,
-    request(fn: number, encode: (sequence: number, sessionId: number, integrityId?: number) => Buffer): Promise<Buffer> {
-      if (fn === FunctionCode.GetMultiVariables)
-        return Promise.resolve(
+    request(ask: Ask<unknown, unknown>): Promise<unknown> {
+      const answer = (data: Buffer) => Promise.resolve(ask.decode(data, { integrity: false }).body);
+      if (ask.functionCode === FunctionCode.GetMultiVariables)
+        return answer(
           encodeGetMultiVariablesResponse({
             header,
             body: { returnValue: 0n, values: new Map([[1, { flags: 0, type: DataType.RID, value: 0x92000001 }]]), errors: new Map() },
           }),
         );
-      const { body } = decodeExploreRequest(encode(1, 1), { integrity: false });
-      const objects = body.exploreId === Ids.ObjectOmsTypeInfoContainer ? [type] : [db];
-      return Promise.resolve(encodeExploreResponse({ header, body: { returnValue: 0n, objects } }));
+      const { exploreId } = ask.body as ExploreRequest;
+      const objects = exploreId === Ids.ObjectOmsTypeInfoContainer ? [type] : [db];
+      return answer(encodeExploreResponse({ header, body: { returnValue: 0n, objects } }));
     },
   };
   return fake as unknown as S7PlusSession;

@@ -15,7 +15,7 @@ import { encodeFrames, S7pFrameReader } from '../lib/s7plus/codec/frame';
 import { encodeInitSslResponse } from '../lib/s7plus/codec/session';
 import { decodeUVlq32, encodeUVlq32 } from '../lib/s7plus/codec/vlq';
 import { FunctionCode, ProtocolVersion } from '../lib/s7plus/constants';
-import { S7PlusSession, type Encode } from '../lib/s7plus/client/session';
+import { S7PlusSession, type Ask } from '../lib/s7plus/client/session';
 import { cotpAccept, countingServer } from './support/s7plus-tls';
 import { until } from './support/wait';
 
@@ -88,25 +88,33 @@ async function rejection(p: Promise<unknown>): Promise<PlcError> {
 
 const PAYLOAD = Buffer.from([1, 2, 3, 0, 0, 0, 0]);
 
-/** A request of function `fn` with PAYLOAD, its IntegrityId before the trailing 4 bytes (as the codec's encoders place it). */
-function enc(fn: number): Encode {
-  return (seq, sessionId, integrityId) => {
-    const head = Buffer.alloc(14);
-    head[0] = 0x31;
-    head.writeUInt16BE(fn, 3);
-    head.writeUInt16BE(seq, 7);
-    head.writeUInt32BE(sessionId, 9);
-    head[13] = 0x34;
-    const id = integrityId === undefined ? Buffer.alloc(0) : encodeUVlq32(integrityId);
-    return Buffer.concat([head, PAYLOAD.subarray(0, 3), id, PAYLOAD.subarray(3)]);
+/**
+ * A request of function `fn` with PAYLOAD, its IntegrityId before the trailing 4 bytes (as the codec's encoders place
+ * it); its answer is the message as it came.
+ */
+function ask(fn: number): Ask<null, Buffer> {
+  return {
+    functionCode: fn,
+    body: null,
+    encode: ({ header, integrityId }) => {
+      const head = Buffer.alloc(14);
+      head[0] = 0x31;
+      head.writeUInt16BE(header.functionCode, 3);
+      head.writeUInt16BE(header.sequence, 7);
+      head.writeUInt32BE(header.sessionId, 9);
+      head[13] = header.transportFlags;
+      const id = integrityId === undefined ? Buffer.alloc(0) : encodeUVlq32(integrityId);
+      return Buffer.concat([head, PAYLOAD.subarray(0, 3), id, PAYLOAD.subarray(3)]);
+    },
+    decode: (data) => ({ header: { functionCode: fn, sequence: data.readUInt16BE(7), transportFlags: data[9]! }, body: data }),
   };
 }
 
 describe('s7plus client: the session', () => {
   it('numbers requests one by one and sends the next only once the one before is answered', async () => {
     const { session, plc } = open();
-    const a = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
-    const b = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables));
+    const a = session.request(ask(FunctionCode.GetMultiVariables));
+    const b = session.request(ask(FunctionCode.SetMultiVariables));
     await until(() => plc.seen.length === 1);
     await new Promise((r) => setImmediate(r));
     expect(plc.seen, 'one in flight').to.have.length(1);
@@ -132,7 +140,7 @@ describe('s7plus client: the session', () => {
       FunctionCode.SetMultiVariables,
     ];
     for (const [i, fn] of order.entries()) {
-      const p = session.request(fn, enc(fn));
+      const p = session.request(ask(fn));
       await until(() => plc.seen.length === i + 1);
       plc.answer(fn, plc.seen[i]!.seq);
       await p;
@@ -141,7 +149,7 @@ describe('s7plus client: the session', () => {
     expect(plc.seen.map((s) => [...s.body.subarray(0, 3)])).to.deep.equal(order.map(() => [1, 2, 3]));
     expect(session.integrityIds).to.deep.equal({ read: 3, write: 2 });
     // The session setup write carries none and advances neither counter.
-    const setup = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables), { integrity: false });
+    const setup = session.request(ask(FunctionCode.SetMultiVariables), { integrity: false });
     await until(() => plc.seen.length === 6);
     expect(plc.seen[5]!.body).to.deep.equal(PAYLOAD);
     plc.answer(FunctionCode.SetMultiVariables, plc.seen[5]!.seq);
@@ -159,7 +167,7 @@ describe('s7plus client: the session', () => {
     );
     const plc = new FakePlc(theirs);
     for (const seq of [0xffff, 0]) {
-      const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+      const p = session.request(ask(FunctionCode.GetMultiVariables));
       await until(() => plc.seen.at(-1)?.seq === seq);
       plc.answer(FunctionCode.GetMultiVariables, seq);
       await p;
@@ -169,7 +177,7 @@ describe('s7plus client: the session', () => {
 
   it('ignores an answer to an earlier sequence number (a request given up on) and takes the right one', async () => {
     const { session, plc } = open();
-    const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const p = session.request(ask(FunctionCode.GetMultiVariables));
     await until(() => plc.seen.length === 1);
     plc.answer(FunctionCode.GetMultiVariables, 4, Buffer.from([0x00, 0x01]));
     plc.answer(FunctionCode.GetMultiVariables, 5, Buffer.from([0x00, 0x02]));
@@ -204,8 +212,8 @@ describe('s7plus client: the session', () => {
   ] as const) {
     it(`${what} drops the link: every request fails with ${code}, the stream is destroyed, the client told once`, async () => {
       const { session, plc, lost, ours } = open();
-      const inFlight = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
-      const queued = session.request(FunctionCode.SetMultiVariables, enc(FunctionCode.SetMultiVariables));
+      const inFlight = session.request(ask(FunctionCode.GetMultiVariables));
+      const queued = session.request(ask(FunctionCode.SetMultiVariables));
       await until(() => plc.seen.length === 1);
       act(plc);
       const err = await rejection(inFlight);
@@ -215,13 +223,13 @@ describe('s7plus client: the session', () => {
       expect(lost).to.have.length(1);
       expect(session.alive).to.equal(false);
       expect(ours.destroyed).to.equal(true);
-      expect((await rejection(session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables)))).code).to.equal(code);
+      expect((await rejection(session.request(ask(FunctionCode.GetMultiVariables)))).code).to.equal(code);
     });
   }
 
   it('a request unanswered within the timeout drops the link with TIMEOUT (its numbers are spent on both sides)', async () => {
     const { session, plc, lost } = open(50);
-    const err = await rejection(session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables)));
+    const err = await rejection(session.request(ask(FunctionCode.GetMultiVariables)));
     expect(err.code).to.equal('TIMEOUT');
     expect(err.message).to.contain('did not answer request 0x54c (sequence 5) within 50 ms');
     expect(plc.seen).to.have.length(1);
@@ -230,10 +238,10 @@ describe('s7plus client: the session', () => {
 
   it('a request aborted while it waits leaves the queue without spending a sequence number', async () => {
     const { session, plc } = open();
-    const first = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const first = session.request(ask(FunctionCode.GetMultiVariables));
     const ac = new AbortController();
-    const second = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables), { signal: ac.signal });
-    const third = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const second = session.request(ask(FunctionCode.GetMultiVariables), { signal: ac.signal });
+    const third = session.request(ask(FunctionCode.GetMultiVariables));
     ac.abort();
     expect((await rejection(second)).code).to.equal('ABORTED');
     await until(() => plc.seen.length === 1);
@@ -268,7 +276,7 @@ describe('s7plus client: the session', () => {
 
   it('destroy() fails what waits with CLOSED and never throws twice', async () => {
     const { session } = open();
-    const p = session.request(FunctionCode.GetMultiVariables, enc(FunctionCode.GetMultiVariables));
+    const p = session.request(ask(FunctionCode.GetMultiVariables));
     session.destroy();
     session.destroy();
     const err = await rejection(p);

@@ -23,15 +23,18 @@ export class PendingRequests<T> {
     return this.entries.has(id);
   }
 
-  /** Registers request `id`. A timeout rejects with a TimeoutError whose stack shows where the request was made. */
-  add(id: number, timeoutMs: number, description: string, signal?: AbortSignal): Promise<T> {
+  /**
+   * Registers request `id`. A timeout rejects with a TimeoutError whose stack shows where the request was made, and whose
+   * message is `timeoutMessage` when given ("<description> timed out after <timeoutMs> ms" otherwise).
+   */
+  add(id: number, timeoutMs: number, description: string, signal?: AbortSignal, timeoutMessage?: string): Promise<T> {
     if (this.entries.has(id)) return Promise.reject(new PlcError('PROTOCOL_ERROR', `request id ${id} is already pending`));
     const caller: { stack?: string } = {};
     Error.captureStackTrace(caller, PendingRequests.prototype.add);
     return new Promise<T>((resolve, reject) => {
       if (signal?.aborted) return reject(abortError(description, signal));
       const timer = setTimeout(() => {
-        const err = new TimeoutError(`${description} timed out after ${timeoutMs} ms`);
+        const err = new TimeoutError(timeoutMessage ?? `${description} timed out after ${timeoutMs} ms`);
         err.stack = `${err.name}: ${err.message}${caller.stack?.replace(/^Error\n?/, '\n') ?? ''}`;
         this.settle(id)?.reject(err);
       }, timeoutMs);

@@ -23,9 +23,10 @@ import { compileDeclarations } from '../../symbols/compile';
 import { elementIndex, memberRef } from '../../symbols/layout';
 import { NameIndex } from '../../symbols/names';
 import type { DataBlockDecl, MemberDecl, SourcePosition, SymbolEntry, SymbolTable, SymbolTableRow, TypeRef } from '../../symbols/model';
-import { decodeGetMultiVariablesResponse, encodeGetMultiVariablesRequest, readRequest } from '../codec/variables';
-import { AreaTypeInfoRID, dbAccessArea, FunctionCode, Ids } from '../constants';
 import { symbolCrc, type SymbolLevel } from '../codec/symbol-crc';
+import { AreaTypeInfoRID, dbAccessArea, Ids } from '../constants';
+import { readAsk } from './asks';
+import { inChunks, type Limits } from './chunks';
 import { dataBlocks, explore } from './services';
 import type { S7PlusSession } from './session';
 import { timesOf, TYPE_OF, typeObjects, type Member, type TypeObject, type TypeTimes } from './typeinfo';
@@ -35,27 +36,20 @@ const AT: SourcePosition = Object.freeze({ file: 'PLC', line: 0, column: 0 });
 /** The most elements of an array the symbol compiler lays out (lib/symbols/layout.ts). */
 const MAX_ELEMENTS = 65535;
 
-/** The RID of each block's type object: LID 1 of the block, all blocks in one request. */
+/** Blocks whose LID 1 a browse reads per request (no PLC is known to refuse 20 items). */
+const BROWSE_LIMITS: Limits = { maxItems: () => 20, refused: () => {} };
+
+/** The RID of each block's type object: LID 1 of each block, 20 blocks per request. */
 async function typeRids(session: S7PlusSession, numbers: number[], signal?: AbortSignal): Promise<Map<number, number>> {
   const rids = new Map<number, number>();
-  const addresses = numbers.map((n) => ({ symbolCrc: 0, accessArea: dbAccessArea(n), accessSubArea: Ids.DBValueActual, lids: [1] }));
-  for (let at = 0; at < addresses.length; at += 20) {
-    const chunk = addresses.slice(at, at + 20);
-    const answer = await session.request(
-      FunctionCode.GetMultiVariables,
-      (sequence, sessionId, integrityId) =>
-        encodeGetMultiVariablesRequest({
-          ...readRequest(sequence, sessionId, chunk),
-          ...(integrityId === undefined ? {} : { integrityId }),
-        }),
-      { signal },
-    );
-    const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
-    chunk.forEach((_, k) => {
+  const address = (n: number) => ({ symbolCrc: 0, accessArea: dbAccessArea(n), accessSubArea: Ids.DBValueActual, lids: [1] });
+  const send = (chunk: number[]) => session.request(readAsk(chunk.map(address)), { signal });
+  await inChunks(numbers, BROWSE_LIMITS, send, (chunk, body) => {
+    chunk.forEach((n, k) => {
       const v = body.values.get(k + 1)?.value;
-      if (typeof v === 'number') rids.set(numbers[at + k]!, v >>> 0);
+      if (typeof v === 'number') rids.set(n, v >>> 0);
     });
-  }
+  });
   return rids;
 }
 

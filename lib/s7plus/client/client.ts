@@ -17,7 +17,7 @@ import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../u
 import { openS7PlusSession } from './handshake';
 import { BrowsedProgram } from './program';
 import { browseTable } from './browse';
-import type { Limits } from './io';
+import type { Limits } from './chunks';
 import { plusSyntax, readMixed, writeMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';

@@ -11,17 +11,10 @@ import type { TLSSocket } from 'node:tls';
 import { abortError, ConnectionError, PlcError, TimeoutError, toPlcError } from '../../errors';
 import type { S7PlusEndpoint } from '../url';
 import { encodeFrames, S7pFrameReader } from '../codec/frame';
-import {
-  decodeCreateObjectResponse,
-  decodeInitSslResponse,
-  encodeCreateObjectRequest,
-  encodeInitSslRequest,
-  sessionCreateRequest,
-  sessionInfo,
-} from '../codec/session';
-import { decodeSetMultiVariablesResponse, encodeSetMultiVariablesRequest, sessionSetupRequest } from '../codec/variables';
-import { FunctionCode, Ids, ProtocolVersion } from '../constants';
+import { decodeInitSslResponse, encodeInitSslRequest, sessionInfo } from '../codec/session';
+import { Ids, ProtocolVersion } from '../constants';
 import { S7PlusSession, type S7PlusWireCounters, type S7PlusWiring } from './session';
+import { sessionCreateAsk, sessionSetupAsk } from './asks';
 import { startTls } from '../transport/handshake';
 import type { CertificateInfo } from '../transport/trust';
 import { openTunnel } from './tunnel';
@@ -120,12 +113,7 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     );
     const signal = o.signal;
     step = 'CreateObject';
-    const createAnswer = await session.request(
-      FunctionCode.CreateObject,
-      (sequence) => encodeCreateObjectRequest(sessionCreateRequest(sequence, { name: CLIENT_NAME })),
-      { integrity: false, signal },
-    );
-    const created = sessionInfo(decodeCreateObjectResponse(createAnswer).body);
+    const created = sessionInfo(await session.request(sessionCreateAsk({ name: CLIENT_NAME }), { integrity: false, signal }));
     const spoken = session.answerVersion;
     if (!e.tls && spoken !== ProtocolVersion.V1) {
       throw new ConnectionError(
@@ -145,17 +133,14 @@ export async function openS7PlusSession(e: S7PlusEndpoint, o: OpenOptions): Prom
     if (e.tls) session.version = ProtocolVersion.V2;
     const version = created.serverSessionVersion;
     step = 'session setup';
-    const setup = decodeSetMultiVariablesResponse(
-      await session.request(
-        FunctionCode.SetMultiVariables,
-        (sequence, sessionId) => encodeSetMultiVariablesRequest(sessionSetupRequest(sequence, sessionId, version)),
-        { version: ProtocolVersion.V2, integrity: false, signal },
-      ),
-      { integrity: false },
-    );
-    if (setup.body.returnValue !== 0n) {
-      throw new ConnectionError('CONNECT_FAILED', `${o.name} refused the session setup (0x${setup.body.returnValue.toString(16)})`, {
-        plcCode: Number(setup.body.returnValue & 0xffffn),
+    const setup = await session.request(sessionSetupAsk(session.sessionId, version), {
+      version: ProtocolVersion.V2,
+      integrity: false,
+      signal,
+    });
+    if (setup.returnValue !== 0n) {
+      throw new ConnectionError('CONNECT_FAILED', `${o.name} refused the session setup (0x${setup.returnValue.toString(16)})`, {
+        plcCode: Number(setup.returnValue & 0xffffn),
       });
     }
     if (e.tls) session.startIntegrity();

@@ -12,19 +12,11 @@ import { PlcError, toPlcError, type TagResult } from '../../errors';
 import type { ReadValues } from '../../link/driver';
 import type { PlcValue, Tag } from '../../types';
 import { decodeTag, encodeTag } from '../../values';
-import {
-  blobValue,
-  classicBlobAddress,
-  decodeGetMultiVariablesResponse,
-  decodeSetMultiVariablesResponse,
-  encodeGetMultiVariablesRequest,
-  encodeSetMultiVariablesRequest,
-  readRequest,
-  writeRequest,
-  type ItemAddress,
-} from '../codec/variables';
+import { blobValue, classicBlobAddress, type ItemAddress } from '../codec/variables';
 import type { PValue } from '../codec/pvalue';
-import { FunctionCode, Ids, ITEM_ERROR_UNRESOLVED } from '../constants';
+import { Ids, ITEM_ERROR_UNRESOLVED } from '../constants';
+import { readAsk, writeAsk } from './asks';
+import { inChunks, type Limits } from './chunks';
 import type { S7PlusSession } from './session';
 
 /** The native objects of the I, Q and M areas (s7commplus (MIT), protocol.py Ids.NATIVE_THE_*_AREA_RID). */
@@ -74,34 +66,6 @@ export function bytesOf(v: PValue): Buffer | undefined {
   return blob && Buffer.isBuffer(blob.data) ? blob.data : undefined;
 }
 
-/** What the client gives the reads and writes: the item limit, and how to learn a lower one. */
-export interface Limits {
-  maxItems(): number;
-  /** The PLC refused a request of `items` items as a whole, or reset the connection on it: the limit goes below it. */
-  refused(items: number): void;
-}
-
-/**
- * Sends a request of `items` items; a PLC that drops the connection on it
- * (PLCSIM is reported to reset on requests past about 1 kB) has shown its
- * limit too: it is lowered before the link error goes on, so the request
- * after the reconnect is smaller.
- */
-export async function sized(session: S7PlusSession, items: number, limits: Limits, send: () => Promise<Buffer>): Promise<Buffer> {
-  try {
-    return await send();
-  } catch (err) {
-    if (items > 1 && (err as PlcError).code === 'CONNECTION_LOST') limits.refused(items);
-    throw err;
-  }
-}
-
-function chunks(indexes: number[], size: number): number[][] {
-  const out: number[][] = [];
-  for (let at = 0; at < indexes.length; at += size) out.push(indexes.slice(at, at + size));
-  return out;
-}
-
 /** One value per tag, in order, in the fewest requests the item limit allows; a tag's own failure is its error. */
 export async function readTags(session: S7PlusSession, tags: readonly Tag[], limits: Limits, signal?: AbortSignal): Promise<ReadValues> {
   const values: PlcValue[] = new Array<PlcValue>(tags.length);
@@ -112,67 +76,45 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
     if (a instanceof PlcError) return void fail(i, a);
     return a;
   });
-  let pending = addresses.flatMap((a, i) => (a ? [i] : []));
-  while (pending.length > 0) {
-    const size = limits.maxItems();
-    const retry: number[] = [];
-    for (const chunk of chunks(pending, size)) {
-      const answer = await sized(session, chunk.length, limits, () =>
-        session.request(
-          FunctionCode.GetMultiVariables,
-          (sequence, sessionId, integrityId) =>
-            encodeGetMultiVariablesRequest({
-              ...readRequest(
-                sequence,
-                sessionId,
-                chunk.map((i) => addresses[i]!),
-              ),
-              ...(integrityId === undefined ? {} : { integrityId }),
-            }),
-          { signal },
-        ),
-      );
-      const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
-      if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
-        if (chunk.length > 1) {
-          limits.refused(chunk.length);
-          retry.push(...chunk);
-          continue;
-        }
-        fail(chunk[0]!, itemError(tags[chunk[0]!]!, body.returnValue));
-        continue;
-      }
-      chunk.forEach((i, k) => {
-        const tag = tags[i]!;
-        const value = body.values.get(k + 1);
-        const code = body.errors.get(k + 1);
-        if (value) {
-          const data = bytesOf(value);
-          if (!data)
-            return fail(
-              i,
-              new PlcError(
-                'PROTOCOL_ERROR',
-                `${tag.address}: the PLC answered a value of type 0x${value.type.toString(16)}, not the bytes asked for`,
-                { tag: tag.address },
-              ),
-            );
-          try {
-            values[i] = decodeTag(tag, data, 0);
-          } catch (err) {
-            fail(i, err as PlcError);
-          }
-        } else
-          fail(
-            i,
-            code !== undefined
-              ? itemError(tag, code)
-              : new PlcError('PROTOCOL_ERROR', `${tag.address}: the PLC did not answer this item`, { tag: tag.address }),
-          );
-      });
+  const wanted = addresses.flatMap((a, i) => (a ? [i] : []));
+  const send = (chunk: number[]) => session.request(readAsk(chunk.map((i) => addresses[i]!)), { signal });
+  await inChunks(wanted, limits, send, (chunk, body) => {
+    if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
+      if (chunk.length > 1) return 'again';
+      fail(chunk[0]!, itemError(tags[chunk[0]!]!, body.returnValue));
+      return;
     }
-    pending = retry;
-  }
+    chunk.forEach((i, k) => {
+      const tag = tags[i]!;
+      const value = body.values.get(k + 1);
+      const code = body.errors.get(k + 1);
+      if (value) {
+        const data = bytesOf(value);
+        if (!data)
+          return fail(
+            i,
+            new PlcError(
+              'PROTOCOL_ERROR',
+              `${tag.address}: the PLC answered a value of type 0x${value.type.toString(16)}, not the bytes asked for`,
+              {
+                tag: tag.address,
+              },
+            ),
+          );
+        try {
+          values[i] = decodeTag(tag, data, 0);
+        } catch (err) {
+          fail(i, err as PlcError);
+        }
+      } else
+        fail(
+          i,
+          code !== undefined
+            ? itemError(tag, code)
+            : new PlcError('PROTOCOL_ERROR', `${tag.address}: the PLC did not answer this item`, { tag: tag.address }),
+        );
+    });
+  });
   return { values, errors };
 }
 
@@ -203,44 +145,24 @@ export async function writeTags(
       results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
     }
   });
-  let pending = ready;
-  while (pending.length > 0) {
-    const size = limits.maxItems();
-    const retry: typeof ready = [];
-    for (let at = 0; at < pending.length; at += size) {
-      const chunk = pending.slice(at, at + size);
-      const answer = await sized(session, chunk.length, limits, () =>
-        session.request(
-          FunctionCode.SetMultiVariables,
-          (sequence, sessionId, integrityId) =>
-            encodeSetMultiVariablesRequest({
-              ...writeRequest(
-                sequence,
-                sessionId,
-                chunk.map((c) => c.address),
-                chunk.map((c) => c.value),
-              ),
-              ...(integrityId === undefined ? {} : { integrityId }),
-            }),
-          { signal },
-        ),
-      );
-      const { body } = decodeSetMultiVariablesResponse(answer, { integrity: session.integrityOn });
-      if (body.returnValue !== 0n && body.errors.size === 0) {
-        if (chunk.length > 1) {
-          limits.refused(chunk.length);
-          retry.push(...chunk);
-          continue;
-        }
-        results[chunk[0]!.i] = { ok: false, error: itemError(items[chunk[0]!.i]!.tag, body.returnValue) };
-        continue;
-      }
-      chunk.forEach((c, k) => {
-        const code = body.errors.get(k + 1);
-        if (code !== undefined) results[c.i] = { ok: false, error: itemError(items[c.i]!.tag, code) };
-      });
+  const send = (chunk: typeof ready) =>
+    session.request(
+      writeAsk(
+        chunk.map((c) => c.address),
+        chunk.map((c) => c.value),
+      ),
+      { signal },
+    );
+  await inChunks(ready, limits, send, (chunk, body) => {
+    if (body.returnValue !== 0n && body.errors.size === 0) {
+      if (chunk.length > 1) return 'again';
+      results[chunk[0]!.i] = { ok: false, error: itemError(items[chunk[0]!.i]!.tag, body.returnValue) };
+      return;
     }
-    pending = retry;
-  }
+    chunk.forEach((c, k) => {
+      const code = body.errors.get(k + 1);
+      if (code !== undefined) results[c.i] = { ok: false, error: itemError(items[c.i]!.tag, code) };
+    });
+  });
   return results;
 }

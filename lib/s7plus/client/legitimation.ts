@@ -29,21 +29,17 @@ import type { Tag } from '../../types';
 import {
   challengeOf,
   credentialsBlobValue,
-  decodeSetVariableResponse,
   encodeCredentials,
-  encodeSetVariableRequest,
   legacyAnswerValue,
-  legitimateRequest,
   legitimationForm,
   paomString,
   protectionLevelOf,
-  sessionAttributeRequest,
   setVariableRefused,
   type LegitimationForm,
 } from '../codec/legitimation';
 import type { PValue } from '../codec/pvalue';
-import { decodeSubStreamedResponse, encodeSubStreamedRequest } from '../codec/substreamed';
-import { AccessLevel, FunctionCode, Ids, LegitimationType, OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH, TransportFlags } from '../constants';
+import { AccessLevel, Ids, LegitimationType, OMS_EXPORTER_LABEL, OMS_EXPORTER_LENGTH } from '../constants';
+import { legitimateAsk, sessionAttributeAsk } from './asks';
 import type { S7PlusSession } from './session';
 
 /** What the password step found and did: the session's protection level after it, and whether a password lowered it. */
@@ -153,18 +149,7 @@ export async function legitimate(session: S7PlusSession, o: LegitimateOptions): 
     address = Ids.Legitimate;
     value = credentialsBlobValue(newAnswer(o.password, challenge, exporterSecret(o.tls)));
   }
-  const answer = decodeSetVariableResponse(
-    await session.request(
-      FunctionCode.SetVariable,
-      (sequence, sessionId, integrityId) =>
-        encodeSetVariableRequest({
-          ...legitimateRequest(sequence, sessionId, address, value),
-          ...(integrityId === undefined ? {} : { integrityId }),
-        }),
-      { signal: o.signal },
-    ),
-    { integrity: session.integrityOn },
-  ).body;
+  const answer = await session.request(legitimateAsk(session.sessionId, address, value), { signal: o.signal });
   const wrong = (detail: string, plcCode?: number) =>
     new PlcError('ACCESS_DENIED', `${o.name} refused the password (wrong password: ${detail})`, {
       ...(plcCode === undefined ? {} : { plcCode }),
@@ -196,17 +181,7 @@ function exporterSecret(socket: TLSSocket): Buffer {
 
 /** GetVarSubStreamed of one attribute of the session object: its value (ProtocolError for a refusal). */
 async function attribute(session: S7PlusSession, address: number, signal: AbortSignal | undefined): Promise<PValue | undefined> {
-  const answer = await session.request(
-    FunctionCode.GetVarSubStreamed,
-    (sequence, sessionId, integrityId) =>
-      encodeSubStreamedRequest({
-        header: { functionCode: FunctionCode.GetVarSubStreamed, sequence, sessionId, transportFlags: TransportFlags.Normal },
-        body: sessionAttributeRequest(sessionId, address),
-        ...(integrityId === undefined ? {} : { integrityId }),
-      }),
-    { signal },
-  );
-  const res = decodeSubStreamedResponse(answer, FunctionCode.GetVarSubStreamed, { integrity: session.integrityOn }).body;
+  const res = await session.request(sessionAttributeAsk(session.sessionId, address), { signal });
   if (res.returnValue !== 0n)
     throw new ProtocolError(`S7CommPlus: the PLC refused the read of session attribute ${address} (0x${res.returnValue.toString(16)})`, {
       plcCode: Number(res.returnValue & 0xffffn),

@@ -19,17 +19,10 @@ import type { SymbolEntry, SymbolTable } from '../../symbols/model';
 import type { PlcValue, Tag } from '../../types';
 import type { TagShape } from '../../values';
 import type { PValue } from '../codec/pvalue';
-import {
-  decodeGetMultiVariablesResponse,
-  decodeSetMultiVariablesResponse,
-  encodeGetMultiVariablesRequest,
-  encodeSetMultiVariablesRequest,
-  readRequest,
-  writeRequest,
-  type ItemAddress,
-} from '../codec/variables';
-import { FunctionCode } from '../constants';
-import { readTags, sized, writeTags, type Limits } from './io';
+import type { ItemAddress } from '../codec/variables';
+import { readAsk, writeAsk } from './asks';
+import { inChunks, type Limits } from './chunks';
+import { readTags, writeTags } from './io';
 import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } from './name-values';
 import type { S7PlusSession } from './session';
 
@@ -106,21 +99,6 @@ export function resolveName(table: SymbolTable, tag: NamedTag): SymbolEntry | Pl
   return entry;
 }
 
-/** Sends `count` items in requests of at most the item limit (io.ts `sized`: a reset on a large request lowers it). */
-async function requestChunks(
-  session: S7PlusSession,
-  count: number,
-  limits: Limits,
-  send: (from: number, to: number) => Promise<Buffer>,
-  take: (from: number, to: number, answer: Buffer) => void,
-): Promise<void> {
-  for (let at = 0; at < count;) {
-    const to = Math.min(count, at + limits.maxItems());
-    take(at, to, await sized(session, to - at, limits, () => send(at, to)));
-    at = to;
-  }
-}
-
 /**
  * The PLC's program as the names see it: the browsed table, and the check after a read by name whether the program
  * changed since (client/program.ts): true when it did, and the table is then browsed again.
@@ -188,6 +166,8 @@ interface NamedPlan {
   readonly wanted: readonly { readonly i: number; readonly entry: SymbolEntry; readonly from: number; readonly to: number }[];
   readonly unresolved: readonly { readonly i: number; readonly error: PlcError }[];
   readonly leaves: readonly SymbolEntry[];
+  /** 0 … leaves.length - 1: what the chunker cuts. */
+  readonly indexes: readonly number[];
   readonly items: readonly ItemAddress[];
   readonly shapes: readonly TagShape[];
 }
@@ -211,7 +191,15 @@ function planOf(tags: readonly Tag[], named: readonly number[], table: SymbolTab
     leaves.push(...leavesOf(table, entry));
     wanted.push({ i, entry, from, to: leaves.length });
   }
-  const plan: NamedPlan = { table, wanted, unresolved, leaves, items: leaves.map(itemOf), shapes: leaves.map(shapeOf) };
+  const plan: NamedPlan = {
+    table,
+    wanted,
+    unresolved,
+    leaves,
+    indexes: leaves.map((_, k) => k),
+    items: leaves.map(itemOf),
+    shapes: leaves.map(shapeOf),
+  };
   PLANS.set(tags, plan);
   return plan;
 }
@@ -237,36 +225,26 @@ async function readNamed(
   // Each leaf's value, or its error, by its index in plan.leaves.
   const leafValues = new Array<PlcValue>(leaves.length);
   let failed: (PlcError | undefined)[] | undefined;
-  const send = (from: number, to: number) =>
-    session.request(
-      FunctionCode.GetMultiVariables,
-      (sequence, sessionId, integrityId) =>
-        encodeGetMultiVariablesRequest({
-          ...readRequest(sequence, sessionId, plan.items.slice(from, to) as ItemAddress[]),
-          ...(integrityId === undefined ? {} : { integrityId }),
-        }),
-      { signal },
-    );
-  await requestChunks(session, leaves.length, limits, send, (from, to, answer) => {
-    const { body } = decodeGetMultiVariablesResponse(answer, { integrity: session.integrityOn });
-    for (let k = from; k < to; k++) {
+  const send = (chunk: number[]) => session.request(readAsk(chunk.map((k) => plan.items[k]!)), { signal });
+  await inChunks(plan.indexes, limits, send, (chunk, body) => {
+    chunk.forEach((k, n) => {
       const e = leaves[k]!;
-      const v = body.values.get(k - from + 1);
+      const v = body.values.get(n + 1);
       if (!v) {
-        const code = body.errors.get(k - from + 1) ?? body.returnValue;
+        const code = body.errors.get(n + 1) ?? body.returnValue;
         (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = new PlcError(
           'OBJECT_DOES_NOT_EXIST',
           `${e.name}: the PLC refused it (0x${code.toString(16)}); was its program changed?`,
           { tag: e.name },
         );
-        continue;
+        return;
       }
       try {
         leafValues[k] = valueOf(e, v, plan.shapes[k]);
       } catch (err) {
         (failed ??= new Array<PlcError | undefined>(leaves.length))[k] = toPlcError(err, 'PROTOCOL_ERROR');
       }
-    }
+    });
   });
   for (const { i, entry, from, to } of plan.wanted) {
     let bad: PlcError | undefined;
@@ -319,24 +297,15 @@ export async function writeMixed(
       results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
     }
   });
-  const send = (from: number, to: number) =>
+  const send = (chunk: typeof ready) =>
     session.request(
-      FunctionCode.SetMultiVariables,
-      (sequence, sessionId, integrityId) =>
-        encodeSetMultiVariablesRequest({
-          ...writeRequest(
-            sequence,
-            sessionId,
-            ready.slice(from, to).map((c) => c.address),
-            ready.slice(from, to).map((c) => c.value),
-          ),
-          ...(integrityId === undefined ? {} : { integrityId }),
-        }),
+      writeAsk(
+        chunk.map((c) => c.address),
+        chunk.map((c) => c.value),
+      ),
       { signal },
     );
-  await requestChunks(session, ready.length, limits, send, (from, to, answer) => {
-    const chunk = ready.slice(from, to);
-    const { body } = decodeSetMultiVariablesResponse(answer, { integrity: session.integrityOn });
+  await inChunks(ready, limits, send, (chunk, body) => {
     chunk.forEach((c, k) => {
       const code = body.errors.get(k + 1) ?? (body.returnValue !== 0n ? body.returnValue : undefined);
       if (code !== undefined && results[c.i]!.ok)

@@ -20,17 +20,9 @@ import { LinkSupervisor } from '../../link/supervisor';
 import type { BackoffOptions } from '../../link/backoff';
 import type { SymbolTable } from '../../symbols/model';
 import type { Tag } from '../../types';
-import { decodeCreateObjectResponse, decodeDeleteObjectResponse, encodeCreateObjectRequest } from '../codec/session';
-import {
-  type Notification,
-  decodeNotification,
-  encodeCreditRequest,
-  encodeSubscriptionDeleteRequest,
-  subscriptionCreateRequest,
-  subscriptionCreditRequest,
-  subscriptionObject,
-} from '../codec/subscription';
-import { FunctionCode, ProtocolVersion, TransportFlags } from '../constants';
+import { type Notification, decodeNotification, subscriptionObject } from '../codec/subscription';
+import { ProtocolVersion } from '../constants';
+import { creditTell, subscriptionCreateAsk, subscriptionDeleteAsk } from './asks';
 import { isNamed } from './names';
 import type { S7PlusSession } from './session';
 import { S7PlusSubscription, type Plan, type SubscribeOptions, type SubscriptionChange } from './subscription';
@@ -206,13 +198,7 @@ export class PushLink extends EventEmitter {
     this.changeCounter = (this.changeCounter % 0xff) + 1;
     this.relationId = (this.relationId + 1) >>> 0;
     const object = subscriptionObject({ relationId, cycleMs: sub.cycle, creditLimit: CREDIT_LIMIT, changeCounter, items: plan.items });
-    const answer = await session.request(FunctionCode.CreateObject, (sequence, sessionId, integrityId) =>
-      encodeCreateObjectRequest({
-        ...subscriptionCreateRequest(sequence, sessionId, session.subscriptionContainerId, object),
-        ...(integrityId === undefined ? {} : { integrityId }),
-      }),
-    );
-    const { body } = decodeCreateObjectResponse(answer, { integrity: session.integrityOn });
+    const body = await session.request(subscriptionCreateAsk(session.subscriptionContainerId, object));
     const id = body.objectIds[0];
     if (body.returnValue !== 0n || id === undefined) {
       throw new PlcError(
@@ -278,15 +264,7 @@ export class PushLink extends EventEmitter {
     live.credit = (live.credit + CREDIT_STEP) % TICKS || CREDIT_STEP;
     const credit = { subscriptionId: live.id, creditLimit: live.credit, v1: session.version === ProtocolVersion.V1 };
     session
-      .request(
-        FunctionCode.SetVariable,
-        (sequence, sessionId, integrityId) =>
-          encodeCreditRequest({
-            ...subscriptionCreditRequest(sequence, sessionId, credit),
-            ...(integrityId === undefined ? {} : { integrityId }),
-          }),
-        { noAnswer: true },
-      )
+      .tell(creditTell(credit))
       // Only a lost link fails it; the supervisor handles that.
       .catch(() => {});
   }
@@ -357,17 +335,9 @@ export class PushLink extends EventEmitter {
     const ac = new AbortController();
     const timer = setTimeout(() => ac.abort(), Math.min(this.wiring.timeout, GOODBYE_MS));
     try {
-      const answer = await session.request(
-        FunctionCode.DeleteObject,
-        (sequence, sessionId, integrityId) =>
-          encodeSubscriptionDeleteRequest({
-            header: { functionCode: FunctionCode.DeleteObject, sequence, sessionId, transportFlags: TransportFlags.Normal },
-            body: { objectId: session.subscriptionContainerId, v1: session.version === ProtocolVersion.V1 },
-            ...(integrityId === undefined ? {} : { integrityId }),
-          }),
-        { signal: ac.signal },
-      );
-      decodeDeleteObjectResponse(answer, { integrity: session.integrityOn });
+      await session.request(subscriptionDeleteAsk(session.subscriptionContainerId, session.version === ProtocolVersion.V1), {
+        signal: ac.signal,
+      });
     } finally {
       clearTimeout(timer);
     }

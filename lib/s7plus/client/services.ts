@@ -5,9 +5,10 @@
  * client.py (get_cpu_state, list_datablocks, _parse_explore_datablocks).
  */
 import { PlcError } from '../../errors';
-import { cpuStateOf, decodeExploreResponse, encodeExploreRequest, exploreRequest, type CpuState } from '../codec/explore';
+import { cpuStateOf, type CpuState } from '../codec/explore';
 import { attributeOf, walkObjects, type PObject } from '../codec/object';
-import { FunctionCode, Ids, serviceResultCode } from '../constants';
+import { Ids, serviceResultCode } from '../constants';
+import { exploreAsk } from './asks';
 import type { S7PlusSession } from './session';
 
 export type { CpuState } from '../codec/explore';
@@ -27,16 +28,7 @@ export async function explore(
   what: string,
   signal?: AbortSignal,
 ): Promise<PObject[]> {
-  const answer = await session.request(
-    FunctionCode.Explore,
-    (sequence, sessionId, integrityId) =>
-      encodeExploreRequest({
-        ...exploreRequest(sequence, sessionId, exploreId, attributes),
-        ...(integrityId === undefined ? {} : { integrityId }),
-      }),
-    { signal },
-  );
-  const { body } = decodeExploreResponse(answer, { integrity: session.integrityOn });
+  const body = await session.request(exploreAsk(exploreId, attributes), { signal });
   if (body.returnValue !== 0n) {
     const code = serviceResultCode(body.returnValue);
     throw new PlcError(

@@ -1,8 +1,11 @@
 /**
  * One live S7CommPlus connection: the stream it owns (the TLS socket over the
  * COTP tunnel, or the plain tunnel with tls=false), the sequence number and
- * the two IntegrityIds, one request in flight and a FIFO of those waiting,
- * the deadline of the one in flight, and the loss of the link.
+ * the two IntegrityIds, one request in flight (lib/link/pending.ts, with its
+ * deadline) and a FIFO of those waiting, and the loss of the link. Callers
+ * ask (an Ask: function, body, the codec's encoder and decoder, see
+ * asks.ts); the session stamps each request's header and IntegrityId and
+ * decodes its answer.
  *
  * What the PLC expects (s7commplus (MIT), connection.py, _send_request): every
  * request takes the next 16-bit sequence number, which the answer echoes;
@@ -14,11 +17,12 @@
  */
 import type { Duplex } from 'node:stream';
 import { TLSSocket } from 'node:tls';
-import { abortError, ConnectionError, type PlcError, ProtocolError, TimeoutError, toPlcError } from '../../errors';
+import { abortError, ConnectionError, type PlcError, ProtocolError, toPlcError } from '../../errors';
 import { Fifo } from '../../link/fifo';
+import { PendingRequests } from '../../link/pending';
 import { encodeFrames, S7pFrameReader, type S7pMessage } from '../codec/frame';
-import { peekMessage } from '../codec/header';
-import { encodeDeleteObjectRequest } from '../codec/session';
+import { peekMessage, type DecodeOptions, type Request, type Response } from '../codec/header';
+import { decodeDeleteObjectResponse, encodeDeleteObjectRequest } from '../codec/session';
 import { FunctionCode, Opcode, ProtocolVersion, READ_FUNCTIONS, TransportFlags } from '../constants';
 import { tlsFailure } from '../transport/handshake';
 
@@ -38,12 +42,23 @@ export interface S7PlusWiring {
 }
 
 /**
- * A request's message (its header included), made when it goes on the wire:
- * with the sequence number and the session id it gets then, and the
- * IntegrityId when the session sends one (the codec's encoders put it where
- * the PLC expects it).
+ * A request as its caller asks it: the function, the body, and the codec's
+ * encoder and decoder. The session stamps what the wire needs when the
+ * request goes out (the sequence number, the session id, the IntegrityId of
+ * the right counter) and decodes the answer as the session is (with or
+ * without IntegrityIds): callers say what, not how.
  */
-export type Encode = (sequence: number, sessionId: number, integrityId: number | undefined) => Buffer;
+export interface Ask<B, R> {
+  functionCode: number;
+  body: B;
+  encode(req: Request<B>): Buffer;
+  decode(data: Buffer, opts: DecodeOptions): Response<R>;
+  /** Default: TransportFlags.Normal. */
+  transportFlags?: number;
+}
+
+/** A request the PLC does not answer (transport flags 0x74: a subscription's credits). */
+export type Tell<B> = Omit<Ask<B, never>, 'decode'>;
 
 export interface RequestOptions {
   signal?: AbortSignal | undefined;
@@ -51,8 +66,6 @@ export interface RequestOptions {
   version?: number;
   /** False: this request carries no IntegrityId and advances no counter (the session setup write). */
   integrity?: boolean;
-  /** The PLC does not answer it (transport flags 0x74: a subscription's credits): settled once it is on the wire. */
-  noAnswer?: boolean;
 }
 
 /** Counters for diagnostics and the benchmark. */
@@ -65,10 +78,9 @@ export interface S7PlusWireCounters {
 }
 
 interface Job {
-  fn: number;
-  encode: Encode;
+  ask: Ask<unknown, unknown> | Tell<unknown>;
   options: RequestOptions;
-  resolve(payload: Buffer): void;
+  resolve(value: unknown): void;
   reject(err: PlcError): void;
   onAbort?: () => void;
 }
@@ -90,8 +102,10 @@ export class S7PlusSession {
   private writeId = 0;
   private readonly cutter = new S7pFrameReader();
   private readonly waiting = new Fifo<Job>();
-  private current: (Job & { seq: number }) | undefined;
-  private timer: NodeJS.Timeout | undefined;
+  /** The request on the wire: its job, sequence number, and whether it carried an IntegrityId. */
+  private current: { job: Job; seq: number; integrity: boolean } | undefined;
+  /** Its answer, by sequence number, with its deadline (one at a time: the PLC answers in order). */
+  private readonly inFlight = new PendingRequests<S7pMessage>();
   private stale = 0;
   private dead: PlcError | undefined;
   private readonly maxQueued: number;
@@ -133,11 +147,6 @@ export class S7PlusSession {
     return this.integrity ? { read: this.readId, write: this.writeId } : undefined;
   }
 
-  /** Whether requests carry IntegrityIds (what the codec's decoders are told). */
-  get integrityOn(): boolean {
-    return this.integrity;
-  }
-
   /** From now on every request carries an IntegrityId, both counters starting at 0 (after the session setup over TLS). */
   startIntegrity(): void {
     this.integrity = true;
@@ -147,18 +156,27 @@ export class S7PlusSession {
 
   /**
    * Sends a request when the one before it is answered; resolves with the
-   * answer's message (its response header included, for the codec's
-   * decoder). An answer of the wrong kind or sequence, or none within the
-   * timeout, drops the link (a ProtocolError, a TimeoutError).
+   * answer's body. An answer of the wrong kind or sequence, or none within
+   * the timeout, drops the link (a ProtocolError, a TimeoutError); an error
+   * PDU or a body the decoder refuses fails this request alone.
    */
-  request(fn: number, encode: Encode, options: RequestOptions = {}): Promise<Buffer> {
+  request<B, R>(ask: Ask<B, R>, options: RequestOptions = {}): Promise<R> {
+    return this.enqueue(ask as Ask<unknown, unknown>, options) as Promise<R>;
+  }
+
+  /** Sends a request the PLC does not answer; resolves once it is on the wire. */
+  async tell<B>(message: Tell<B>, options: RequestOptions = {}): Promise<void> {
+    await this.enqueue(message as Tell<unknown>, options);
+  }
+
+  private enqueue(ask: Ask<unknown, unknown> | Tell<unknown>, options: RequestOptions): Promise<unknown> {
     if (this.dead) return Promise.reject(this.dead);
     if (options.signal?.aborted) return Promise.reject(abortError(`a request to ${this.wiring.name}`, options.signal));
     if (this.waiting.size >= this.maxQueued) {
       return Promise.reject(new ConnectionError('QUEUE_FULL', `${this.wiring.name}: ${this.maxQueued} requests are already waiting`));
     }
-    return new Promise<Buffer>((resolve, reject) => {
-      const job: Job = { fn, encode, options, resolve, reject };
+    return new Promise<unknown>((resolve, reject) => {
+      const job: Job = { ask, options, resolve, reject };
       const signal = options.signal;
       if (signal) {
         // A request still waiting leaves the queue; one on the wire is answered (its numbers are spent) and its answer dropped.
@@ -180,17 +198,19 @@ export class S7PlusSession {
    */
   async goodbye(deadline: number): Promise<void> {
     if (this.dead) return this.destroy();
-    const encode: Encode = (sequence, sessionId, integrityId) =>
-      encodeDeleteObjectRequest({
-        header: { functionCode: FunctionCode.DeleteObject, sequence, sessionId, transportFlags: TransportFlags.Normal },
-        body: { objectId: sessionId },
-        ...(integrityId === undefined ? {} : { integrityId }),
-      });
     const ac = new AbortController();
     const timer = setTimeout(() => ac.abort(), deadline);
     try {
       await Promise.race([
-        this.request(FunctionCode.DeleteObject, encode, { signal: ac.signal }),
+        this.request(
+          {
+            functionCode: FunctionCode.DeleteObject,
+            body: { objectId: this.sessionId },
+            encode: encodeDeleteObjectRequest,
+            decode: decodeDeleteObjectResponse,
+          },
+          { signal: ac.signal },
+        ),
         new Promise((_, reject) => ac.signal.addEventListener('abort', () => reject(new Error('deadline')), { once: true })),
       ]);
     } catch {
@@ -206,6 +226,17 @@ export class S7PlusSession {
     this.lose(new ConnectionError('CLOSED', `connection to ${this.wiring.name} was closed`), false);
   }
 
+  /** A request's message: its header (this session's id, sequence `seq`) and body, with `integrityId` where the codec puts it. */
+  private stamp(ask: Ask<unknown, unknown> | Tell<unknown>, seq: number, integrityId: number | undefined): Buffer {
+    const header = {
+      functionCode: ask.functionCode,
+      sequence: seq,
+      sessionId: this.sessionId,
+      transportFlags: ask.transportFlags ?? TransportFlags.Normal,
+    };
+    return ask.encode(integrityId === undefined ? { header, body: ask.body } : { header, body: ask.body, integrityId });
+  }
+
   private pump(): void {
     if (this.current || this.dead) return;
     const job = this.waiting.shift();
@@ -213,13 +244,14 @@ export class S7PlusSession {
     const seq = this.nextSeq;
     this.nextSeq = (this.nextSeq + 1) & 0xffff;
     const o = job.options;
+    const fn = job.ask.functionCode;
     const counted = this.integrity && o.integrity !== false;
-    const isRead = READ_FUNCTIONS.has(job.fn);
+    const isRead = READ_FUNCTIONS.has(fn);
     let frame: Buffer;
     try {
       frame = encodeFrames(
         o.version ?? this.version,
-        job.encode(seq, this.sessionId, counted ? (isRead ? this.readId : this.writeId) : undefined),
+        this.stamp(job.ask, seq, counted ? (isRead ? this.readId : this.writeId) : undefined),
       );
     } catch (err) {
       // Nothing went out: the numbers are not spent.
@@ -231,20 +263,21 @@ export class S7PlusSession {
       if (isRead) this.readId = (this.readId + 1) >>> 0;
       else this.writeId = (this.writeId + 1) >>> 0;
     }
-    this.current = { ...job, seq };
     this.stale = 0;
     this.stats.requestsSent++;
     this.stats.bytesSent += frame.length;
     this.stream.write(frame);
-    if (o.noAnswer) {
-      this.current = undefined;
-      this.settle(job, undefined, Buffer.alloc(0));
+    if (!('decode' in job.ask)) {
+      this.settle(job, undefined, undefined);
       return this.pump();
     }
-    this.timer = setTimeout(() => {
-      const what = `${this.wiring.name} did not answer request 0x${job.fn.toString(16)} (sequence ${seq}) within ${this.wiring.timeout} ms`;
-      this.lose(new TimeoutError(what));
-    }, this.wiring.timeout);
+    this.current = { job, seq, integrity: counted };
+    const what = `${this.wiring.name} did not answer request 0x${fn.toString(16)} (sequence ${seq}) within ${this.wiring.timeout} ms`;
+    this.inFlight.add(seq, this.wiring.timeout, `request 0x${fn.toString(16)} to ${this.wiring.name}`, undefined, what).then(
+      (m) => this.answered(job, m, counted),
+      // Its deadline (a TimeoutError: the link drops), or the link already lost (then a no-op).
+      (err: PlcError) => this.lose(err),
+    );
   }
 
   private readonly receive = (chunk: Buffer): void => {
@@ -274,28 +307,39 @@ export class S7PlusSession {
       throw new ProtocolError(`${this.wiring.name}: an answer of ${m.data.length} bytes has no response header`);
     }
     const r = { seq: peek.sequence, fn: peek.functionCode };
-    const job = this.current;
-    if (!job) throw new ProtocolError(`${this.wiring.name}: an answer (sequence ${r.seq}) to no request`);
-    if (r.seq !== job.seq) {
-      const behind = (job.seq - r.seq) & 0xffff;
+    const current = this.current;
+    if (!current) throw new ProtocolError(`${this.wiring.name}: an answer (sequence ${r.seq}) to no request`);
+    if (r.seq !== current.seq) {
+      const behind = (current.seq - r.seq) & 0xffff;
       if (behind > 0 && behind < 0x8000 && ++this.stale <= MAX_STALE) {
         this.stats.ignored++;
         return;
       }
-      throw new ProtocolError(`${this.wiring.name}: an answer with sequence ${r.seq} while waiting for ${job.seq}`);
+      throw new ProtocolError(`${this.wiring.name}: an answer with sequence ${r.seq} while waiting for ${current.seq}`);
     }
-    if (r.fn !== job.fn && r.fn !== FunctionCode.Error) {
-      throw new ProtocolError(`${this.wiring.name}: the answer to request 0x${job.fn.toString(16)} is for function 0x${r.fn.toString(16)}`);
+    const fn = current.job.ask.functionCode;
+    if (r.fn !== fn && r.fn !== FunctionCode.Error) {
+      throw new ProtocolError(`${this.wiring.name}: the answer to request 0x${fn.toString(16)} is for function 0x${r.fn.toString(16)}`);
     }
-    clearTimeout(this.timer);
     this.current = undefined;
     this.answerVersion = m.version;
-    if (r.fn === FunctionCode.Error) {
-      this.settle(job, new ProtocolError(`${this.wiring.name} answered request 0x${job.fn.toString(16)} with an error PDU`));
-    } else {
-      this.settle(job, undefined, m.data);
-    }
+    this.inFlight.resolve(r.seq, m);
     this.pump();
+  }
+
+  /** The answer of `job`'s request: its body as the session decodes it (`integrity`: the request carried an IntegrityId). */
+  private answered(job: Job, m: S7pMessage, integrity: boolean): void {
+    const fn = job.ask.functionCode;
+    if (m.data.readUInt16BE(3) === FunctionCode.Error) {
+      return this.settle(job, new ProtocolError(`${this.wiring.name} answered request 0x${fn.toString(16)} with an error PDU`));
+    }
+    let body: unknown;
+    try {
+      body = (job.ask as Ask<unknown, unknown>).decode(m.data, { integrity }).body;
+    } catch (err) {
+      return this.settle(job, toPlcError(err, 'PROTOCOL_ERROR'));
+    }
+    this.settle(job, undefined, body);
   }
 
   /**
@@ -307,24 +351,24 @@ export class S7PlusSession {
     if (data.length < 16) throw new ProtocolError(`${this.wiring.name}: a SystemEvent of ${data.length} bytes`);
   }
 
-  private settle(job: Job, err: PlcError | undefined, payload?: Buffer): void {
+  private settle(job: Job, err: PlcError | undefined, value?: unknown): void {
     if (job.onAbort) job.options.signal?.removeEventListener('abort', job.onAbort);
     if (err) job.reject(err);
-    else job.resolve(payload!);
+    else job.resolve(value);
   }
 
   /** The link is gone: every request fails, the stream is destroyed, the client told (unless it destroyed the session itself). */
   private lose(cause: PlcError, report = true): void {
     if (this.dead) return;
-    clearTimeout(this.timer);
     const err = this.wiring.lossError(cause);
     this.dead = err;
     this.stream.off('data', this.receive);
     // Late 'error' events of the dying stream have a listener still (the one in the constructor), so they never crash the process.
     this.stream.destroy();
-    const job = this.current;
+    const current = this.current;
     this.current = undefined;
-    if (job) this.settle(job, err);
+    this.inFlight.rejectAll(err);
+    if (current) this.settle(current.job, err);
     for (let w = this.waiting.shift(); w; w = this.waiting.shift()) this.settle(w, err);
     if (report) this.wiring.lost(this, err);
   }

@@ -83,8 +83,13 @@ export function decodeExploreRequest(data: Buffer, opts: DecodeOptions): Request
 export function exploreRequest(sequence: number, sessionId: number, exploreId: number, attributes: number[] = []): Request<ExploreRequest> {
   return {
     header: { functionCode: FunctionCode.Explore, sequence, sessionId, transportFlags: TransportFlags.Normal },
-    body: { exploreId, requestId: 0, childsRecursive: 1, flag: 1, parents: 0, attributes },
+    body: exploreBody(exploreId, attributes),
   };
+}
+
+/** The body of an Explore of `exploreId` (see exploreRequest). */
+export function exploreBody(exploreId: number, attributes: number[] = []): ExploreRequest {
+  return { exploreId, requestId: 0, childsRecursive: 1, flag: 1, parents: 0, attributes };
 }
 
 export interface ExploreResponse {

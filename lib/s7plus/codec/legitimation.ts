@@ -111,8 +111,13 @@ export function sessionAttributeRequest(sessionId: number, address: number): Sub
 export function legitimateRequest(sequence: number, sessionId: number, address: number, value: PValue): Request<SetVariableRequest> {
   return {
     header: { functionCode: FunctionCode.SetVariable, sequence, sessionId, transportFlags: TransportFlags.Normal },
-    body: { inObjectId: sessionId, address, value, qualifier: NO_QUALIFIER },
+    body: legitimateBody(sessionId, address, value),
   };
+}
+
+/** The body of the password's SetVariable (see legitimateRequest). */
+export function legitimateBody(sessionId: number, address: number, value: PValue): SetVariableRequest {
+  return { inObjectId: sessionId, address, value, qualifier: NO_QUALIFIER };
 }
 
 /** The protection level of a GetVarSubStreamed answer: a scalar UDInt (connection.py _parse_protection_level_response). */

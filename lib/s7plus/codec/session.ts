@@ -152,6 +152,19 @@ const wstring = (s: string): PValue => scalar(DataType.WString, s);
  * (some S7-1200 firmware answers without ServerSessionVersion to fewer attributes).
  */
 export function sessionCreateRequest(sequence: number, who: ClientIdentity): Request<CreateObjectRequest> {
+  return {
+    header: {
+      functionCode: FunctionCode.CreateObject,
+      sequence,
+      sessionId: Ids.ObjectNullServerSession,
+      transportFlags: TransportFlags.SessionCreate,
+    },
+    body: sessionCreateBody(who),
+  };
+}
+
+/** The body of the session's CreateObject (see sessionCreateRequest). */
+export function sessionCreateBody(who: ClientIdentity): CreateObjectRequest {
   const subscriptions = newObject({ relationId: Ids.GetNewRIDOnServer, classId: Ids.ClassSubscriptions }, [
     [Ids.ObjectVariableTypeName, wstring('SubscriptionContainer')],
   ]);
@@ -169,15 +182,7 @@ export function sessionCreateRequest(sequence: number, who: ClientIdentity): Req
     ],
     [subscriptions],
   );
-  return {
-    header: {
-      functionCode: FunctionCode.CreateObject,
-      sequence,
-      sessionId: Ids.ObjectNullServerSession,
-      transportFlags: TransportFlags.SessionCreate,
-    },
-    body: { requestId: Ids.ObjectServerSessionContainer, requestValue: scalar(DataType.UDInt, 0), object: session },
-  };
+  return { requestId: Ids.ObjectServerSessionContainer, requestValue: scalar(DataType.UDInt, 0), object: session };
 }
 
 /** What a client needs from the answer to the session's CreateObject. */

@@ -113,8 +113,13 @@ export function subscriptionCreateRequest(
 ): Request<CreateObjectRequest> {
   return {
     header: { functionCode: FunctionCode.CreateObject, sequence, sessionId, transportFlags: TransportFlags.Normal },
-    body: { requestId: containerId, requestValue: scalar(DataType.UDInt, 0), object },
+    body: subscriptionCreateBody(containerId, object),
   };
+}
+
+/** The body of a subscription's CreateObject (see subscriptionCreateRequest). */
+export function subscriptionCreateBody(containerId: number, object: PObject): CreateObjectRequest {
+  return { requestId: containerId, requestValue: scalar(DataType.UDInt, 0), object };
 }
 
 export interface CreditRequest {

@@ -123,11 +123,16 @@ export function decodeGetMultiVariablesRequest(data: Buffer, opts: DecodeOptions
   return { header, body: { linkId, addresses, qualifier }, ...(integrityId === undefined ? {} : { integrityId }) };
 }
 
+/** The body of a read of these addresses as s7commplus's client sends it. */
+export function readBody(addresses: ItemAddress[]): GetMultiVariablesRequest {
+  return { linkId: 0, addresses, qualifier: NO_QUALIFIER };
+}
+
 /** A read of these addresses as s7commplus's client sends it. */
 export function readRequest(sequence: number, sessionId: number, addresses: ItemAddress[]): Request<GetMultiVariablesRequest> {
   return {
     header: { functionCode: FunctionCode.GetMultiVariables, sequence, sessionId, transportFlags: TransportFlags.Normal },
-    body: { linkId: 0, addresses, qualifier: NO_QUALIFIER },
+    body: readBody(addresses),
   };
 }
 
@@ -237,6 +242,11 @@ export function decodeSetMultiVariablesRequest(data: Buffer, opts: DecodeOptions
   return { header, body: { targets, values, qualifier }, ...(integrityId === undefined ? {} : { integrityId }) };
 }
 
+/** The body of a write of values to these addresses. */
+export function writeBody(addresses: ItemAddress[], values: PValue[]): SetMultiVariablesRequest {
+  return { targets: { kind: 'items', addresses }, values, qualifier: NO_QUALIFIER };
+}
+
 /** A write of values to these addresses. */
 export function writeRequest(
   sequence: number,
@@ -246,7 +256,7 @@ export function writeRequest(
 ): Request<SetMultiVariablesRequest> {
   return {
     header: { functionCode: FunctionCode.SetMultiVariables, sequence, sessionId, transportFlags: TransportFlags.Normal },
-    body: { targets: { kind: 'items', addresses }, values, qualifier: NO_QUALIFIER },
+    body: writeBody(addresses, values),
   };
 }
 
@@ -264,11 +274,16 @@ export function sessionSetupRequest(
 ): Request<SetMultiVariablesRequest> {
   return {
     header: { functionCode: FunctionCode.SetMultiVariables, sequence, sessionId, transportFlags: TransportFlags.Normal },
-    body: {
-      targets: { kind: 'attributes', inObjectId: sessionId, ids: [Ids.ServerSessionVersion] },
-      values: [serverSessionVersion],
-      qualifier: v1 ? { ...NO_QUALIFIER, v1 } : NO_QUALIFIER,
-    },
+    body: sessionSetupBody(sessionId, serverSessionVersion, v1),
+  };
+}
+
+/** The session setup's body (see sessionSetupRequest). */
+export function sessionSetupBody(sessionId: number, serverSessionVersion: PValue, v1 = false): SetMultiVariablesRequest {
+  return {
+    targets: { kind: 'attributes', inObjectId: sessionId, ids: [Ids.ServerSessionVersion] },
+    values: [serverSessionVersion],
+    qualifier: v1 ? { ...NO_QUALIFIER, v1 } : NO_QUALIFIER,
   };
 }
 
