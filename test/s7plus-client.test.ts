@@ -135,13 +135,14 @@ describe('s7plus client against the s7commplus emulator', function () {
         'DB1.DBB12': 0x5a,
       });
       const session = (client as unknown as { session: { integrityIds: unknown } }).session;
-      expect(session.integrityIds).to.deep.equal({ read: 2, write: 1 });
+      // The reads: the PLC's SystemLimits (once per session, issue #32; the emulator reports none) and the two above.
+      expect(session.integrityIds).to.deep.equal({ read: 3, write: 1 });
       expect(await client.cpuState()).to.equal('RUN');
       await peer.setCpuState('STOP');
       expect(await client.cpuState()).to.equal('STOP');
       await peer.setCpuState('RUN');
       expect((await client.dataBlocks()).map((b) => b.number)).to.deep.equal([1]);
-      expect(session.integrityIds).to.deep.equal({ read: 5, write: 1 });
+      expect(session.integrityIds).to.deep.equal({ read: 6, write: 1 });
       await client.close();
     });
 
@@ -269,6 +270,9 @@ describe('s7plus client against the s7commplus emulator', function () {
       ] as const) {
         const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=5000${query}`);
         await client.connect();
+        // The session's first read asks the PLC's SystemLimits too (issue #32): the emulator reports none, 20 stay.
+        await client.read(['DB1.DBB0']);
+        expect(client.maxItems).to.equal(query ? 5 : 20);
         const before = client.stats.requestsSent;
         const values = await client.read(tags(count));
         expect(Object.keys(values), query).to.have.length(count);

@@ -12,7 +12,7 @@ import { PlcError, toPlcError, type TagResult } from '../../errors';
 import type { ReadValues } from '../../link/driver';
 import type { PlcValue, Tag } from '../../types';
 import { decodeTag, encodeTag } from '../../values';
-import { blobValue, classicBlobAddress, type ItemAddress } from '../codec/variables';
+import { addressBytes, blobValue, classicBlobAddress, writeValueBytes, type ItemAddress } from '../codec/variables';
 import type { PValue } from '../codec/pvalue';
 import { Ids, ITEM_ERROR_UNRESOLVED } from '../constants';
 import { readAsk, writeAsk } from './asks';
@@ -78,43 +78,49 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
   });
   const wanted = addresses.flatMap((a, i) => (a ? [i] : []));
   const send = (chunk: number[]) => session.request(readAsk(chunk.map((i) => addresses[i]!)), { signal });
-  await inChunks(wanted, limits, send, (chunk, body) => {
-    if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
-      if (chunk.length > 1) return 'again';
-      fail(chunk[0]!, itemError(tags[chunk[0]!]!, body.returnValue));
-      return;
-    }
-    chunk.forEach((i, k) => {
-      const tag = tags[i]!;
-      const value = body.values.get(k + 1);
-      const code = body.errors.get(k + 1);
-      if (value) {
-        const data = bytesOf(value);
-        if (!data)
-          return fail(
+  await inChunks(
+    wanted,
+    limits,
+    send,
+    (chunk, body) => {
+      if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
+        if (chunk.length > 1) return 'again';
+        fail(chunk[0]!, itemError(tags[chunk[0]!]!, body.returnValue));
+        return;
+      }
+      chunk.forEach((i, k) => {
+        const tag = tags[i]!;
+        const value = body.values.get(k + 1);
+        const code = body.errors.get(k + 1);
+        if (value) {
+          const data = bytesOf(value);
+          if (!data)
+            return fail(
+              i,
+              new PlcError(
+                'PROTOCOL_ERROR',
+                `${tag.address}: the PLC answered a value of type 0x${value.type.toString(16)}, not the bytes asked for`,
+                {
+                  tag: tag.address,
+                },
+              ),
+            );
+          try {
+            values[i] = decodeTag(tag, data, 0);
+          } catch (err) {
+            fail(i, err as PlcError);
+          }
+        } else
+          fail(
             i,
-            new PlcError(
-              'PROTOCOL_ERROR',
-              `${tag.address}: the PLC answered a value of type 0x${value.type.toString(16)}, not the bytes asked for`,
-              {
-                tag: tag.address,
-              },
-            ),
+            code !== undefined
+              ? itemError(tag, code)
+              : new PlcError('PROTOCOL_ERROR', `${tag.address}: the PLC did not answer this item`, { tag: tag.address }),
           );
-        try {
-          values[i] = decodeTag(tag, data, 0);
-        } catch (err) {
-          fail(i, err as PlcError);
-        }
-      } else
-        fail(
-          i,
-          code !== undefined
-            ? itemError(tag, code)
-            : new PlcError('PROTOCOL_ERROR', `${tag.address}: the PLC did not answer this item`, { tag: tag.address }),
-        );
-    });
-  });
+      });
+    },
+    (i) => addressBytes(addresses[i]!),
+  );
   return { values, errors };
 }
 
@@ -153,16 +159,22 @@ export async function writeTags(
       ),
       { signal },
     );
-  await inChunks(ready, limits, send, (chunk, body) => {
-    if (body.returnValue !== 0n && body.errors.size === 0) {
-      if (chunk.length > 1) return 'again';
-      results[chunk[0]!.i] = { ok: false, error: itemError(items[chunk[0]!.i]!.tag, body.returnValue) };
-      return;
-    }
-    chunk.forEach((c, k) => {
-      const code = body.errors.get(k + 1);
-      if (code !== undefined) results[c.i] = { ok: false, error: itemError(items[c.i]!.tag, code) };
-    });
-  });
+  await inChunks(
+    ready,
+    limits,
+    send,
+    (chunk, body) => {
+      if (body.returnValue !== 0n && body.errors.size === 0) {
+        if (chunk.length > 1) return 'again';
+        results[chunk[0]!.i] = { ok: false, error: itemError(items[chunk[0]!.i]!.tag, body.returnValue) };
+        return;
+      }
+      chunk.forEach((c, k) => {
+        const code = body.errors.get(k + 1);
+        if (code !== undefined) results[c.i] = { ok: false, error: itemError(items[c.i]!.tag, code) };
+      });
+    },
+    (c) => addressBytes(c.address) + writeValueBytes(c.value),
+  );
   return results;
 }

@@ -31,7 +31,7 @@ export interface CpuSide {
 }
 
 /** One item address of a request: its SymbolCrc (0: no check), the area, its sub-area and LIDs. */
-export interface ItemAddress {
+interface ItemAddress {
   readonly crc: number;
   readonly area: number;
   readonly subArea: number;
