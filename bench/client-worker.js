@@ -69,6 +69,8 @@ async function run(job) {
     const elapsedMs = Number(process.hrtime.bigint() - t0) / 1e6;
     const cpu = process.cpuUsage(cpu0);
     if (c.requests) result.requestsPerPoll = (c.requests() - requests0) / polls;
+    // The items per request the client settled on (ours over s7plus://: the PLC's SystemLimits, or the URL's maxItems).
+    if (c.itemLimit) result.itemLimit = c.itemLimit();
     await c.close();
     Object.assign(result, {
       polls,

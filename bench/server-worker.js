@@ -40,7 +40,8 @@ async function start(msg) {
     const { generateCertificate } = require(path.join(DIST, 'lib/s7plus/transport/cert.js'));
     const cert = await generateCertificate({ commonName: 'plcwire benchmark' });
     const service = new S7PlusService({ ...program(), tls: { cert: cert.cert, key: cert.key } });
-    server = new S7Server({ port: 0, profile: 's7-1500', s7plus: service });
+    // An S7-1500 unless the job names another profile (an S7-1200 reports SystemLimits of 50 tags per request).
+    server = new S7Server({ port: 0, profile: msg.profile ?? 's7-1500', s7plus: service });
     return { port: await server.listen(), fingerprint: service.fingerprint };
   }
   const memory = new PlcMemory({ dataBlocks: { 1: DB1_SIZE } });

@@ -43,21 +43,26 @@ describe('npm run bench: the S7CommPlus section (issue #25)', function () {
     expect(code, out).to.equal(0);
     expect(out).to.include('S7CommPlus: 100 tags by name in an optimized DB');
     expect(out).to.include('Our s7plus:// against our s7:// on the same 100 tags of a standard DB');
-    expect(out).to.include('S7CommPlus targets (issue #25)');
+    expect(out).to.include('S7CommPlus targets (issues #25, #32)');
     // Our rows measured (a wrong first value would be "not measured: wrong value …"): polls/s, CPU ms/poll, requests/poll.
     for (const label of ['ours (s7plus://, by name)', '  its transport alone (floor)', 'ours s7:// (PUT/GET)', 'ours s7plus:// (TLS)']) {
       const cells = row(out, label);
       expect(Number(cells[0]), `${label}: ${cells.join(' | ')}`).to.be.above(0);
       expect(Number(cells[1]), `${label}: ${cells.join(' | ')}`).to.be.above(0);
     }
-    // 100 names at 50 items per request: 2 reads and the program check (client/program.ts), by our own count and by the proxy's TLS records.
-    expect(row(out, 'ours (s7plus://, by name)').slice(2, 4)).to.deep.equal(['3.0', '3.0']);
+    // 100 names, each with its SymbolCrc, and no program check (issue #32): the S7-1500's SystemLimits (100) would allow
+    // one read, the 1024-byte frame takes 2; by our own count and by the proxy's TLS records.
+    expect(row(out, 'ours (s7plus://, by name)').slice(2, 4)).to.deep.equal(['2.0', '2.0']);
     expect(row(out, 'ours s7plus:// (TLS)').slice(2, 4)).to.deep.equal(['2.0', '2.0']);
-    expect(row(out, 'requests per poll: 100 names at 50 per request = 2, and the program check = 3')).to.deep.equal([
-      '3.0 (ours) / 3.0 (proxy)',
-      'pass',
+    expect(row(out, 'requests per poll, S7-1200: 100 names at SystemLimits 50 = 2')).to.deep.equal(['2.0 (ours) / 2.0 (proxy)', 'pass']);
+    expect(row(out, 'requests per poll, S7-1500: 100 names at SystemLimits 100 = 1')).to.deep.equal([
+      '2.0 (ours) / 2.0 (proxy)',
+      'the 1024-byte frame: 2',
     ]);
-    for (const target of ["polls/s at least 10× the s7commplus client's", 'CPU per poll over TLS at most 1.5×']) {
+    for (const target of [
+      "polls/s at least 10× the s7commplus client's",
+      'CPU per poll by name at most 2× its TLS-in-COTP transport floor',
+    ]) {
       expect(out.split('\n').find((l) => l.startsWith(target))).to.match(/(pass|FAIL|not measured)$/);
     }
     const python = row(out, 's7commplus 0.3.0 (Python)');

@@ -18,7 +18,9 @@ import { browseTable } from '../lib/s7plus/client/browse';
 import type { Ask, S7PlusSession } from '../lib/s7plus/client/session';
 import { encodeExploreResponse, type ExploreRequest } from '../lib/s7plus/codec/explore';
 import { newObject, type PObject } from '../lib/s7plus/codec/object';
+import { symbolCrc } from '../lib/s7plus/codec/symbol-crc';
 import { encodeGetMultiVariablesResponse } from '../lib/s7plus/codec/variables';
+import { expectedCrc } from '../lib/s7plus/server/symbol-crc';
 import { DataType, dbAccessArea, ElementId, FunctionCode, Ids, SoftDataType } from '../lib/s7plus/constants';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
 import { startPlusSimulator } from './support/s7plus-sim';
@@ -164,7 +166,7 @@ describe('S7CommPlus browse and names (our client, our simulator)', function () 
     }
   });
 
-  it('names go in requests of at most maxItems items: a struct of 4 members and 2 more names in 3 requests of 2, then 1 program check', async () => {
+  it('names go in requests of at most maxItems items: a struct of 4 members and 2 more names in 3 requests of 2, and no program check', async () => {
     const small = createClient(
       `s7plus://127.0.0.1:${server.port}?fingerprint=${service.fingerprint!}&timeout=10000&maxItems=2`,
     ) as S7PlusClient;
@@ -174,8 +176,8 @@ describe('S7CommPlus browse and names (our client, our simulator)', function () 
       const before = small.stats.requestsSent;
       const values = await small.read(['"Tank".Valves', '"Tank".Count', '"Recipe".Target']);
       expect(values['"Tank".Valves']).to.have.length(2);
-      // 3 reads of 2 items, and the one Explore that checks the program did not change meanwhile.
-      expect(small.stats.requestsSent - before).to.equal(4);
+      // 3 reads of 2 items and nothing else: each name carries its SymbolCrc, which the PLC checks (issue #32).
+      expect(small.stats.requestsSent - before).to.equal(3);
     } finally {
       await small.close();
     }
@@ -387,10 +389,11 @@ END_DATA_BLOCK
 describe('S7CommPlus names of every elementary type (an optimized DB)', function () {
   this.timeout(30000);
   let server: S7Server;
+  let service: S7PlusService;
   let client: S7PlusClient;
   before(async () => {
     const cert = await generateCertificate();
-    const service = new S7PlusService({
+    service = new S7PlusService({
       sources: [{ name: 'All.db', content: ALL_TYPES }],
       db: { All: 3 },
       tls: { cert: cert.cert, key: cert.key },
@@ -470,6 +473,19 @@ describe('S7CommPlus names of every elementary type (an optimized DB)', function
     expect(table.entries.map((e) => [e.name, e.type, e.children])).to.deep.equal(compiled.entries.map((e) => [e.name, e.type, e.children]));
     expect(table.lookup('"All".grid[2,1]')!.access!.lids).to.deep.equal([0xa + 26, 4]);
     expect(table.lookup('"All".steps[2].names[1]')!.access!.lids).to.deep.equal([0xa + 28, 1, 1, 0xb, 1]);
+    // Every name with the SymbolCrc the CPU checks, an element with its array's (issue #32); a multi-dimensional
+    // array's none (no public rule gives its bound in the CRC).
+    const db = service.model.dbs.find((d) => d.name === 'All')!;
+    for (const e of table.entries.filter((x) => x.access!.lids.length > 0))
+      expect(e.access!.symbolCrc, e.name).to.equal(expectedCrc(db, e.access!.lids));
+    expect(table.lookup('"All".grid[2,1]')!.access!.symbolCrc).to.equal(undefined);
+    expect(table.lookup('"All".steps[2].names[1]')!.access!.symbolCrc).to.equal(
+      symbolCrc([
+        { name: 'steps', soft: SoftDataType.Struct, low: 1 },
+        { name: 'names', soft: SoftDataType.String, low: 0 },
+      ]),
+    );
+    expect(table.lookup('"All".flags[9]')!.access!.symbolCrc).to.equal(table.lookup('"All".flags[0]')!.access!.symbolCrc);
     const arrays = {
       '"All".grid': [1, 2, 3, 4, 5, 6],
       '"All".flags': [true, false, true, false, false, false, false, false, false, true],

@@ -136,7 +136,7 @@ describe('s7plus client against the s7commplus emulator', function () {
         'DB1.DBB12': 0x5a,
       });
       const session = (client as unknown as { session: { integrityIds: unknown } }).session;
-      // Two reads, one write, and the protection level read at connect.
+      // The reads: the protection level at connect, the PLC's SystemLimits (once per session, issue #32; the emulator reports none) and the two above.
       expect(session.integrityIds).to.deep.equal({ read: 3, write: 1 });
       expect(await client.cpuState()).to.equal('RUN');
       await peer.setCpuState('STOP');
@@ -272,6 +272,9 @@ describe('s7plus client against the s7commplus emulator', function () {
       ] as const) {
         const client = createClient(`s7plus://127.0.0.1:${peer.port}?tls=false&timeout=5000${query}`);
         await client.connect();
+        // The session's first read asks the PLC's SystemLimits too (issue #32): the emulator reports none, 20 stay.
+        await client.read(['DB1.DBB0']);
+        expect(client.maxItems).to.equal(query ? 5 : 20);
         const before = client.stats.requestsSent;
         const values = await client.read(tags(count));
         expect(Object.keys(values), query).to.have.length(count);

@@ -21,7 +21,8 @@ import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { compileSymbols } from '../lib/symbols';
 import type { SymbolSource } from '../lib/symbols/model';
-import { Ids } from '../lib/s7plus/constants';
+import { symbolCrc } from '../lib/s7plus/codec/symbol-crc';
+import { Ids, SoftDataType } from '../lib/s7plus/constants';
 import { DB_NUMBERS, S7PLUS_FIXTURES, SOURCES } from './fixtures/s7plus';
 import { startPlusSimulator } from './support/s7plus-sim';
 import { until, waitFor } from './support/wait';
@@ -67,9 +68,19 @@ describe('S7CommPlus browse of the PLC tag table (I/Q/M names)', function () {
       });
       expect(pick(b)).to.deep.equal(pick(c));
     }
-    expect(browsed.lookup('"Start_Button"')!.access).to.deep.equal({ area: Ids.NativeTheIAreaRID, lids: [0xa] });
+    // Each with the SymbolCrc of its name and type (issue #32).
+    const crc = (name: string, soft: number) => symbolCrc([{ name, soft }]);
+    expect(browsed.lookup('"Start_Button"')!.access).to.deep.equal({
+      area: Ids.NativeTheIAreaRID,
+      lids: [0xa],
+      symbolCrc: crc('Start_Button', SoftDataType.Bool),
+    });
     expect(browsed.lookup('"Motor on"')!.access!.area).to.equal(Ids.NativeTheQAreaRID);
-    expect(browsed.lookup('"Temperature"')!.access).to.deep.equal({ area: Ids.NativeTheMAreaRID, lids: [0xb] });
+    expect(browsed.lookup('"Temperature"')!.access).to.deep.equal({
+      area: Ids.NativeTheMAreaRID,
+      lids: [0xb],
+      symbolCrc: crc('Temperature', SoftDataType.Real),
+    });
     // Every DB entry is still there as before.
     expect(browsed.entries.filter((e) => e.db !== null).map((e) => e.name)).to.deep.equal(
       compiled.entries.filter((e) => e.db !== null).map((e) => e.name),
@@ -231,7 +242,7 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     }
   });
 
-  it('a reload that changes nothing keeps the times, the table and the memory; the check costs one request per read', async () => {
+  it('a reload that changes nothing keeps the times, the table and the memory; a read by name costs no check', async () => {
     await client.write({ '"Std".X': 77, '"Prog".C': 33 });
     let changes = 0;
     client.on('programChanged', () => changes++);
@@ -239,8 +250,8 @@ describe('S7CommPlus program change (a download while a client polls by name)', 
     service.reload(V1, server.memory);
     const sent = client.stats.requestsSent;
     expect(await client.read(['"Std".X', '"Prog".C'])).to.deep.equal({ '"Std".X': 77, '"Prog".C': 33 });
-    // One GetMultiVariables of the two names, one Explore of the type objects' times.
-    expect(client.stats.requestsSent - sent).to.equal(2);
+    // One GetMultiVariables of the two names, each with its SymbolCrc (issue #32): no Explore of the program per read.
+    expect(client.stats.requestsSent - sent).to.equal(1);
     expect(changes).to.equal(0);
     expect(await client.browse()).to.equal(before);
     // Addresses alone are not checked: the program does not move them.

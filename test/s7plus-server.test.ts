@@ -12,8 +12,9 @@ import { FrameReader } from '../lib/link/framer';
 import { S7Client } from '../lib/s7/client';
 import { checkTpkt, decodeCotp, encodeConnectionRequest } from '../lib/s7/codec';
 import { S7Server, type S7RefusedEvent } from '../lib/s7/server';
-import { encodeUVlq32 } from '../lib/s7plus/codec/vlq';
-import { Ids } from '../lib/s7plus/constants';
+import { ITEM_ERROR_INVALID_CRC, symbolCrc } from '../lib/s7plus/codec/symbol-crc';
+import { encodeSVlq32, encodeUVlq32, encodeUVlq64 } from '../lib/s7plus/codec/vlq';
+import { Ids, SoftDataType, SystemLimits } from '../lib/s7plus/constants';
 import { resolveLids } from '../lib/s7plus/server/model';
 import { S7PlusService } from '../lib/s7plus/server';
 import { parseUrl, type S7Endpoint } from '../lib/url';
@@ -53,11 +54,17 @@ function request(fn: number, seq: number, session: number, body: Buffer): Buffer
 
 const v = encodeUVlq32;
 
-/** The item list of a Get/SetMultiVariables: DB items by LID path. */
-function items(list: readonly { db: number; lids: number[] }[]): Buffer {
+/** The item list of a Get/SetMultiVariables: DB items by LID path (SymbolCrc 0 unless given), or any area and sub-area. */
+function items(list: readonly { db?: number; area?: number; subArea?: number; lids: number[]; crc?: number }[]): Buffer {
   const parts = [Buffer.alloc(4), v(list.length), v(list.length * 4)];
   for (const it of list)
-    parts.push(v(0), v(Ids.DBAccessAreaBase + it.db), v(it.lids.length + 1), v(Ids.DBValueActual), ...it.lids.map((l) => v(l)));
+    parts.push(
+      v(it.crc ?? 0),
+      v(it.area ?? Ids.DBAccessAreaBase + it.db!),
+      v(it.lids.length + 1),
+      v(it.subArea ?? Ids.DBValueActual),
+      ...it.lids.map((l) => v(l)),
+    );
   return Buffer.concat(parts);
 }
 
@@ -483,6 +490,117 @@ describe('S7CommPlus simulator (issue #25)', function () {
       const r = await p.ask(0x04d4, Buffer.alloc(4));
       expect(r.body[0]).to.equal(0);
       await p.closed;
+    });
+  });
+
+  describe('SymbolCrc, SystemLimits and the frame limit (issue #32)', () => {
+    const limitsOf = async (port: number) => {
+      const p = new Peer(port);
+      peers.push(p);
+      await p.open();
+      const area = SystemLimits.ObjectRoot;
+      const subArea = SystemLimits.SubArea;
+      const r = await p.ask(
+        0x054c,
+        Buffer.concat([
+          items([
+            { area, subArea, lids: [SystemLimits.TagsPerReadRequest] },
+            { area, subArea, lids: [SystemLimits.TagsPerWriteRequest] },
+          ]),
+          Buffer.alloc(4),
+        ]),
+      );
+      // ReturnValue 0; items 1 and 2 as DInt (type 0x08, a signed VLQ); no errors.
+      return r.body.toString('hex');
+    };
+    const dint = (n: number) => '0008' + encodeSVlq32(n).toString('hex');
+
+    it('reports SystemLimits (ObjectRoot 201, sub-area 1037, LIDs 1000 and 1001) per profile: an S7-1500 100, an S7-1200 50; maxItems overrides', async () => {
+      expect(await limitsOf(server.port)).to.equal('00' + '01' + dint(4) + '02' + dint(4) + '00' + '00');
+      for (const [profile, limit] of [
+        ['s7-1500', 100],
+        ['s7-1200', 50],
+      ] as const) {
+        const own = new S7Server({ port: 0, profile, s7plus: new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: false }) });
+        await own.listen();
+        try {
+          expect(await limitsOf(own.port), profile).to.equal('00' + '01' + dint(limit) + '02' + dint(limit) + '00' + '00');
+        } finally {
+          await own.close();
+        }
+      }
+    });
+
+    it('refuses an item whose SymbolCrc is not its path`s alone with InvalidCRC (0x8009890012CBFFEF); a matching CRC and 0 are served', async () => {
+      const level = symbolCrc([{ name: 'Level', soft: SoftDataType.Real }]);
+      const position = symbolCrc([
+        { name: 'Valves', soft: SoftDataType.Struct, low: 0 },
+        { name: 'Position', soft: SoftDataType.Int },
+      ]);
+      server.memory.area('DB', 1)!.writeInt16BE(-2, 44);
+      const p = peer();
+      await p.open();
+      const r = await p.ask(
+        0x054c,
+        Buffer.concat([
+          items([
+            { db: 1, lids: [0xa], crc: level },
+            { db: 1, lids: [0xa], crc: (level ^ 1) >>> 0 },
+            { db: 1, lids: [0x11, 1, 1, 0xb], crc: position },
+            { db: 1, lids: [0xb], crc: level },
+          ]),
+          Buffer.alloc(4),
+        ]),
+      );
+      const invalid = encodeUVlq64(ITEM_ERROR_INVALID_CRC).toString('hex');
+      // Item 1: REAL 12.5; item 3: INT -2; items 2 and 4 (Count read with Level's CRC): InvalidCRC.
+      expect(r.body.toString('hex')).to.equal('00' + '01000e41480000' + '030007fffe' + '00' + '02' + invalid + '04' + invalid + '00');
+      // A write with a stale CRC writes nothing; the other item of the request is written.
+      const w = await p.ask(
+        0x0542,
+        Buffer.concat([
+          items([
+            { db: 1, lids: [0xb], crc: level },
+            { db: 1, lids: [0xa], crc: level },
+          ]),
+          v(1),
+          Buffer.from([0, 0x07, 0x00, 0x09]),
+          v(2),
+          Buffer.from([0, 0x0e, 0x40, 0x00, 0x00, 0x00]),
+          Buffer.from([0]),
+          Buffer.alloc(4),
+        ]),
+      );
+      expect(w.body.toString('hex')).to.equal('00' + '01' + invalid + '00');
+      expect(server.memory.area('DB', 1)!.readInt16BE(4)).to.equal(7);
+      expect(server.memory.area('DB', 1)!.readFloatBE(0)).to.equal(2);
+    });
+
+    it('refuses a request frame past the negotiated TPDU size (1024 bytes) by default, and serves one within it', async () => {
+      const own = new S7Server({
+        port: 0,
+        profile: 's7-1500',
+        s7plus: new S7PlusService({ sources: SOURCES, db: DB_NUMBERS, tls: false }),
+      });
+      await own.listen();
+      try {
+        // Header 4 + request header 14 + items + fill + trailer 4: pad the fill to reach the size wanted.
+        const body = (frame: number) => {
+          const list = items([{ db: 1, lids: [0xb] }]);
+          return Buffer.concat([list, Buffer.alloc(frame - 4 - 14 - list.length - 4)]);
+        };
+        const p = new Peer(own.port);
+        peers.push(p);
+        await p.open();
+        const r = await p.ask(0x054c, body(1024));
+        expect(r.body.toString('hex')).to.equal('00' + '0100070007' + '00' + '00');
+        const refused = waitFor<S7RefusedEvent>(own, 'refused');
+        p.socket.write(request(0x054c, 9, p.session, body(1025)));
+        expect((await refused).message).to.contain('a request of 1025 bytes, more than the 1024');
+        await p.closed;
+      } finally {
+        await own.close();
+      }
     });
   });
 });

@@ -22,7 +22,12 @@ const CLIENTS = {
     const limit = maxItems ? `&maxItems=${maxItems}` : '';
     const plc = await connect(`s7plus://127.0.0.1:${port}?fingerprint=${fingerprint}&timeout=10000${limit}`);
     plc.on('error', () => undefined);
-    return { read: () => plc.read(addresses), close: () => plc.close(), requests: () => plc.stats.requestsSent };
+    return {
+      read: () => plc.read(addresses),
+      close: () => plc.close(),
+      requests: () => plc.stats.requestsSent,
+      itemLimit: () => plc.maxItems,
+    };
   },
 
   /**
@@ -33,29 +38,26 @@ const CLIENTS = {
    */
   async 'ours-s7plus-transport'({ port, fingerprint, maxItems, addresses }) {
     const { connect } = plcwire();
-    const v = require(path.join(DIST, 'lib/s7plus/codec/variables.js'));
-    const { FunctionCode, Ids } = require(path.join(DIST, 'lib/s7plus/constants.js'));
-    const plc = await connect(`s7plus://127.0.0.1:${port}?fingerprint=${fingerprint}&timeout=10000&maxItems=${maxItems}`);
+    const { readAsk } = require(path.join(DIST, 'lib/s7plus/client/asks.js'));
+    const { cut } = require(path.join(DIST, 'lib/s7plus/client/chunks.js'));
+    const { addressBytes } = require(path.join(DIST, 'lib/s7plus/codec/variables.js'));
+    const { Ids } = require(path.join(DIST, 'lib/s7plus/constants.js'));
+    const limit = maxItems ? `&maxItems=${maxItems}` : '';
+    const plc = await connect(`s7plus://127.0.0.1:${port}?fingerprint=${fingerprint}&timeout=10000${limit}`);
     plc.on('error', () => undefined);
     const table = await plc.browse();
+    // The items ours sends: each name's LIDs and SymbolCrc.
     const items = addresses.map((a) => {
-      const { area, lids } = table.lookup(a).access;
-      return { symbolCrc: 0, accessArea: area, accessSubArea: Ids.DBValueActual, lids: [...lids] };
+      const { area, lids, symbolCrc } = table.lookup(a).access;
+      return { symbolCrc: symbolCrc ?? 0, accessArea: area, accessSubArea: Ids.DBValueActual, lids: [...lids] };
     });
-    const chunks = [];
-    for (let at = 0; at < items.length; at += maxItems) chunks.push(items.slice(at, at + maxItems));
+    // Cut as ours cuts them (after the first read: the PLC's SystemLimits, frames of at most the TPDU, 1024 bytes).
+    let chunks;
     const raw = async () => {
-      // The client's live session (BaseClient's `session`): what its reads go through.
+      chunks ??= cut(items, { maxItems: () => plc.maxItems, refused: () => undefined, maxFrame: () => 1024 }, addressBytes);
+      // The client's live session (BaseClient's `session`): what its reads go through; the answer is not decoded.
       const session = plc.session;
-      for (const chunk of chunks) {
-        // An Ask (lib/s7plus/client/session.ts) whose answer is left undecoded: the session stamps and sends it.
-        await session.request({
-          functionCode: FunctionCode.GetMultiVariables,
-          body: v.readBody(chunk),
-          encode: v.encodeGetMultiVariablesRequest,
-          decode: (data) => ({ header: undefined, body: data }),
-        });
-      }
+      for (const chunk of chunks) await session.request({ ...readAsk(chunk), decode: () => ({ body: undefined }) });
     };
     let first = true;
     return {

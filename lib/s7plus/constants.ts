@@ -305,6 +305,18 @@ export const Ids = {
  */
 export const AreaTypeInfoRID = Object.freeze({ I: 0x90010000, Q: 0x90020000, M: 0x90030000 });
 
+/**
+ * The PLC's own limits: items of access area ObjectRoot (RID 201) and sub-area SystemLimits (1037), each a DInt:
+ * LID 1000 the most tags one read request may carry, 1001 one write request (thomas-v2/S7CommPlusDriver (LGPL,
+ * facts only), Core/Ids.cs and Core/CommRessources.cs ReadMax; its issue #71 names both LIDs).
+ */
+export const SystemLimits = Object.freeze({
+  ObjectRoot: 201,
+  SubArea: 1037,
+  TagsPerReadRequest: 1000,
+  TagsPerWriteRequest: 1001,
+});
+
 /** The access area of DB `db` (1..65535). s7commplus (MIT), protocol.py DB_ACCESS_AREA_BASE. */
 export function dbAccessArea(db: number): number {
   return (Ids.DBAccessAreaBase + (db & 0xffff)) >>> 0;

@@ -37,9 +37,11 @@ export interface S7PlusEndpoint extends SafetyOptions {
   role: S7PlusRole;
   timeout: number;
   /**
-   * At most this many items per request; absent: DEFAULTS.s7plusMaxItems.
-   * A PLC that refuses a request as too large (or resets on it) teaches the
-   * client a lower limit.
+   * At most this many items per request, in place of the PLC's own
+   * SystemLimits (an override); absent: what the PLC reports, read once per
+   * session (DEFAULTS.s7plusMaxItems when it reports none). A PLC that
+   * refuses a request as too large (or resets on it) teaches the client a
+   * lower limit.
    */
   maxItems?: number;
 }

@@ -175,6 +175,12 @@ export interface SymbolAccess {
   readonly area: number;
   /** The LIDs from the block down to the entry, outermost first. */
   readonly lids: readonly number[];
+  /**
+   * The SymbolCrc of the entry's path (lib/s7plus/codec/symbol-crc.ts), sent with every read and write so that the
+   * PLC refuses a LID a download gave to another member; undefined where no public rule gives it (a path through a
+   * multi-dimensional array): such an entry is sent with 0, unchecked by the PLC.
+   */
+  readonly symbolCrc?: number;
 }
 
 /** A data block of the compiled sources. */

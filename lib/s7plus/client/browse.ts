@@ -23,6 +23,7 @@ import { compileDeclarations } from '../../symbols/compile';
 import { elementIndex, memberRef } from '../../symbols/layout';
 import { NameIndex } from '../../symbols/names';
 import type { DataBlockDecl, MemberDecl, SourcePosition, SymbolEntry, SymbolTable, SymbolTableRow, TypeRef } from '../../symbols/model';
+import { symbolCrc, type SymbolLevel } from '../codec/symbol-crc';
 import { AreaTypeInfoRID, dbAccessArea, Ids } from '../constants';
 import { readAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
@@ -52,10 +53,20 @@ async function typeRids(session: S7PlusSession, numbers: number[], signal?: Abor
   return rids;
 }
 
-/** Per entry name (as compiled), the LIDs and the PLC's offset of a member of a standard block. */
+/** Per entry name (as compiled), the LIDs, the SymbolCrc and the PLC's offset of a member of a standard block. */
 interface Facts {
   lids: Map<string, number[]>;
+  crcs: Map<string, number>;
   place: Map<string, { byte: number; bit: number | null }>;
+}
+
+/**
+ * A member's level of a symbol path: its name and software type, an array's lower bound too; undefined for a
+ * multi-dimensional array, whose bound in the CRC no public source gives (codec/symbol-crc.ts).
+ */
+function levelOf(m: Member): SymbolLevel | undefined {
+  if (!m.dims) return { name: m.name, soft: m.soft };
+  return m.dims.length === 1 ? { name: m.name, soft: m.soft, low: m.dims[0]!.low } : undefined;
 }
 
 const key = (name: string) => name.toLowerCase();
@@ -64,7 +75,7 @@ const key = (name: string) => name.toLowerCase();
 function declare(
   m: Member,
   types: Map<number, TypeObject>,
-  path: { name: string; lids: number[]; base: number | undefined },
+  path: { name: string; lids: number[]; base: number | undefined; levels: SymbolLevel[] | undefined },
   facts: Facts,
   depth: number,
 ): MemberDecl {
@@ -72,6 +83,11 @@ function declare(
   const name = `${path.name}.${memberRef(m.name)}`;
   const lids = [...path.lids, m.lid];
   facts.lids.set(key(name), lids);
+  const level = levelOf(m);
+  const levels = path.levels && level ? [...path.levels, level] : undefined;
+  // Every element of an array has the array's CRC: an index is not part of it.
+  const crc = levels && symbolCrc(levels);
+  if (crc !== undefined) facts.crcs.set(key(name), crc);
   const abs = path.base !== undefined && m.byte !== undefined ? path.base + m.byte : undefined;
   if (abs !== undefined) facts.place.set(key(name), { byte: abs, bit: m.bit ?? null });
   const struct = (rid: number, prefix: string, prefixLids: number[], base: number | undefined): TypeRef => {
@@ -83,7 +99,7 @@ function declare(
       );
     return {
       kind: 'struct',
-      members: t.members.map((c) => declare(c, types, { name: prefix, lids: prefixLids, base }, facts, depth + 1)),
+      members: t.members.map((c) => declare(c, types, { name: prefix, lids: prefixLids, base, levels }, facts, depth + 1)),
       at: AT,
     };
   };
@@ -106,6 +122,7 @@ function declare(
       const index = elementIndex(m.dims, k);
       const elName = `${name}[${index}]`;
       facts.lids.set(key(elName), [...lids, k]);
+      if (crc !== undefined) facts.crcs.set(key(elName), crc);
       if (m.structRid !== undefined) {
         const t = struct(m.structRid, elName, [...lids, k, 1], undefined);
         elementType ??= t;
@@ -129,7 +146,7 @@ const TAG_AREAS: readonly { area: 'I' | 'Q' | 'M'; rid: number; typeRid: number 
  * symbol compiler makes the entries a compiled tag table gives; a tag without a standard offset or of a type this
  * client does not read is left out (it has no address to give).
  */
-function tagRows(types: Map<number, TypeObject>, lids: Map<string, number[]>, areas: Map<string, number>): SymbolTableRow[] {
+function tagRows(types: Map<number, TypeObject>, facts: Facts, areas: Map<string, number>): SymbolTableRow[] {
   const rows: SymbolTableRow[] = [];
   for (const { area, rid, typeRid } of TAG_AREAS) {
     for (const m of types.get(typeRid)?.members ?? []) {
@@ -146,7 +163,8 @@ function tagRows(types: Map<number, TypeObject>, lids: Map<string, number[]>, ar
         stringLength: m.stringLength,
       });
       const name = `"${m.name}"`;
-      lids.set(key(name), [m.lid]);
+      facts.lids.set(key(name), [m.lid]);
+      facts.crcs.set(key(name), symbolCrc([{ name: m.name, soft: m.soft }]));
       areas.set(key(name), rid);
       rows.push({ name: m.name, address, dataType: type, comment: '', at: AT });
     }
@@ -186,7 +204,7 @@ export async function browseProgram(session: S7PlusSession, signal?: AbortSignal
   const container = await explore(session, Ids.ObjectOmsTypeInfoContainer, [], 'its types', signal);
   const types = typeObjects(container);
   const decls: DataBlockDecl[] = [];
-  const facts: Facts = { lids: new Map(), place: new Map() };
+  const facts: Facts = { lids: new Map(), crcs: new Map(), place: new Map() };
   const areas = new Map<string, number>();
   for (const b of blocks) {
     const rid = rids.get(b.number);
@@ -195,7 +213,9 @@ export async function browseProgram(session: S7PlusSession, signal?: AbortSignal
     const optimized = t.members.length > 0 && t.members.every((m) => m.byte === undefined);
     const blockName = `"${b.name}"`;
     areas.set(key(blockName), dbAccessArea(b.number));
-    const members = t.members.map((m) => declare(m, types, { name: blockName, lids: [], base: optimized ? undefined : 0 }, facts, 0));
+    const members = t.members.map((m) =>
+      declare(m, types, { name: blockName, lids: [], base: optimized ? undefined : 0, levels: [] }, facts, 0),
+    );
     decls.push({
       kind: 'db',
       name: b.name,
@@ -207,22 +227,19 @@ export async function browseProgram(session: S7PlusSession, signal?: AbortSignal
       at: AT,
     });
   }
-  const rows = tagRows(types, facts.lids, areas);
-  return { table: tableOf(decls, rows, facts.lids, facts.place, areas), times: timesOf(container), blocks: blockWords(blocks) };
+  const rows = tagRows(types, facts, areas);
+  return { table: tableOf(decls, rows, facts, areas), times: timesOf(container), blocks: blockWords(blocks) };
 }
 
-function tableOf(
-  decls: DataBlockDecl[],
-  rows: SymbolTableRow[],
-  lids: Map<string, number[]>,
-  place: Map<string, { byte: number; bit: number | null }>,
-  areas: Map<string, number>,
-): SymbolTable {
+function tableOf(decls: DataBlockDecl[], rows: SymbolTableRow[], facts: Facts, areas: Map<string, number>): SymbolTable {
+  const { lids, crcs, place } = facts;
   const compiled = compileDeclarations(decls, rows, {});
   const entries = compiled.entries.map((e): SymbolEntry => {
     const blockKey = key(e.name.slice(0, e.name.indexOf('"', 1) + 1));
     const area = areas.get(blockKey) ?? dbAccessArea(e.db ?? 0);
-    const withAccess = { ...e, access: Object.freeze({ area, lids: Object.freeze(lids.get(key(e.name)) ?? []) }) };
+    const crc = crcs.get(key(e.name));
+    const access = { area, lids: Object.freeze(lids.get(key(e.name)) ?? []), ...(crc === undefined ? {} : { symbolCrc: crc }) };
+    const withAccess = { ...e, access: Object.freeze(access) };
     delete (withAccess as { at?: unknown }).at;
     const p = place.get(key(e.name));
     // The PLC's own offset of a standard member is the authority; our layout rules only fill in array elements.

@@ -3,15 +3,20 @@
  * requests of at most the item limit, one request at a time, in order. A PLC
  * that refuses a request as a whole, or drops the connection on it, has
  * shown its limit: the limit goes below that request's size, and a refused
- * request's items go again in smaller requests.
+ * request's items go again in smaller requests. Given the items' sizes, a
+ * request also stays within the frame the PLC takes (the negotiated TPDU
+ * size: issue #32).
  */
 import type { PlcError } from '../../errors';
+import { MULTI_VARIABLES_FRAME_OVERHEAD } from '../codec/variables';
 
 /** What the client gives the reads, writes and browses: the item limit, and how to learn a lower one. */
 export interface Limits {
   maxItems(): number;
   /** The PLC refused a request of `items` items as a whole, or reset the connection on it: the limit goes below it. */
   refused(items: number): void;
+  /** The most bytes of one request frame (header to trailer): the negotiated TPDU size. Undefined: no limit. */
+  maxFrame?(): number | undefined;
 }
 
 /**
@@ -40,13 +45,12 @@ export async function inChunks<I, A>(
   limits: Limits,
   send: (chunk: I[]) => Promise<A>,
   take: (chunk: I[], answer: A) => 'again' | void,
+  bytes?: (item: I) => number,
 ): Promise<void> {
   let pending = items;
   while (pending.length > 0) {
-    const size = limits.maxItems();
     const again: I[] = [];
-    for (let at = 0; at < pending.length; at += size) {
-      const chunk = pending.slice(at, at + size);
+    for (const chunk of cut(pending, limits, bytes)) {
       if (take(chunk, await sized(chunk.length, limits, () => send(chunk))) === 'again' && chunk.length > 1) {
         limits.refused(chunk.length);
         again.push(...chunk);
@@ -54,4 +58,35 @@ export async function inChunks<I, A>(
     }
     pending = again;
   }
+}
+
+/**
+ * `items` cut in order into requests of at most `limits.maxItems()` items and, given `bytes` (each item's bytes on
+ * the wire) and `limits.maxFrame()`, of at most that frame with the request's own bytes
+ * (MULTI_VARIABLES_FRAME_OVERHEAD); an item alone over it still goes, alone (the PLC's answer is its result).
+ */
+export function cut<I>(items: readonly I[], limits: Limits, bytes?: (item: I) => number): I[][] {
+  const size = limits.maxItems();
+  const frame = bytes && limits.maxFrame?.();
+  if (frame === undefined) {
+    const out: I[][] = [];
+    for (let at = 0; at < items.length; at += size) out.push(items.slice(at, at + size));
+    return out;
+  }
+  const budget = frame - MULTI_VARIABLES_FRAME_OVERHEAD;
+  const out: I[][] = [];
+  let chunk: I[] = [];
+  let used = 0;
+  for (const item of items) {
+    const n = bytes!(item);
+    if (chunk.length > 0 && (chunk.length >= size || used + n > budget)) {
+      out.push(chunk);
+      chunk = [];
+      used = 0;
+    }
+    chunk.push(item);
+    used += n;
+  }
+  if (chunk.length > 0) out.push(chunk);
+  return out;
 }

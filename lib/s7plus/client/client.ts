@@ -10,6 +10,7 @@
  */
 import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
 import { ConnectionError, isLinkError, type PlcError } from '../../errors';
+import { COTP_DT_HEADER } from '../../iso/constants';
 import type { Driver } from '../../link/driver';
 import type { SymbolTable } from '../../symbols/model';
 import type { Protocol, RequestOptions, Tag } from '../../types';
@@ -17,8 +18,9 @@ import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../u
 import { openS7PlusSession } from './handshake';
 import { BrowsedProgram } from './program';
 import { browseTable } from './browse';
-import type { Limits } from './chunks';
-import { plusSyntax, readMixed, writeMixed } from './names';
+import { readPlcLimits, type SessionLimits } from './limits';
+import { writeMixed } from './name-writes';
+import { plusSyntax, readMixed } from './names';
 import { cpuState, dataBlocks, type CpuState, type S7PlusDataBlock } from './services';
 import type { S7PlusSession, S7PlusWireCounters } from './session';
 import type { HandshakeStep, PeerCertificate } from './handshake';
@@ -82,12 +84,15 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   protection: Protection | undefined;
   readonly #password: string | undefined;
   private readonly onHandshakeStep: ((passed: HandshakeStep) => void) | undefined;
-  /** Items per request: the URL's maxItems or 20, lowered when the PLC refuses a request as too large. */
+  /**
+   * Items per read request: the URL's maxItems, else what the PLC's SystemLimits report (20 until it reports them),
+   * lowered when the PLC refuses a request as too large.
+   */
   private itemLimit: number;
-  private readonly limits: Limits = {
-    maxItems: () => this.itemLimit,
-    refused: (items) => this.learnItemLimit(items),
-  };
+  /** Items per write request, as itemLimit (SystemLimits LID 1001). */
+  private writeLimit: number;
+  /** Per session: its frame (the negotiated TPDU size), its read and write limits, and its SystemLimits read. */
+  private readonly perSession = new WeakMap<S7PlusSession, SessionLimits>();
 
   /** The program of the live session (browse(), the program check); a new session browses again. */
   private program: { session: S7PlusSession; program: BrowsedProgram } | undefined;
@@ -102,14 +107,21 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   protected readonly driver: Driver<S7PlusSession, Tag>;
   private readonly baseDriver = {
     openSession: (signal: AbortSignal) => this.openSession(signal),
-    readValues: (session: S7PlusSession, tags: readonly Tag[], signal?: AbortSignal) =>
-      readMixed(session, tags, this.limits, this.programOf(session), signal),
+    readValues: async (session: S7PlusSession, tags: readonly Tag[], signal?: AbortSignal) => {
+      const limits = this.limitsOf(session);
+      if (!limits.known) await this.plcLimits(session, limits, signal);
+      return readMixed(session, tags, limits.read, this.programOf(session), signal);
+    },
     readTags: async (session: S7PlusSession, tags: readonly Tag[], signal?: AbortSignal) => {
-      const { values, errors } = await readMixed(session, tags, this.limits, this.programOf(session), signal);
+      const limits = this.limitsOf(session);
+      if (!limits.known) await this.plcLimits(session, limits, signal);
+      const { values, errors } = await readMixed(session, tags, limits.read, this.programOf(session), signal);
       return toResults(values, errors);
     },
     writeTags: async (session: S7PlusSession, items: readonly { tag: Tag; value: unknown }[], signal?: AbortSignal) => {
-      const results = await writeMixed(session, items, this.limits, this.programOf(session), signal);
+      const limits = this.limitsOf(session);
+      if (!limits.known) await this.plcLimits(session, limits, signal);
+      const results = await writeMixed(session, items, limits.write, this.programOf(session), signal);
       return this.#password === undefined ? readOnlyRefusals(session, this.name, items, results, signal) : results;
     },
     noBlockLength: 'S7CommPlus reads data blocks by their own layout: there is no PUT/GET layout to check',
@@ -125,9 +137,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     this.onHandshakeStep = handshake;
     this.pushBackoff = { ...(rest.backoff ? { backoff: rest.backoff } : {}), ...(rest.random ? { random: rest.random } : {}) };
     this.itemLimit = endpoint.maxItems ?? S7PLUS_DEFAULT_MAX_ITEMS;
+    this.writeLimit = this.itemLimit;
   }
 
-  /** The most items this client puts into one request. */
+  /** The most items this client puts into one read request (the PLC's SystemLimits once read, or the URL's maxItems). */
   get maxItems(): number {
     return this.itemLimit;
   }
@@ -135,10 +148,44 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
   /** The PLC refused a request of `items` items as a whole: requests carry half as many from now on (the `itemLimit` event). */
   private learnItemLimit(items: number): void {
     const limit = Math.max(1, Math.floor(items / 2));
+    this.writeLimit = Math.min(this.writeLimit, Math.max(limit, 1));
     if (limit >= this.itemLimit) return;
     const was = this.itemLimit;
     this.itemLimit = limit;
     this.emit('itemLimit', { limit, was });
+  }
+
+  /** The limits of `session`'s requests (made at its first read or write). */
+  private limitsOf(session: S7PlusSession): SessionLimits {
+    const known = this.perSession.get(session);
+    if (known) return known;
+    const frame = (): number | undefined => this.perSession.get(session)?.frame;
+    const refused = (items: number) => this.learnItemLimit(items);
+    const limits: SessionLimits = {
+      frame: undefined,
+      // With maxItems in the URL the PLC's limits are not asked: the URL's is the override.
+      known: this.endpoint.maxItems !== undefined,
+      read: { maxItems: () => this.itemLimit, refused, maxFrame: frame },
+      write: { maxItems: () => this.writeLimit, refused, maxFrame: frame },
+    };
+    this.perSession.set(session, limits);
+    return limits;
+  }
+
+  /** Reads the PLC's SystemLimits, once per session (a failed read is tried again at the next request). */
+  private async plcLimits(session: S7PlusSession, limits: SessionLimits, signal?: AbortSignal): Promise<void> {
+    limits.asked ??= readPlcLimits(session, signal).then(
+      (plc) => {
+        if (plc.read !== undefined) this.itemLimit = plc.read;
+        if (plc.write !== undefined) this.writeLimit = plc.write;
+        limits.known = true;
+      },
+      (err: unknown) => {
+        limits.asked = undefined;
+        throw err;
+      },
+    );
+    await limits.asked;
   }
 
   /** The CPU's operating state: RUN, STOP or UNKNOWN (theCPUexecUnit). */
@@ -245,6 +292,12 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
     signal: AbortSignal,
     hooks?: { lost(session: S7PlusSession, err: PlcError): void; notify(data: Buffer): void },
   ): Promise<S7PlusSession> {
+    // The TPDU size the PLC confirmed: a request frame stays within it (PLCSIM drops one past about 1 KB).
+    let frame: number | undefined;
+    const onStep = (passed: HandshakeStep) => {
+      if (passed.step === 'cotp') frame = passed.maxPayload + COTP_DT_HEADER;
+      this.onHandshakeStep?.(passed);
+    };
     const opened = await openS7PlusSession(this.endpoint, {
       name: this.name,
       timeout: this.timeout,
@@ -255,9 +308,10 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
       lost: hooks?.lost ?? ((session, err) => this.sessionLost(session, err)),
       ...(hooks ? { notify: hooks.notify } : {}),
       insecure: (certificate) => this.warnInsecure(certificate),
-      ...(this.onHandshakeStep ? { onStep: this.onHandshakeStep } : {}),
+      onStep,
       password: this.#password,
     });
+    this.limitsOf(opened.session).frame = frame;
     this.certificate = opened.certificate;
     this.device = opened.device;
     this.protection = opened.protection;

@@ -12,7 +12,7 @@ import { PlcError, toPlcError, type TagResult } from '../../errors';
 import type { ReadValues } from '../../link/driver';
 import type { PlcValue, Tag } from '../../types';
 import { decodeTag, encodeTag } from '../../values';
-import { blobValue, classicBlobAddress, type ItemAddress } from '../codec/variables';
+import { addressBytes, blobValue, classicBlobAddress, writeValueBytes, type ItemAddress } from '../codec/variables';
 import type { PValue } from '../codec/pvalue';
 import { Ids } from '../constants';
 import { readAsk, writeAsk } from './asks';
@@ -65,31 +65,37 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
   });
   const wanted = addresses.flatMap((a, i) => (a ? [i] : []));
   const send = (chunk: number[]) => session.request(readAsk(chunk.map((i) => addresses[i]!)), { signal });
-  await inChunks(wanted, limits, send, (chunk, body) => {
-    if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
-      if (chunk.length > 1) return 'again';
-      fail(chunk[0]!, itemRefusal(body.returnValue, { tag: tags[chunk[0]!]!.address }));
-      return;
-    }
-    chunk.forEach((i, k) => {
-      const tag = tags[i]!;
-      const answer = itemAnswer(body, k + 1);
-      if (answer === undefined) return fail(i, notAnswered(tag.address));
-      if ('code' in answer) return fail(i, itemRefusal(answer.code, { tag: tag.address, request: answer.request }));
-      const untrusted = untrustedValue(answer, tag.address);
-      if (untrusted) return fail(i, untrusted);
-      const data = bytesOf(answer);
-      if (!data) {
-        const what = `${tag.address}: the PLC answered a value of type 0x${answer.type.toString(16)}, not the bytes asked for`;
-        return fail(i, new PlcError('PROTOCOL_ERROR', what, { tag: tag.address }));
+  await inChunks(
+    wanted,
+    limits,
+    send,
+    (chunk, body) => {
+      if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
+        if (chunk.length > 1) return 'again';
+        fail(chunk[0]!, itemRefusal(body.returnValue, { tag: tags[chunk[0]!]!.address }));
+        return;
       }
-      try {
-        values[i] = decodeTag(tag, data, 0);
-      } catch (err) {
-        fail(i, err as PlcError);
-      }
-    });
-  });
+      chunk.forEach((i, k) => {
+        const tag = tags[i]!;
+        const answer = itemAnswer(body, k + 1);
+        if (answer === undefined) return fail(i, notAnswered(tag.address));
+        if ('code' in answer) return fail(i, itemRefusal(answer.code, { tag: tag.address, request: answer.request }));
+        const untrusted = untrustedValue(answer, tag.address);
+        if (untrusted) return fail(i, untrusted);
+        const data = bytesOf(answer);
+        if (!data) {
+          const what = `${tag.address}: the PLC answered a value of type 0x${answer.type.toString(16)}, not the bytes asked for`;
+          return fail(i, new PlcError('PROTOCOL_ERROR', what, { tag: tag.address }));
+        }
+        try {
+          values[i] = decodeTag(tag, data, 0);
+        } catch (err) {
+          fail(i, err as PlcError);
+        }
+      });
+    },
+    (i) => addressBytes(addresses[i]!),
+  );
   return { values, errors };
 }
 
@@ -128,19 +134,25 @@ export async function writeTags(
       ),
       { signal },
     );
-  await inChunks(ready, limits, send, (chunk, body) => {
-    if (body.returnValue !== 0n && body.errors.size === 0) {
-      if (chunk.length > 1) return 'again';
-      results[chunk[0]!.i] = { ok: false, error: itemRefusal(body.returnValue, { tag: items[chunk[0]!.i]!.tag.address, write: true }) };
-      return;
-    }
-    chunk.forEach((c, k) => {
-      const answer = itemAnswer(body, k + 1);
-      if (answer && 'code' in answer) {
-        const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, write: true, request: answer.request });
-        results[c.i] = { ok: false, error };
+  await inChunks(
+    ready,
+    limits,
+    send,
+    (chunk, body) => {
+      if (body.returnValue !== 0n && body.errors.size === 0) {
+        if (chunk.length > 1) return 'again';
+        results[chunk[0]!.i] = { ok: false, error: itemRefusal(body.returnValue, { tag: items[chunk[0]!.i]!.tag.address, write: true }) };
+        return;
       }
-    });
-  });
+      chunk.forEach((c, k) => {
+        const answer = itemAnswer(body, k + 1);
+        if (answer && 'code' in answer) {
+          const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, write: true, request: answer.request });
+          results[c.i] = { ok: false, error };
+        }
+      });
+    },
+    (c) => addressBytes(c.address) + writeValueBytes(c.value),
+  );
   return results;
 }

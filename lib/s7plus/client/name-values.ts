@@ -36,7 +36,8 @@ export function leavesOf(table: SymbolTable, entry: SymbolEntry): readonly Symbo
 /** A name's item: its block's access area with DBValueActual, or an I, Q, M tag's area object with ControllerAreaValueActual. */
 export function itemOf(entry: SymbolEntry): ItemAddress {
   const subArea = entry.area === 'DB' ? Ids.DBValueActual : Ids.ControllerAreaValueActual;
-  return { symbolCrc: 0, accessArea: entry.access!.area, accessSubArea: subArea, lids: [...entry.access!.lids] };
+  // The path's SymbolCrc: the PLC refuses the item (InvalidCRC) if a download gave its LIDs to another member.
+  return { symbolCrc: entry.access!.symbolCrc ?? 0, accessArea: entry.access!.area, accessSubArea: subArea, lids: [...entry.access!.lids] };
 }
 
 export function shapeOf(entry: SymbolEntry): TagShape {

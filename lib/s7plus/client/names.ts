@@ -6,26 +6,27 @@
  * item by item, a struct or array as its elementary members, put back
  * together as an object or an array. A name the PLC does not have fails
  * with INVALID_ADDRESS naming it and the closest names, never with another
- * member's value. Addresses go on to the by-address path (io.ts).
+ * member's value. Addresses go on to the by-address path (io.ts); writes by
+ * name are name-writes.ts.
  * Layouts: s7commplus (MIT), client.py (read_tags / write_tags by access
  * sequence: area, DBValueActual, LIDs).
  */
 import { S7_TAG_SYNTAX } from '../../address';
-import { PlcError, toPlcError, type TagResult } from '../../errors';
+import { PlcError, toPlcError } from '../../errors';
 import type { ReadValues, TagSyntax } from '../../link/driver';
 import { canonicalName, splitSymbol } from '../../symbols/names';
 import { wholeBlock } from '../../symbols/resolve';
 import type { SymbolEntry, SymbolTable } from '../../symbols/model';
 import type { PlcValue, Tag } from '../../types';
 import type { TagShape } from '../../values';
-import type { PValue } from '../codec/pvalue';
-import type { ItemAddress } from '../codec/variables';
-import { readAsk, writeAsk } from './asks';
+import { isInvalidCrc } from '../codec/symbol-crc';
+import { addressBytes, type ItemAddress } from '../codec/variables';
+import { readAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
 import { itemAnswer, itemRefusal, notAnswered, untrustedValue } from './refusals';
-import { readTags, writeTags } from './io';
+import { readTags } from './io';
 import { explainOptimized } from './optimized';
-import { assemble, itemOf, leavesOf, pvalueOf, shapeOf, valueOf, writeLeaves } from './name-values';
+import { assemble, itemOf, leavesOf, shapeOf, valueOf } from './name-values';
 import type { S7PlusSession } from './session';
 
 /** A tag that stands for a name of the PLC's program (resolved at the read or write). */
@@ -85,21 +86,14 @@ export function unknownName(table: SymbolTable, name: string): PlcError {
   return new PlcError('INVALID_ADDRESS', `unknown name ${name} on the PLC${hint}`, { tag: name });
 }
 
-const isAddress = (tag: Tag) => !isNamed(tag);
+export const isAddress = (tag: Tag): boolean => !isNamed(tag);
 const slotsOf = (errors: (PlcError | undefined)[]) => ({
   errorAt: (i: number) => errors[i],
   replace: (i: number, err: PlcError) => (errors[i] = err),
 });
-const resultSlots = (results: TagResult<void>[]) => ({
-  errorAt: (i: number) => {
-    const r = results[i]!;
-    return r.ok ? undefined : r.error;
-  },
-  replace: (i: number, error: PlcError) => (results[i] = { ok: false, error }),
-});
 
 /** True when `table` has the name: a member, or a data block named alone. */
-function knows(table: SymbolTable, name: string): boolean {
+export function knows(table: SymbolTable, name: string): boolean {
   return table.lookup(name) !== undefined || wholeBlock(table, name) !== undefined;
 }
 
@@ -115,8 +109,10 @@ export function resolveName(table: SymbolTable, tag: NamedTag): SymbolEntry | Pl
 }
 
 /**
- * The PLC's program as the names see it: the browsed table, and the check after a read by name whether the program
- * changed since (client/program.ts): true when it did, and the table is then browsed again.
+ * The PLC's program as the names see it: the browsed table, and the check whether the program changed since
+ * (client/program.ts): true when it did, and the table is then browsed again. Every name goes with its SymbolCrc, so
+ * the PLC itself refuses a LID a download gave to another member (InvalidCRC); the check runs only after such a
+ * refusal, for a name the table lacks, or for a name without a CRC (a path no public rule covers: issue #32).
  */
 export interface Program {
   table(): Promise<SymbolTable>;
@@ -125,7 +121,7 @@ export interface Program {
 }
 
 /** Reads of a program that keeps changing give up after this many attempts. */
-const MAX_ATTEMPTS = 3;
+export const MAX_ATTEMPTS = 3;
 
 /** Values of addresses and names, in order; each tag's own failure is its error. */
 export async function readMixed(
@@ -154,13 +150,21 @@ export async function readMixed(
     addressed.forEach((i, k) => ((values[i] = r.values[k]!), (errors[i] = r.errors?.[k])));
     await explainOptimized(tags, slotsOf(errors), () => program.table(), isAddress);
   }
-  // A value read by LID counts only when the program had not changed by the time it came: the check runs after the
-  // read, so a download before or during it is seen, and the names are read again through the new table.
+  // A value read by LID counts only when the PLC checked its SymbolCrc, or the program had not changed by the time it
+  // came (the check runs after the read, so a download before or during it is seen); a refused item is never a value:
+  // the names are read again through the table browsed again.
   for (let attempt = 1; ; attempt++) {
     const t = await program.table();
-    await readNamed(session, tags, named, t, limits, values, errors, signal);
+    const read = await readNamed(session, tags, named, t, limits, values, errors, signal);
     const unknown = named.some((i) => !knows(t, tags[i]!.address));
-    if (!(await program.changed(unknown))) break;
+    if (read.refused.length === 0 && !read.unchecked && !unknown) break;
+    if (!(await program.changed(unknown))) {
+      // InvalidCRC though the program is the one browsed: the CRC of that path is not the PLC's (no public rule
+      // covers it): it goes with 0 from now on, and the program check covers it.
+      if (read.crcRefused.length === 0 || attempt === MAX_ATTEMPTS) break;
+      for (const name of read.crcRefused) distrusted(t).add(name);
+      continue;
+    }
     if (attempt === MAX_ATTEMPTS) {
       for (const i of named) {
         values[i] = undefined as unknown as PlcValue;
@@ -183,6 +187,10 @@ export async function readMixed(
  */
 interface NamedPlan {
   readonly table: SymbolTable;
+  /** How many of the table's CRCs were distrusted when the plan was made (a plan is made again after more). */
+  readonly distrusted: number;
+  /** True when a leaf goes without a SymbolCrc: the PLC checks nothing of it, the program check must. */
+  readonly unchecked: boolean;
   readonly wanted: readonly { readonly i: number; readonly entry: SymbolEntry; readonly from: number; readonly to: number }[];
   readonly unresolved: readonly { readonly i: number; readonly error: PlcError }[];
   readonly leaves: readonly SymbolEntry[];
@@ -195,9 +203,24 @@ interface NamedPlan {
 /** Plans by tag list: the client hands the same array back for the same list (client/base.ts ReadList), so a poll finds its plan. */
 const PLANS = new WeakMap<readonly Tag[], NamedPlan>();
 
+/** Per browsed table, the leaves whose SymbolCrc the PLC refused while its program was the one browsed. */
+const DISTRUSTED = new WeakMap<SymbolTable, Set<string>>();
+
+export function distrusted(table: SymbolTable): Set<string> {
+  let names = DISTRUSTED.get(table);
+  if (!names) DISTRUSTED.set(table, (names = new Set<string>()));
+  return names;
+}
+
+/** A leaf's item address through `table`: with its SymbolCrc, or 0 (no check) where the PLC refused ours. */
+export function itemIn(table: SymbolTable, leaf: SymbolEntry): ItemAddress {
+  const item = itemOf(leaf);
+  return DISTRUSTED.get(table)?.has(leaf.name) ? { ...item, symbolCrc: 0 } : item;
+}
+
 function planOf(tags: readonly Tag[], named: readonly number[], table: SymbolTable): NamedPlan {
   const known = PLANS.get(tags);
-  if (known?.table === table) return known;
+  if (known?.table === table && known.distrusted === (DISTRUSTED.get(table)?.size ?? 0)) return known;
   const wanted: { i: number; entry: SymbolEntry; from: number; to: number }[] = [];
   const unresolved: { i: number; error: PlcError }[] = [];
   const leaves: SymbolEntry[] = [];
@@ -211,17 +234,27 @@ function planOf(tags: readonly Tag[], named: readonly number[], table: SymbolTab
     leaves.push(...leavesOf(table, entry));
     wanted.push({ i, entry, from, to: leaves.length });
   }
+  const items = leaves.map((leaf) => itemIn(table, leaf));
   const plan: NamedPlan = {
     table,
+    distrusted: DISTRUSTED.get(table)?.size ?? 0,
+    unchecked: items.some((a) => a.symbolCrc === 0),
     wanted,
     unresolved,
     leaves,
     indexes: leaves.map((_, k) => k),
-    items: leaves.map(itemOf),
+    items,
     shapes: leaves.map(shapeOf),
   };
   PLANS.set(tags, plan);
   return plan;
+}
+
+/** What a read by name saw: the leaves the PLC refused (each its error), those of them for their SymbolCrc. */
+interface NamedRead {
+  readonly refused: readonly string[];
+  readonly crcRefused: readonly string[];
+  readonly unchecked: boolean;
 }
 
 /** Reads the named tags `named` through table `t` into `values` / `errors` (each slot overwritten). */
@@ -234,11 +267,13 @@ async function readNamed(
   values: PlcValue[],
   errors: (PlcError | undefined)[],
   signal?: AbortSignal,
-): Promise<void> {
+): Promise<NamedRead> {
   for (const i of named) {
     values[i] = undefined as unknown as PlcValue;
     errors[i] = undefined;
   }
+  const refused: string[] = [];
+  const crcRefused: string[] = [];
   const plan = planOf(tags, named, t);
   const { leaves } = plan;
   for (const { i, error } of plan.unresolved) errors[i] = error;
@@ -246,22 +281,37 @@ async function readNamed(
   const leafValues = new Array<PlcValue>(leaves.length);
   let failed: (PlcError | undefined)[] | undefined;
   const send = (chunk: number[]) => session.request(readAsk(chunk.map((k) => plan.items[k]!)), { signal });
-  await inChunks(plan.indexes, limits, send, (chunk, body) => {
-    chunk.forEach((k, n) => {
-      const e = leaves[k]!;
-      const fail = (err: PlcError) => ((failed ??= new Array<PlcError | undefined>(leaves.length))[k] = err);
-      const answer = itemAnswer(body, n + 1);
-      if (answer === undefined) return void fail(notAnswered(e.name));
-      if ('code' in answer) return void fail(itemRefusal(answer.code, { tag: e.name, name: e.name, request: answer.request }));
-      const untrusted = untrustedValue(answer, e.name);
-      if (untrusted) return void fail(untrusted);
-      try {
-        leafValues[k] = valueOf(e, answer, plan.shapes[k]);
-      } catch (err) {
-        fail(toPlcError(err, 'PROTOCOL_ERROR'));
-      }
-    });
-  });
+  const bytes = (k: number) => addressBytes(plan.items[k]!);
+  await inChunks(
+    plan.indexes,
+    limits,
+    send,
+    (chunk, body) => {
+      chunk.forEach((k, n) => {
+        const e = leaves[k]!;
+        const fail = (err: PlcError) => ((failed ??= new Array<PlcError | undefined>(leaves.length))[k] = err);
+        const answer = itemAnswer(body, n + 1);
+        if (answer === undefined) return void fail(notAnswered(e.name));
+        if ('code' in answer) {
+          // A refused item is never a value: its name is read again once the program is known (InvalidCRC: changed).
+          refused.push(e.name);
+          if (!isInvalidCrc(answer.code))
+            return void fail(itemRefusal(answer.code, { tag: e.name, name: e.name, request: answer.request }));
+          crcRefused.push(e.name);
+          const why = `${e.name}: the PLC refused its symbol CRC (0x${answer.code.toString(16)}, InvalidCRC): the PLC's program changed`;
+          return void fail(new PlcError('OBJECT_DOES_NOT_EXIST', why, { tag: e.name, plcCode: Number(answer.code & 0xffffn) }));
+        }
+        const untrusted = untrustedValue(answer, e.name);
+        if (untrusted) return void fail(untrusted);
+        try {
+          leafValues[k] = valueOf(e, answer, plan.shapes[k]);
+        } catch (err) {
+          fail(toPlcError(err, 'PROTOCOL_ERROR'));
+        }
+      });
+    },
+    bytes,
+  );
   for (const { i, entry, from, to } of plan.wanted) {
     let bad: PlcError | undefined;
     if (failed) for (let k = from; !bad && k < to; k++) bad = failed[k];
@@ -273,69 +323,5 @@ async function readNamed(
       values[i] = assemble(t, entry, leaf) as PlcValue;
     }
   }
-}
-
-/** One result per item, in order: addresses by io.ts, names by LID. */
-export async function writeMixed(
-  session: S7PlusSession,
-  items: readonly { tag: Tag; value: unknown }[],
-  limits: Limits,
-  program: Program,
-  signal?: AbortSignal,
-): Promise<TagResult<void>[]> {
-  const tags = items.map((it) => it.tag);
-  const explain = (results: TagResult<void>[]) => explainOptimized(tags, resultSlots(results), () => program.table(), isAddress);
-  if (!items.some((it) => isNamed(it.tag))) {
-    const r = await writeTags(session, items, limits, signal);
-    await explain(r);
-    return r;
-  }
-  const results: TagResult<void>[] = items.map(() => ({ ok: true, value: undefined }));
-  const addressed = items.flatMap((it, i) => (isNamed(it.tag) ? [] : [i]));
-  if (addressed.length > 0) {
-    const r = await writeTags(
-      session,
-      addressed.map((i) => items[i]!),
-      limits,
-      signal,
-    );
-    addressed.forEach((i, k) => (results[i] = r[k]!));
-    await explain(results);
-  }
-  // A write by a stale LID would land in another member: the program is checked first (browsed again if it changed).
-  const known = await program.table();
-  await program.changed(items.some((it) => isNamed(it.tag) && !knows(known, it.tag.address)));
-  const t = await program.table();
-  const ready: { i: number; address: ItemAddress; value: PValue; name: string }[] = [];
-  items.forEach(({ tag, value }, i) => {
-    if (!isNamed(tag)) return;
-    const entry = resolveName(t, tag);
-    if (entry instanceof PlcError) return void (results[i] = { ok: false, error: entry });
-    try {
-      const leaves: { entry: SymbolEntry; value: unknown }[] = [];
-      writeLeaves(t, entry, value, leaves);
-      const mine = leaves.map((l) => ({ i, address: itemOf(l.entry), value: pvalueOf(l.entry, l.value), name: l.entry.name }));
-      ready.push(...mine);
-    } catch (err) {
-      results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
-    }
-  });
-  const send = (chunk: typeof ready) =>
-    session.request(
-      writeAsk(
-        chunk.map((c) => c.address),
-        chunk.map((c) => c.value),
-      ),
-      { signal },
-    );
-  await inChunks(ready, limits, send, (chunk, body) => {
-    chunk.forEach((c, k) => {
-      const answer = itemAnswer(body, k + 1);
-      if (answer && 'code' in answer && results[c.i]!.ok) {
-        const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, name: c.name, write: true, request: answer.request });
-        results[c.i] = { ok: false, error };
-      }
-    });
-  });
-  return results;
+  return { refused, crcRefused, unchecked: plan.unchecked };
 }

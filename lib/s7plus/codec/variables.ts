@@ -39,6 +39,7 @@ import {
   type Response,
 } from './header';
 import { readPValue, writePValue, type PValue } from './pvalue';
+import { uvlq32Length } from './vlq';
 
 export interface ItemAddress {
   symbolCrc: number;
@@ -318,4 +319,29 @@ export function decodeSetMultiVariablesResponse(data: Buffer, opts: DecodeOption
 /** A blob PValue of raw bytes, as the classic-blob reads answer and writes send (s7commplus (MIT), codec.py encode_pvalue_blob). */
 export function blobValue(data: Buffer): PValue {
   return { flags: 0, type: DataType.Blob, value: { rootId: 0, data } };
+}
+
+/** Bytes of an item address on the wire (its SymbolCrc, area, LID count, sub-area and LIDs as UVLQs). */
+export function addressBytes(a: ItemAddress): number {
+  let n = uvlq32Length(a.symbolCrc) + uvlq32Length(a.accessArea) + uvlq32Length(a.lids.length + 1) + uvlq32Length(a.accessSubArea);
+  for (const lid of a.lids) n += uvlq32Length(lid);
+  return n;
+}
+
+/**
+ * The most bytes a Get/SetMultiVariables request frame has besides its addresses and values: the PDU header (4),
+ * the request header (14), the LinkId or InObjectId (4), the item and field counts (UVLQs of at most 3 bytes), the
+ * end of a write's values (1), the ObjectQualifier, an integrity id (at most 5), the fill (4) and the trailer (4).
+ */
+export const MULTI_VARIABLES_FRAME_OVERHEAD = ((): number => {
+  const w = new Writer();
+  writeObjectQualifier(w, NO_QUALIFIER);
+  return 4 + 14 + 4 + 3 + 3 + 1 + w.toBuffer().length + 5 + 4 + 4;
+})();
+
+/** Bytes a value of a write adds: its item number (at most 3) and its PValue. */
+export function writeValueBytes(v: PValue): number {
+  const w = new Writer();
+  writePValue(w, v);
+  return 3 + w.toBuffer().length;
 }

@@ -10,20 +10,23 @@ import type { Socket } from 'node:net';
 import type * as tls from 'node:tls';
 import type { PlcMemory } from '../../sim/memory';
 import type { CompileOptions, SymbolSource } from '../../symbols/model';
-import { formatDeviceString } from '../codec/identity';
+import { formatDeviceString, parseDeviceString } from '../codec/identity';
 import { fingerprint256 } from '../transport/cert';
 import { serverSecureContext } from '../transport/server-tls';
 import { PlusConnection } from './connection';
 import { dataBlockImages } from '../../sim/symbol-memory';
+import { systemLimitsOf, uniformLimits, type SystemLimitValues } from './limits';
 import { buildPlusModel, type PlusModel } from './model';
 import { isS7PlusRequest } from './tsap';
 
 export type { PlusModel } from './model';
 
-/** Items a CPU 1215C serves in one request (public reports, issue #25; s7commplus (MIT) client.py max_items_per_request). */
-const DEFAULT_MAX_ITEMS = 50;
-/** Request bytes PLCSIM Advanced takes before it drops the connection (s7commplus (MIT) server.py max_request_bytes: "past about 1 KB"); a real CPU takes more, so the default is the TPKT limit. */
-const DEFAULT_MAX_REQUEST_BYTES = 65535;
+/**
+ * The request frame the CPU takes: the TPDU size its connection confirm negotiates (tsap.ts: code 0x0A, 1024 bytes).
+ * PLCSIM Advanced V8 (CPU 1511) answered a read frame of about 860 bytes and dropped the connection on one of about
+ * 1060 (s7commplus (MIT) client.py, the comment of max_request_bytes; server.py "past about 1 KB").
+ */
+const DEFAULT_MAX_REQUEST_BYTES = 1024;
 
 export interface S7PlusOptions {
   /** The DB and UDT sources (and symbol tables) the CPU's program is built from, as `--source` gives them. */
@@ -32,11 +35,14 @@ export interface S7PlusOptions {
   readonly db?: CompileOptions['db'];
   /** The CPU's certificate and key (PEM). `false`: the CPU is configured without secure communication and speaks S7CommPlus in plain text. */
   readonly tls: { readonly cert: string | Buffer; readonly key: string | Buffer } | false;
-  /** Items one request may carry; more resets the connection. Default 50 (CPU 1215C). */
+  /**
+   * Items one request may carry, read or write, reported as SystemLimits; more resets the connection. Default: the
+   * profile's (limits.ts: an S7-1200 50, an S7-1500 100).
+   */
   readonly maxItems?: number;
   /** The CPU's password: a session has read access until it legitimates with it (over TLS). Never logged. */
   readonly password?: string;
-  /** Bytes one request frame may have; more resets the connection. Default 65535. */
+  /** Bytes one request frame may have (header to trailer, after TLS); more resets the connection. Default 1024, the negotiated TPDU size. */
   readonly maxRequestBytes?: number;
   /**
    * The device string of ServerSessionVersion (`1;<order number>;V<firmware>`), default an S7-1500 at V3.1:
@@ -59,7 +65,7 @@ export class S7PlusService {
   /** SHA-256 of the certificate (DER), 64 upper-case hex digits; undefined in plain text. */
   readonly fingerprint: string | undefined;
   private readonly secureContext: tls.SecureContext | undefined;
-  private readonly maxItems: number;
+  private readonly limits: SystemLimitValues | undefined;
   private readonly maxRequestBytes: number;
   private nextSession = 0x3a0;
   private readonly device: string | undefined;
@@ -70,7 +76,7 @@ export class S7PlusService {
     this.db = options.db;
     this.current = buildPlusModel(options.sources, options.db ? { db: options.db } : {});
     for (const n of this.current.optimizedDbs) this.optimizedDbs.add(n);
-    this.maxItems = options.maxItems ?? DEFAULT_MAX_ITEMS;
+    this.limits = options.maxItems === undefined ? undefined : uniformLimits(options.maxItems);
     this.#password = options.password;
     this.device = options.device;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
@@ -149,7 +155,8 @@ export class S7PlusService {
           },
           memory: cpu.memory,
           mode: () => cpu.state,
-          maxItems: this.maxItems,
+          // The limits of the CPU the session's device string names (a test's before the profile's).
+          limits: this.limits ?? systemLimitsOf(this.device ? parseDeviceString(this.device).orderCode : identity?.orderCode),
         },
         secureContext: this.secureContext,
         session: {

@@ -24,7 +24,7 @@ import type { DataTypeName } from '../../types';
 import { AreaTypeInfoRID, dbAccessArea, Ids, SoftDataType } from '../constants';
 
 /** The LID of the first member of a block or struct. */
-const FIRST_LID = 0xa;
+export const FIRST_LID = 0xa;
 /** RIDs of the simulator's type objects: a DB's is this base plus its number, a struct's or UDT's the other base plus its index. */
 const DB_TYPE_RID = 0x92000000;
 const STRUCT_TYPE_RID = 0x93000000;

@@ -10,10 +10,13 @@ import type { PlcMemory } from '../../sim/memory';
 import type { AreaName } from '../../types';
 import { ProtocolError } from '../../errors';
 import type { LayoutNode } from '../../symbols/layout-nodes';
-import { DataType, dbAccessArea, ITEM_ERROR_UNRESOLVED, Ids, OperatingState } from '../constants';
+import { DataType, dbAccessArea, ITEM_ERROR_UNRESOLVED, Ids, OperatingState, SystemLimits } from '../constants';
 import { Reader, Writer } from '../codec/bytes';
-import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
+import { ITEM_ERROR_INVALID_CRC } from '../codec/symbol-crc';
+import { encodeSVlq32, encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
+import type { SystemLimitValues } from './limits';
 import { resolveAreaLid, resolveLids, type PlusDb, type PlusModel } from './model';
+import { expectedCrc, tagCrc } from './symbol-crc';
 import { blockList, cpuExecUnit, isTypeObject, typeInfoContainer, typeObjectAttributes } from './typeinfo';
 import { blob, readNode, readPValue, writeNode } from './values';
 
@@ -23,12 +26,13 @@ export interface CpuSide {
   readonly memory: PlcMemory;
   /** RUN or STOP. */
   mode(): 'RUN' | 'STOP';
-  /** Items one Get/SetMultiVariables may carry; more resets the connection (as a CPU 1215C does past 50). */
-  readonly maxItems: number;
+  /** What SystemLimits reports: items one Get/SetMultiVariables may carry; more resets the connection. */
+  readonly limits: SystemLimitValues;
 }
 
-/** One item address of a request: the area, its sub-area and LIDs. */
-export interface ItemAddress {
+/** One item address of a request: its SymbolCrc (0: no check), the area, its sub-area and LIDs. */
+interface ItemAddress {
+  readonly crc: number;
   readonly area: number;
   readonly subArea: number;
   readonly lids: readonly number[];
@@ -72,30 +76,35 @@ function exploreAttributes(r: Reader): number[] {
  */
 const EXPLORE_NO_SUCH_OBJECT = 0x8020ab001992fff4n;
 
-function readAddresses(r: Reader, cpu: CpuSide): ItemAddress[] {
+function readAddresses(r: Reader, max: number): ItemAddress[] {
   r.u32('the link id');
   const count = r.uvlq32();
-  if (count > cpu.maxItems) throw new ResetConnection(`a request of ${count} items, more than the ${cpu.maxItems} the CPU serves`);
+  if (count > max) throw new ResetConnection(`a request of ${count} items, more than the ${max} the CPU serves`);
   r.uvlq32();
   const items: ItemAddress[] = [];
   for (let i = 0; i < count; i++) {
-    r.uvlq32();
+    const crc = r.uvlq32();
     const area = r.uvlq32();
     const n = r.uvlq32();
     if (n < 1 || n > 64) throw new ProtocolError(`S7CommPlus item address with ${n} LIDs`);
     const subArea = r.uvlq32();
     const lids: number[] = [];
     for (let k = 1; k < n; k++) lids.push(r.uvlq32());
-    items.push({ area, subArea, lids });
+    items.push({ crc, area, subArea, lids });
   }
   return items;
 }
 
-/** Where an item lands: a node of a DB or area, a byte range of a standard DB or area, the type object's RID (LID 1), or nothing. */
+/**
+ * Where an item lands: a node of a DB or area (with the SymbolCrc its path has; undefined: a path with no public
+ * rule, not checked), a byte range of a standard DB or area, the type object's RID (LID 1), a SystemLimits value, or
+ * nothing.
+ */
 type Target =
-  | { kind: 'node'; area: AreaName; db: number; node: LayoutNode }
+  | { kind: 'node'; area: AreaName; db: number; node: LayoutNode; crc: number | undefined }
   | { kind: 'range'; area: AreaName; db: number; byte: number; size: number }
-  | { kind: 'rid'; rid: number };
+  | { kind: 'rid'; rid: number }
+  | { kind: 'limit'; value: number };
 
 /** A range of bytes by the classic-blob LIDs (marker, byte, count) within `length` bytes. */
 function range(lids: readonly number[], area: AreaName, db: number, length: number): Target | undefined {
@@ -115,8 +124,20 @@ function dbOf(model: PlusModel, area: number): PlusDb | undefined {
   return byArea.get(area);
 }
 
-function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
+/** The SystemLimits item a LID names (constants.ts SystemLimits), or undefined. */
+/** An item address without its SymbolCrc: what a subscription's reference names. */
+type ItemPath = Omit<ItemAddress, 'crc'>;
+
+function limit(cpu: CpuSide, item: ItemPath): Target | undefined {
+  if (item.subArea !== SystemLimits.SubArea || item.lids.length !== 1) return undefined;
+  if (item.lids[0] === SystemLimits.TagsPerReadRequest) return { kind: 'limit', value: cpu.limits.tagsPerRead };
+  if (item.lids[0] === SystemLimits.TagsPerWriteRequest) return { kind: 'limit', value: cpu.limits.tagsPerWrite };
+  return undefined;
+}
+
+function target(cpu: CpuSide, item: ItemPath): Target | undefined {
   const lids = item.lids;
+  if (item.area === SystemLimits.ObjectRoot) return limit(cpu, item);
   const blob = lids.length === 3 && lids[0] === Ids.LidClassicBlob;
   const area = cpu.model.areas.find((a) => a.rid === item.area);
   if (area) {
@@ -124,7 +145,7 @@ function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
     if (item.subArea !== Ids.ControllerAreaValueActual) return undefined;
     if (blob) return range(lids, area.area, 0, cpu.memory.area(area.area)?.length ?? 0);
     const tag = resolveAreaLid(area, lids);
-    return tag ? { kind: 'node', area: area.area, db: 0, node: tag.node } : undefined;
+    return tag ? { kind: 'node', area: area.area, db: 0, node: tag.node, crc: tagCrc(tag) } : undefined;
   }
   if ((item.area & 0xffff0000) >>> 0 !== Ids.DBAccessAreaBase || item.subArea !== Ids.DBValueActual) return undefined;
   const db = dbOf(cpu.model, item.area);
@@ -137,35 +158,55 @@ function target(cpu: CpuSide, item: ItemAddress): Target | undefined {
   // By address: standard DBs only; an optimized one has no offsets to give.
   if (blob) return db.optimized ? undefined : range(lids, 'DB', db.number, db.length);
   const node = resolveLids(db, lids);
-  return node ? { kind: 'node', area: 'DB', db: db.number, node } : undefined;
+  return node ? { kind: 'node', area: 'DB', db: db.number, node, crc: expectedCrc(db, lids) } : undefined;
 }
 
-function itemList(results: readonly (Buffer | undefined)[]): Buffer {
+/**
+ * True when the CPU refuses the item for its SymbolCrc: a non-zero CRC that is not its path's, or one given for
+ * what has no symbol (an address, LID 1, a SystemLimits value). 0 asks for no check.
+ */
+function crcRefused(item: ItemAddress, t: Target | undefined): boolean {
+  if (item.crc === 0 || !t) return false;
+  return t.kind !== 'node' || (t.crc !== undefined && t.crc !== item.crc);
+}
+
+/** Per item its PValue, or its error (a bigint). */
+function itemList(results: readonly (Buffer | bigint)[]): Buffer {
   // One Writer for the answer rather than a Buffer per item number joined at the end (50 items a request).
   const w = new Writer().uvlq64(0n);
   results.forEach((v, i) => {
-    if (v) w.uvlq32(i + 1).bytes(v);
+    if (typeof v !== 'bigint') w.uvlq32(i + 1).bytes(v);
   });
   w.uvlq32(0);
   results.forEach((v, i) => {
-    if (!v) w.uvlq32(i + 1).uvlq64(ITEM_ERROR_UNRESOLVED);
+    if (typeof v === 'bigint') w.uvlq32(i + 1).uvlq64(v);
   });
   return w.uvlq32(0).toBuffer();
 }
 
 /** The PValue an item address names now, or undefined when it names nothing the CPU serves. */
-export function itemValue(cpu: CpuSide, item: ItemAddress): Buffer | undefined {
-  const t = target(cpu, item);
+export function itemValue(cpu: CpuSide, item: ItemPath): Buffer | undefined {
+  return valueOf(cpu, target(cpu, item));
+}
+
+function valueOf(cpu: CpuSide, t: Target | undefined): Buffer | undefined {
   if (!t) return undefined;
   if (t.kind === 'rid') return Buffer.concat([Buffer.from([0x00, DataType.RID]), u32be(t.rid)]);
+  if (t.kind === 'limit') return Buffer.concat([Buffer.from([0x00, DataType.DInt]), encodeSVlq32(t.value)]);
   const image = cpu.memory.area(t.area, t.db);
   if (!image || (t.kind === 'node' ? t.node.byte + t.node.size : t.byte + t.size) > image.length) return undefined;
   return t.kind === 'node' ? readNode(t.node, image) : blob(Buffer.from(image.subarray(t.byte, t.byte + t.size)));
 }
 
-/** GetMultiVariables: each item's value, or its error. */
+/** GetMultiVariables: each item's value, or its error (InvalidCRC for a SymbolCrc not its path's). */
 export function getMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
-  return itemList(readAddresses(new Reader(body), cpu).map((item) => itemValue(cpu, item)));
+  return itemList(
+    readAddresses(new Reader(body), cpu.limits.tagsPerRead).map((item) => {
+      const t = target(cpu, item);
+      if (crcRefused(item, t)) return ITEM_ERROR_INVALID_CRC;
+      return valueOf(cpu, t) ?? ITEM_ERROR_UNRESOLVED;
+    }),
+  );
 }
 
 function u32be(v: number): Buffer {
@@ -177,7 +218,7 @@ function u32be(v: number): Buffer {
 /** SetMultiVariables of data: each item written, or its error (nothing of that item written). */
 export function setMultiVariables(cpu: CpuSide, body: Buffer, mayWrite: boolean): Buffer {
   const r = new Reader(body);
-  const items = readAddresses(r, cpu);
+  const items = readAddresses(r, cpu.limits.tagsPerWrite);
   const values = new Map<number, Buffer>();
   for (let i = 0; i < items.length; i++) {
     const nr = r.uvlq32();
@@ -189,6 +230,7 @@ export function setMultiVariables(cpu: CpuSide, body: Buffer, mayWrite: boolean)
   items.forEach((item, i) => {
     const raw = values.get(i + 1);
     const t = target(cpu, item);
+    if (crcRefused(item, t)) return void errors.push(encodeUVlq32(i + 1), encodeUVlq64(ITEM_ERROR_INVALID_CRC));
     let ok = false;
     // Without the password (read access) every write is refused.
     if (!mayWrite) ok = false;
