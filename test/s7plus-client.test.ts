@@ -137,13 +137,13 @@ describe('s7plus client against the s7commplus emulator', function () {
       });
       const session = (client as unknown as { session: { integrityIds: unknown } }).session;
       // The reads: the protection level at connect, the PLC's SystemLimits (once per session, issue #32; the emulator reports none) and the two above.
-      expect(session.integrityIds).to.deep.equal({ read: 3, write: 1 });
+      expect(session.integrityIds).to.deep.equal({ read: 4, write: 1 });
       expect(await client.cpuState()).to.equal('RUN');
       await peer.setCpuState('STOP');
       expect(await client.cpuState()).to.equal('STOP');
       await peer.setCpuState('RUN');
       expect((await client.dataBlocks()).map((b) => b.number)).to.deep.equal([1]);
-      expect(session.integrityIds).to.deep.equal({ read: 6, write: 1 });
+      expect(session.integrityIds).to.deep.equal({ read: 7, write: 1 });
       await client.close();
     });
 
