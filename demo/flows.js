@@ -100,8 +100,9 @@ function demoFlow(urls) {
 }
 
 /**
- * The demo plant's default URLs (`npx plcwire demo`). The s7plus one carries no fingerprint: the simulator makes
- * its certificate at start, so a flow saved from these URLs (the Dashboard 2 example) pins it with Get certificate;
+ * The demo plant's default URLs (`npx plcwire demo`). The s7plus one carries no fingerprint: the simulator's
+ * certificate is each user's own (made on the first start, then kept: demoCertificateDir()), so a flow saved from
+ * these URLs (the Dashboard 2 example) pins it once with Get certificate;
  * `npm start` gives the running plant's URLs, pinned.
  */
 const DEMO_URLS = Object.freeze({

@@ -21,7 +21,7 @@ function intro() {
       id: 'demo.comment',
       type: 'comment',
       name: 'Simulators: npm start (S7 + S7CommPlus 10102, FETCH/WRITE 12000/12001, freeport 14001)',
-      info: 'Run `npx plcwire demo` to start the same simulated plant without Node-RED.\n\nThe S7 and CP connections hold the source of the plant\'s DB1 (`Plant.db`, as TIA Portal generates it): their nodes read and write by name, `"Plant".Level`. Open a connection node to see its blocks.\n\nThe S7CommPlus connection reads the S7-1200\'s optimized DB `"Tank"` by name with no source file: the names come from the PLC (*Browse PLC* in the connection dialog lists them). It speaks TLS, trusting the simulator\'s certificate by its fingerprint in the URL; the simulator makes a new certificate at every start, so in a copy of this flow press *Get certificate* and *Pin* in the connection dialog.',
+      info: 'Run `npx plcwire demo` to start the same simulated plant without Node-RED.\n\nThe S7 and CP connections hold the source of the plant\'s DB1 (`Plant.db`, as TIA Portal generates it): their nodes read and write by name, `"Plant".Level`. Open a connection node to see its blocks.\n\nThe S7CommPlus connection reads the S7-1200\'s optimized DB `"Tank"` by name with no source file: the names come from the PLC (*Browse PLC* in the connection dialog lists them). It speaks TLS, trusting the simulator\'s certificate by its fingerprint in the URL; the simulator makes its certificate on its first start and keeps it for you (`npm start` and `npx plcwire demo` alike), so in a copy of this flow press *Get certificate* and *Pin* in the connection dialog once.',
       ...at(380, 40),
     },
     {

@@ -12,6 +12,7 @@ import { S7Server, type S7Profile } from '../lib/s7/server';
 import { compileSymbols } from '../lib/symbols/compile';
 import type { DataTypeName } from '../lib/types';
 import { encodeInto, JS_TYPES } from '../lib/values';
+import { CPU315 } from './fixtures/s7-userdata';
 import { freePort } from './support/net';
 import { until, waitFor } from './support/wait';
 
@@ -697,6 +698,44 @@ describe('plcwire system commands (the installed binary against the simulator)',
     expect((JSON.parse(r.out) as { decoded: unknown }).decoded).to.deep.equal([
       { index: 1, maxPdu: 240, maxConnections: 16, mpiRate: 187_500, busRate: 10_000_000 },
     ]);
+  });
+
+  it('szl 0x0131 2 and 3: the S7-300 answers its test and commissioning and operator interface records as its CPU 315-2 PN/DP does (issue #31)', async () => {
+    const url = await start('s7-300');
+    let r = await plcwire(['szl', url, '0x0131', '2', '--json']);
+    expect(r.code, r.err).to.equal(0);
+    const two = JSON.parse(r.out) as { index: string; records: string[]; decoded: Record<string, unknown>[] };
+    expect(two.index).to.equal('0x0002');
+    // The CPU's own record, byte for byte (test/fixtures/s7-userdata.ts says where it comes from).
+    expect(two.records).to.deep.equal([CPU315.communicationIndex2.toString('hex')]);
+    expect(two.decoded[0]).to.deep.include({ index: 2, forceableVariables: 10, runtimeLimitSeconds: 0 });
+    expect(two.decoded[0]!.functions).to.include.members([
+      'block status',
+      'variable status',
+      'force selection',
+      'modify variable',
+      'breakpoint',
+    ]);
+    r = await plcwire(['szl', url, '0x0131', '3', '--json']);
+    expect(r.code, r.err).to.equal(0);
+    const three = JSON.parse(r.out) as { records: string[]; decoded: unknown[] };
+    expect(three.records).to.deep.equal([CPU315.communicationIndex3.toString('hex')]);
+    expect(three.decoded[0]).to.deep.include({
+      index: 3,
+      maxConsistentBytes: 240,
+      maxCyclicReadJobs: 16,
+      cyclicPeriodMinMs: 100,
+      cyclicPeriodMaxMs: 52_100,
+    });
+    // The text output names the index the record carries.
+    r = await plcwire(['szl', url, '0x0131', '2']);
+    expect(r.code, r.err).to.equal(0);
+    expect(r.out)
+      .to.match(/index 0x0002/)
+      .and.match(/force selection/);
+    // An index that CPU does not have is refused, as before.
+    r = await plcwire(['szl', url, '0x0131', '9']);
+    expect(r.code).to.equal(EXIT.TAG_ERROR);
   });
 
   it('diag --max gives the most recent entries, newest first', async () => {

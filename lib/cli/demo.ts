@@ -1,19 +1,47 @@
 /** `plcwire demo`: the three simulated PLCs with a running process, until Ctrl-C. */
 import * as path from 'node:path';
-import { DEMO_STATIONS, startPlant } from '../plant/plant';
+import { ValueError } from '../errors';
+import { demoCertificateDir } from '../plant/certificate-dir';
+import { DEMO_PORTS, DEMO_STATIONS, startPlant, type Plant } from '../plant/plant';
 import { DEMO_TAGS } from '../plant/process';
 import { TANK_SYMBOLS } from '../plant/tank';
+import { intFlag, stringFlag, UsageError, type ParsedArgs } from './args';
 import { EXIT, untilInterrupted, type CliIo } from './io';
 
 /** demo/Plant.db beside dist/ (in the repository and in the installed package alike). */
 const PLANT_SOURCE_FILE = path.resolve(__dirname, '..', '..', '..', 'demo', 'Plant.db');
 
-export async function runDemo(io: CliIo): Promise<number> {
-  const plant = await startPlant();
+/**
+ * The plant on the ports the flags name (0: any free port), its S7-1200's certificate kept in --tls-dir, by default
+ * the directory `npm start` keeps it in (demoCertificateDir()): a URL pinned once stays pinned.
+ */
+async function plantOf(args: ParsedArgs, tlsDir: string): Promise<Plant> {
+  const port = (flag: string, fallback: number) => intFlag(args, flag, fallback, 0, 65535);
+  const ports = {
+    s7: port('port', DEMO_PORTS.s7),
+    fetch: port('fetch-port', DEMO_PORTS.fetch),
+    write: port('write-port', DEMO_PORTS.write),
+    freeport: port('freeport-port', DEMO_PORTS.freeport),
+  };
+  try {
+    return await startPlant({ ports, tlsDir });
+  } catch (err) {
+    // What is wrong with the directory, said with the flag that names it.
+    if (err instanceof ValueError && err.tag === 'tlsDir')
+      throw new UsageError(`--tls-dir: ${err.message.slice(err.message.indexOf(': ') + 2)}`);
+    throw err;
+  }
+}
+
+export async function runDemo(rest: readonly string[], args: ParsedArgs, io: CliIo): Promise<number> {
+  if (rest.length > 0) throw new UsageError(`unexpected argument "${rest[0]}"`);
+  const tlsDir = stringFlag(args, 'tls-dir') ?? demoCertificateDir();
+  const plant = await plantOf(args, tlsDir);
   const say = (line: string) => io.stdout.write(`${line}\n`);
   say('plcwire demo plant running (simulated S7-1200 with S7CommPlus, FETCH/WRITE CP and S7-200 freeport stations):');
   say(`  S7          ${plant.urls.s7}`);
-  say(`  S7CommPlus  ${plant.urls.s7plus}  (TLS, pinned by the certificate made at start; the optimized DB "Tank" by name)`);
+  say(`  S7CommPlus  ${plant.urls.s7plus}  (TLS; the optimized DB "Tank" by name)`);
+  say(`              the certificate is kept in ${tlsDir}: the same fingerprint at every run`);
   say(`  FETCH/WRITE ${plant.urls.fetchwrite}`);
   say(`  freeport    ${plant.urls.freeport}  (stations ${DEMO_STATIONS.level}: level REAL, ${DEMO_STATIONS.parts}: parts DINT)`);
   say('try:');

@@ -119,8 +119,15 @@ Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reach
                      start and the same after, so a pinned fingerprint= still holds; else made anew at every start
 example:
   plcwire serve s7 --port 10102 --profile s7-1200 --source Plant.db --db Plant=1`,
-  demo: `usage: plcwire demo
+  demo: `usage: plcwire demo [options]
 Runs all three simulators with a running process (no Node-RED) until Ctrl-C and prints try: lines.
+options:
+  --tls-dir DIR        keep the S7-1200's certificate in DIR, made on the first run (default: the directory
+                       npm start keeps it in), so a pinned fingerprint= holds at every run
+  --port N             the S7-1200's port, S7comm and S7CommPlus (default 10102; 0: any free port)
+  --fetch-port N       the FETCH/WRITE CP's ports (default 12000 and 12001)
+  --write-port N
+  --freeport-port N    the S7-200 freeport stations' TCP port (default 14001)
 example:
   plcwire demo`,
 };

@@ -41,7 +41,7 @@ const USAGE = `usage:
                    [--source Tank.db... --db Tank=1...] [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE]
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
-  plcwire demo
+  plcwire demo [--tls-dir DIR] [--port 10102] (the S7-1200's certificate kept between runs; demo --help: every port)
 options: --debug prints stack traces; --help (-h) prints this text, plcwire <command> --help that command's;
       --version the package's version.
 symbols: names as TIA writes them ('"Tank".Motor.Speed', Tank.Motor.Speed); a STRUCT reads as an object
@@ -53,7 +53,7 @@ password (s7plus:// only): PLCWIRE_PASSWORD or --password-file FILE (its first l
       freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
 exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
-const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', 'password-file', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
+const VALUE_FLAGS = ['timeout', 'interval', 'max', 'set', 'password-file', 'freeport-port', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
 const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'version', 'strict-symbols'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
@@ -118,7 +118,7 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
       case 'serve':
         return await serve(rest, args, io);
       case 'demo':
-        return await (await import('./demo')).runDemo(io);
+        return await (await import('./demo')).runDemo(rest, args, io);
       default:
         throw new UsageError(
           `unknown command "${command}" (read, write, watch, symbols, browse, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`,

@@ -1,40 +1,36 @@
-import { isAddress } from '../address/parse';
 import { ValueError } from '../errors';
+import { byLeafType, type Convert, type TypedClient } from '../symbols/leaf-types';
 import type { SymbolTable } from '../symbols/model';
 import type { DataTypeName, PlcScalar, PlcValue } from '../types';
-import { textOf, valueToText } from '../values/text';
-import { timeText } from '../values/time-text';
+import { Literal, textOf, valueToText } from '../values/text';
+import { isTimeType, timeText } from '../values/time-text';
 export { valueToText };
-
-/** What the CLI asks a client to tell a target's type: its tag, and the PLC's own table where it browsed one. */
-interface TypedClient {
-  tag(address: string): unknown;
-  readonly browsedTable?: SymbolTable | undefined;
-}
-
-/** The data type `target` was declared with (an address's, a symbol's, an array's element type), or undefined. */
-function declaredType(client: TypedClient, table: SymbolTable | undefined, target: string): string | undefined {
-  const symbols = table ?? client.browsedTable;
-  if (symbols && !isAddress(target)) {
-    const entry = symbols.lookup(target);
-    if (entry) return entry.dataType;
-  }
-  try {
-    const type = (client.tag(target) as { type?: unknown }).type;
-    return typeof type === 'string' ? type : undefined;
-  } catch {
-    return undefined;
-  }
-}
 
 /**
  * A read value as the CLI's text output shows it: TIME, DATE, TIME_OF_DAY and
  * the other time types as TIA writes them (`T#5S`, `D#2024-01-31`,
- * `TOD#12:00:00.000`, lib/values/time-text.ts), everything else as textOf.
- * The JSON output keeps the value (numbers of ms, ISO dates).
+ * `TOD#12:00:00.000`, lib/values/time-text.ts), a struct's members of those
+ * types too (by its shape or the PLC's browsed entry, lib/symbols/leaf-types.ts),
+ * everything else as textOf. The JSON output keeps the value (numbers of ms,
+ * ISO dates).
  */
 export function textForPeople(client: TypedClient, table: SymbolTable | undefined, target: string, value: unknown): string {
-  return timeText(declaredType(client, table, target), value) ?? textOf(value);
+  let convert: Convert | undefined;
+  try {
+    convert = byLeafType(client, table, target, timeLiteral);
+  } catch {
+    convert = undefined; // a target that does not parse was refused before its value was read
+  }
+  return textOf(convert ? convert(value) : value);
+}
+
+/** The conversion of a value of `type` to its TIA literal, or undefined for a type that has none. */
+function timeLiteral(type: string | undefined): Convert | undefined {
+  if (!isTimeType(type)) return undefined;
+  return (value) => {
+    const text = timeText(type, value);
+    return text === undefined ? value : new Literal(text);
+  };
 }
 
 /** The part of a tag the CLI needs to turn text into a value. */

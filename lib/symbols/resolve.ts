@@ -30,7 +30,7 @@ import { assembleStruct, expandStruct, memberKey, type StructTree } from './stru
 export type SymbolShape<T> = StructTree<ShapeLeaf<T>>;
 
 /** A struct's elementary member as a driver reaches it by address. */
-export interface ShapeLeaf<T> {
+interface ShapeLeaf<T> {
   /** The driver's tag of the member, named by its full symbol (the key of its errors). */
   readonly tag: T;
   /** Its shape for the value codecs (S7 syntax, as every entry address is written). */

@@ -6,12 +6,18 @@ export function valueToText(value: unknown): string {
   return String(value);
 }
 
+/** Text already written for people (a TIA time literal in a struct): textOf prints it as it is, unquoted. */
+export class Literal {
+  constructor(readonly text: string) {}
+}
+
 /**
  * Text for people of any value read: as valueToText, and a STRUCT (an object
  * keyed by member name, read by symbol) as `{ Speed: 1.5, On: true }`, a key
  * quoted when it is not a plain name.
  */
 export function textOf(value: unknown): string {
+  if (value instanceof Literal) return value.text;
   if (Array.isArray(value)) return `[${value.map(textOf).join(', ')}]`;
   if (typeof value !== 'object' || value === null || value instanceof Date) return valueToText(value);
   const members = Object.entries(value).map(([k, v]) => `${/^[A-Za-z_]\w*$/.test(k) ? k : JSON.stringify(k)}: ${textOf(v)}`);

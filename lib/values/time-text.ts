@@ -79,7 +79,7 @@ function literal(type: string, value: unknown): string | undefined {
 }
 
 /** True for the types this file writes as TIA literals. */
-function isTimeType(type: string | undefined): boolean {
+export function isTimeType(type: string | undefined): boolean {
   return type !== undefined && ['TIME', 'LTIME', 'S5TIME', 'TIME_OF_DAY', 'DATE', 'DATE_AND_TIME', 'DTL'].includes(type);
 }
 

@@ -201,6 +201,11 @@ export interface CpuIdentity {
   blockFunctions: boolean;
   /** Connection password (userdata group 5). */
   passwordFunctions: boolean;
+  /**
+   * SZL 0x0131 records beyond index 1 (which the simulator builds from the connection), as the CPU
+   * sends them (40 bytes, hex), by index; an index not here is refused as the CPU refuses it.
+   */
+  communicationRecords?: Readonly<Record<number, string>>;
 }
 
 const COPYRIGHT = 'Original Siemens Equipment';
@@ -223,6 +228,34 @@ export const IDENTITIES: Readonly<Record<S7Profile, Readonly<CpuIdentity>>> = Ob
     copyright: COPYRIGHT,
     blockFunctions: true,
     passwordFunctions: true,
+    // SZL 0x0131 index 2 (test and commissioning: block and variable status, force of 10 variables, breakpoints) and
+    // index 3 (operator interface: read, write and cyclic reading of I/O, bit memory, DBs, timers and counters; 16
+    // cyclic jobs of 100 ms to 52.1 s) of a CPU 315-2 PN/DP (6ES7 315-2EH14-0AB0), as published in snap7's server
+    // data (src/core/s7_firmware.h, "they come from a physical CPU"; field layout: Siemens, "System Software for
+    // S7-300/400 System and Standard Functions", SSL-ID W#16#xy31). Index 3's consistent data, 240 bytes, is the PDU.
+    // No such record of the other profiles' CPUs was found: they refuse indexes 2 and 3 rather than invent them.
+    communicationRecords: Object.freeze({
+      // index, funkt_0..5, aseg, eseg, trgereig_0..2, trgbed, pfad, tiefe, systrig, erg_par, erg_pat_1/2, force, time, res
+      2: [
+        '0002',
+        'befd4f000000',
+        '000008000000',
+        '3c0108000000',
+        '7d0000',
+        '05',
+        '03',
+        '0f',
+        '00',
+        '00',
+        '0800',
+        '000c',
+        '000a',
+        '0000',
+        '00010000',
+      ].join(''),
+      // index, funkt_0..3, data, anz, per_min, per_max, 26 bytes reserved
+      3: ['0003', '7ffc8301', '00f0', '0010', '0001', '0209', '00'.repeat(26)].join(''),
+    }),
   }),
   's7-400': Object.freeze({
     orderCode: '6ES7 416-3ES07-0AB0',

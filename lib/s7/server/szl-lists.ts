@@ -64,9 +64,14 @@ export function szlList(id: number, index: number, v: SzlView): SzlList | number
       const list = encodeComponentIdentification(fields, id === 0x011c ? index : 0);
       return list.records.length === 0 ? E.SZL_INDEX : list;
     }
-    case SZL.COMMUNICATION:
-      if (index !== 1) return E.SZL_INDEX;
-      return encodeCommunication({ maxPdu: v.pduSize, maxConnections: v.maxConnections, mpiRate: 187_500, busRate: 10_000_000 });
+    case SZL.COMMUNICATION: {
+      if (index === 1)
+        return encodeCommunication({ maxPdu: v.pduSize, maxConnections: v.maxConnections, mpiRate: 187_500, busRate: 10_000_000 });
+      // Other indexes as the profile's CPU sends them (profiles.ts, communicationRecords).
+      const record = i.communicationRecords?.[index];
+      if (record === undefined) return E.SZL_INDEX;
+      return { id, index, recordLength: record.length / 2, records: [Buffer.from(record, 'hex')] };
+    }
     case SZL.PROTECTION:
       if (index !== 4) return E.SZL_INDEX;
       return encodeProtection({
