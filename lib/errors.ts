@@ -188,9 +188,14 @@ export class TagErrors<T = unknown> extends PlcError {
 
 export type TagResult<T = unknown> = { ok: true; value: T } | { ok: false; error: PlcError };
 
-/** The error of a request (or connection attempt) given up because `signal` was aborted. */
-export function abortError(description: string, signal: AbortSignal): PlcError {
-  return new PlcError('ABORTED', `${description} was aborted`, { cause: signal.reason });
+/**
+ * The error of a request (or connection attempt, or command) given up before
+ * its answer: because `signal` was aborted (its reason is the cause), or, with
+ * no signal, because the caller gave up on it. The one place an ABORTED error
+ * is made, so every abort reads the same ("… was aborted").
+ */
+export function abortError(description: string, signal?: AbortSignal): PlcError {
+  return new PlcError('ABORTED', `${description} was aborted`, signal ? { cause: signal.reason } : {});
 }
 
 /**

@@ -77,7 +77,7 @@ export type { BackoffOptions } from './link/backoff';
 export type { FrameCheck } from './link/framer';
 
 export * as s7 from './s7/codec';
-export { S7Client, type ItemLimitEvent, type S7Stats } from './s7/client';
+export { S7Client, type ItemLimitEvent, type S7ClientEvents, type S7Stats } from './s7/client';
 export type { S7Session } from './s7/client';
 export {
   planRead,
@@ -109,6 +109,8 @@ export { certificateInDirectory, CERTIFICATE_FILES } from './s7plus/transport/ce
 /** The S7CommPlus client (`connect('s7plus://…')` gives one) and its subscriptions: `client.subscribe(tags, { cycle })`. */
 export {
   S7PlusClient,
+  type S7PlusClientEvents,
+  type InsecureEvent,
   S7PlusSubscription,
   type SubscribeOptions,
   type SubscriptionChange,

@@ -2,7 +2,7 @@
  * The shared model every driver speaks: data types, parsed tags, values,
  * per-tag results and the client interface returned by `connect(url)`.
  */
-import type { EventEmitter } from 'node:events';
+import type { TypedEvents } from './client/events';
 import type { PlcError, TagResult } from './errors';
 
 export type DataTypeName =
@@ -150,11 +150,39 @@ export interface LayoutOkEvent {
   checks: LayoutCheck[];
 }
 
+/** The `reconnecting` event: the next attempt in `delay` ms, the `attempt`-th since the link went, and why the last one failed. */
+export interface ReconnectingEvent {
+  delay: number;
+  attempt: number;
+  error: PlcError;
+}
+
+/**
+ * The events every client emits and their arguments (see PlcClient): a
+ * listener of a misspelt event (`client.on('conected', …)`) or of another
+ * event's argument does not compile. A driver's client adds its own
+ * (S7ClientEvents, S7PlusClientEvents).
+ */
+export interface ClientEvents {
+  state: [state: LinkState];
+  connecting: [];
+  connected: [];
+  disconnected: [error: PlcError];
+  reconnecting: [event: ReconnectingEvent];
+  /** Only emitted when someone listens. */
+  error: [error: PlcError];
+  closed: [];
+  layoutMismatch: [event: LayoutMismatchEvent];
+  layoutUnknown: [event: LayoutUnknownEvent];
+  layoutOk: [event: LayoutOkEvent];
+}
+
 /**
  * What `connect(url)` returns, whatever the protocol.
  *
- * Events (state changes only): `connecting`, `connected`, `disconnected` (err),
- * `reconnecting` ({ delay, attempt }), `error` (err), `state` (LinkState).
+ * Events (state changes only; typed by ClientEvents): `connecting`, `connected`,
+ * `disconnected` (err), `reconnecting` (ReconnectingEvent `{ delay, attempt, error }`),
+ * `error` (err), `state` (LinkState), `closed`.
  * S7Client also emits `itemLimit` (ItemLimitEvent `{ limit, was }`) once when
  * the PLC answers fewer items than a job asked for: from then on it plans jobs
  * of at most `limit` items (see S7Endpoint.maxItems).
@@ -171,7 +199,7 @@ export interface LayoutOkEvent {
  *   no such service); nothing is refused;
  * - `layoutOk` (LayoutOkEvent `{ checks }`): every block matches (again).
  */
-export interface PlcClient extends EventEmitter {
+export interface PlcClient extends TypedEvents<ClientEvents> {
   readonly protocol: Protocol;
   readonly state: LinkState;
   /**

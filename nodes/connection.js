@@ -213,6 +213,7 @@ module.exports = function (RED) {
    *   the sources, else the PLC's browsed table (the deployed connection's client, or a browse kept a few seconds;
    *   the password typed or the node's credential): the PLC's type, invalid with the closest names, or `unchecked`.
    * POST plcwire/csv { url?, text } → { url, tags, problems }; POST plcwire/csv/export { tags } → { csv };
+   * POST plcwire/duplicates { tags } → { duplicates: [{ name, rows }] };
    * POST plcwire/url { url } | { endpoint } → { ok, url, endpoint, key }; GET plcwire/presets → the CPU presets.
    */
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
@@ -240,6 +241,7 @@ module.exports = function (RED) {
 
   RED.httpAdmin.post('/plcwire/csv', canRead, (req, res) => res.json(editor.csvImportAnswer(req.body || {})));
   RED.httpAdmin.post('/plcwire/csv/export', canRead, (req, res) => res.json(editor.csvExportAnswer(req.body || {})));
+  RED.httpAdmin.post('/plcwire/duplicates', canRead, (req, res) => res.json(editor.duplicatesAnswer(req.body || {})));
   RED.httpAdmin.post('/plcwire/url', canRead, (req, res) => res.json(editor.urlAnswer(req.body || {})));
   RED.httpAdmin.get('/plcwire/presets', canRead, (req, res) => res.json(plc.S7_CPU_PRESETS));
 

@@ -282,28 +282,54 @@
     return out;
   }
 
-  /** The name a row is known by: its name, or its address when it has none. */
-  function rowName(row) {
-    return String((row && row.name) || '').trim() || String((row && row.address) || '').trim();
-  }
-
-  /** Names given to more than one row. */
-  editor.duplicateNames = function (rows) {
-    var count = {};
-    (rows || []).forEach(function (r) {
-      var n = rowName(r);
-      if (n) count[n] = (count[n] || 0) + 1;
-    });
-    return Object.keys(count).filter(function (n) {
-      return count[n] > 1;
+  /**
+   * The names given to more than one of `rows` ({ name, address }), as the
+   * runtime counts them (POST plcwire/duplicates): calls back with
+   * [{ name, rows: indexes }], or [] when the runtime does not answer.
+   */
+  editor.duplicateNames = function (rows, callback) {
+    $.ajax({
+      url: 'plcwire/duplicates',
+      type: 'POST',
+      contentType: 'application/json',
+      data: JSON.stringify({ tags: tagRows(rows) }),
+      success: function (res) {
+        callback((res && res.duplicates) || []);
+      },
+      error: function () {
+        callback([]);
+      },
     });
   };
+
+  function tagRows(rows) {
+    return (rows || []).map(function (r) {
+      return { name: String((r && r.name) || ''), address: String((r && r.address) || '') };
+    });
+  }
+
+  // A validate function answers at once: the names used twice in a node's table as the runtime said
+  // before, asked when not known yet (every plcwire node is validated again when the answer arrives).
+  var duplicateAnswers = {}; // the table's rows as JSON → [{ name, rows }]
+  function knownDuplicates(rows) {
+    var key = JSON.stringify(tagRows(rows));
+    if (duplicateAnswers[key]) return duplicateAnswers[key];
+    if (duplicateAnswers[key] === undefined) {
+      if (Object.keys(duplicateAnswers).length > 200) duplicateAnswers = {}; // tables edited away are asked again if they come back
+      duplicateAnswers[key] = null; // asked; null until the answer
+      editor.duplicateNames(rows, function (duplicates) {
+        duplicateAnswers[key] = duplicates;
+        if (duplicates.length) revalidate();
+      });
+    }
+    return [];
+  }
 
   /** For a node's `tags` validate: true, or what is wrong (names used twice, addresses the parser refuses). */
   editor.validateTags = function (node, tags) {
     if (!Array.isArray(tags)) return false;
-    var problems = editor.duplicateNames(tags).map(function (n) {
-      return node._('plcwire.editor.duplicateName', { name: n });
+    var problems = knownDuplicates(tags).map(function (d) {
+      return node._('plcwire.editor.duplicateName', { name: d.name });
     });
     problems = problems.concat(
       addressProblems(
@@ -436,15 +462,21 @@
     }
 
     function markDuplicates(items) {
-      var rows = items.map(rowOf);
-      var twice = editor.duplicateNames(rows);
-      items.forEach(function (item, i) {
-        var name = rowName(rows[i]);
-        var duplicate = twice.indexOf(name) >= 0;
-        item
-          .find('.plcwire-tag-name')
-          .toggleClass('plcwire-invalid', duplicate)
-          .attr('title', duplicate ? t('plcwire.editor.duplicateName', { name: name }) : '');
+      editor.duplicateNames(items.map(rowOf), function (duplicates) {
+        if (closed) return;
+        var nameOf = {}; // row index → the name it shares with another row
+        duplicates.forEach(function (d) {
+          d.rows.forEach(function (i) {
+            nameOf[i] = d.name;
+          });
+        });
+        items.forEach(function (item, i) {
+          var name = nameOf[i];
+          item
+            .find('.plcwire-tag-name')
+            .toggleClass('plcwire-invalid', name !== undefined)
+            .attr('title', name !== undefined ? t('plcwire.editor.duplicateName', { name: name }) : '');
+        });
       });
     }
 

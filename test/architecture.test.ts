@@ -314,6 +314,14 @@ describe('architecture of lib/', () => {
     ).to.deep.equal([]);
   });
 
+  it("an ABORTED error is made in lib/errors.ts only (abortError), so every abort reads the same and keeps the signal's reason", () => {
+    const making = /new\s+\w*Error\(\s*'ABORTED'/;
+    const makers = [...GRAPH.keys()].filter((f) => making.test(fs.readFileSync(path.join(ROOT, f), 'utf8')));
+    // The pattern finds the one maker that must stay: it is not blind.
+    expect(makers).to.include('lib/errors.ts');
+    expect(makers.filter((f) => f !== 'lib/errors.ts')).to.deep.equal([]);
+  });
+
   it(`no file in lib/ is over ${MAX_LINES} lines, except the ones LONG_FILES names with a reason`, () => {
     expect(overLong(LINES, LONG_FILES, MAX_LINES)).to.deep.equal([]);
   });

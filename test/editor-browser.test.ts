@@ -353,6 +353,10 @@ describe('editor: the plcwire dialogs in headless Chromium', function () {
             (e) => e.textContent !== '',
           ),
         );
+        // The names used twice come from the runtime (POST plcwire/duplicates): the mark follows its answer.
+        await page.waitForFunction(
+          () => (globalThis as any).document.querySelectorAll('#node-input-plcwire-tags .plcwire-tag-name.plcwire-invalid').length === 2,
+        );
         expect(await rows(page)).to.deep.equal([
           { name: 'speed', address: 'DB1.DBW0:INT', duplicate: true, type: 'INT' },
           { name: 'speed', address: 'DB1.DBW6:INT', duplicate: true, type: 'INT' },

@@ -4,7 +4,7 @@
  * test/nodered-symbols.test.ts and test/nodes/connection-s7plus.test.ts.
  */
 import { expect } from 'chai';
-import { csvExportAnswer, csvImportAnswer, symbolConfig, urlAnswer, validateAnswer } from '../lib/flows/editor-answers';
+import { csvExportAnswer, csvImportAnswer, duplicatesAnswer, symbolConfig, urlAnswer, validateAnswer } from '../lib/flows/editor-answers';
 
 describe('flows: the editor answers', () => {
   it("urlAnswer formats fields with each scheme's own defaults and parses a URL into them, with the PLC key", () => {
@@ -29,6 +29,17 @@ describe('flows: the editor answers', () => {
     const back = csvImportAnswer({ url: 'nope://', text: csv });
     expect(back.url).to.include({ ok: false });
     expect(back.tags[0]).to.deep.equal({ name: 'level', address: 'DB1.DBD0:REAL' });
+  });
+
+  it('duplicatesAnswer: the names given to more than one row, with their indexes; rows that are no objects count as empty', () => {
+    const rows = [{ name: 'a', address: 'MW0' }, null, { address: 'MW0' }, { name: 'MW0', address: 'MW2' }, { name: 'a', address: 'MW4' }];
+    expect(duplicatesAnswer({ tags: rows })).to.deep.equal({
+      duplicates: [
+        { name: 'a', rows: [0, 4] },
+        { name: 'MW0', rows: [2, 3] },
+      ],
+    });
+    expect(duplicatesAnswer({})).to.deep.equal({ duplicates: [] });
   });
 
   it("symbolConfig reads a request's sources as a connection's config, never strict (the editor checks, it does not refuse)", () => {

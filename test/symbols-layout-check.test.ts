@@ -34,7 +34,8 @@ async function failure(p: Promise<unknown>): Promise<PlcError> {
 /** Every layout event of a client, in order. */
 function record(client: S7Client | FetchWriteClient): { name: string; event: unknown }[] {
   const seen: { name: string; event: unknown }[] = [];
-  for (const name of ['layoutMismatch', 'layoutUnknown', 'layoutOk']) client.on(name, (event: unknown) => seen.push({ name, event }));
+  for (const name of ['layoutMismatch', 'layoutUnknown', 'layoutOk'] as const)
+    client.on(name, (event: unknown) => seen.push({ name, event }));
   return seen;
 }
 

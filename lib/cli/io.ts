@@ -5,7 +5,7 @@
  */
 import { createInterface } from 'node:readline';
 import type { AnyClient } from '../connect';
-import { isLinkError, PlcError, SourceError, TagErrors } from '../errors';
+import { abortError, isLinkError, PlcError, SourceError, TagErrors } from '../errors';
 import { UsageError } from './args';
 
 export const EXIT = Object.freeze({
@@ -95,7 +95,7 @@ export async function withClient<R>(client: AnyClient, io: CliIo, work: (client:
     });
     return await work(client);
   } catch (err) {
-    if (io.signal.aborted) throw new PlcError('ABORTED', 'interrupted');
+    if (io.signal.aborted) throw abortError('the command', io.signal);
     throw err;
   } finally {
     io.signal.removeEventListener('abort', onAbort);

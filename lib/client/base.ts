@@ -1,10 +1,11 @@
-import { EventEmitter } from 'node:events';
+import type { EventEmitter } from 'node:events';
 import type { Duplex } from 'node:stream';
 import { ConnectionError, PlcError, TagErrors, tagError, toPlcError, writeRefusal, type TagResult } from '../errors';
 import type { Driver, DriverSession, DriverTag, ReadValues } from '../link/driver';
+import { EventEmitterBase, type EventMap, type NoEvents, type TypedEvents } from './events';
 import { LinkSupervisor } from '../link/supervisor';
 import { expandWrite } from '../symbols/resolve';
-import type { LayoutCheck, LinkState, PlcClient, PlcData, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
+import type { ClientEvents, LayoutCheck, LinkState, PlcClient, PlcData, PlcValue, PreparedRead, Protocol, RequestOptions } from '../types';
 import { DEFAULT_TIMEOUT, type ClientOptions } from './options';
 import { ReadLists, recordBuilder, toResults, type ReadList } from './lists';
 import { ClientSymbols, shapeResults, shapeValues, type LayoutServices } from './symbols';
@@ -25,6 +26,16 @@ const LAYOUT_PARALLEL = 4;
 
 const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) as ReadValues;
 
+// ClientEvents' and the driver's Own listener methods (lib/client/events.ts), merged into the class (the only merge here).
+/* eslint-disable @typescript-eslint/no-unsafe-declaration-merging, @typescript-eslint/no-empty-object-type, @typescript-eslint/no-unused-vars */
+export interface BaseClient<
+  S extends DriverSession,
+  T extends DriverTag,
+  M = undefined,
+  Own extends EventMap<Own> = NoEvents,
+> extends TypedEvents<ClientEvents, Own> {}
+/* eslint-enable @typescript-eslint/no-empty-object-type, @typescript-eslint/no-unused-vars */
+
 /**
  * What every driver's client shares: the supervisor (connect, reconnect,
  * state events, close), address parsing with a cache, prepared reads
@@ -35,7 +46,10 @@ const NO_VALUES: ReadValues = Object.freeze({ values: [], errors: undefined }) a
  * Requests made while not connected fail fast with NOT_CONNECTED: a stale
  * write executed minutes later, when the link comes back, is worse than an error.
  */
-export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M = undefined> extends EventEmitter implements PlcClient {
+export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M = undefined, Own extends EventMap<Own> = NoEvents>
+  extends EventEmitterBase
+  implements PlcClient
+{
   abstract readonly protocol: Protocol;
   readonly name: string;
   protected readonly timeout: number;
@@ -67,13 +81,14 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
       () => this.driver.syntax,
       (address) => this.tag(address),
     );
-    // The supervisor's events are the client's; a new live session first starts its layout check.
+    // The supervisor's events are the client's (by name: untyped); a new live session first starts its layout check.
+    const self = this as unknown as EventEmitter;
     const events = {
       emit: (event: string, ...args: unknown[]) => {
         if (event === 'connected') this.symbols?.layout.linkUp();
-        return this.emit(event, ...args);
+        return self.emit(event, ...args);
       },
-      listenerCount: (event: string) => this.listenerCount(event),
+      listenerCount: (event: string) => self.listenerCount(event),
     };
     this.supervisor = new LinkSupervisor<S>({
       name: options.name,
@@ -168,7 +183,7 @@ export abstract class BaseClient<S extends DriverSession, T extends DriverTag, M
   private layoutServices(): LayoutServices {
     const { driver } = this;
     return {
-      events: this,
+      events: this as unknown as EventEmitter,
       blockLength: driver.blockLength
         ? (db, signal) => {
             const session = this.liveSession();

@@ -12,14 +12,14 @@ import { EventEmitter } from 'node:events';
 import { createClient, type AnyClient, type ConnectOptions } from '../connect';
 import { PlcError } from '../errors';
 import type { SymbolTable } from '../symbols';
-import type { LinkState } from '../types';
+import type { LinkState, PlcClient } from '../types';
 import { endpointKey, endpointName, parseUrl, type Endpoint } from '../url';
 
 /** Parameters that change what a client may do to the PLC: two owners must agree on them to share a client. */
 const SAFETY = ['readOnly', 'allow', 'control'] as const;
 
 /** What a pooled link's client must do (an AnyClient; tests may give a stand-in). */
-export interface PoolClient extends Pick<EventEmitter, 'on'> {
+export interface PoolClient extends Pick<PlcClient, 'on'> {
   /** The link's state: the client's supervisor's (LinkSupervisor.state), the one source of it. */
   readonly state: LinkState;
   start(): void;

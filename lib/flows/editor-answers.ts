@@ -11,7 +11,7 @@ import { createClient } from '../connect';
 import { toPlcError } from '../errors';
 import type { SymbolTable } from '../symbols';
 import type { DriverTag } from '../link/driver';
-import { tagsFromCsv, tagsToCsv, type TagRow, type TagTableProblem } from '../tags/table';
+import { duplicateNames, tagsFromCsv, tagsToCsv, type TagRow, type TagTableProblem } from '../tags/table';
 import { endpointKey, formatUrl, parseUrl, type Endpoint } from '../url';
 import { checkAddresses, type NameAnswer } from './name-check';
 import { compileCached, type SymbolConfig } from './symbol-config';
@@ -115,14 +115,27 @@ export function csvImportAnswer(body: Body): { url: { ok: true } | UrlProblem; t
   }
 }
 
-/** POST plcwire/csv/export { tags: [{ name, address }] } → { csv }, the form csvImportAnswer reads back. */
-export function csvExportAnswer(body: Body): { csv: string } {
+/** A request's `tags: [{ name, address }]` (at most MAX_EXPORT_ROWS; anything else is an empty row). */
+function tagRowsOf(body: Body): TagRow[] {
   const rows = Array.isArray(body.tags) ? (body.tags as unknown[]).slice(0, MAX_EXPORT_ROWS) : [];
-  const tags = rows.map((t) => {
+  return rows.map((t) => {
     const row = (t && typeof t === 'object' ? t : {}) as Body;
     return { name: textOf(row.name), address: textOf(row.address) };
   });
-  return { csv: tagsToCsv(tags) };
+}
+
+/** POST plcwire/csv/export { tags: [{ name, address }] } → { csv }, the form csvImportAnswer reads back. */
+export function csvExportAnswer(body: Body): { csv: string } {
+  return { csv: tagsToCsv(tagRowsOf(body)) };
+}
+
+/**
+ * POST plcwire/duplicates { tags: [{ name, address }] } → { duplicates: [{ name, rows }] }:
+ * the names given to more than one row (a row without a name is known by its
+ * address), with those rows' indexes, counted as the runtime counts them.
+ */
+export function duplicatesAnswer(body: Body): { duplicates: { name: string; rows: number[] }[] } {
+  return { duplicates: duplicateNames(tagRowsOf(body)) };
 }
 
 /**

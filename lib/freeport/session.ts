@@ -4,7 +4,7 @@
  * timeout before the next, a quiet gap between frames, retries on silence or
  * corruption. A silent station fails only its own request; the line stays up.
  */
-import { ConnectionError, PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
+import { abortError, ConnectionError, type PlcError, ProtocolError, TimeoutError, toPlcError } from '../errors';
 import { JobQueue } from '../link/jobs';
 import { PendingRequests } from '../link/pending';
 import type { DriverSession } from '../link/supervisor';
@@ -131,7 +131,8 @@ export class FreeportSession implements DriverSession {
     const id = this.nextId++;
     this.current = { id, station: request.station };
     this.parser.reset(); // a half reply from before must not join this one
-    const reply = this.pending.add(id, this.discipline.timeout, `${request.command} of station ${request.station}`, signal);
+    const what = `${request.command} of station ${request.station}`;
+    const reply = this.pending.add(id, this.discipline.timeout, what, signal);
     reply.catch(() => {}); // settled below either way; a throw from write() must not leave it unhandled
     try {
       this.transport.write(encodeRequest(request, this.profile));
@@ -140,7 +141,7 @@ export class FreeportSession implements DriverSession {
       if (err instanceof TimeoutError) this.drainUntil = Date.now() + this.discipline.timeout;
       throw err;
     } finally {
-      if (this.pending.has(id)) this.pending.reject(id, new PlcError('ABORTED', 'superseded'));
+      if (this.pending.has(id)) this.pending.reject(id, abortError(what));
       this.current = undefined;
       this.quietSince = Date.now();
     }

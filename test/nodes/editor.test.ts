@@ -121,6 +121,30 @@ describe('nodes: editor endpoints', function () {
     expect(holes.body.csv).to.equal('name,address\r\n,\r\n5,\r\n');
   });
 
+  it('answers the names a tag table gives more than one row (the editor keeps no copy of the rule)', async () => {
+    await helper.load(ALL_NODES, []);
+    const tags = [
+      { name: 'speed', address: 'DB1.DBW0:INT' },
+      { name: ' speed ', address: 'DB1.DBW6:INT' },
+      { name: '', address: 'MW2' },
+      { name: 'MW2', address: 'MW4' },
+      { name: 'level', address: 'DB1.DBD8:REAL' },
+    ];
+    const res = await helper.request().post('/plcwire/duplicates').send({ tags }).expect(200);
+    // A name is trimmed; a row without one is known by its address.
+    expect(res.body).to.deep.equal({
+      duplicates: [
+        { name: 'speed', rows: [0, 1] },
+        { name: 'MW2', rows: [2, 3] },
+      ],
+    });
+    const odd = await helper.request().post('/plcwire/duplicates').send({ tags: 'speed' }).expect(200);
+    expect(odd.body).to.deep.equal({ duplicates: [] });
+    const editor = fs.readFileSync(path.join(ROOT, 'resources/plcwire-editor.js'), 'utf8');
+    expect(editor).to.include("url: 'plcwire/duplicates'");
+    expect(editor).not.to.match(/count\[n\]/);
+  });
+
   it('serves the CPU presets of the library, TSAPs and items per job included', async () => {
     await helper.load(ALL_NODES, []);
     const lib = require(path.join(ROOT, 'dist/lib/index.js'));
@@ -133,7 +157,7 @@ describe('nodes: editor endpoints', function () {
   it('asks for the plcwire.read permission', () => {
     const source = fs.readFileSync(path.join(ROOT, 'nodes/connection.js'), 'utf8');
     const routes = source.match(/RED\.httpAdmin\.(get|post)\([^)]*\)/g) ?? [];
-    expect(routes.length).to.equal(8);
+    expect(routes.length).to.equal(9);
     for (const r of routes) expect(r).to.include('canRead');
     expect(source).to.include("RED.auth.needsPermission('plcwire.read')");
   });

@@ -7,7 +7,7 @@
  */
 import { createClient } from '../../lib/connect';
 import { startPlant } from '../../lib/plant/plant';
-import type { PlcClient } from '../../lib/types';
+import type { ClientEvents, PlcClient } from '../../lib/types';
 
 const POLLS = Number(process.argv[2] ?? 100_000);
 const RECONNECTS = Number(process.argv[3] ?? 1_000);
@@ -21,7 +21,7 @@ function heapMiB(): number {
   return process.memoryUsage().heapUsed / 2 ** 20;
 }
 
-function once(client: PlcClient, event: string, ms: number): Promise<void> {
+function once(client: PlcClient, event: keyof ClientEvents, ms: number): Promise<void> {
   return new Promise((resolve, reject) => {
     const timer = setTimeout(() => reject(new Error(`no ${event} within ${ms} ms`)), ms);
     client.once(event, () => {

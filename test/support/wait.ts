@@ -1,12 +1,15 @@
 import type { EventEmitter } from 'node:events';
+import type { PlcClient } from '../../lib/types';
 
 /** Waits for `event` on `emitter` (optionally one whose args satisfy `match`), or rejects after `ms`. */
 export function waitFor<T = unknown>(
-  emitter: EventEmitter,
+  source: EventEmitter | PlcClient,
   event: string,
   ms = 3000,
   match: (...args: any[]) => boolean = () => true,
 ): Promise<T> {
+  // A client types its events (ClientEvents); this waits for any name, the client's own events included.
+  const emitter = source as EventEmitter;
   return new Promise((resolve, reject) => {
     const timer = setTimeout(() => {
       emitter.removeListener(event, listener);

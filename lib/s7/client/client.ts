@@ -60,6 +60,11 @@ export interface ItemLimitEvent {
   was: number;
 }
 
+/** S7Client's events besides every client's (ClientEvents). */
+export interface S7ClientEvents {
+  itemLimit: [event: ItemLimitEvent];
+}
+
 /** Counters start at 0; plansMade is the plan store's own count. */
 function newStats(plans: { readonly misses: number }): S7Stats {
   return {
@@ -85,7 +90,7 @@ interface S7Prepared {
   compiled: CompiledRead | undefined;
 }
 
-export class S7Client extends BaseClient<S7Session, Tag, S7Prepared> {
+export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEvents> {
   readonly protocol: Protocol = 's7';
   readonly endpoint: S7Endpoint;
   /**

@@ -16,7 +16,7 @@ import type { SymbolTable } from '../../symbols/model';
 import type { Protocol, RequestOptions, Tag } from '../../types';
 import { S7PLUS_DEFAULT_MAX_ITEMS, S7PLUS_URLS, type S7PlusEndpoint } from '../url';
 import { openS7PlusSession } from './handshake';
-import { BrowsedProgram } from './program';
+import { BrowsedProgram, type ProgramChange } from './program';
 import { browseTable } from './browse';
 import { readPlcLimits, type SessionLimits } from './limits';
 import { writeMixed } from './name-writes';
@@ -63,15 +63,26 @@ export interface S7PlusClientOptions extends Partial<ClientOptions> {
 }
 
 /** The `insecure` event of a connection with `insecure=true`: which certificate it accepted unchecked. */
-interface InsecureEvent {
+export interface InsecureEvent {
   certificate: PeerCertificate;
   message: string;
+}
+
+/**
+ * S7PlusClient's events besides every client's (ClientEvents): `itemLimit` (the
+ * PLC's item limit learnt), `programChanged` (the PLC's program changed under
+ * a browsed table) and `insecure` (a certificate accepted unchecked).
+ */
+export interface S7PlusClientEvents {
+  itemLimit: [event: { limit: number; was: number }];
+  programChanged: [change: ProgramChange];
+  insecure: [event: InsecureEvent];
 }
 
 /** A clean close waits this long at most for the PLC to answer the DeleteObject. */
 const GOODBYE_MS = 2000;
 
-export class S7PlusClient extends BaseClient<S7PlusSession, Tag> {
+export class S7PlusClient extends BaseClient<S7PlusSession, Tag, undefined, S7PlusClientEvents> {
   readonly protocol: Protocol = 's7plus';
   readonly endpoint: S7PlusEndpoint;
   /** Counters of the wire, cumulative over reconnects. */
