@@ -26,8 +26,16 @@ function freePort() {
 }
 
 /** A snap7 server on 127.0.0.1 with the given areas ({ db: { 1: Buffer }, MK: Buffer, PE, PA, CT, TM }). */
+/**
+ * Every snap7 server made in this process, kept referenced until it exits: node-snap7 aborts the process (SIGABRT)
+ * now and then, likely when a stopped server is collected while another one runs (seen once in four fresh-clone runs under
+ * load, in the before hook of doctor-vs-snap7.test.js); a stopped server holds no socket, so keeping it costs nothing.
+ */
+const SERVERS = [];
+
 async function startSnap7Server(areas) {
   const server = new snap7.S7Server();
+  SERVERS.push(server);
   for (const [db, buf] of Object.entries(areas.db ?? {})) server.RegisterArea(server.srvAreaDB, Number(db), buf);
   for (const name of ['PE', 'PA', 'MK', 'CT', 'TM']) {
     if (areas[name]) server.RegisterArea(server[`srvArea${name}`], areas[name]);
