@@ -8,6 +8,7 @@
  * is its folder's part and one field of its entry.
  */
 import type { BindingInterface } from '@serialport/bindings-interface';
+import type { AlarmPort } from './alarms/model';
 import type { ClientOptions } from './client/options';
 import type { DiagnosePort } from './doctor-steps';
 import { PlcError } from './errors';
@@ -52,8 +53,7 @@ export interface ConnectOptions extends Partial<Omit<ClientOptions, 'name'>> {
  * entry: a caller asks the entry (`driverOf(endpoint).browse`), never the
  * URL's scheme. What several drivers share of a capability lives in a folder
  * above the protocols (the doctor's walk and URL handling in lib/doctor/),
- * each driver's part in its own folder. Alarms (both generations) come next,
- * as an `alarms` port beside these.
+ * each driver's part in its own folder (the alarm model in lib/alarms/).
  */
 interface DriverPorts<E, C> {
   /** The connection doctor's steps of this protocol (`plcwire doctor`, diagnose(), Test connection in Node-RED). */
@@ -62,6 +62,8 @@ interface DriverPorts<E, C> {
   browse?(client: C, options?: RequestOptions): Promise<SymbolTable>;
   /** The PLC reports changes of `tags`, sampled every `cycle` ms (`plcwire watch`, the read node's push mode). */
   subscribe?(client: C, tags: readonly string[], options?: { cycle?: number }): Promise<TagSubscription>;
+  /** What the PLC pushes: its alarms, mode changes, diagnostic messages (`plcwire alarms`, `plcwire ack`, the alarms node). */
+  readonly alarms?: AlarmPort<C>;
 }
 
 /** The names of the capability ports. */

@@ -174,3 +174,14 @@ export { PLANT_DB_NUMBERS, PLANT_SOURCE, TANK_DB_NUMBERS, TANK_SOURCE } from './
 export { TankBlock, TANK_SYMBOLS, type TankSnapshot } from './plant/tank';
 export { startPlant, DEMO_PORTS, DEMO_STATIONS, type Plant, type PlantOptions, type PlantPorts } from './plant/plant';
 export { demoCertificateDir } from './plant/certificate-dir';
+export type {
+  AlarmDefinition,
+  AlarmEvent,
+  AlarmKind,
+  AlarmPort,
+  AlarmSubscribeOptions,
+  AlarmSubscription,
+  AlarmTexts,
+  AlarmValue,
+  PlcAlarm,
+} from './alarms/model';
