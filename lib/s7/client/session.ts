@@ -11,6 +11,7 @@ import type { FrameReader } from '../../link/framer';
 import { decodeS7, s7AnswerRef, type S7Message } from '../codec';
 import { cotpTpduType, disconnectReason } from '../../iso/cotp';
 import { setPduRef } from '../codec/pdu-decode';
+import { isUserdataPush } from '../codec/userdata';
 import { CotpType } from '../../iso/constants';
 
 /** The counters a session adds to (the client's S7Stats, cumulative over reconnects). */
@@ -95,6 +96,7 @@ export class S7Session {
   private dead: PlcError | undefined;
   private readonly maxQueued: number;
   private corked = false;
+  private readonly pushListeners = new Set<(frame: Buffer) => void>();
 
   constructor(
     private readonly socket: net.Socket,
@@ -136,6 +138,10 @@ export class S7Session {
           ),
         );
       }
+      if (isUserdataPush(frame)) {
+        this.push(frame);
+        continue;
+      }
       let ref = s7AnswerRef(frame);
       if (ref < 0) {
         try {
@@ -147,6 +153,33 @@ export class S7Session {
       if (!this.answer(ref, frame)) this.stats.ignoredReplies++;
     }
   };
+
+  /**
+   * A PDU the CPU sent unasked (isUserdataPush: alarms, mode changes,
+   * diagnostic messages, cyclic data) goes to every push listener; one that
+   * throws loses the link as a malformed answer would. Without a listener it
+   * is counted as an ignored reply.
+   */
+  private push(frame: Buffer): void {
+    if (this.pushListeners.size === 0) {
+      this.stats.ignoredReplies++;
+      return;
+    }
+    for (const listener of this.pushListeners) {
+      try {
+        listener(frame);
+      } catch (err) {
+        this.lose(linkError(this.name, err));
+        return;
+      }
+    }
+  }
+
+  /** Listens to the PDUs the CPU pushes on this session (see push()); returns the function that stops listening. */
+  onPush(listener: (frame: Buffer) => void): () => void {
+    this.pushListeners.add(listener);
+    return () => this.pushListeners.delete(listener);
+  }
 
   /** Drops the link, once: every job fails (with the client's word for it), the socket goes, the client is told. */
   lose(cause: PlcError): void {

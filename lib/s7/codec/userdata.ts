@@ -113,6 +113,24 @@ export function encodeUserdata(pduRef: number, p: UserdataParams, data?: Buffer,
   return frame;
 }
 
+/**
+ * Whether a whole frame is a userdata PDU the CPU sent unasked (type push:
+ * alarm and diagnostic indications of group 4, cyclic data of group 2), so
+ * the session hands it to its push listeners instead of matching an answer.
+ * Looks at the bytes only; the listener decodes.
+ */
+export function isUserdataPush(frame: Buffer): boolean {
+  const at = FRAME_OVERHEAD;
+  const params = at + S7_JOB_HEADER;
+  return (
+    frame.length > params + 8 &&
+    frame[at] === S7_PROTOCOL_ID &&
+    frame[at + 1] === Rosctr.UserData &&
+    frame[params + 2] === 0x12 &&
+    frame[params + 5]! >> 4 === UserdataType.Push
+  );
+}
+
 /** A first request (8-byte parameters) of a group and subfunction, with its data (or none). */
 export function encodeUserdataRequest(group: number, subfunction: number, data?: Buffer): Buffer {
   return encodeUserdata(0, { method: UserdataMethod.Request, type: UserdataType.Request, group, subfunction, sequence: 0 }, data);
