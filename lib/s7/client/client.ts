@@ -24,6 +24,7 @@ import type { PlcValue, Protocol, RequestOptions, Tag } from '../../types';
 import { S7_URLS, type S7Endpoint } from '../url';
 import { DEFAULT_MAX_ITEMS } from '../constants';
 import { openS7Session } from './handshake';
+import { PushHub } from './pushes';
 import type { S7Session, WireCounters } from './session';
 import { compileRead, executeRead, tagError, type CollectedRead, type CompiledRead } from './read';
 import { writeJob } from './write';
@@ -103,6 +104,8 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
   /** Items per job: the URL's maxItems or 20, lowered when the PLC serves fewer (learnItemLimit). */
   private itemLimit: number;
   private planOptions: PlanOptions;
+  /** The PDUs the CPU pushes (alarms, mode changes, diagnostic messages, cyclic data), on every session: lib/s7/client/pushes.ts. */
+  readonly pushes = new PushHub();
   private readonly services: S7Services;
   protected readonly driver: Driver<S7Session, Tag, S7Prepared> = {
     syntax: S7_TAG_SYNTAX,
@@ -155,7 +158,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
     ).plan;
   }
 
-  /** A session wired to this client: its counters are the client's stats, its loss goes to the supervisor. */
+  /** A session wired to this client: its counters are the client's stats, its loss goes to the supervisor, its pushes to `pushes`. */
   private openSession(signal: AbortSignal): Promise<S7Session> {
     return openS7Session(this.endpoint, {
       name: this.name,
@@ -166,7 +169,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
       stats: this.stats,
       lossError: (cause) => this.lossError(cause),
       lost: (session, err) => this.sessionLost(session, err),
-    });
+    }).then((session) => this.pushes.wire(session));
   }
 
   /** The live session, for the services (NOT_CONNECTED when there is none). */
