@@ -12,7 +12,7 @@ import { PlcError, toPlcError, type TagResult } from '../../errors';
 import type { ReadValues } from '../../link/driver';
 import type { PlcValue, Tag } from '../../types';
 import { decodeTag, encodeTag } from '../../values';
-import { addressBytes, blobValue, classicBlobAddress, writeValueBytes, type ItemAddress } from '../codec/variables';
+import { addressBytes, blobValue, classicBlobAddress, writeValueBytes, type ItemAddress, type SetResults } from '../codec/variables';
 import type { PValue } from '../codec/pvalue';
 import { Ids } from '../constants';
 import { readAsk, writeAsk } from './asks';
@@ -126,7 +126,42 @@ export async function writeTags(
       results[i] = { ok: false, error: toPlcError(err, 'INVALID_VALUE') };
     }
   });
-  const send = (chunk: typeof ready) =>
+  await writeInChunks(session, ready, limits, signal, (chunk, body) => {
+    if (body.returnValue !== 0n && body.errors.size === 0) {
+      if (chunk.length > 1) return 'again';
+      results[chunk[0]!.i] = { ok: false, error: itemRefusal(body.returnValue, { tag: items[chunk[0]!.i]!.tag.address, write: true }) };
+      return;
+    }
+    chunk.forEach((c, k) => {
+      const answer = itemAnswer(body, k + 1);
+      if (answer && 'code' in answer) {
+        const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, write: true, request: answer.request });
+        results[c.i] = { ok: false, error };
+      }
+    });
+  });
+  return results;
+}
+
+/** One item of a SetMultiVariables: where, and the value. */
+interface WriteItem {
+  readonly address: ItemAddress;
+  readonly value: PValue;
+}
+
+/**
+ * Writes `items` as SetMultiVariables requests through the one chunker
+ * (chunks.ts: the item limit and the frame), `take` reading each answer; the
+ * writes by address and by name both send this way.
+ */
+export function writeInChunks<C extends WriteItem>(
+  session: S7PlusSession,
+  items: readonly C[],
+  limits: Limits,
+  signal: AbortSignal | undefined,
+  take: (chunk: C[], body: SetResults) => 'again' | void,
+): Promise<void> {
+  const send = (chunk: C[]) =>
     session.request(
       writeAsk(
         chunk.map((c) => c.address),
@@ -134,25 +169,5 @@ export async function writeTags(
       ),
       { signal },
     );
-  await inChunks(
-    ready,
-    limits,
-    send,
-    (chunk, body) => {
-      if (body.returnValue !== 0n && body.errors.size === 0) {
-        if (chunk.length > 1) return 'again';
-        results[chunk[0]!.i] = { ok: false, error: itemRefusal(body.returnValue, { tag: items[chunk[0]!.i]!.tag.address, write: true }) };
-        return;
-      }
-      chunk.forEach((c, k) => {
-        const answer = itemAnswer(body, k + 1);
-        if (answer && 'code' in answer) {
-          const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, write: true, request: answer.request });
-          results[c.i] = { ok: false, error };
-        }
-      });
-    },
-    (c) => addressBytes(c.address) + writeValueBytes(c.value),
-  );
-  return results;
+  return inChunks(items, limits, send, take, (c) => addressBytes(c.address) + writeValueBytes(c.value));
 }

@@ -12,10 +12,9 @@ import type { SymbolEntry, SymbolTable } from '../../symbols/model';
 import type { Tag } from '../../types';
 import type { PValue } from '../codec/pvalue';
 import { isInvalidCrc } from '../codec/symbol-crc';
-import { addressBytes, writeValueBytes, type ItemAddress } from '../codec/variables';
-import { writeAsk } from './asks';
-import { inChunks, type Limits } from './chunks';
-import { writeTags } from './io';
+import type { ItemAddress } from '../codec/variables';
+import type { Limits } from './chunks';
+import { writeInChunks, writeTags } from './io';
 import { explainOptimized } from './optimized';
 import { itemAnswer, itemRefusal } from './refusals';
 import { pvalueOf, writeLeaves } from './name-values';
@@ -102,29 +101,15 @@ export async function writeMixed(
     const ready = writeLeavesOf(t, items, todo, results);
     if ((unknown || ready.some((c) => c.address.symbolCrc === 0)) && (await program.changed(unknown)) && attempt < MAX_ATTEMPTS) continue;
     const stale = new Map<number, bigint>();
-    const send = (chunk: readonly WriteLeaf[]) =>
-      session.request(
-        writeAsk(
-          chunk.map((c) => c.address),
-          chunk.map((c) => c.value),
-        ),
-        { signal },
-      );
-    await inChunks(
-      ready,
-      limits,
-      send,
-      (chunk, body) => {
-        chunk.forEach((c, k) => {
-          const answer = itemAnswer(body, k + 1);
-          if (!answer || !('code' in answer) || !results[c.i]!.ok) return;
-          if (isInvalidCrc(answer.code) && attempt < MAX_ATTEMPTS) return void (stale.has(c.i) || stale.set(c.i, answer.code));
-          const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, name: c.name, write: true, request: answer.request });
-          results[c.i] = { ok: false, error };
-        });
-      },
-      (c) => addressBytes(c.address) + writeValueBytes(c.value),
-    );
+    await writeInChunks(session, ready, limits, signal, (chunk, body) => {
+      chunk.forEach((c, k) => {
+        const answer = itemAnswer(body, k + 1);
+        if (!answer || !('code' in answer) || !results[c.i]!.ok) return;
+        if (isInvalidCrc(answer.code) && attempt < MAX_ATTEMPTS) return void (stale.has(c.i) || stale.set(c.i, answer.code));
+        const error = itemRefusal(answer.code, { tag: items[c.i]!.tag.address, name: c.name, write: true, request: answer.request });
+        results[c.i] = { ok: false, error };
+      });
+    });
     if (stale.size === 0) break;
     // Refused for its CRC though the program is the one browsed: that path's CRC is not the PLC's; it goes with 0.
     if (!(await program.changed())) for (const c of ready) if (stale.has(c.i) && c.address.symbolCrc !== 0) distrusted(t).add(c.name);
