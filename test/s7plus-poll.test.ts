@@ -42,9 +42,9 @@ describe('S7CommPlus poll: SystemLimits, SymbolCrc, no program check per poll (i
   this.timeout(30000);
   const rigs: Rig[] = [];
 
-  async function rig(profile: S7Profile, sources: SymbolSource[], db: Record<string, number>, query = ''): Promise<Rig> {
+  async function rig(profile: S7Profile, sources: SymbolSource[], db: Record<string, number>, query = '', cpuMax?: number): Promise<Rig> {
     const cert = await generateCertificate();
-    const service = new S7PlusService({ sources, db, tls: { cert: cert.cert, key: cert.key } });
+    const service = new S7PlusService({ sources, db, tls: { cert: cert.cert, key: cert.key }, ...(cpuMax ? { maxItems: cpuMax } : {}) });
     const server = new S7Server({ port: 0, profile, s7plus: service });
     await server.listen();
     const proxy = new RequestCountingProxy(server.port);
@@ -92,6 +92,31 @@ describe('S7CommPlus poll: SystemLimits, SymbolCrc, no program check per poll (i
     const r = await rig('s7-1500', [pollDb(100)], { Poll: 1 }, '&maxItems=25');
     expect(await perPoll(r, names(100))).to.equal(4);
     expect(r.client.maxItems).to.equal(25);
+  });
+
+  it('an override above the CPU`s limit: the CPU refuses the request of 60 items as a whole (no reset), the client learns 50 and reads every value', async () => {
+    const r = await rig('s7-1200', [pollDb(100)], { Poll: 1 }, '&maxItems=60');
+    let drops = 0;
+    r.client.on('disconnected', () => drops++);
+    const values = await r.client.read(names(60));
+    expect(Object.keys(values)).to.have.length(60);
+    expect(r.client.maxItems).to.be.at.most(50);
+    r.proxy.reset();
+    expect(await r.client.read(names(60))).to.deep.equal(values);
+    expect(r.proxy.requests).to.equal(2);
+    expect(r.client.state).to.equal('connected');
+    expect(drops).to.equal(0);
+  });
+
+  it('a write by name above the CPU`s limit: refused as a whole, sent again in smaller requests, every member written', async () => {
+    // The CPU serves 20 items a request, the URL says 60: the frame alone would cut 60 writes in two requests of about 30.
+    const r = await rig('s7-1200', [pollDb(100)], { Poll: 1 }, '&maxItems=60', 20);
+    await r.client.read(names(1));
+    r.proxy.reset();
+    await r.client.write(Object.fromEntries(names(60).map((n, i) => [n, 1000 + i])));
+    expect(r.proxy.requests).to.be.at.least(4);
+    const written = await r.client.read(names(60));
+    expect(names(60).filter((n, i) => written[n] !== 1000 + i)).to.deep.equal([]);
   });
 
   it('never yields a stale value across a download: a member whose type changed, then one deleted before the others', async () => {

@@ -334,11 +334,21 @@ describe('S7CommPlus simulator (issue #25)', function () {
       expect(unknown.body.toString('hex')).to.equal('00' + '00' + '01828204' + '00');
     });
 
-    it('resets the connection on a request of more items than the CPU serves, and on a request too long; others go on', async () => {
-      for (const body of [
-        Buffer.concat([items([1, 2, 3, 4, 5].map(() => ({ db: 1, lids: [0xa] }))), Buffer.alloc(4)]),
-        Buffer.concat([items([{ db: 1, lids: [0xa] }]), Buffer.alloc(400)]),
-      ]) {
+    it('refuses a read or write of more items than the CPU serves as a 1215C does (ReturnValue 0xA027A6000054FFFC, no item), the connection kept', async () => {
+      const p = peer();
+      await p.open();
+      const five = items([1, 2, 3, 4, 5].map(() => ({ db: 1, lids: [0xa] })));
+      const read = await p.ask(0x054c, Buffer.concat([five, Buffer.alloc(4)]));
+      // ReturnValue as a VLQ64 (d0 89 f4 e0 80 81 a9 ff fc), no value, no error.
+      expect(read.body.toString('hex')).to.equal('d089f4e08081a9fffc' + '00' + '00');
+      const write = await p.ask(0x0542, Buffer.concat([five, Buffer.from([1, 0x00, 0x04, 0x07, 0]), Buffer.alloc(4)]));
+      expect(write.body.toString('hex')).to.equal('d089f4e08081a9fffc' + '00');
+      const r = await p.ask(0x054c, Buffer.concat([items([{ db: 1, lids: [0xb] }]), Buffer.alloc(4)]));
+      expect(r.body.toString('hex')).to.equal('00' + '0100070007' + '00' + '00');
+    });
+
+    it('resets the connection on a request too long; others go on', async () => {
+      for (const body of [Buffer.concat([items([{ db: 1, lids: [0xa] }]), Buffer.alloc(400)])]) {
         const p = peer();
         await p.open();
         const refused = waitFor<S7RefusedEvent>(server, 'refused');

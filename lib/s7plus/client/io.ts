@@ -17,7 +17,7 @@ import type { PValue } from '../codec/pvalue';
 import { Ids } from '../constants';
 import { readAsk, writeAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
-import { itemAnswer, itemRefusal, notAnswered, untrustedValue } from './refusals';
+import { itemAnswer, itemRefusal, notAnswered, refusedWhole, untrustedValue } from './refusals';
 import type { S7PlusSession } from './session';
 
 /** The native objects of the I, Q and M areas (s7commplus (MIT), protocol.py Ids.NATIVE_THE_*_AREA_RID). */
@@ -70,7 +70,7 @@ export async function readTags(session: S7PlusSession, tags: readonly Tag[], lim
     limits,
     send,
     (chunk, body) => {
-      if (body.returnValue !== 0n && body.values.size === 0 && body.errors.size === 0) {
+      if (refusedWhole(body)) {
         if (chunk.length > 1) return 'again';
         fail(chunk[0]!, itemRefusal(body.returnValue, { tag: tags[chunk[0]!]!.address }));
         return;
@@ -127,7 +127,7 @@ export async function writeTags(
     }
   });
   await writeInChunks(session, ready, limits, signal, (chunk, body) => {
-    if (body.returnValue !== 0n && body.errors.size === 0) {
+    if (refusedWhole(body)) {
       if (chunk.length > 1) return 'again';
       results[chunk[0]!.i] = { ok: false, error: itemRefusal(body.returnValue, { tag: items[chunk[0]!.i]!.tag.address, write: true }) };
       return;

@@ -16,7 +16,7 @@ import type { ItemAddress } from '../codec/variables';
 import type { Limits } from './chunks';
 import { writeInChunks, writeTags } from './io';
 import { explainOptimized } from './optimized';
-import { itemAnswer, itemRefusal } from './refusals';
+import { itemAnswer, itemRefusal, refusedWhole } from './refusals';
 import { pvalueOf, writeLeaves } from './name-values';
 import { distrusted, isAddress, isNamed, itemIn, knows, MAX_ATTEMPTS, resolveName, type NamedTag, type Program } from './names';
 import type { S7PlusSession } from './session';
@@ -102,6 +102,7 @@ export async function writeMixed(
     if ((unknown || ready.some((c) => c.address.symbolCrc === 0)) && (await program.changed(unknown)) && attempt < MAX_ATTEMPTS) continue;
     const stale = new Map<number, bigint>();
     await writeInChunks(session, ready, limits, signal, (chunk, body) => {
+      if (refusedWhole(body) && chunk.length > 1) return 'again';
       chunk.forEach((c, k) => {
         const answer = itemAnswer(body, k + 1);
         if (!answer || !('code' in answer) || !results[c.i]!.ok) return;

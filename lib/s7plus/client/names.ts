@@ -23,7 +23,7 @@ import { isInvalidCrc } from '../codec/symbol-crc';
 import { addressBytes, type ItemAddress } from '../codec/variables';
 import { readAsk } from './asks';
 import { inChunks, type Limits } from './chunks';
-import { itemAnswer, itemRefusal, notAnswered, untrustedValue } from './refusals';
+import { itemAnswer, itemRefusal, notAnswered, refusedWhole, untrustedValue } from './refusals';
 import { readTags } from './io';
 import { explainOptimized } from './optimized';
 import { assemble, itemOf, leavesOf, shapeOf, valueOf } from './name-values';
@@ -287,6 +287,7 @@ async function readNamed(
     limits,
     send,
     (chunk, body) => {
+      if (refusedWhole(body) && chunk.length > 1) return 'again';
       chunk.forEach((k, n) => {
         const e = leaves[k]!;
         const fail = (err: PlcError) => ((failed ??= new Array<PlcError | undefined>(leaves.length))[k] = err);

@@ -40,6 +40,17 @@ export function itemAnswer(body: Answer, k: number): PValue | { code: bigint; re
   return body.values?.get(k);
 }
 
+/**
+ * The PLC refused the request as a whole: a ReturnValue that is not 0 and
+ * no item answered (a CPU 1215C so refuses more items than its
+ * SystemLimits: 0xA027A6000054FFFC). A request of several items then goes
+ * again in smaller ones (chunks.ts: 'again'); one item alone is refused
+ * with that code (itemAnswer).
+ */
+export function refusedWhole(body: Answer): boolean {
+  return body.returnValue !== 0n && body.errors.size === 0 && (body.values?.size ?? 0) === 0;
+}
+
 /** A value the answer gives for `tag` that is not to be trusted (flag bits no public source explains), as the tag's error. */
 export function untrustedValue(v: PValue, tag: string): PlcError | undefined {
   const unknown = v.flags & ~KNOWN_FLAGS;

@@ -76,10 +76,25 @@ function exploreAttributes(r: Reader): number[] {
  */
 const EXPLORE_NO_SUCH_OBJECT = 0x8020ab001992fff4n;
 
-function readAddresses(r: Reader, max: number): ItemAddress[] {
+/**
+ * A CPU 1215C FW V4.2 answers a read of more items than its SystemLimits
+ * allow with this ReturnValue and no item, whatever the request's size
+ * (s7commplus (MIT) client.py, the comment of max_items_per_request; the
+ * same for writes is assumed). The simulator answers every profile so.
+ */
+export const TOO_MANY_ITEMS = 0xa027a6000054fffcn;
+
+/** The answer to a Get- or SetMultiVariables of more items than the CPU serves: TOO_MANY_ITEMS, no item (an empty value list and error list for a read). */
+function tooMany(read: boolean): Buffer {
+  const w = new Writer().uvlq64(TOO_MANY_ITEMS).uvlq32(0);
+  return (read ? w.uvlq32(0) : w).toBuffer();
+}
+
+/** The item addresses of a request, or undefined when there are more than `max` (the CPU refuses the request: tooMany). */
+function readAddresses(r: Reader, max: number): ItemAddress[] | undefined {
   r.u32('the link id');
   const count = r.uvlq32();
-  if (count > max) throw new ResetConnection(`a request of ${count} items, more than the ${max} the CPU serves`);
+  if (count > max) return undefined;
   r.uvlq32();
   const items: ItemAddress[] = [];
   for (let i = 0; i < count; i++) {
@@ -200,8 +215,10 @@ function valueOf(cpu: CpuSide, t: Target | undefined): Buffer | undefined {
 
 /** GetMultiVariables: each item's value, or its error (InvalidCRC for a SymbolCrc not its path's). */
 export function getMultiVariables(cpu: CpuSide, body: Buffer): Buffer {
+  const items = readAddresses(new Reader(body), cpu.limits.tagsPerRead);
+  if (!items) return tooMany(true);
   return itemList(
-    readAddresses(new Reader(body), cpu.limits.tagsPerRead).map((item) => {
+    items.map((item) => {
       const t = target(cpu, item);
       if (crcRefused(item, t)) return ITEM_ERROR_INVALID_CRC;
       return valueOf(cpu, t) ?? ITEM_ERROR_UNRESOLVED;
@@ -219,6 +236,7 @@ function u32be(v: number): Buffer {
 export function setMultiVariables(cpu: CpuSide, body: Buffer, mayWrite: boolean): Buffer {
   const r = new Reader(body);
   const items = readAddresses(r, cpu.limits.tagsPerWrite);
+  if (!items) return tooMany(false);
   const values = new Map<number, Buffer>();
   for (let i = 0; i < items.length; i++) {
     const nr = r.uvlq32();
