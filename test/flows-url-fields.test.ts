@@ -5,6 +5,8 @@
  * test/editor-url-browser.test.ts.
  */
 import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as path from 'node:path';
 import { urlAnswer } from '../lib/flows/editor-answers';
 import { fieldsOf, placeholdersOf, presetFields, urlOfFields, type UrlFields } from '../lib/flows/url-fields';
 import { DEFAULTS, formatUrl, parseUrl, S7_CPU_PRESETS } from '../lib/url';
@@ -256,5 +258,50 @@ describe('flows: the connection dialog fields ⇄ URL', () => {
     expect(placeholdersOf('freeport+tcp')).to.include({ timeout: '1000' }).and.not.have.any.keys('tcpHost', 'tcpPort');
     expect(placeholdersOf('s7')).not.to.have.any.keys('host');
     expect(placeholdersOf('modbus')).to.deep.equal({});
+  });
+});
+
+describe("nodes/connection.html holds no scheme's format, default or fingerprint rule (the library's are used)", () => {
+  const html = fs.readFileSync(path.join(__dirname, '../../nodes/connection.html'), 'utf8');
+  // The one URL it may hold: a new connection node's default value (Node-RED needs it before any runtime answers).
+  const NEW_NODE = "url: { value: 's7://192.168.0.1?rack=0&slot=1'";
+  const code = html.replace(NEW_NODE, '');
+
+  it('the new node default is there once, and nothing else that writes a URL: no scheme prefix, no query parameter, no encoding', () => {
+    expect(html.split(NEW_NODE)).to.have.length(2);
+    expect(code).not.to.match(/['"](s7|s7plus|fetchwrite|freeport|freeport\+tcp):\/\/['"]/);
+    expect(code).not.to.match(
+      /['"][?&]?(rack|slot|pdu|type|timeout|maxItems|fingerprint|ca|insecure|tls|port|fetchPort|writePort|dbUnit|baud|parity|databits|stopbits|retries|gap|readOnly|allow|control|localTsap|remoteTsap)=/,
+    );
+    expect(code).not.to.match(/encodeURI(Component)?\(/);
+  });
+
+  it("no default of the library's URLs as a literal (port 102, PDU 960, timeouts, FETCH/WRITE ports, items per job)", () => {
+    for (const value of [
+      DEFAULTS.s7Port,
+      DEFAULTS.pduSize,
+      DEFAULTS.timeout,
+      DEFAULTS.fetchPort,
+      DEFAULTS.writePort,
+      DEFAULTS.freeportTimeout,
+    ]) {
+      expect(code, String(value)).not.to.match(new RegExp(`(?<![\\w.])${value}(?![\\w.])`));
+    }
+    expect(code, 'maxItems placeholder').not.to.match(/placeholder="20"/);
+  });
+
+  it('no fingerprint rule: no hex pattern, no colon or white space stripping, no case change, no byte split', () => {
+    expect(code).not.to.match(/toUpperCase|toLowerCase/);
+    expect(code).not.to.match(/\[\\s:\]|\[:\\s\]|\(\.\.\)|0-9A-F|0-9a-f/i);
+    expect(code).not.to.match(/hex4|toString\(16\)/);
+  });
+
+  it('the rules are found when they are there (the checks above can fail)', () => {
+    const old =
+      "var p = val('fingerprint').replace(/[\\s:]/g, '').toUpperCase(); base = 's7://' + host + (port !== '102' ? ':' + port : ''); add('pdu', v, '960');";
+    expect(old).to.match(/['"](s7|s7plus):\/\/['"]/);
+    expect(old).to.match(new RegExp(`(?<![\\w.])${DEFAULTS.s7Port}(?![\\w.])`));
+    expect(old).to.match(/toUpperCase/);
+    expect(old).to.match(/\[\\s:\]/);
   });
 });

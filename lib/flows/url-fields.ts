@@ -234,6 +234,30 @@ function blamed(scheme: string, fields: UrlFields, kept: string, problem: string
 }
 
 /**
+ * `fields` without the values that are their protocol's defaults (they change
+ * nothing the parser says), composed, with the parser's refusal; undefined
+ * when that URL cannot be composed or is not refused.
+ */
+function leanText(scheme: string, fields: UrlFields, kept: string): { code: string; message: string; url: string } | undefined {
+  const lean: UrlFields = { ...fields };
+  for (const [name, value] of Object.entries(placeholdersOf(scheme)))
+    if (name !== 'protocol' && textOf(fields[name]) === value) lean[name] = '';
+  let url: string;
+  try {
+    url = compose(scheme, lean, kept);
+  } catch {
+    return undefined;
+  }
+  try {
+    parseUrl(url);
+    return undefined;
+  } catch (err) {
+    const e = toPlcError(err, 'INVALID_URL');
+    return { code: e.code, message: e.message, url };
+  }
+}
+
+/**
  * The URL the dialog's fields make, in the library's form; or why they make
  * none, and which field says so. `kept`: the URL the fields were filled from,
  * whose parameters no field writes are kept (keptParams).
@@ -251,6 +275,9 @@ export function urlOfFields(fields: UrlFields, kept = ''): FieldsUrl | FieldsPro
   } catch (err) {
     const e = toPlcError(err, 'INVALID_URL');
     const field = blamed(scheme, fields, kept, refusal(() => text) ?? '');
+    // Shown and saved without the defaults typed (as the library writes a valid URL): they change nothing the parser says.
+    const lean = leanText(scheme, fields, kept);
+    if (lean !== undefined) return { ok: false, ...lean, ...(field ? { field } : {}), placeholders: placeholdersOf(scheme) };
     const url = text || `${scheme}://`;
     return { ok: false, code: e.code, message: e.message, ...(field ? { field } : {}), url, placeholders: placeholdersOf(scheme) };
   }
