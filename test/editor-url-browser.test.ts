@@ -43,16 +43,19 @@ describe('editor in Chromium: the connection dialog gets its URL from the librar
   const urlShown = (page: Page) => page.inputValue('#node-config-input-url');
   const saved = (page: Page) => page.evaluate(() => (globalThis as any).RED.nodes.node('conn').url as string);
 
-  /** Opens the connection's dialog and waits until the library has read its URL into the fields. */
+  /** Opens the connection's dialog and waits until the library has read its URL into the fields (and said what it makes of it). */
   async function openDialog(page: Page): Promise<void> {
     await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-connection', 'conn'));
     await page.locator('#node-config-plcwire-protocol').waitFor({ state: 'visible' });
     await page.waitForFunction(
-      () => (globalThis as any).document.querySelector('#node-config-plcwire-url-hint').textContent !== '',
-      undefined,
-      {
-        timeout: 10_000,
+      () => {
+        const document = (globalThis as any).document;
+        return (
+          document.querySelector('#node-config-plcwire-url-hint').textContent !== '' || document.querySelector('.plcwire-field-problem')
+        );
       },
+      undefined,
+      { timeout: 10_000 },
     );
   }
 
@@ -260,8 +263,13 @@ describe('editor in Chromium: the connection dialog gets its URL from the librar
       expect(await saved(page)).to.equal('s7://127.0.0.1?pdu=13');
       await page.waitForFunction(() => (globalThis as any).RED.nodes.node('conn').valid === false, undefined, { timeout: 10_000 });
 
-      // Corrected: the message goes, the URL is valid again.
+      // Opened again on it: the fields as the URL has them, the one to fix marked with the library's message.
       await openDialog(page);
+      await page.locator('.plcwire-field-problem[data-field="pduSize"]').waitFor({ state: 'visible', timeout: 10_000 });
+      expect(await page.inputValue('#node-config-plcwire-pduSize')).to.equal('13');
+      expect(await page.inputValue('#node-config-plcwire-host')).to.equal('127.0.0.1');
+      expect(await urlShown(page)).to.equal('s7://127.0.0.1?pdu=13');
+      // Corrected: the message goes, the URL is valid again.
       await setFields(page, { protocol: 's7', host: '127.0.0.1', pduSize: '480' });
       await waitForUrl(page, 's7://127.0.0.1?rack=0&slot=1&pdu=480');
       expect(await page.locator('.plcwire-field-problem').count()).to.equal(0);

@@ -8,7 +8,9 @@ import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
 import { urlAnswer } from '../lib/flows/editor-answers';
-import { fieldsOf, placeholdersOf, presetFields, urlOfFields, type UrlFields } from '../lib/flows/url-fields';
+import type { UrlFields } from '../lib/flows/url-field-table';
+import { urlOfFields } from '../lib/flows/url-fields';
+import { fieldsOf, looseFieldsOf, placeholdersOf, presetFields } from '../lib/flows/url-fields-read';
 import { DEFAULTS, formatUrl, parseUrl, S7_CPU_PRESETS } from '../lib/url';
 
 const FINGERPRINT = '0123456789ABCDEF'.repeat(4);
@@ -215,6 +217,38 @@ describe('flows: the connection dialog fields ⇄ URL', () => {
 
     it('an unknown protocol is blamed on the protocol field; the answer holds no URL', () => {
       expect(urlOfFields({ protocol: 'modbus', host: 'x' })).to.deep.include({ ok: false, field: 'protocol', url: '' });
+    });
+  });
+
+  describe('a URL the parser refuses, read into the fields as it stands (the dialog opens on it with the field to fix)', () => {
+    const cases: [string, UrlFields, string | undefined][] = [
+      [
+        's7://plc:1102?rack=0&slot=1&pdu=12&control=true',
+        { protocol: 's7', host: 'plc', port: '1102', pduSize: '12', control: true, addressing: 'rack', timeout: '' },
+        'pduSize',
+      ],
+      ['s7://h?localTsap=10', { addressing: 'tsap', localTsap: '10', remoteTsap: '', rack: '' }, 'localTsap'],
+      ['fetchwrite://cp?port=0', { fetchPort: '0', writePort: '0' }, 'fetchPort'],
+      ['freeport:///dev/ttyS0?baud=9601', { protocol: 'freeport', serialPath: '/dev/ttyS0', baudRate: '9601', parity: '' }, 'baudRate'],
+      ['s7plus://plc?TLS=no&fingerprint=AB', { fingerprint: 'AB', tls: false, insecure: false, ca: '' }, 'fingerprint'],
+      ['s7://127.0.0.1?rack=0&slott=1', { host: '127.0.0.1', rack: '0', slot: '' }, undefined],
+    ];
+    for (const [url, fields, field] of cases) {
+      it(`${url}: ${field ?? 'no one field (the message under the URL)'}`, () => {
+        const answer = urlAnswer({ url });
+        expect(answer).to.include({ ok: false, code: 'INVALID_URL' });
+        expect((answer as { message: string }).message).to.equal(refusal(url));
+        expect((answer as { fields: UrlFields }).fields).to.include(fields);
+        expect((answer as { field?: string }).field).to.equal(field);
+        expect(looseFieldsOf(url)).to.deep.equal((answer as { fields: UrlFields }).fields);
+      });
+    }
+
+    it('every field of the protocol is set (none keeps a value from before); no URL or an unknown scheme gives none', () => {
+      expect(Object.keys(looseFieldsOf('s7://plc?pdu=1')!)).to.include.members(Object.keys(fieldsOf(parseUrl('s7://plc'))));
+      expect(looseFieldsOf('mqtt://x')).to.equal(undefined);
+      expect(looseFieldsOf('not a url')).to.equal(undefined);
+      expect(urlAnswer({ url: 'mqtt://x' })).not.to.have.property('fields');
     });
   });
 

@@ -15,7 +15,9 @@ import { duplicateNames, tagsFromCsv, tagsToCsv, type TagRow, type TagTableProbl
 import { endpointKey, formatUrl, parseUrl, type Endpoint } from '../url';
 import { checkAddresses, type NameAnswer } from './name-check';
 import { compileCached, type SymbolConfig } from './symbol-config';
-import { fieldsOf, placeholdersOf, presetFields, urlOfFields, type FieldsProblem, type FieldsUrl, type UrlFields } from './url-fields';
+import type { UrlFields } from './url-field-table';
+import { urlOfFields, type FieldsProblem, type FieldsUrl } from './url-fields';
+import { fieldsOf, looseFieldsOf, placeholdersOf, presetFields } from './url-fields-read';
 
 type Body = Record<string, unknown>;
 /** What the address parsers of every protocol give (an S7 Tag, a FreeportTag): what validate and the CSV import read. */
@@ -147,6 +149,8 @@ export function duplicatesAnswer(body: Body): { duplicates: { name: string; rows
  *   field?, url }: the URL the fields make (every scheme's own format and
  *   defaults; `kept`'s parameters no field writes kept), or the parser's
  *   error with the field it is about;
+ *   A URL the parser refuses answers its message with the fields as they
+ *   stand (looseFieldsOf) and the field to fix;
  * - { preset } → { ok, fields }: the fields a CPU preset sets.
  */
 export function urlAnswer(body: Body): UrlAnswer {
@@ -167,7 +171,12 @@ export function urlAnswer(body: Body): UrlAnswer {
       placeholders: placeholdersOf(textOf(fields.protocol)),
     };
   } catch (err) {
-    return problemOf(err);
+    // A URL the parser refuses still gives the dialog its fields, and the one to fix.
+    const fields = body.endpoint ? undefined : looseFieldsOf(textOf(body.url));
+    if (!fields) return problemOf(err);
+    const field = urlOfFields(fields, textOf(body.url));
+    const blamed = !field.ok && field.field ? { field: field.field } : {};
+    return { ...problemOf(err), ...blamed, fields, placeholders: placeholdersOf(textOf(fields.protocol)) };
   }
 }
 
@@ -176,4 +185,4 @@ type UrlAnswer =
   | FieldsUrl
   | FieldsProblem
   | { ok: true; fields: UrlFields }
-  | UrlProblem;
+  | (UrlProblem & { field?: string; fields?: UrlFields; placeholders?: UrlFields });

@@ -10,11 +10,9 @@
  */
 import { PlcError, toPlcError } from '../errors';
 import { hostPart } from '../link/url-params';
-import { DEFAULTS, endpointKey, formatUrl, parseUrl, S7_CPU_PRESETS, type Endpoint } from '../url';
-import { hex4 } from '../values/text';
-
-/** The dialog's fields by id: text as typed, a tick as a boolean. */
-export type UrlFields = Record<string, string | boolean>;
+import { endpointKey, formatUrl, parseUrl, type Endpoint } from '../url';
+import { SAFETY, SCHEMES, textOf, ticked, type Part, type UrlFields } from './url-field-table';
+import { placeholdersOf } from './url-fields-read';
 
 /** A URL the fields make, with what the dialog shows of it. */
 export interface FieldsUrl {
@@ -40,102 +38,8 @@ export interface FieldsProblem {
   placeholders: UrlFields;
 }
 
-/** One query parameter of a field: its text, or (`tick`) written as `param=<tick>` when the tick is so. */
-interface Part {
-  field: string;
-  param: string;
-  tick?: boolean;
-  /** Sent only when the other fields say so (rack/slot or the TSAP pair). */
-  when?: (f: UrlFields) => boolean;
-}
-
-/** Where the URL's authority (or a serial port's path) comes from, and what a parser accepts in place of each. */
-interface Base {
-  host?: string;
-  port?: string;
-  path?: string;
-}
-
 /** Values the parser accepts in a base field: a field is to blame when its own value, replaced by one of these, makes the URL parse. */
 const NEUTRAL = { host: 'localhost', port: '1', path: 'COM1' } as const;
-
-const byRack = (f: UrlFields) => textOf(f.addressing) !== 'tsap';
-const byTsap = (f: UrlFields) => textOf(f.addressing) === 'tsap';
-
-const LINE: Part[] = [
-  { field: 'timeout', param: 'timeout' },
-  { field: 'retries', param: 'retries' },
-  { field: 'gap', param: 'gap' },
-];
-
-/**
- * The dialog's protocol choices (each one a URL scheme): its base fields, the
- * fields of its parameters, and (`covers`) parameters its fields stand for
- * without writing them.
- */
-const SCHEMES: Readonly<Record<string, { base: Base; parts: Part[]; covers?: string[] }>> = {
-  s7: {
-    base: { host: 'host', port: 'port' },
-    parts: [
-      { field: 'rack', param: 'rack', when: byRack },
-      { field: 'slot', param: 'slot', when: byRack },
-      { field: 'localTsap', param: 'localTsap', when: byTsap },
-      { field: 'remoteTsap', param: 'remoteTsap', when: byTsap },
-      { field: 'connectionType', param: 'type' },
-      { field: 'pduSize', param: 'pdu' },
-      { field: 'timeout', param: 'timeout' },
-      { field: 'maxItems', param: 'maxItems' },
-      { field: 'control', param: 'control', tick: true },
-    ],
-  },
-  s7plus: {
-    base: { host: 'host', port: 'port' },
-    parts: [
-      { field: 'fingerprint', param: 'fingerprint' },
-      { field: 'ca', param: 'ca' },
-      { field: 'insecure', param: 'insecure', tick: true },
-      { field: 'tls', param: 'tls', tick: false },
-      { field: 'timeout', param: 'timeout' },
-      { field: 'maxItems', param: 'maxItems' },
-    ],
-  },
-  fetchwrite: {
-    base: { host: 'host' },
-    parts: [
-      { field: 'fetchPort', param: 'fetchPort' },
-      { field: 'writePort', param: 'writePort' },
-      { field: 'dbUnit', param: 'dbUnit' },
-      { field: 'timeout', param: 'timeout' },
-    ],
-    // One port for both is written as port= (lib/fetchwrite/url.ts): the two port fields stand for it.
-    covers: ['port'],
-  },
-  freeport: {
-    base: { path: 'serialPath' },
-    parts: [
-      { field: 'baudRate', param: 'baud' },
-      { field: 'parity', param: 'parity' },
-      { field: 'dataBits', param: 'databits' },
-      { field: 'stopBits', param: 'stopbits' },
-      ...LINE,
-    ],
-  },
-  'freeport+tcp': { base: { host: 'tcpHost', port: 'tcpPort' }, parts: LINE },
-};
-
-/** What every protocol takes (lib/url.ts). */
-const SAFETY: Part[] = [
-  { field: 'readOnly', param: 'readOnly', tick: true },
-  { field: 'allow', param: 'allow' },
-];
-
-function textOf(value: unknown): string {
-  return typeof value === 'string' ? value.trim() : typeof value === 'number' ? String(value) : '';
-}
-
-function ticked(value: unknown): boolean | undefined {
-  return value === true || value === 'true' ? true : value === false || value === 'false' ? false : undefined;
-}
 
 /** A host as typed (an IPv6 address with or without its brackets), refused when it would change the URL's shape. */
 function authority(host: string, port: string): string {
@@ -281,108 +185,4 @@ export function urlOfFields(fields: UrlFields, kept = ''): FieldsUrl | FieldsPro
     const url = text || `${scheme}://`;
     return { ok: false, code: e.code, message: e.message, ...(field ? { field } : {}), url, placeholders: placeholdersOf(scheme) };
   }
-}
-
-/** The dialog's fields of an endpoint (the ones of its protocol, and the ones every protocol has). */
-export function fieldsOf(e: Endpoint): UrlFields {
-  const common = { timeout: String(e.timeout), readOnly: !!e.readOnly, allow: (e.allow ?? []).join(',') };
-  const maxItems = (n: number | undefined) => (n === undefined ? '' : String(n));
-  switch (e.protocol) {
-    case 's7':
-      return {
-        protocol: 's7',
-        ...common,
-        host: e.host,
-        port: String(e.port),
-        addressing: e.localTsap === undefined ? 'rack' : 'tsap',
-        rack: String(e.rack),
-        slot: String(e.slot),
-        ...(e.localTsap === undefined || e.remoteTsap === undefined
-          ? {}
-          : { localTsap: hex4(e.localTsap).toUpperCase(), remoteTsap: hex4(e.remoteTsap).toUpperCase() }),
-        connectionType: e.connectionType,
-        pduSize: String(e.pduSize),
-        maxItems: maxItems(e.maxItems),
-        control: !!e.control,
-      };
-    case 's7plus':
-      return {
-        protocol: 's7plus',
-        ...common,
-        host: e.host,
-        port: String(e.port),
-        fingerprint: e.fingerprint ?? '',
-        ca: e.ca ?? '',
-        insecure: !!e.insecure,
-        tls: e.tls,
-        maxItems: maxItems(e.maxItems),
-      };
-    case 'fetchwrite':
-      return {
-        protocol: 'fetchwrite',
-        ...common,
-        host: e.host,
-        fetchPort: String(e.fetchPort),
-        writePort: String(e.writePort),
-        dbUnit: e.dbUnit,
-      };
-    case 'freeport': {
-      const line = { ...common, retries: String(e.retries), gap: String(e.interFrameGapMs) };
-      const t = e.transport;
-      if (t.kind === 'tcp') return { protocol: 'freeport+tcp', ...line, tcpHost: t.host, tcpPort: String(t.port) };
-      return {
-        protocol: 'freeport',
-        ...line,
-        serialPath: t.path,
-        baudRate: String(t.baudRate),
-        parity: t.parity,
-        dataBits: String(t.dataBits),
-        stopBits: String(t.stopBits),
-      };
-    }
-  }
-}
-
-/** The URLs that name a place and nothing else, whose parse shows what every other field of the scheme means when empty. */
-const BARE: Readonly<Record<string, string>> = {
-  s7: 's7://localhost',
-  s7plus: 's7plus://localhost',
-  fetchwrite: 'fetchwrite://localhost',
-  freeport: 'freeport://COM1',
-  'freeport+tcp': 'freeport+tcp://localhost:1',
-};
-
-/**
- * What each text field of a protocol means when left empty (its placeholder):
- * the library's defaults, read from a URL that names a place and nothing
- * else; items per job as the driver assumes them. Empty for a protocol the
- * dialog does not offer.
- */
-export function placeholdersOf(protocol: string): UrlFields {
-  const bare = BARE[protocol];
-  if (!bare) return {};
-  const { base } = SCHEMES[protocol]!;
-  const own = new Set([base.host, base.path, protocol === 'freeport+tcp' ? base.port : undefined]);
-  const out: UrlFields = {};
-  for (const [name, value] of Object.entries(fieldsOf(parseUrl(bare)))) {
-    if (typeof value === 'string' && value !== '' && !own.has(name)) out[name] = value;
-  }
-  if (protocol === 's7') out.maxItems = String(DEFAULTS.maxItems);
-  if (protocol === 's7plus') out.maxItems = String(DEFAULTS.s7plusMaxItems);
-  return out;
-}
-
-/**
- * The fields a CPU preset sets (S7_CPU_PRESETS): rack and slot or the TSAP
- * pair, and items per job (empty: the library's default); undefined for a
- * name that is no preset.
- */
-export function presetFields(cpu: string): UrlFields | undefined {
-  const preset = Object.hasOwn(S7_CPU_PRESETS, cpu) ? S7_CPU_PRESETS[cpu as keyof typeof S7_CPU_PRESETS] : undefined;
-  if (!preset) return undefined;
-  const where: UrlFields =
-    preset.localTsap !== undefined && preset.remoteTsap !== undefined
-      ? { addressing: 'tsap', localTsap: hex4(preset.localTsap).toUpperCase(), remoteTsap: hex4(preset.remoteTsap).toUpperCase() }
-      : { addressing: 'rack', rack: String(preset.rack ?? ''), slot: String(preset.slot ?? '') };
-  return { ...where, maxItems: preset.maxItems === undefined ? '' : String(preset.maxItems) };
 }
