@@ -214,7 +214,9 @@ module.exports = function (RED) {
    *   the password typed or the node's credential): the PLC's type, invalid with the closest names, or `unchecked`.
    * POST plcwire/csv { url?, text } → { url, tags, problems }; POST plcwire/csv/export { tags } → { csv };
    * POST plcwire/duplicates { tags } → { duplicates: [{ name, rows }] };
-   * POST plcwire/url { url } | { endpoint } → { ok, url, endpoint, key }; GET plcwire/presets → the CPU presets.
+   * POST plcwire/url { url } | { endpoint } → { ok, url, endpoint, key, fields, placeholders }; { fields, kept? } → the URL the
+   *   connection dialog's fields make, or the parser's message and the field it is about; { preset } → a CPU preset's fields
+   *   (lib/flows/url-fields.ts); GET plcwire/presets → the CPU presets.
    */
   RED.httpAdmin.post('/plcwire/validate', canRead, function (req, res) {
     const body = req.body || {};

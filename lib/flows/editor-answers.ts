@@ -15,6 +15,9 @@ import { duplicateNames, tagsFromCsv, tagsToCsv, type TagRow, type TagTableProbl
 import { endpointKey, formatUrl, parseUrl, type Endpoint } from '../url';
 import { checkAddresses, type NameAnswer } from './name-check';
 import { compileCached, type SymbolConfig } from './symbol-config';
+import type { UrlFields } from './url-field-table';
+import { urlOfFields, type FieldsProblem, type FieldsUrl } from './url-fields';
+import { fieldsOf, looseFieldsOf, placeholdersOf, presetFields } from './url-fields-read';
 
 type Body = Record<string, unknown>;
 /** What the address parsers of every protocol give (an S7 Tag, a FreeportTag): what validate and the CSV import read. */
@@ -139,15 +142,47 @@ export function duplicatesAnswer(body: Body): { duplicates: { name: string; rows
 }
 
 /**
- * POST plcwire/url { url } | { endpoint } → { ok, url, endpoint, key }: a URL
- * parsed into the dialog's fields, or fields formatted into a URL (every
- * scheme's own format and defaults), with the key of the PLC it reaches.
+ * POST plcwire/url, the connection dialog's URL (lib/flows/url-fields.ts):
+ * - { url } | { endpoint } → { ok, url, endpoint, key, fields }: a URL parsed
+ *   into the dialog's fields (and written in the library's form);
+ * - { fields, kept? } → { ok, url, endpoint, key, placeholders } | { ok: false, code, message,
+ *   field?, url }: the URL the fields make (every scheme's own format and
+ *   defaults; `kept`'s parameters no field writes kept), or the parser's
+ *   error with the field it is about;
+ *   A URL the parser refuses answers its message with the fields as they
+ *   stand (looseFieldsOf) and the field to fix;
+ * - { preset } → { ok, fields }: the fields a CPU preset sets.
  */
-export function urlAnswer(body: Body): { ok: true; url: string; endpoint: Endpoint; key: string } | UrlProblem {
+export function urlAnswer(body: Body): UrlAnswer {
+  if (body.preset !== undefined) {
+    const fields = presetFields(textOf(body.preset));
+    return fields ? { ok: true, fields } : { ok: false, code: 'INVALID_URL', message: `no CPU preset "${textOf(body.preset)}"` };
+  }
+  if (body.fields && typeof body.fields === 'object') return urlOfFields(body.fields as UrlFields, textOf(body.kept));
   try {
     const endpoint = body.endpoint ? parseUrl(formatUrl(body.endpoint as Endpoint)) : parseUrl(textOf(body.url));
-    return { ok: true, url: formatUrl(endpoint), endpoint, key: endpointKey(endpoint) };
+    const fields = fieldsOf(endpoint);
+    return {
+      ok: true,
+      url: formatUrl(endpoint),
+      endpoint,
+      key: endpointKey(endpoint),
+      fields,
+      placeholders: placeholdersOf(textOf(fields.protocol)),
+    };
   } catch (err) {
-    return problemOf(err);
+    // A URL the parser refuses still gives the dialog its fields, and the one to fix.
+    const fields = body.endpoint ? undefined : looseFieldsOf(textOf(body.url));
+    if (!fields) return problemOf(err);
+    const field = urlOfFields(fields, textOf(body.url));
+    const blamed = !field.ok && field.field ? { field: field.field } : {};
+    return { ...problemOf(err), ...blamed, fields, placeholders: placeholdersOf(textOf(fields.protocol)) };
   }
 }
+
+type UrlAnswer =
+  | { ok: true; url: string; endpoint: Endpoint; key: string; fields: UrlFields; placeholders: UrlFields }
+  | FieldsUrl
+  | FieldsProblem
+  | { ok: true; fields: UrlFields }
+  | (UrlProblem & { field?: string; fields?: UrlFields; placeholders?: UrlFields });

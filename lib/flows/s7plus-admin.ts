@@ -2,9 +2,10 @@
  * The answers of the connection dialog's S7CommPlus questions (issue #25),
  * without Node-RED (nodes/shared/s7plus-admin.js serves them):
  *
- * certificateAnswer(url) → { ok, fingerprint, subject, validFrom, validTo }:
+ * certificateAnswer(url) → { ok, fingerprint, bytes, subject, validFrom, validTo }:
  *   the PLC's certificate taken without trusting it, closed before any
- *   session (lib/s7plus/client/certificate.ts).
+ *   session (lib/s7plus/client/certificate.ts); `bytes`: the fingerprint as
+ *   TIA Portal shows it, byte by byte (the dialog joins them by colons).
  * browseAnswer(url, { password }) → { ok, blocks, entries, types, errors }:
  *   the PLC's table in the shape of the sources' compile (describe()).
  *
@@ -14,13 +15,15 @@
  */
 import { PlcError, toPlcError } from '../errors';
 import { peekCertificate } from '../s7plus/client/certificate';
+import { fingerprintBytes } from '../s7plus/transport/fingerprint';
 import { isS7PlusEndpoint, type S7PlusEndpoint } from '../s7plus/url';
 import { parseUrl } from '../url';
 import { browsePlc } from './plc-tables';
 import { describe, type SymbolsDescription } from './symbol-config';
 
 type Failure = { ok: false; code: string; message: string };
-export type CertificateAnswer = { ok: true; fingerprint: string; subject: string; validFrom: string; validTo: string } | Failure;
+export type CertificateAnswer =
+  { ok: true; fingerprint: string; bytes: string[]; subject: string; validFrom: string; validTo: string } | Failure;
 export type BrowseAnswer = ({ ok: true } & SymbolsDescription) | Failure;
 
 /** An error as the dialog is told it. */
@@ -42,7 +45,14 @@ function s7plusEndpoint(url: string): S7PlusEndpoint {
 export async function certificateAnswer(url: string, signal: AbortSignal): Promise<CertificateAnswer> {
   try {
     const c = await peekCertificate(s7plusEndpoint(url), { signal });
-    return { ok: true, fingerprint: c.fingerprint, subject: c.subject, validFrom: c.validFrom, validTo: c.validTo };
+    return {
+      ok: true,
+      fingerprint: c.fingerprint,
+      bytes: fingerprintBytes(c.fingerprint),
+      subject: c.subject,
+      validFrom: c.validFrom,
+      validTo: c.validTo,
+    };
   } catch (err) {
     return failure(err);
   }

@@ -27,7 +27,7 @@ export interface S7PlusEndpoint extends SafetyOptions {
   port: number;
   /** False only when the URL says `tls=false`: plain S7CommPlus V1. */
   tls: boolean;
-  /** The PLC certificate's SHA-256 over its DER bytes, 64 lower-case hex digits, no colons. */
+  /** The PLC certificate's SHA-256 over its DER bytes, 64 upper-case hex digits, no colons (normalizeFingerprint). */
   fingerprint?: string;
   /** A PEM file of the CA (the TIA project's) that signed the PLC's certificate. */
   ca?: string;

@@ -46,6 +46,11 @@ describe('nodes: the connection on s7plus:// (S7CommPlus)', function () {
       const res = await helper.request().post('/plcwire/s7plus/certificate').send({ url: bare }).expect(200);
       expect(res.body.ok, JSON.stringify(res.body)).to.equal(true);
       expect(res.body.fingerprint).to.equal(service.fingerprint!);
+      // The bytes as TIA Portal shows them, for the dialog to join by colons (it holds no fingerprint rule).
+      expect(res.body.bytes.join('')).to.equal(service.fingerprint!);
+      expect(res.body.bytes)
+        .to.have.length(32)
+        .and.satisfy((bytes: string[]) => bytes.every((b) => /^[0-9A-F]{2}$/.test(b)));
       expect(res.body.subject).to.include('CN=plcwire simulator');
       expect(new Date(res.body.validTo).getTime()).to.be.greaterThan(Date.now());
       expect(new Date(res.body.validFrom).getTime()).to.be.lessThan(Date.now() + 60_000);

@@ -16,6 +16,11 @@ export function normalizeFingerprint(text: string): string | undefined {
   return /^[0-9A-F]{64}$/.test(hex) ? hex : undefined;
 }
 
+/** A fingerprint's bytes as TIA Portal and openssl show them, two upper-case hex digits each ("AB", "CD", …: joined by colons). */
+export function fingerprintBytes(fingerprint: string): string[] {
+  return digits(fingerprint).match(/../g) ?? [];
+}
+
 /** Why `text` is not a SHA-256 fingerprint (a character that is not a hex digit, or how many digits it has). */
 export function fingerprintProblem(text: string): string {
   const hex = digits(text);
