@@ -224,8 +224,9 @@ export function readDai(obj: PObject): Dai {
     throw new ProtocolError(`S7CommPlus: alarm attribute ${what} (${id}) is not a number`);
   };
   const idValue = attributeOf(obj, Ids.AlarmDaiCpuAlarmId)?.value;
-  if (typeof idValue !== 'bigint' && typeof idValue !== 'number')
-    throw new ProtocolError('S7CommPlus: an alarm (DAI) without its CPU alarm id (2670)');
+  // An LWord (AlarmsDai.cs); any whole number of another integer type is taken too.
+  if (!(typeof idValue === 'bigint' || (typeof idValue === 'number' && Number.isInteger(idValue))) || idValue < 0)
+    throw new ProtocolError('S7CommPlus: an alarm (DAI) without a CPU alarm id (2670) that is a whole number');
   const name = attributeOf(obj, Ids.ObjectVariableTypeName)?.value;
   const coming = attributeOf(obj, Ids.AlarmDaiComing);
   const going = attributeOf(obj, Ids.AlarmDaiGoing);
