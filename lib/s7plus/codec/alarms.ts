@@ -353,7 +353,8 @@ export function decodeAlarmNotification(data: Buffer): AlarmNotification {
 
 export function encodeAlarmNotification(n: AlarmNotification): Buffer {
   const w = new Writer();
-  w.u8(Opcode.Notification).u32(n.subscriptionId).u16(0).u16(0).u16(0).u8(n.creditTick).uvlq32(n.sequence);
+  // The 6 reserved bytes as TIA's captures show them: 04 00 00 00 00 00 (s7commplus docs/subscriptions-alarms.rst).
+  w.u8(Opcode.Notification).u32(n.subscriptionId).u16(0x0400).u16(0).u16(0).u8(n.creditTick).uvlq32(n.sequence);
   if (n.timestamp !== undefined) {
     if (n.timestamp < 0n || n.timestamp >= 1n << 56n)
       throw new RangeError('S7CommPlus: a notification timestamp must have its first byte 0');
