@@ -220,7 +220,16 @@ const TANK: AlarmDefinition = {
   trigger: '"Tank".Alarm',
   values: ['"Tank".Level', '"Tank".Count', '"Tank".Name'],
 };
-/** 1000 alarms on the bits of DB1 bytes 100–224 (the Recipe DB's spare bytes are not used: DB3 is a plain standard DB). */
+/** A trigger by name in a block with optimized access ("Recipe", test/fixtures/s7plus/Recipe.db). */
+const RECIPE: AlarmDefinition = {
+  id: 8,
+  kind: 'Program_Alarm',
+  texts: { 'en-US': 'Recipe step @1%d@ done' },
+  needsAck: false,
+  trigger: '"Recipe".Done',
+  values: ['"Recipe".Step'],
+};
+/** 1000 alarms on the bits of M100 to M224. */
 const BURST: AlarmDefinition[] = Array.from({ length: 1000 }, (_, i) => ({
   id: 1000 + i,
   kind: 'Program_Alarm',
@@ -236,7 +245,7 @@ describe('S7CommPlus alarms (our client, our S7-1500 simulator)', function () {
   let writer: S7PlusClient;
 
   before(async () => {
-    sim = await startPlusSimulator({ sources: SOURCES, db: DB_NUMBERS, alarms: [TANK, ...BURST] });
+    sim = await startPlusSimulator({ sources: SOURCES, db: DB_NUMBERS, alarms: [TANK, RECIPE, ...BURST] });
   });
   beforeEach(async () => {
     client = createClient(sim.url, { backoff: { initialDelay: 50, maxDelay: 200 } }) as S7PlusClient;
@@ -310,6 +319,18 @@ describe('S7CommPlus alarms (our client, our S7-1500 simulator)', function () {
     expect(e3).to.have.property('code', 'NOT_SUPPORTED');
     expect((e3 as PlcError).message).to.match(/docs\/alarms\.md/);
     expect(await DRIVERS.s7plus.alarms!.list(client)).to.deep.equal([]);
+  });
+
+  it('a trigger by name in a block with optimized access, written by name: the alarm comes with its value', async () => {
+    await writer.write({ '"Recipe".Step': 4, '"Recipe".Done': true });
+    try {
+      const alarm = (await client.alarms()).find((a) => a.id === 8);
+      expect(alarm).to.deep.include({ state: 'coming', needsAck: false, acknowledged: true });
+      expect(alarm!.texts).to.deep.equal({ 'en-US': { text: 'Recipe step 4 done' } });
+    } finally {
+      await writer.write({ '"Recipe".Done': false, '"Recipe".Step': 3 });
+    }
+    expect((await client.alarms()).find((a) => a.id === 8)).to.equal(undefined);
   });
 
   it('an unknown text language is refused naming it', async () => {
