@@ -9,11 +9,12 @@ import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
 import { DataType } from '../lib/sparkplug/datatypes';
 import { SparkplugEdgeNode, type SparkplugEdgeNodeOptions } from '../lib/sparkplug';
+import type { SparkplugMetric } from '../lib/sparkplug/model';
 import { encodePayload } from '../lib/sparkplug/payload';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { haveMosquitto, Mosquitto } from './support/mosquitto';
 import { TestHost } from './support/sparkplug-host';
-import { waitFor } from './support/wait';
+import { until, waitFor } from './support/wait';
 
 const FAST = { backoff: { initialDelay: 20, maxDelay: 100, factor: 2, jitter: 0 } };
 
@@ -186,5 +187,82 @@ describe('Sparkplug edge node against mosquitto and the S7 simulator', function 
     const err = await refused;
     expect(err.code).to.equal('WRITE_NOT_ALLOWED');
     expect(memory.read('DB', 1, 0, 2).readInt16BE(0)).to.equal(0);
+  });
+
+  it("tck-id-message-flow-edge-node-ncmd-subscribe tck-id-message-flow-device-dcmd-subscribe tck-id-message-flow-edge-node-birth-publish-connect: a clean session, NCMD and DCMD subscribed with QoS 1 before the NBIRTH (the broker's own log)", async () => {
+    edge();
+    await host.nextOf('DBIRTH');
+    const log = broker.log;
+    expect(log).to.match(/as plcwire-Plant-Line1 \(p\d, c1, k\d+\)/);
+    const subscribe = log.indexOf('spBv1.0/Plant/NCMD/Line1 (QoS 1)');
+    const dcmd = log.indexOf('spBv1.0/Plant/DCMD/Line1/Press (QoS 1)');
+    const nbirth = log.search(/Received PUBLISH from plcwire-Plant-Line1 .*'spBv1\.0\/Plant\/NBIRTH\/Line1'/);
+    expect(subscribe, 'NCMD subscription').to.be.greaterThan(-1);
+    expect(dcmd, 'DCMD subscription').to.be.greaterThan(-1);
+    expect(nbirth, 'NBIRTH').to.be.greaterThan(subscribe);
+    expect(nbirth).to.be.greaterThan(dcmd);
+  });
+
+  it('tck-id-payloads-alias-uniqueness tck-id-payloads-alias-birth-requirement tck-id-payloads-name-birth-data-requirement: aliases unique across the devices of the node, every birth and data metric timestamped', async () => {
+    const other = new S7Client(parseUrl(`s7://127.0.0.1:${server.port}?timeout=1500`) as S7Endpoint, FAST);
+    try {
+      await other.connect();
+      edge({
+        devices: [
+          { name: 'A', client: plc, tags: { X: 'DB1.DBW0:INT', Y: 'DB1.DBW2:INT' } },
+          { name: 'B', client: other, tags: { X: 'DB1.DBW0:INT', Z: 'DB1.DBD4:REAL' } },
+        ],
+      });
+      const a = await host.nextOf('DBIRTH', 'A');
+      const b = await host.nextOf('DBIRTH', 'B');
+      const aliases = [...a.payload!.metrics, ...b.payload!.metrics].map((m) => m.alias);
+      expect(new Set(aliases).size).to.equal(4);
+      memory.write('DB', 1, 0, Buffer.from([0, 5]));
+      const d1 = await host.nextOf('DDATA');
+      expect(d1.payload!.timestamp).to.be.a('number');
+      for (const m of d1.payload!.metrics) expect(m.timestamp).to.be.a('number');
+    } finally {
+      await node?.stop();
+      node = undefined;
+      await other.close();
+    }
+  });
+
+  it('report by exception with a deadband: a change within it is not sent, one beyond it is', async () => {
+    edge({ deadbands: { Press: { Speed: 10 } } });
+    await host.nextOf('DBIRTH');
+    memory.write('DB', 1, 0, Buffer.from([0, 10])); // +10: within
+    memory.write('DB', 1, 4, Buffer.from([0, 0, 0, 1])); // Count changes (no deadband): proves a poll ran
+    const first = await host.nextOf('DDATA');
+    expect(first.payload!.metrics.map((m) => m.value)).to.deep.equal([1]);
+    memory.write('DB', 1, 0, Buffer.from([0, 11])); // +11: beyond
+    const second = await host.nextOf('DDATA');
+    expect(second.payload!.metrics.map((m) => m.value)).to.deep.equal([11]);
+  });
+
+  it('tck-id-payloads-propertyset-quality-value-type: a tag whose read fails is a null metric with the Quality property 0 (BAD) as Int32', async () => {
+    edge({ devices: [{ name: 'Press', client: plc, tags: { Good: 'DB1.DBW0:INT', Missing: 'DB9.DBW0:INT' } }] });
+    const dbirth = await host.nextOf('DBIRTH');
+    const missing = dbirth.payload!.metrics.find((m) => m.name === 'Missing')!;
+    expect(missing).to.include({ isNull: true, value: null, datatype: DataType.Int16 });
+    expect(missing.properties).to.deep.equal({ Quality: { type: DataType.Int32, value: 0 } });
+    expect(dbirth.payload!.metrics.find((m) => m.name === 'Good')!.properties).to.equal(undefined);
+  });
+
+  it('a DCMD to a metric not made writable, or with a value of another datatype, is refused before the PLC', async () => {
+    edge();
+    await host.nextOf('DBIRTH');
+    const errors: PlcError[] = [];
+    node!.on('error', (e) => errors.push(e));
+    const dcmd = (metrics: SparkplugMetric[]) =>
+      host.client.publishAsync('spBv1.0/Plant/DCMD/Line1/Press', encodePayload({ timestamp: Date.now(), metrics }));
+    await dcmd([{ name: 'Count', datatype: DataType.Int32, value: 5 }]);
+    await dcmd([{ name: 'Setpoint', datatype: DataType.Float, value: 1.5 }]);
+    await dcmd([{ name: 'Nope', datatype: DataType.Int16, value: 1 }]);
+    await until(() => errors.length >= 3, 5000, 'three refusals');
+    expect(errors.map((e) => e.code)).to.deep.equal(['WRITE_NOT_ALLOWED', 'INVALID_VALUE', 'INVALID_ADDRESS']);
+    expect(errors[0]!.message).to.match(/Count.*not writable/);
+    expect(errors[1]!.message).to.match(/Int16.*Float/);
+    expect(memory.read('DB', 1, 0, 8).equals(Buffer.alloc(8))).to.equal(true);
   });
 });
