@@ -156,7 +156,9 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     try {
       await client.subscribeAsync(subscriptions);
     } catch (err) {
+      // No session without the command subscriptions: end it, the next CONNECT tries again.
       this.report(toPlcError(err, 'CONNECTION_LOST'));
+      client.end(true);
       return;
     }
     if (client !== this.client) return;
