@@ -71,7 +71,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
       this.devices.push(device);
     }
     this.bdSeqStore = new BdSeqStore(options.stateDir, this.group, this.node);
-    this.store = new ForwardStore(options.buffer);
+    this.store = new ForwardStore(options.buffer, `${encodeURIComponent(this.group)}.${encodeURIComponent(this.node)}`);
   }
   /* eslint-enable @typescript-eslint/no-unsafe-declaration-merging */
 
