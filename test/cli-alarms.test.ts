@@ -8,9 +8,17 @@ import { expect } from 'chai';
 import { spawn } from 'node:child_process';
 import { once } from 'node:events';
 import * as path from 'node:path';
+import { PassThrough } from 'node:stream';
+import type { PlcAlarm } from '../lib/alarms/model';
+import { ackOn, alarmsOn } from '../lib/cli/alarms';
+import { parseArgs } from '../lib/cli/args';
 import { EXIT } from '../lib/cli/io';
+import { createClient, type AnyClient } from '../lib/connect';
+import { PlcError } from '../lib/errors';
 import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
+import { StandInPort } from './support/alarm-port';
+import { until } from './support/wait';
 
 const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
 
@@ -91,5 +99,106 @@ describe('cli: plcwire alarms and plcwire ack', function () {
       expect(r.code, args.join(' ')).to.equal(EXIT.USAGE);
       expect(r.err, args.join(' ')).to.match(message);
     }
+  });
+
+  describe('on a live link, through a stand-in of the alarms port', () => {
+    /** The command's streams, captured, and its Ctrl-C. */
+    function io() {
+      const stdout = new PassThrough();
+      const stderr = new PassThrough();
+      const out = { text: '', err: '' };
+      stdout.on('data', (d: Buffer) => (out.text += d.toString()));
+      stderr.on('data', (d: Buffer) => (out.err += d.toString()));
+      const ctrlC = new AbortController();
+      return { io: { stdout, stderr, stdin: new PassThrough(), signal: ctrlC.signal }, out, ctrlC };
+    }
+    const args = (...words: string[]) => parseArgs(words, ['language'], ['json', 'watch', 'mode', 'diagnostics']);
+    const tankHigh: PlcAlarm = {
+      id: 1001,
+      kind: 'ALARM_S',
+      state: 'coming',
+      needsAck: true,
+      acknowledged: false,
+      coming: new Date('2026-12-03T10:00:00.000Z'),
+      values: [{ type: 'REAL', value: 95.5 }],
+      texts: { 'en-US': { text: 'Tank high level' }, 'de-DE': { text: 'Tank Füllstand hoch' } },
+    };
+    let client: AnyClient;
+    beforeEach(() => {
+      client = createClient(url());
+      client.on('error', () => {});
+    });
+    afterEach(() => client.close());
+
+    it('lists the active alarms, one line each in the language asked for, and closes the connection', async () => {
+      const stand = new StandInPort<AnyClient>();
+      stand.active = [tankHigh];
+      const before = connections;
+      const c = io();
+      expect(await alarmsOn(client, stand, args('--language', 'de'), c.io)).to.equal(EXIT.OK);
+      expect(c.out.text).to.equal('1001 ALARM_S coming unacknowledged came 2026-12-03T10:00:00.000Z "Tank Füllstand hoch" (REAL 95.5)\n');
+      expect(connections).to.equal(before + 1);
+      expect(client.state).to.equal('closed');
+    });
+
+    it('--json: the active alarms as one JSON array, times as ISO strings; none active: stderr says so, stdout stays empty', async () => {
+      const stand = new StandInPort<AnyClient>();
+      stand.active = [tankHigh];
+      const c = io();
+      await alarmsOn(client, stand, args('--json'), c.io);
+      const [shown] = JSON.parse(c.out.text) as Record<string, unknown>[];
+      expect(shown).to.deep.include({
+        id: 1001,
+        kind: 'ALARM_S',
+        coming: '2026-12-03T10:00:00.000Z',
+        values: [{ type: 'REAL', value: 95.5 }],
+      });
+      const empty = io();
+      await alarmsOn(createClient(url()), new StandInPort<AnyClient>(), args(), empty.io);
+      expect(empty.out.text).to.equal('');
+      expect(empty.out.err).to.match(/^plcwire: no active alarms on /);
+    });
+
+    it('--watch --json: one JSON object per event, in order, until Ctrl-C (exit 130), the subscription and link closed', async () => {
+      const stand = new StandInPort<AnyClient>();
+      const c = io();
+      const done = alarmsOn(client, stand, args('--watch', '--json', '--mode'), c.io);
+      await until(() => stand.subs.length === 1, 5000, 'subscribed');
+      expect(stand.options[0]).to.deep.include({ mode: true, diagnostics: false });
+      const at = new Date('2026-12-03T10:00:01.000Z');
+      stand.subs[0]!.push({ type: 'alarm', change: 'coming', alarm: tankHigh, at });
+      stand.subs[0]!.push({ type: 'mode', from: 'RUN', to: 'STOP', at });
+      stand.subs[0]!.push({ type: 'alarm', change: 'going', alarm: { ...tankHigh, state: 'going' }, at, during: 'outage' });
+      await until(() => c.out.text.split('\n').length === 4, 5000, 'three lines');
+      const lines = c.out.text
+        .trim()
+        .split('\n')
+        .map((l) => JSON.parse(l) as Record<string, unknown>);
+      expect(lines.map((l) => [l.type, l.change ?? l.to, l.during])).to.deep.equal([
+        ['alarm', 'coming', undefined],
+        ['mode', 'STOP', undefined],
+        ['alarm', 'going', 'outage'],
+      ]);
+      expect(lines[0]).to.deep.include({ at: '2026-12-03T10:00:01.000Z' });
+      c.ctrlC.abort();
+      expect(await done).to.equal(EXIT.INTERRUPTED);
+      expect(stand.subs[0]!.closed).to.equal(true);
+      expect(client.state).to.equal('closed');
+    });
+
+    it('ack: "alarm <id> acknowledged" once the port resolved; the PLC’s refusal names the alarm', async () => {
+      const stand = new StandInPort<AnyClient>();
+      const c = io();
+      expect(await ackOn(client, stand, 1001, args(), c.io)).to.equal(EXIT.OK);
+      expect(c.out.text).to.equal('alarm 1001 acknowledged\n');
+      expect(stand.acks).to.deep.equal([1001]);
+      const refusing = new StandInPort<AnyClient>();
+      refusing.acknowledge = () => Promise.reject(new PlcError('PLC_ERROR', 'no such alarm'));
+      const err = await ackOn(createClient(url()), refusing, 7, args(), io().io).then(
+        () => undefined,
+        (e: unknown) => e,
+      );
+      expect(err).to.be.instanceOf(PlcError).with.property('message', 'alarm 7: no such alarm');
+    });
   });
 });

@@ -8,51 +8,15 @@
  * tested is the feed, not a protocol.
  */
 import { expect } from 'chai';
-import { EventEmitter } from 'node:events';
-import type { AlarmEvent, AlarmPort, AlarmSubscribeOptions, AlarmSubscription, PlcAlarm } from '../lib/alarms/model';
+import type { AlarmEvent, PlcAlarm } from '../lib/alarms/model';
 import { createClient } from '../lib/connect';
 import { PlcError } from '../lib/errors';
 import { AlarmFeed, requestOf } from '../lib/flows/alarms';
 import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
 import type { S7Client } from '../lib/s7/client';
+import { StandInPort } from './support/alarm-port';
 import { until, waitFor } from './support/wait';
-
-/** Shaped as an AlarmSubscription (its `on`/`off` are EventEmitter's, cast where handed out). */
-class StandInSubscription extends EventEmitter {
-  active: PlcAlarm[] = [];
-  closed = false;
-  constructor(readonly push: (e: AlarmEvent) => void) {
-    super();
-  }
-  close(): Promise<void> {
-    this.closed = true;
-    return Promise.resolve();
-  }
-}
-
-class StandInPort implements AlarmPort<S7Client> {
-  subs: StandInSubscription[] = [];
-  refuse: PlcError | undefined;
-  acks: number[] = [];
-  attempts = 0;
-  options: AlarmSubscribeOptions[] = [];
-  list(): Promise<PlcAlarm[]> {
-    return Promise.resolve(this.subs.at(-1)?.active ?? []);
-  }
-  subscribe(_client: S7Client, options: AlarmSubscribeOptions, listener: (e: AlarmEvent) => void): Promise<AlarmSubscription> {
-    this.attempts++;
-    this.options.push(options);
-    if (this.refuse) return Promise.reject(this.refuse);
-    const sub = new StandInSubscription(listener);
-    this.subs.push(sub);
-    return Promise.resolve(sub as unknown as AlarmSubscription);
-  }
-  acknowledge(_client: S7Client, id: number): Promise<void> {
-    this.acks.push(id);
-    return Promise.resolve();
-  }
-}
 
 const alarm = (id: number, over: Partial<PlcAlarm> = {}): PlcAlarm => ({
   id,

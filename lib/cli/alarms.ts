@@ -51,16 +51,20 @@ function languageOf(args: ParsedArgs): string | undefined {
 export async function alarms(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {
   const endpoint = alarmEndpoint(rest[0], 'alarms', args);
   if (rest.length > 1) throw new UsageError(`unexpected argument "${rest[1]}"`);
-  const language = languageOf(args);
-  const json = args.flags.has('json');
+  languageOf(args); // checked before connecting
   const watching = args.flags.has('watch');
   for (const f of ['mode', 'diagnostics']) if (args.flags.has(f) && !watching) throw new UsageError(`--${f} goes with --watch`);
   const port = alarmPort(endpoint, 'alarms');
-  const client = createClient(endpoint, passwordOption(endpoint, args));
-  if (watching) return watchAlarms(client, port, args, io, language);
+  return alarmsOn(createClient(endpoint, passwordOption(endpoint, args)), port, args, io);
+}
+
+/** `plcwire alarms` once its command line is checked: `client` not yet connected, `port` its driver's (or a stand-in). */
+export async function alarmsOn(client: AnyClient, port: AlarmPort<AnyClient>, args: ParsedArgs, io: CliIo): Promise<number> {
+  const language = stringFlag(args, 'language');
+  if (args.flags.has('watch')) return watchAlarms(client, port, args, io, language);
   const active = await withClient(client, io, (c) => port.list(c, { signal: io.signal }));
-  if (json) io.stdout.write(`${toJson(active.map(plainAlarm))}\n`);
-  else if (active.length === 0) io.stderr.write(`plcwire: no active alarms on ${endpointName(endpoint)}\n`);
+  if (args.flags.has('json')) io.stdout.write(`${toJson(active.map(plainAlarm))}\n`);
+  else if (active.length === 0) io.stderr.write(`plcwire: no active alarms on ${endpointName(client.endpoint)}\n`);
   else for (const a of active) io.stdout.write(`${alarmLine(a, language)}\n`);
   return EXIT.OK;
 }
@@ -141,7 +145,11 @@ export async function ack(rest: string[], args: ParsedArgs, io: CliIo): Promise<
     const ok = await confirm(io, `acknowledge alarm ${id} on ${endpointName(endpoint)}? [y/N] `);
     if (!ok) throw new PlcError('WRITE_NOT_ALLOWED', 'acknowledgement cancelled');
   }
-  const client = createClient(endpoint, passwordOption(endpoint, args));
+  return ackOn(createClient(endpoint, passwordOption(endpoint, args)), port, id, args, io);
+}
+
+/** `plcwire ack` once its command line is checked and allowed: `client` not yet connected, `port` its driver's (or a stand-in). */
+export async function ackOn(client: AnyClient, port: AlarmPort<AnyClient>, id: number, args: ParsedArgs, io: CliIo): Promise<number> {
   try {
     await withClient(client, io, (c) => port.acknowledge(c, id, { signal: io.signal }));
   } catch (err) {
