@@ -17,10 +17,7 @@
  *   ack (0x0b) request:              function 09 objects{n}: 12 08 syntax 19 values 01 event-id[4] ack-going ack-coming
  *   ack answer:                      function 09 n result*(FF ok)
  *   ack indication (0x0c):           time[8 BCD] function 00 n objects as in the ack request
- *   query (0x13) request:            00 01 12 08 1A 00 query-type 34 alarm-type[4]
- *   query answer:                    00 n FF 09 length[2] dataset*
- *       dataset: length 00 00 alarm-type event-id[4] 00 event-state ack-going ack-coming
- *                coming-time[8] coming-value going-time[8] going-value (value: FF ts length[2 bytes] data)
+ *   query (0x13):                    alarm-query.ts
  *   diagnostic message (0x03):       the 20-byte diagnostic buffer entry (codec/diagnostics.ts)
  *
  * Decoders take the data part (a subarray of the frame) and throw only ProtocolError.
@@ -139,7 +136,7 @@ function valueBytes(values: readonly AssociatedValue[]): number {
   return values.reduce((n, v) => n + 4 + v.data.length, 0);
 }
 
-function writeValue(b: Buffer, o: number, v: AssociatedValue, lengthInBytes: boolean): number {
+export function writeValue(b: Buffer, o: number, v: AssociatedValue, lengthInBytes: boolean): number {
   b[o] = v.returnCode;
   b[o + 1] = v.transportSize;
   b.writeUInt16BE(lengthInBytes ? v.data.length : dataLengthField(v.transportSize, v.data.length), o + 2);
@@ -147,7 +144,7 @@ function writeValue(b: Buffer, o: number, v: AssociatedValue, lengthInBytes: boo
   return o + 4 + v.data.length;
 }
 
-function readValue(d: Buffer, o: number, lengthInBytes: boolean, what: string): [AssociatedValue, number] {
+export function readValue(d: Buffer, o: number, lengthInBytes: boolean, what: string): [AssociatedValue, number] {
   if (o + 4 > d.length) throw new ProtocolError(`${what}: associated value header cut off at byte ${o}`);
   const transportSize = d[o + 1]!;
   const field = d.readUInt16BE(o + 2);
@@ -158,7 +155,7 @@ function readValue(d: Buffer, o: number, lengthInBytes: boolean, what: string): 
 
 // ---------------------------------------------------------------- indications
 
-export interface AlarmObject {
+interface AlarmObject {
   /** AlarmSyntax.ALARM_IND, or NOTIFY_IND for NOTIFY/NOTIFY_8P. */
   syntaxId: number;
   eventId: number;
@@ -291,7 +288,8 @@ export function encodeAckAnswer(results: readonly number[]): Buffer {
 }
 
 export function decodeAckAnswer(d: Buffer): number[] {
-  if (d.length < 2 || d.length !== 2 + d[1]!) throw new ProtocolError(`alarm ack answer of ${d.length} bytes is not function, count, results`);
+  if (d.length < 2 || d.length !== 2 + d[1]!)
+    throw new ProtocolError(`alarm ack answer of ${d.length} bytes is not function, count, results`);
   return [...d.subarray(2)];
 }
 
@@ -311,99 +309,4 @@ export function encodeAckIndication(ind: AckIndication): Buffer {
 export function decodeAckIndication(d: Buffer): AckIndication {
   if (d.length < 10) throw new ProtocolError(`alarm ack indication of ${d.length} bytes, expected at least 10`);
   return { time: decodeDateAndTime(d, 0), objects: decodeAckObjects(d, 10, d[9]!, 'alarm ack indication') };
-}
-
-// ---------------------------------------------------------------- query
-
-/** Query type 1: by alarm type. */
-export const QUERY_BY_TYPE = 0x01;
-
-export function encodeQueryRequest(alarmType: number): Buffer {
-  return Buffer.of(0x00, 0x01, 0x12, 0x08, AlarmSyntax.ALARM_QUERYREQ, 0x00, QUERY_BY_TYPE, 0x34, 0, 0, 0, alarmType);
-}
-
-/** The alarm type asked for: a 32-bit field (Wireshark); PLC4X 0.13.1 sends it as one byte, read too. */
-export function decodeQueryRequest(d: Buffer): { queryType: number; alarmType: number } {
-  if (d.length < 9 || d[2] !== 0x12 || d[4] !== AlarmSyntax.ALARM_QUERYREQ) {
-    throw new ProtocolError(`alarm query request ${d.subarray(0, 12).toString('hex')} is not 00 01 12 08 1A …`);
-  }
-  return { queryType: d[6]!, alarmType: d.length >= 12 ? d.readUInt32BE(8) : d[8]! };
-}
-
-export interface QueryEntry {
-  alarmType: number;
-  eventId: number;
-  eventState: number;
-  ackGoing: number;
-  ackComing: number;
-  /** Time and associated value (the SD_i bytes) of the last coming / going; absent as all-zero. */
-  coming?: { time: Date; value: AssociatedValue };
-  going?: { time: Date; value: AssociatedValue };
-}
-
-/** A dataset's head: length, 2 reserved, alarm type, event id, 1 reserved, event state, ack going, ack coming. */
-const DATASET_HEAD = 12;
-const NO_VALUE: AssociatedValue = { returnCode: 0x0a, transportSize: 0, data: Buffer.alloc(0) };
-
-/** The whole answer's data (the server cuts it into parts). */
-export function encodeQueryAnswer(entries: readonly QueryEntry[]): Buffer {
-  const sets = entries.map((e) => {
-    const cv = e.coming?.value ?? NO_VALUE;
-    const gv = e.going?.value ?? NO_VALUE;
-    const b = Buffer.alloc(DATASET_HEAD + 8 + 4 + cv.data.length + 8 + 4 + gv.data.length);
-    b[0] = b.length - 1;
-    b[3] = e.alarmType;
-    b.writeUInt32BE(e.eventId >>> 0, 4);
-    b[9] = e.eventState;
-    b[10] = e.ackGoing;
-    b[11] = e.ackComing;
-    let o = DATASET_HEAD;
-    if (e.coming) encodeDateAndTime(e.coming.time, b, o);
-    o = writeValue(b, o + 8, cv, true);
-    if (e.going) encodeDateAndTime(e.going.time, b, o);
-    writeValue(b, o + 8, gv, true);
-    return b;
-  });
-  const body = Buffer.concat(sets);
-  const head = Buffer.of(0x00, Math.min(entries.length, 0xff), 0xff, 0x09, 0, 0);
-  head.writeUInt16BE(Math.min(body.length, 0xffff), 4);
-  return Buffer.concat([head, body]);
-}
-
-function stamp(d: Buffer, o: number): Date | undefined {
-  return d.subarray(o, o + 8).every((x) => x === 0) ? undefined : decodeDateAndTime(d, o);
-}
-
-/** The whole answer (every part joined). */
-export function decodeQueryAnswer(d: Buffer): QueryEntry[] {
-  const what = 'alarm query answer';
-  if (d.length < 6) throw new ProtocolError(`${what} of ${d.length} bytes, expected at least 6`);
-  if (d[2] !== 0xff) return [];
-  const out: QueryEntry[] = [];
-  let o = 6;
-  while (o < d.length) {
-    const end = o + 1 + d[o]!;
-    if (end > d.length || end - o < DATASET_HEAD + 24) throw new ProtocolError(`${what}: dataset at byte ${o} of ${d[o]} bytes does not fit`);
-    const set = d.subarray(0, end);
-    const e: QueryEntry = {
-      alarmType: d[o + 3]!,
-      eventId: d.readUInt32BE(o + 4),
-      eventState: d[o + 9]!,
-      ackGoing: d[o + 10]!,
-      ackComing: d[o + 11]!,
-    };
-    let p = o + DATASET_HEAD;
-    const ct = stamp(set, p);
-    const [cv, afterComing] = readValue(set, p + 8, true, what);
-    if (ct) e.coming = { time: ct, value: cv };
-    p = afterComing;
-    if (p + 8 > end) throw new ProtocolError(`${what}: dataset at byte ${o} has no going time`);
-    const gt = stamp(set, p);
-    const [gv, afterGoing] = readValue(set, p + 8, true, what);
-    if (gt) e.going = { time: gt, value: gv };
-    if (afterGoing !== end) throw new ProtocolError(`${what}: dataset at byte ${o} announces ${end - afterGoing} bytes more than it holds`);
-    out.push(e);
-    o = end;
-  }
-  return out;
 }
