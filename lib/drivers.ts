@@ -142,6 +142,12 @@ export const DRIVERS = Object.freeze({
     diagnose: S7PLUS_DOCTOR,
     browse: (client, options) => client.browse(options),
     subscribe: (client, tags, options) => client.subscribe(tags, options),
+    // Program_Alarms (issue #33): the active-alarm list, the alarm subscription; acknowledge refuses (docs/alarms.md).
+    alarms: {
+      list: (client, options) => client.alarms(options),
+      subscribe: (client, options, listener) => client.subscribeAlarms(options, listener),
+      acknowledge: (client, id, options) => client.acknowledge(id, options),
+    },
     // Its simulator is the S7 one's (S7CommPlus on the same port as PUT/GET, as a CPU serves it) once that serves it.
     // As on a CPU, S7CommPlus is served by the S7 simulator of an S7-1200/1500 on the PUT/GET port (the called TSAP decides).
     serve: (flags) =>

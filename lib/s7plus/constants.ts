@@ -294,6 +294,30 @@ export const Ids = {
   DBWildcardRID: 0x8a11ffff,
   /** A LID path of this marker, a byte offset and a byte count reads a standard DB as bytes. */
   LidClassicBlob: 3,
+  // Alarms (issue #33). s7commplus (MIT), protocol.py Ids and alarm.py: the alarm subscription's child
+  // (AlarmSubscriptionRef), the alarm subsystem's active-alarm relation, the DAI (alarm) object and its attributes.
+  AlarmSubscriptionRefAlarmDomain: 2659,
+  AlarmSubscriptionRefItsAlarmSubsystem: 2660,
+  AlarmSubscriptionRefClassRid: 2662,
+  AlarmSubscriptionRefAlarmDomainFilter: 7731,
+  AlarmSubscriptionRefSendTexts: 8173,
+  AlarmSubscriptionRefTextLanguages: 8181,
+  AlarmSubsystemUpdateRelevantDai: 2667,
+  AlarmDaiCpuAlarmId: 2670,
+  AlarmDaiAllStatesInfo: 2671,
+  AlarmDaiDomain: 2672,
+  AlarmDaiComing: 2673,
+  AlarmDaiGoing: 2677,
+  AlarmDaiClassRid: 2681,
+  AlarmDaiTexts: 2715,
+  AlarmDaiMessageType: 4079,
+  AlarmDaiHmiInfo: 7813,
+  AlarmDaiSequenceCounter: 7917,
+  /** Members of the coming / going struct (AS_CGS): s7commplus alarm.py (3475, 3476, 3646); 3474 from S7CommPlusDriver's Ids.cs (LGPL, the number only). */
+  AsCgsAllStatesInfo: 3474,
+  AsCgsTimestamp: 3475,
+  AsCgsAssociatedValues: 3476,
+  AsCgsAckTimestamp: 3646,
 } as const;
 
 /**

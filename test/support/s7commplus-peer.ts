@@ -399,7 +399,11 @@ export type PeerOp =
   | { op: 'db_read'; db: number; offset: number; size: number }
   | { op: 'db_write'; db: number; offset: number; data: string }
   | { op: 'subscribe'; items: readonly string[]; cycleMs?: number }
-  | { op: 'notification'; subscription?: number; timeoutMs?: number };
+  | { op: 'notification'; subscription?: number; timeoutMs?: number }
+  // Alarms (issue #33): languages are Windows LCIDs (1033 en-US, 1031 de-DE).
+  | { op: 'alarm_subscribe'; languages?: readonly number[] }
+  | { op: 'alarm_notification'; languages?: readonly number[]; timeoutMs?: number }
+  | { op: 'read_alarms'; languages?: readonly number[] };
 
 export interface PeerError {
   readonly type: string;

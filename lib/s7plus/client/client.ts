@@ -9,7 +9,7 @@
  * no property, no JSON, no inspect() output, no error and no log line.
  */
 import { BaseClient, endpointOptions, toResults, type ClientOptions } from '../../client/base';
-import { ConnectionError, isLinkError, type PlcError } from '../../errors';
+import { ConnectionError, isLinkError, PlcError } from '../../errors';
 import { COTP_DT_HEADER } from '../../iso/constants';
 import type { Driver } from '../../link/driver';
 import type { SymbolTable } from '../../symbols/model';
@@ -27,6 +27,9 @@ import type { HandshakeStep, PeerCertificate } from './handshake';
 import { parseDeviceString } from '../codec/identity';
 import { readOnlyRefusals, type Protection } from './legitimation';
 import { PushLink } from './push';
+import { activeAlarms, languageIds, S7PlusAlarmSubscription } from './alarms';
+import { ackRefusal } from '../../alarms/ack-guard';
+import type { AlarmEvent, AlarmSubscribeOptions, PlcAlarm } from '../../alarms/model';
 import type { S7PlusSubscription, SubscribeOptions, SubscriptionChange } from './subscription';
 
 export type { PeerCertificate } from './handshake';
@@ -115,6 +118,11 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag, undefined, S7Pl
   /** The reconnect backoff of the client's options, for the subscriptions' session too. */
   private readonly pushBackoff: Pick<ClientOptions, 'backoff' | 'random'>;
 
+  /** The alarm subscriptions (alarms.ts), each on a session of its own; the client's close() closes them. */
+  private readonly alarmSubs = new Set<S7PlusAlarmSubscription>();
+  /** Read-only and the allow-list as the client was given them: acknowledge() asks ackRefusal first. */
+  private readonly ackGuard: { readOnly: boolean | undefined; allow: readonly string[] | undefined };
+
   protected readonly driver: Driver<S7PlusSession, Tag>;
   private readonly baseDriver = {
     openSession: (signal: AbortSignal) => this.openSession(signal),
@@ -141,7 +149,9 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag, undefined, S7Pl
 
   constructor(endpoint: S7PlusEndpoint, options: S7PlusClientOptions = {}) {
     const { password, handshake, ...rest } = options;
-    super(endpointOptions(S7PLUS_URLS.name(endpoint), endpoint, rest));
+    const effective = endpointOptions(S7PLUS_URLS.name(endpoint), endpoint, rest);
+    super(effective);
+    this.ackGuard = { readOnly: effective.readOnly, allow: effective.allow };
     this.driver = { syntax: plusSyntax(rest.symbols), ...this.baseDriver };
     this.endpoint = endpoint;
     this.#password = password;
@@ -290,8 +300,52 @@ export class S7PlusClient extends BaseClient<S7PlusSession, Tag, undefined, S7Pl
     return this.push.subscribe(tags, options, listener);
   }
 
+  /** The Program_Alarms active now (the alarm subsystem's list), texts in `languages` (`en-US`, …; default every one the PLC has). */
+  alarms(options: RequestOptions & { languages?: readonly string[] } = {}): Promise<PlcAlarm[]> {
+    return this.withSession((s) => activeAlarms(s, languageIds(options.languages), options.signal));
+  }
+
+  /**
+   * The PLC's Program_Alarms as they come and go (issue #33), on a session of their own: resolves once the PLC
+   * created the subscription (its `active` holds the alarms active then); after a reconnect it is created again and
+   * what came or went meanwhile is reported `during: 'outage'`. The client's close() closes it.
+   */
+  async subscribeAlarms(options: AlarmSubscribeOptions = {}, listener?: (e: AlarmEvent) => void): Promise<S7PlusAlarmSubscription> {
+    if (this.state !== 'connected') throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (the link is ${this.state})`);
+    const sub = new S7PlusAlarmSubscription(
+      { name: this.name, timeout: this.timeout, ...this.pushBackoff, open: (signal, hooks) => this.openSession(signal, hooks) },
+      options,
+    );
+    if (listener) sub.on('event', listener);
+    this.alarmSubs.add(sub);
+    const close = sub.close.bind(sub);
+    sub.close = () => {
+      this.alarmSubs.delete(sub);
+      return close();
+    };
+    await sub.start();
+    return sub;
+  }
+
+  /**
+   * Acknowledging a Program_Alarm over S7CommPlus: no public source shows the request (docs/alarms.md says what is
+   * missing), so after the write safety (read-only, allow-list) it is refused with NOT_SUPPORTED; nothing is sent.
+   */
+  acknowledge(id: number, _options: RequestOptions = {}): Promise<void> {
+    const refused = ackRefusal(id, this.ackGuard.readOnly, this.ackGuard.allow);
+    if (refused) return Promise.reject(refused);
+    return Promise.reject(
+      new PlcError(
+        'NOT_SUPPORTED',
+        `acknowledge of alarm ${id} on ${this.name}: no public source shows how S7CommPlus acknowledges a Program_Alarm; acknowledge it on the HMI or with the program (docs/alarms.md)`,
+        { tag: `ALARM${id}` },
+      ),
+    );
+  }
+
   /** Ends the PLC's session (DeleteObject, at most 2 s), then closes as every client does. Always resolves. */
   override async close(): Promise<void> {
+    await Promise.all([...this.alarmSubs].map((s) => s.close()));
     await this.push?.close();
     const session = this.session;
     if (session?.alive) await session.goodbye(Math.min(this.timeout, GOODBYE_MS));

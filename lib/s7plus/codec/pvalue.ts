@@ -7,7 +7,10 @@
  * - VLQ: UDInt, AID (unsigned 32), DInt (signed 32), ULInt (unsigned 64),
  *   LInt, Timespan (signed 64);
  * - WString, S7String: a UVLQ byte count, then the text (UTF-8 / Latin-1);
- * - Blob: a UVLQ root id, a UVLQ byte count, the bytes;
+ * - Blob: a UVLQ root id, a UVLQ byte count, the bytes; a root id above 1
+ *   (a typed blob: an alarm's associated value names its Softdatatype there)
+ *   has 8 bytes and a blob type (2 or 3) between the root id and the count
+ *   (s7commplus (MIT), alarm.py _decode_blob);
  * - Struct: a UInt32 struct id, then (UVLQ key, PValue) members ending at key
  *   0; or, for the packed struct ids, a UInt64 interface timestamp, UVLQ
  *   transport flags, a UVLQ count (a second one when flags has 0x400) and
@@ -29,7 +32,14 @@ import { Reader, Writer } from './bytes';
 export interface BlobValue {
   rootId: number;
   data: Buffer;
+  /** A typed blob's (root id above 1) 8 bytes before its blob type; zeros when absent. */
+  typeHead?: Buffer;
+  /** A typed blob's blob type, 2 or 3; 2 when absent. */
+  blobType?: number;
 }
+
+/** A typed blob's head: its 8 bytes and its blob type (alarm.py _decode_blob). */
+const TYPED_BLOB_HEAD = 8;
 
 export interface StructMember {
   key: number;
@@ -120,7 +130,13 @@ function readScalar(r: Reader, type: number, depth: number): Scalar {
       return r.bytes(r.uvlq32(), 'S7String').toString('latin1');
     case DataType.Blob: {
       const rootId = r.uvlq32();
-      return { rootId, data: r.bytes(r.uvlq32(), 'Blob') };
+      if (rootId <= 1) return { rootId, data: r.bytes(r.uvlq32(), 'Blob') };
+      const typeHead = r.bytes(TYPED_BLOB_HEAD, 'typed Blob head');
+      const at = r.offset;
+      const blobType = r.u8('Blob type');
+      if (blobType !== 2 && blobType !== 3)
+        throw new ProtocolError(`S7CommPlus: typed Blob of type ${blobType} at offset ${at} (2 or 3 are known)`);
+      return { rootId, typeHead, blobType, data: r.bytes(r.uvlq32(), 'Blob') };
     }
     case DataType.Struct:
       return readStruct(r, depth);
@@ -267,7 +283,13 @@ function writeScalar(w: Writer, type: number, v: Scalar): void {
     }
     case DataType.Blob:
       if (v === null || typeof v !== 'object' || !('rootId' in v)) throw wrongValue(type, v);
-      w.uvlq32(v.rootId).uvlq32(v.data.length).bytes(v.data);
+      w.uvlq32(v.rootId);
+      if (v.rootId > 1) {
+        const head = v.typeHead ?? Buffer.alloc(TYPED_BLOB_HEAD);
+        if (head.length !== TYPED_BLOB_HEAD) throw new RangeError(`S7CommPlus: a typed Blob's head has ${TYPED_BLOB_HEAD} bytes`);
+        w.bytes(head).u8(v.blobType ?? 2);
+      }
+      w.uvlq32(v.data.length).bytes(v.data);
       return;
     case DataType.Struct:
       if (v === null || typeof v !== 'object' || !('id' in v)) throw wrongValue(type, v);

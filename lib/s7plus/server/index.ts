@@ -18,6 +18,8 @@ import { dataBlockImages } from '../../sim/symbol-memory';
 import { systemLimitsOf, uniformLimits, type SystemLimitValues } from './limits';
 import { buildPlusModel, type PlusModel } from './model';
 import { isS7PlusRequest } from './tsap';
+import type { AlarmDefinition } from '../../alarms/model';
+import { AlarmSubsystem } from './alarms';
 
 export type { PlusModel } from './model';
 
@@ -49,6 +51,12 @@ export interface S7PlusOptions {
    * its firmware decides the form of legitimation the CPU takes (V2.9 to V3.0: the legacy one).
    */
   readonly device?: string;
+  /**
+   * The Program_Alarms of the CPU's program (issue #33): each comes when its trigger tag goes TRUE and goes when it
+   * goes FALSE, to every alarm subscription and in the active-alarm list (server/alarms.ts). `plcwire serve s7
+   * --alarms F` gives the file's definitions.
+   */
+  readonly alarms?: readonly AlarmDefinition[];
 }
 
 /** What the S7 simulator gives each S7CommPlus connection. */
@@ -69,6 +77,8 @@ export class S7PlusService {
   private readonly maxRequestBytes: number;
   private nextSession = 0x3a0;
   private readonly device: string | undefined;
+  /** The CPU's alarm subsystem: the Program_Alarms of `S7PlusOptions.alarms` (none: a quiet one). */
+  readonly alarms: AlarmSubsystem;
   /** The CPU's password (`S7PlusOptions.password`): a private field, so no inspect(), JSON or log shows it. */
   readonly #password: string | undefined;
 
@@ -80,6 +90,7 @@ export class S7PlusService {
     this.#password = options.password;
     this.device = options.device;
     this.maxRequestBytes = options.maxRequestBytes ?? DEFAULT_MAX_REQUEST_BYTES;
+    this.alarms = new AlarmSubsystem(options.alarms ?? [], () => this.current);
     if (options.tls) {
       this.secureContext = serverSecureContext(options.tls);
       this.fingerprint = fingerprint256(new X509Certificate(options.tls.cert).raw);
@@ -145,6 +156,8 @@ export class S7PlusService {
   ): PlusLink {
     const service = this;
     const identity = cpu.cpu?.identity;
+    // The trigger tags live in the CPU's memory, the one every connection shares.
+    this.alarms.attach(cpu.memory);
     const device = identity ? formatDeviceString(identity.orderCode, identity.firmware) : undefined;
     return new PlusConnection(
       {
@@ -155,6 +168,7 @@ export class S7PlusService {
           },
           memory: cpu.memory,
           mode: () => cpu.state,
+          alarms: this.alarms,
           // The limits of the CPU the session's device string names (a test's before the profile's).
           limits: this.limits ?? systemLimitsOf(this.device ? parseDeviceString(this.device).orderCode : identity?.orderCode),
         },

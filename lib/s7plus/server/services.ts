@@ -19,6 +19,9 @@ import { resolveAreaLid, resolveLids, type PlusDb, type PlusModel } from './mode
 import { expectedCrc, tagCrc } from './symbol-crc';
 import { blockList, cpuExecUnit, isTypeObject, typeInfoContainer, typeObjectAttributes } from './typeinfo';
 import { blob, readNode, readPValue, writeNode } from './values';
+import { daiObject } from '../codec/alarms';
+import { writeObject } from '../codec/object';
+import type { AlarmSubsystem } from './alarms';
 
 /** What a handler needs of the CPU. */
 export interface CpuSide {
@@ -28,6 +31,8 @@ export interface CpuSide {
   mode(): 'RUN' | 'STOP';
   /** What SystemLimits reports: items one Get/SetMultiVariables may carry; more resets the connection. */
   readonly limits: SystemLimitValues;
+  /** The alarm subsystem (Program_Alarms of S7PlusOptions.alarms); absent: a CPU without alarms. */
+  readonly alarms?: AlarmSubsystem;
 }
 
 /** One item address of a request: its SymbolCrc (0: no check), the area, its sub-area and LIDs. */
@@ -47,11 +52,26 @@ export function explore(cpu: CpuSide, body: Buffer): Buffer {
   const id = r.u32('the Explore id');
   const ok = (objects: Buffer) => Buffer.concat([encodeUVlq64(0n), objects, Buffer.alloc(4)]);
   if (id === Ids.NativeThePlcProgramRID) return ok(blockList(cpu.model, unnamedDbs(cpu)));
+  if (id === Ids.NativeTheAlarmSubsystemRID) return activeAlarms(cpu);
   if (id === Ids.NativeTheCpuExecUnitRID) return ok(cpuExecUnit(cpu.mode() === 'RUN' ? OperatingState.Run : OperatingState.Stop));
   if (id === Ids.ObjectOmsTypeInfoContainer) return ok(typeInfoContainer(cpu.model, exploreAttributes(r)));
   // One type object for its modification time (s7commplus (MIT) client.py _read_type_info_time).
   if (isTypeObject(cpu.model, id)) return ok(typeObjectAttributes(cpu.model, id, exploreAttributes(r)));
   return Buffer.concat([encodeUVlq64(EXPLORE_NO_SUCH_OBJECT), Buffer.alloc(8)]);
+}
+
+/**
+ * The alarms active now, one DAI object each (codec/alarms.ts). With objects, four bytes (the Explore id) go before
+ * them, where a PLC puts a few (codec/explore.ts, "preamble") and s7commplus's reader skips four (alarm.py
+ * parse_alarm_explore_response); with none, the answer is the return value and the fill.
+ */
+function activeAlarms(cpu: CpuSide): Buffer {
+  const active = cpu.alarms?.active() ?? [];
+  if (active.length === 0) return Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)]);
+  const w = new Writer();
+  w.u32(Ids.NativeTheAlarmSubsystemRID);
+  for (const dai of active) writeObject(w, daiObject(dai));
+  return Buffer.concat([encodeUVlq64(0n), w.toBuffer(), Buffer.alloc(4)]);
 }
 
 /** The memory's data blocks no source declares (a profile's or a layout's when no program was given): standard, by address only. */

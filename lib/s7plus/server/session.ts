@@ -23,6 +23,10 @@ import {
 import { Reader } from '../codec/bytes';
 import { encodeUVlq32, encodeUVlq64 } from '../codec/vlq';
 import { FULL_ACCESS, Legitimation } from './legitimation';
+import { decodeObject } from '../codec/object';
+import { readAlarmSubscription } from '../codec/alarms';
+import { AlarmSubscriptions } from './alarm-subscriptions';
+import { AlarmSubsystem } from './alarms';
 import { Subscriptions } from './subscriptions';
 import { explore, getMultiVariables, getVarSubStreamed, ResetConnection, setMultiVariables, type CpuSide } from './services';
 
@@ -61,6 +65,7 @@ export class PlusSession {
   /** The session's subscription container: the second object id of its CreateObject. */
   private container = 0;
   private readonly subscriptions: Subscriptions;
+  private readonly alarmSubscriptions: AlarmSubscriptions;
   private readonly legitimation: Legitimation;
 
   constructor(
@@ -68,12 +73,15 @@ export class PlusSession {
     private readonly options: SessionOptions,
   ) {
     this.subscriptions = new Subscriptions(cpu, options.push, this.version());
+    // A CPU without alarms defined still has its alarm subsystem: a subscription to it is taken and stays quiet.
+    this.alarmSubscriptions = new AlarmSubscriptions(cpu.alarms ?? new AlarmSubsystem([], () => cpu.model), options.push, this.version());
     this.legitimation = new Legitimation(options.password, options.exporter, options.device ?? DEFAULT_DEVICE);
   }
 
   /** The connection ended: no more notifications. */
   close(): void {
     this.subscriptions.clear();
+    this.alarmSubscriptions.clear();
   }
 
   /** Handles one frame (header, data, trailer); throws ProtocolError for a frame that breaks the protocol (the connection is then reset). */
@@ -126,6 +134,7 @@ export class PlusSession {
     if (fn === FunctionCode.DeleteObject && body.length <= 4) {
       this.stage = 'init';
       this.subscriptions.clear();
+      this.alarmSubscriptions.clear();
       return { reply: this.frame(this.version(), fn, seq, Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)])), close: true };
     }
     const read = READ_FUNCTIONS.has(fn);
@@ -217,13 +226,14 @@ export class PlusSession {
     return Buffer.concat([encodeUVlq64(ITEM_ERROR_UNRESOLVED), Buffer.alloc(4)]);
   }
 
-  /** A subscription under the session's container: its object id. */
+  /** A subscription (of variables, or of alarms: one with an AlarmSubscriptionRef child) under the session's container: its object id. */
   private createSubscription(body: Buffer, id: number | undefined): Buffer {
     const r = new Reader(body);
     if (r.u32('the container id') !== this.container)
       throw new ProtocolError("S7CommPlus CreateObject outside the session's subscription container");
     const object = body.subarray(11 + (id === undefined ? 0 : encodeUVlq32(id).length));
-    const created = this.subscriptions.create(object);
+    const alarms = object[0] === ElementId.StartOfObject ? readAlarmSubscription(decodeObject(object).value) : undefined;
+    const created = alarms ? this.alarmSubscriptions.create(alarms) : this.subscriptions.create(object);
     return Buffer.concat([encodeUVlq64(0n), Buffer.from([1]), encodeUVlq32(created), Buffer.alloc(4)]);
   }
 
@@ -232,6 +242,7 @@ export class PlusSession {
     const object = new Reader(body).u32('the object id');
     if (object !== this.container) return Buffer.concat([encodeUVlq64(ITEM_ERROR_UNRESOLVED), Buffer.alloc(4)]);
     this.subscriptions.clear();
+    this.alarmSubscriptions.clear();
     return Buffer.concat([encodeUVlq64(0n), Buffer.alloc(4)]);
   }
 
@@ -243,9 +254,11 @@ export class PlusSession {
     const address = r.uvlq32();
     const flags = r.u8('flags');
     const type = r.u8('type');
-    if (address === Ids.SubscriptionCreditLimit && type === DataType.Int)
-      this.subscriptions.setCredit(object, r.bytes(2, 'an Int').readInt16BE(0));
-    else if (address === Ids.Legitimate && type === DataType.Blob) {
+    if (address === Ids.SubscriptionCreditLimit && type === DataType.Int) {
+      const limit = r.bytes(2, 'an Int').readInt16BE(0);
+      if (this.alarmSubscriptions.has(object)) this.alarmSubscriptions.setCredit(object, limit);
+      else this.subscriptions.setCredit(object, limit);
+    } else if (address === Ids.Legitimate && type === DataType.Blob) {
       r.uvlq32();
       return this.legitimation.attempt(r.bytes(r.uvlq32(), 'the credentials')) ? 0n : LEGITIMATION_REFUSED;
     } else if (address === Ids.ServerSessionResponse && type === DataType.USInt && flags & PValueFlag.Array) {
@@ -305,7 +318,8 @@ export class PlusSession {
     const head = Buffer.alloc(14);
     head[0] = S7P_PROTOCOL_ID;
     head[1] = version;
-    head.writeUInt16BE(10 + body.length, 2);
+    // connection.ts cuts a long response into frames of its own and writes their lengths; this one is not read then.
+    head.writeUInt16BE(Math.min(10 + body.length, 0xffff), 2);
     head[4] = Opcode.Response;
     head.writeUInt16BE(fn, 7);
     head.writeUInt16BE(seq, 11);

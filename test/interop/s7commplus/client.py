@@ -91,6 +91,25 @@ def error_of(e):
     return {"type": type(e).__name__, "message": str(e)}
 
 
+def alarm_of(a):
+    """An s7commplus Alarm as JSON: what the package decoded, texts by LCID."""
+    return {
+        "id": a.cpu_alarm_id,
+        "state": a.state,
+        "name": a.name,
+        "domain": a.domain,
+        "sequenceCounter": a.sequence_counter,
+        "timestamp": a.timestamp,
+        "ackTimestamp": a.acknowledge_timestamp,
+        "hmiInfo": a.hmi_info.hex(),
+        "values": [v.hex() for v in a.associated_values],
+        "texts": {
+            str(int(lang)): {"alarm": t.alarm_text, "info": t.info_text, "additional": list(t.additional_texts)}
+            for lang, t in a.texts.items()
+        },
+    }
+
+
 class Runner:
     def __init__(self):
         self.client = Client()
@@ -203,6 +222,33 @@ class Runner:
             "decoded": hexify(n.decoded_values),
             "errors": hexify(n.errors),
         }
+
+    # Alarms (issue #33): the package's alarm subscription, its notifications and the active-alarm list.
+    def op_alarm_subscribe(self, op):
+        return self.client.create_alarm_subscription(language_ids=op.get("languages"))
+
+    def op_alarm_notification(self, op):
+        got = {}
+
+        def receive():
+            try:
+                got["n"] = self.client.receive_alarm_notification(op.get("languages"))
+            except Exception as e:  # reported below
+                got["e"] = e
+
+        worker = threading.Thread(target=receive, daemon=True)
+        worker.start()
+        worker.join(int(op.get("timeoutMs", 5000)) / 1000)
+        if worker.is_alive():
+            self.stuck = True
+            raise Timeout(f"no alarm notification within {int(op.get('timeoutMs', 5000))} ms")
+        if "e" in got:
+            raise got["e"]
+        n = got["n"]
+        return {"subscription": n.subscription_id, "sequence": n.sequence_number, "alarms": [alarm_of(a) for a in n.alarms]}
+
+    def op_read_alarms(self, op):
+        return [alarm_of(a) for a in self.client.read_alarms(op.get("languages"))]
 
     def op_disconnect(self, op):
         self.client.disconnect()
