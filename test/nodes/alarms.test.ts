@@ -8,6 +8,9 @@ import { expect } from 'chai';
 import { loadCatalogs, withCatalog } from './catalogs';
 import { fetchWriteSim } from './sims';
 import { ALL_NODES, helper, nodes, Recorder, until, type Sim } from './support';
+import type { AlarmDefinition } from '../../lib/alarms/model';
+import { DB_NUMBERS, SOURCES } from '../fixtures/s7plus';
+import { startPlusSimulator, type PlusSimulator } from '../support/s7plus-sim';
 
 describe('nodes: plcwire-alarms', function () {
   this.timeout(20000);
@@ -70,5 +73,56 @@ describe('nodes: plcwire-alarms', function () {
     expect(msg.error.code).to.equal('INVALID_VALUE');
     expect(msg.error.message).to.contain('msg.ack = <alarm id>').and.to.contain('msg.topic = "list"');
     expect(out.messages).to.deep.equal([]);
+  });
+
+  describe('on an S7-1500 (our simulator, Program_Alarm over S7CommPlus)', () => {
+    const TANK_HIGH: AlarmDefinition = {
+      id: 7,
+      kind: 'Program_Alarm',
+      texts: { 'en-US': 'Tank level high: @1%5.1f@ m' },
+      needsAck: true,
+      priority: 5,
+      trigger: '"Tank".Alarm',
+      values: ['"Tank".Level'],
+    };
+    let plus: PlusSimulator;
+    const trigger = (on: boolean) => plus.server.memory.writeBit('DB', 1, 6, 1, on); // "Tank".Alarm is DB1.DBX6.1
+
+    before(async () => {
+      plus = await startPlusSimulator({ sources: SOURCES, db: DB_NUMBERS, alarms: [TANK_HIGH] });
+    });
+    afterEach(() => trigger(false));
+    after(() => plus?.server.close());
+
+    it('sends each event with its alarm as plain data, counts in the status, the active list on topic "list"', async () => {
+      const { out, caught, node } = await load(plus.url);
+      const statuses: { fill: string; text: string }[] = [];
+      node.on('call:status', (call: any) => statuses.push(call.args[0]));
+      await until(() => statuses.some((s) => s.text === 'no active alarms'), 15000, 'subscribed: "no active alarms"');
+      trigger(true);
+      const coming = await out.next((m) => m.topic === 'alarm/7/coming', 10000, 'the coming event');
+      expect(coming.payload).to.deep.include({ type: 'alarm', change: 'coming' });
+      expect(coming.payload.alarm).to.deep.include({ id: 7, kind: 'Program_Alarm', needsAck: true, acknowledged: false, priority: 5 });
+      expect(coming.payload.alarm.texts['en-US'].text).to.equal('Tank level high:  12.5 m');
+      expect(coming.payload.at).to.be.a('string');
+      await until(() => statuses.some((s) => s.text === '1/1 unacked' && s.fill === 'red'), 5000, 'status "1/1 unacked"');
+      node.receive({ topic: 'list' });
+      const list = await out.next((m) => m.topic === 'list', 10000, 'the active list');
+      expect(list.payload.map((a: { id: number }) => a.id)).to.deep.equal([7]);
+      trigger(false);
+      await out.next((m) => m.topic === 'alarm/7/going', 10000, 'the going event');
+      await until(() => statuses.at(-1)?.text === 'no active alarms', 5000, 'status back to "no active alarms"');
+      expect(caught.messages).to.deep.equal([]);
+    });
+
+    it('msg.ack: the S7CommPlus client refuses it, the refusal reaches Catch with its code and the message', async () => {
+      const { caught, node } = await load(plus.url);
+      await until(() => node.linkState === 'connected', 15000, 'connected');
+      node.receive({ ack: 7, keep: 1 });
+      const msg = await caught.next(undefined, 10000, 'the refusal');
+      expect(msg.error.code).to.equal('NOT_SUPPORTED');
+      expect(msg.error.message).to.contain('acknowledge of alarm 7');
+      expect(msg.keep).to.equal(1);
+    });
   });
 });
