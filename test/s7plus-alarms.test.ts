@@ -13,7 +13,7 @@ import * as net from 'node:net';
 import type { AlarmEvent, PlcAlarm } from '../lib/alarms/model';
 import { createClient } from '../lib/connect';
 import { DRIVERS } from '../lib/drivers';
-import { PlcError } from '../lib/errors';
+import { PlcError, ProtocolError } from '../lib/errors';
 import type { S7PlusClient } from '../lib';
 import {
   alarmExploreBody,
@@ -127,6 +127,13 @@ describe('S7CommPlus alarms (codec)', () => {
       'de-DE': { text: 'Pegel 12.50', info: 'Info' },
     });
     expect(Object.keys(toPlcAlarm(back, [1031]).texts ?? {})).to.deep.equal(['de-DE']);
+  });
+
+  it('a DAI whose CPU alarm id is no whole number is a ProtocolError (found by the fuzzer: a REAL id made BigInt() throw a RangeError)', () => {
+    const obj = daiObject(dai);
+    const m = obj.members.find((x) => x.kind === 'attribute' && x.id === 2670)!;
+    if (m.kind === 'attribute') m.value = { flags: 0, type: DataType.LReal, value: 2.5 };
+    expect(() => readDai(decodeObject(encodeObject(obj)).value)).to.throw(ProtocolError, /CPU alarm id/);
   });
 
   it('an alarm notification encodes and decodes both ways; a data notification is not one', () => {

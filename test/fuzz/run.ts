@@ -20,6 +20,7 @@ import {
 } from '../../lib/s7/codec';
 import { decodeTag } from '../../lib/values';
 import { fuzz, type FuzzTarget } from './engine';
+import { s7plusAlarmTargets } from './s7plus-alarm-targets';
 import { s7plusTargets } from './s7plus-targets';
 import { symbolTargets } from './symbol-targets';
 import { extraTargets } from './targets';
@@ -126,6 +127,7 @@ const targets: FuzzTarget[] = [
   ...extraTargets(),
   ...symbolTargets(),
   ...s7plusTargets(),
+  ...s7plusAlarmTargets(),
 ];
 
 const results = targets.map((t) => fuzz(t, inputs));

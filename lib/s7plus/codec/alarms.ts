@@ -224,8 +224,9 @@ export function readDai(obj: PObject): Dai {
     throw new ProtocolError(`S7CommPlus: alarm attribute ${what} (${id}) is not a number`);
   };
   const idValue = attributeOf(obj, Ids.AlarmDaiCpuAlarmId)?.value;
-  if (typeof idValue !== 'bigint' && typeof idValue !== 'number')
-    throw new ProtocolError('S7CommPlus: an alarm (DAI) without its CPU alarm id (2670)');
+  // An LWord (AlarmsDai.cs); any whole number of another integer type is taken too.
+  if (!(typeof idValue === 'bigint' || (typeof idValue === 'number' && Number.isInteger(idValue))) || idValue < 0)
+    throw new ProtocolError('S7CommPlus: an alarm (DAI) without a CPU alarm id (2670) that is a whole number');
   const name = attributeOf(obj, Ids.ObjectVariableTypeName)?.value;
   const coming = attributeOf(obj, Ids.AlarmDaiComing);
   const going = attributeOf(obj, Ids.AlarmDaiGoing);
@@ -352,7 +353,8 @@ export function decodeAlarmNotification(data: Buffer): AlarmNotification {
 
 export function encodeAlarmNotification(n: AlarmNotification): Buffer {
   const w = new Writer();
-  w.u8(Opcode.Notification).u32(n.subscriptionId).u16(0).u16(0).u16(0).u8(n.creditTick).uvlq32(n.sequence);
+  // The 6 reserved bytes as TIA's captures show them: 04 00 00 00 00 00 (s7commplus docs/subscriptions-alarms.rst).
+  w.u8(Opcode.Notification).u32(n.subscriptionId).u16(0x0400).u16(0).u16(0).u8(n.creditTick).uvlq32(n.sequence);
   if (n.timestamp !== undefined) {
     if (n.timestamp < 0n || n.timestamp >= 1n << 56n)
       throw new RangeError('S7CommPlus: a notification timestamp must have its first byte 0');

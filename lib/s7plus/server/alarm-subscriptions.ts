@@ -5,11 +5,13 @@
  * asked for, while the client's credits last (SetVariable of the credit
  * limit gives more, as for data subscriptions); what comes meanwhile waits,
  * in order. DeleteObject of the container ends them with the data ones.
- * Layouts: s7commplus (MIT) alarm.py; credits: connection.py
+ * Changes that wait go out together, several alarm objects in one
+ * notification. Layouts: s7commplus (MIT) alarm.py; credits: connection.py
  * send_subscription_credit.
  */
 import { ProtocolError } from '../../errors';
 import { daiObject, encodeAlarmNotification, type Dai } from '../codec/alarms';
+import { encodeObject, type PObject } from '../codec/object';
 import { S7P_PROTOCOL_ID } from '../constants';
 import type { AlarmSubsystem } from './alarms';
 
@@ -19,6 +21,10 @@ const MAX_ALARM_SUBSCRIPTIONS = 4;
 const MAX_WAITING = 10_000;
 /** The largest frame the simulator sends (its length field has 16 bits). */
 const MAX_FRAME_DATA = 0xffff;
+/** A notification's bytes besides its alarm objects (head, sequence, value list end, alarm subscription id, fill). */
+const NOTIFICATION_HEAD = 32;
+/** Changes one notification carries at most (a notification holds a list of alarm objects: alarm.py parse_alarm_notification). */
+const MAX_PER_NOTIFICATION = 100;
 
 interface AlarmSub {
   readonly id: number;
@@ -82,10 +88,20 @@ export class AlarmSubscriptions {
     this.flush(sub);
   }
 
+  /** What waits goes out while credits last: as many changes per notification as fit one frame (its alarm list). */
   private flush(sub: AlarmSub): void {
     while (sub.waiting.length > 0 && this.active.has(sub.id)) {
       if (sub.limit >= 0 && sub.tick === sub.limit) return;
-      const dai = sub.waiting.shift()!;
+      const objects: PObject[] = [];
+      let bytes = NOTIFICATION_HEAD;
+      while (sub.waiting.length > 0 && objects.length < MAX_PER_NOTIFICATION) {
+        const object = daiObject(this.inLanguages(sub, sub.waiting[0]!));
+        const size = encodeObject(object).length;
+        if (objects.length > 0 && bytes + size > MAX_FRAME_DATA) break;
+        objects.push(object);
+        bytes += size;
+        sub.waiting.shift();
+      }
       sub.tick = (sub.tick + 1) % 255;
       sub.sequence = (sub.sequence + 1) >>> 0;
       const data = encodeAlarmNotification({
@@ -95,7 +111,7 @@ export class AlarmSubscriptions {
         changeCounter: 1,
         alarmSubscriptionId: sub.id,
         unexplained: 0,
-        alarms: [daiObject(this.inLanguages(sub, dai))],
+        alarms: objects,
       });
       if (data.length > MAX_FRAME_DATA) throw new ProtocolError(`an alarm notification of ${data.length} bytes`);
       const head = Buffer.from([S7P_PROTOCOL_ID, this.version, data.length >> 8, data.length & 0xff]);

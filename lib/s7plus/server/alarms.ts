@@ -13,7 +13,7 @@
 import { parseAddress } from '../../address/parse';
 import type { AlarmDefinition } from '../../alarms/model';
 import { ValueError } from '../../errors';
-import type { PlcMemory } from '../../sim/memory';
+import type { MemoryAccess, PlcMemory } from '../../sim/memory';
 import type { PlcValue, Tag } from '../../types';
 import { tagDecoder } from '../../values';
 import { associatedValueBlob, associatedValuesArray, lcidOf, nsOfDate, ACK_CLASS } from '../codec/alarm-texts';
@@ -47,7 +47,7 @@ export class AlarmSubsystem {
   private memory: PlcMemory | undefined;
   /** The program the tags were resolved in: a download (reload) resolves them again. */
   private resolvedIn: PlusModel | undefined;
-  private readonly onWrite = (): void => this.evaluate();
+  private readonly onWrite = (access: MemoryAccess): void => this.evaluate(access);
 
   constructor(
     definitions: readonly AlarmDefinition[],
@@ -92,8 +92,8 @@ export class AlarmSubsystem {
     return () => this.listeners.delete(listener);
   }
 
-  /** Each trigger read now: an edge raises or clears its alarm (in definition order). */
-  evaluate(): void {
+  /** Each trigger read now (only those in the bytes of `written`, when given): an edge raises or clears its alarm (in definition order). */
+  evaluate(written?: MemoryAccess): void {
     const memory = this.memory;
     if (!memory) return;
     const model = this.model();
@@ -105,12 +105,20 @@ export class AlarmSubsystem {
       }
     }
     for (const a of this.alarms) {
+      const t = a.trigger;
+      if (written && t && !overlaps(t, written)) continue;
       const on = this.read(memory, a, 'trigger') === true;
       if (on === a.on) continue;
       a.on = on;
       a.sequence = (a.sequence + 1) >>> 0;
       a.dai = this.daiOf(memory, a, on ? 'coming' : 'going');
-      for (const l of [...this.listeners]) l(a.dai);
+      for (const l of [...this.listeners]) {
+        try {
+          l(a.dai);
+        } catch {
+          // One session's failure to send (a notification too long for a frame) is not the writer's: the change stands.
+        }
+      }
     }
   }
 
@@ -179,4 +187,14 @@ export class AlarmSubsystem {
       }
     }
   }
+}
+
+/** Whether a write touched the bytes of `tag`. */
+function overlaps(tag: Tag, w: MemoryAccess): boolean {
+  return (
+    tag.area === w.area &&
+    tag.dbNumber === (w.area === 'DB' ? w.dbNumber : tag.dbNumber) &&
+    tag.byteOffset < w.offset + w.length &&
+    w.offset < tag.byteOffset + tag.byteLength
+  );
 }
