@@ -317,9 +317,9 @@ describe('browser: the npm start demo in headless Chromium', function () {
     if (profile) fs.rmSync(profile, { recursive: true, force: true });
   });
 
-  it('the editor lists our five nodes in the palette', async () => {
+  it('the editor lists our six nodes in the palette', async () => {
     await page.goto(demo.editor, { waitUntil: 'domcontentloaded' });
-    for (const type of ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control']) {
+    for (const type of ['plcwire-connection', 'plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'plcwire-alarms']) {
       if (type === 'plcwire-connection') continue; // config nodes are not in the palette
       await page.waitForSelector(`.red-ui-palette-node[data-palette-type="${type}"]`, { timeout: 30_000 });
     }
@@ -391,7 +391,7 @@ describe('browser: the npm start demo in headless Chromium', function () {
       // scripts it loads (resources/…/plcwire-editor.js) have arrived, so one type says nothing of the next.
       await editor.waitForFunction(
         () =>
-          ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control'].every(
+          ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'plcwire-alarms'].every(
             (t) => (globalThis as any).RED?.nodes?.getType?.(t) !== undefined,
           ),
         undefined,

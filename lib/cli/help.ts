@@ -93,6 +93,34 @@ Changes the CPU's mode and prints the state after. The URL needs control=true; -
 PLC that is not on this machine.
 example:
   plcwire cpu "s7://192.168.0.10?rack=0&slot=2&control=true" stop --yes`,
+  alarms: `usage: plcwire alarms <url> [--watch [--mode] [--diagnostics]] [--language L] [--json] [--timeout ms]
+Prints the alarms active now (S7-300/400 over s7://: the alarm query; S7-1200/1500 over s7plus://: the active-alarm
+list), one per line: id, source, state, acknowledgement, priority, when it came, its text and associated values.
+With --watch it prints one line per event as the PLC sends it until Ctrl-C (exit code 130): coming, going and
+acknowledged; after a link loss it reconnects, subscribes again and prints what came or went meanwhile.
+  --watch            print events until Ctrl-C instead of the active alarms
+  --mode             with --watch: also the CPU's mode changes (STOP, RUN, ...)
+  --diagnostics      with --watch: also the diagnostic messages the CPU sends
+  --language L       the language of the texts (en-US, de-DE, ...; default the PLC's first)
+  --json             a JSON array of the active alarms; with --watch one JSON object per event and line
+  --timeout ms       how long to wait for the PLC
+${PASSWORD_OPTION}
+${URL_NOTE}
+examples:
+  plcwire alarms "s7://192.168.0.10?rack=0&slot=2"
+  plcwire alarms "s7plus://192.168.0.1?fingerprint=<64 hex digits>" --watch --json`,
+  ack: `usage: plcwire ack <url> <alarm id> [--yes] [--json] [--timeout ms]
+Acknowledges one alarm, by the id plcwire alarms prints (decimal, 16#hex or 0x hex), and prints "alarm <id>
+acknowledged" once the PLC confirmed it. An operator's write: a URL with readOnly=true refuses it, and one with
+allow= only when the list names ALARMS or ALARM<id> (exit code 4, nothing sent); --yes in scripts or for a PLC
+that is not on this machine.
+  --yes              acknowledge on a PLC that is not on this machine without asking
+  --json             { "id": ..., "acknowledged": true }
+  --timeout ms       how long to wait for the PLC
+${PASSWORD_OPTION}
+${URL_NOTE}
+example:
+  plcwire ack "s7://192.168.0.10?rack=0&slot=2&allow=ALARMS" 1001 --yes`,
   doctor: `usage: plcwire doctor <url> [address|name...] [--json] [--timeout ms]
 Walks the connection step by step and stops at the first failure with the fix in words. Over s7plus://:
 TCP, COTP, InitSSL, TLS (the PLC's certificate; refused, it prints the URL with the fingerprint= that pins it),

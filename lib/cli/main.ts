@@ -21,6 +21,7 @@ import { realsShown } from '../symbols/reals';
 import { reportLayout, structValueFromText, symbolOptions, symbols, SYMBOL_FLAGS } from './symbols';
 import { browse, browsedValueFromText, isPlcName, passwordOption } from './s7plus';
 import { subscriberOf, watchPushed } from './watch-push';
+import { ack, alarms, ALARM_BOOL_FLAGS, ALARM_VALUE_FLAGS } from './alarms';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
 import { textForPeople, toJson, valueFromText, type TypedTag } from './values';
 
@@ -36,6 +37,8 @@ const USAGE = `usage:
   plcwire clock <url> [--set now|<ISO time>] [--yes] [--json]
   plcwire blocks <url> [TYPE [NUMBER]] [--json]          (OB, FB, FC, DB, SDB, SFC, SFB)
   plcwire cpu   <url> stop|start|cold-start [--yes] [--json]   (the URL needs control=true)
+  plcwire alarms <url> [--watch [--mode] [--diagnostics]] [--language L] [--json]   (s7:// S7-300/400, s7plus:// S7-1200/1500)
+  plcwire ack   <url> <alarm id> [--yes] [--json]        (an operator's write: readOnly and allow= refuse it)
   plcwire doctor <url> [address|symbol...] [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
   plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json] [--max-items N]
                    [--source Tank.db... --db Tank=1...] [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE]
@@ -62,7 +65,7 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
   const end = argv.indexOf('--');
   const words = argv.map((a, i) => (a === '-h' && (end < 0 || i < end) ? '--help' : a));
   try {
-    args = parseArgs(words, VALUE_FLAGS, BOOL_FLAGS);
+    args = parseArgs(words, [...VALUE_FLAGS, ...ALARM_VALUE_FLAGS], [...BOOL_FLAGS, ...ALARM_BOOL_FLAGS]);
   } catch (err) {
     // `plcwire read --help` prints read's help even beside an option read does not know.
     const command = words.find((w) => !w.startsWith('-'));
@@ -117,11 +120,15 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
         return await browse(rest, args, io);
       case 'serve':
         return await serve(rest, args, io);
+      case 'alarms':
+        return await alarms(rest, args, io);
+      case 'ack':
+        return await ack(rest, args, io);
       case 'demo':
         return await (await import('./demo')).runDemo(rest, args, io);
       default:
         throw new UsageError(
-          `unknown command "${command}" (read, write, watch, symbols, browse, info, szl, diag, clock, blocks, cpu, doctor, serve, demo)`,
+          `unknown command "${command}" (read, write, watch, symbols, browse, info, szl, diag, clock, blocks, cpu, alarms, ack, doctor, serve, demo)`,
         );
     }
   } catch (err) {

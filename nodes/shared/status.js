@@ -101,6 +101,21 @@ function failedStatus(t, action) {
   return { fill: 'red', shape: 'ring', text: t('plcwire-control.status.failed', { action }) };
 }
 
+/**
+ * Alarms: none active (green ring); active, all acknowledged (yellow dot, `3 active`); some waiting for an
+ * operator (red dot, `1/3 unacked`: one of three).
+ */
+function alarmCountsStatus(t, { active, unacknowledged }) {
+  if (active === 0) return { fill: 'green', shape: 'ring', text: t('plcwire-alarms.status.none') };
+  if (unacknowledged === 0) return { fill: 'yellow', shape: 'dot', text: t('plcwire-alarms.status.active', { active }) };
+  return { fill: 'red', shape: 'dot', text: t('plcwire-alarms.status.unacknowledged', { active, unacknowledged }) };
+}
+
+/** Alarms: the subscription failed or was lost (the error went to Catch, once per outage). */
+function alarmsFailedStatus(t) {
+  return { fill: 'red', shape: 'ring', text: t('plcwire-alarms.status.failed') };
+}
+
 module.exports = {
   linkStatus,
   layoutStatus,
@@ -112,4 +127,6 @@ module.exports = {
   cpuStatus,
   entriesStatus,
   failedStatus,
+  alarmCountsStatus,
+  alarmsFailedStatus,
 };

@@ -14,7 +14,7 @@ import { helper, nodes, Recorder, ROOT, until, type Sim } from './support';
 const status = require(path.join(ROOT, 'nodes/shared/status.js'));
 
 /** Types whose nodes show a status (the config node shows none). */
-const SHOWN_BY = ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control'];
+const SHOWN_BY = ['plcwire-read', 'plcwire-write', 'plcwire-heartbeat', 'plcwire-control', 'plcwire-alarms'];
 
 /** Every key of a catalog, flattened: "plcwire.status.connected". */
 function keysOf(catalog: object, prefix = ''): string[] {
@@ -88,6 +88,16 @@ function everyStatus(t: (key: string, params?: object) => string, type: string):
     list.push({ what: `alive ${n}`, status: status.aliveStatus(t, n), numbers: [n] });
   }
   for (const ms of [3_000, 86_400_000]) list.push({ what: `lost ${ms} ms`, status: status.lostStatus(t, ms), numbers: [ms / 1000] });
+  if (type === 'plcwire-alarms') {
+    // A plant's alarm server holds a few hundred active alarms at most; the widest counts must fit.
+    list.push({ what: 'no alarms', status: status.alarmCountsStatus(t, { active: 0, unacknowledged: 0 }), numbers: [] });
+    for (const n of [1, 999]) {
+      list.push({ what: `${n} active`, status: status.alarmCountsStatus(t, { active: n, unacknowledged: 0 }), numbers: [n] });
+      list.push({ what: `${n}/${n} unacked`, status: status.alarmCountsStatus(t, { active: n, unacknowledged: n }), numbers: [n] });
+    }
+    list.push({ what: 'alarms failed', status: status.alarmsFailedStatus(t), numbers: [] });
+    return list;
+  }
   if (type !== 'plcwire-control') return list;
   // The README's table has a row for RUN, STOP and STARTUP, and names the rarer modes in the text.
   for (const mode of ['RUN', 'STOP', 'STARTUP']) list.push({ what: `CPU ${mode}`, status: status.cpuStatus(t, mode), numbers: [] });
@@ -108,7 +118,7 @@ function everyStatus(t: (key: string, params?: object) => string, type: string):
 describe('nodes: message catalogs', () => {
   it('no catalog writes a placeholder as {{name}}: Node-RED interpolates __name__ and shows {{name}} raw', () => {
     const files = catalogFiles().filter((f) => f.endsWith('.json'));
-    expect(files.length).to.equal(15);
+    expect(files.length).to.equal(18);
     for (const file of files) {
       const text = fs.readFileSync(path.join(ROOT, file), 'utf8');
       expect(text.match(/\{\{[^}]*\}\}/g), file).to.equal(null);

@@ -21,6 +21,7 @@ export const nodes = {
   write: require(path.join(ROOT, 'nodes/write.js')),
   heartbeat: require(path.join(ROOT, 'nodes/heartbeat.js')),
   control: require(path.join(ROOT, 'nodes/control.js')),
+  alarms: require(path.join(ROOT, 'nodes/alarms.js')),
   catch: require(path.join(CORE, 'core/common/25-catch.js')),
   status: require(path.join(CORE, 'core/common/25-status.js')),
 };

@@ -25,6 +25,7 @@ import { S7_URLS, type S7Endpoint } from '../url';
 import { DEFAULT_MAX_ITEMS } from '../constants';
 import { openS7Session } from './handshake';
 import { PushHub } from './pushes';
+import { S7Alarms } from './alarms';
 import type { S7Session, WireCounters } from './session';
 import { compileRead, executeRead, tagError, type CollectedRead, type CompiledRead } from './read';
 import { writeJob } from './write';
@@ -107,6 +108,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
   /** The PDUs the CPU pushes (alarms, mode changes, diagnostic messages, cyclic data), on every session: lib/s7/client/pushes.ts. */
   readonly pushes = new PushHub();
   private readonly services: S7Services;
+  private readonly alarmService: S7Alarms;
   protected readonly driver: Driver<S7Session, Tag, S7Prepared> = {
     syntax: S7_TAG_SYNTAX,
     openSession: (signal) => this.openSession(signal),
@@ -124,12 +126,9 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
     this.endpoint = endpoint;
     this.itemLimit = endpoint.maxItems ?? DEFAULT_MAX_ITEMS;
     this.planOptions = { maxItems: this.itemLimit };
-    this.services = new S7Services({
-      name: this.name,
-      endpoint,
-      session: () => this.liveS7Session(),
-      current: () => this.session,
-    });
+    const host = { name: this.name, endpoint, session: () => this.liveS7Session(), current: () => this.session };
+    this.services = new S7Services(host);
+    this.alarmService = new S7Alarms(host, this);
   }
 
   /** The most items this client puts into one job (the PDU size may allow fewer). */
@@ -278,6 +277,12 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
   clearPassword(options?: RequestOptions): Promise<void> {
     return this.services.clearPassword(options);
   }
+  /** The active alarms of an S7-300/400 (the alarm query, every part): lib/s7/client/alarms.ts, docs/alarms.md. */
+  readonly alarms: S7Alarms['list'] = (options) => this.alarmService.list(options);
+  /** Alarm, mode and diagnostic events as the CPU pushes them; registered again after every reconnect. */
+  readonly subscribeAlarms: S7Alarms['subscribe'] = (options, listener) => this.alarmService.subscribe(options, listener);
+  /** Acknowledges an alarm (an operator's write: refused read-only or outside the allow-list); done when the CPU confirmed it. */
+  readonly acknowledge: S7Alarms['acknowledge'] = (id, options) => this.alarmService.acknowledge(id, options);
 
   /**
    * A DB's data length from its block info, for the layout check of symbols

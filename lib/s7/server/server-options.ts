@@ -6,6 +6,7 @@
 import type { Socket } from 'node:net';
 import type { PlcMemory } from '../../sim/memory';
 import type { SymbolTable } from '../../symbols/model';
+import type { AlarmDefinition } from '../../alarms/model';
 import type { CpuIdentity, CpuProfile, S7Layout, S7Profile } from './profiles';
 
 export interface S7ServerOptions {
@@ -39,6 +40,12 @@ export interface S7ServerOptions {
    * program's blocks are the memory's, and PUT/GET refuses its optimized DBs.
    */
   s7plus?: S7PlusEndpoint;
+  /**
+   * The program's alarm blocks (AlarmDefinition, lib/alarms/model.ts; the `--alarms` file of `plcwire serve s7`):
+   * an S7-300/400 raises each as its trigger tag goes TRUE / FALSE and serves the message service, the alarm query
+   * and acknowledgement (lib/s7/server/alarms.ts). A CPU of another profile refuses those services (0x8104).
+   */
+  alarms?: readonly AlarmDefinition[];
 }
 
 /** The S7CommPlus side the simulator hands connections to (lib/s7plus/server S7PlusService). */

@@ -92,7 +92,11 @@ export class S7Server extends EventEmitter {
     }
     this.maxItems = options.maxItems;
     const identity = { ...(typeof profile === 'string' ? IDENTITIES[profile] : IDENTITIES['s7-1500']), ...options.identity };
-    this.cpu = new CpuServices(this.memory, Object.freeze(identity), { maxConnections: resolved.maxConnections });
+    this.cpu = new CpuServices(this.memory, Object.freeze(identity), {
+      maxConnections: resolved.maxConnections,
+      alarms: options.alarms,
+      symbols,
+    });
     this.cpu.on('mode', (mode: SimulatorMode) => this.emit('mode', mode));
     this.faults = {
       accessDenied: false,
@@ -205,7 +209,7 @@ export class S7Server extends EventEmitter {
         s5CountersTimers: this.profile.s5CountersTimers !== false,
         optimizedDb: this.plus?.optimizedDbs,
       },
-      services: newServiceSession(),
+      services: newServiceSession(socket),
       maxJobs: 1,
       running: 0,
       queue: [],

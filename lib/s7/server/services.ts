@@ -37,6 +37,7 @@ import { blockNumbers, blockSpec, serveBlockFunction, type SimulatedBlock } from
 import type { CpuIdentity } from './profiles';
 import { SERVICE_CODE as E } from './service-codes';
 import { SZL_IDS, szlList } from './szl-lists';
+import { AlarmEngine, type AlarmOptions, type AlarmPeer } from './alarms';
 
 /** RUN or STOP (the simulator passes STARTUP at once). */
 export type SimulatorMode = 'RUN' | 'STOP';
@@ -64,10 +65,11 @@ export interface ServiceSession {
   nextRef: number;
   /** The connection gave the right password. */
   authorized: boolean;
+  peer?: AlarmPeer;
 }
 
-export function newServiceSession(): ServiceSession {
-  return { pending: undefined, uploads: new Map(), nextRef: 0, authorized: false };
+export function newServiceSession(peer?: AlarmPeer): ServiceSession {
+  return { pending: undefined, uploads: new Map(), nextRef: 0, authorized: false, peer };
 }
 
 const DIAGNOSTIC_CAPACITY = 100;
@@ -88,13 +90,15 @@ export class CpuServices extends EventEmitter {
   private password: string | undefined;
   private lastTransition: { eventId: number; time: Date };
   private readonly created: Date;
+  readonly alarms: AlarmEngine;
 
   constructor(
     private readonly memory: PlcMemory,
     readonly identity: Readonly<CpuIdentity>,
-    private readonly limits: { maxConnections: number },
+    private readonly limits: { maxConnections: number } & AlarmOptions,
   ) {
     super();
+    this.alarms = new AlarmEngine(memory, this, limits);
     this.created = new Date(Math.floor(Date.now() / 1000) * 1000);
     // A CPU that was powered on and went to RUN.
     this.record(0x1382, 0xfe, 100);
@@ -230,8 +234,8 @@ export class CpuServices extends EventEmitter {
     s.pending = undefined;
     switch (params.group) {
       case UserdataGroup.Cpu:
-        if (params.subfunction !== CpuSubfunction.ReadSzl) break;
-        return this.readSzl(u, s, pduSize);
+        if (params.subfunction === CpuSubfunction.ReadSzl) return this.readSzl(u, s, pduSize);
+        return this.alarms.serve(u, s.peer, (bytes) => this.part(s, u, pduSize, bytes, this.nextSequence(s)));
       case UserdataGroup.Time:
         if (params.subfunction === TimeSubfunction.ReadClock) return answer({ data: this.clockData() });
         if (params.subfunction === TimeSubfunction.SetClock) {
