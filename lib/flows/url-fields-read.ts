@@ -4,68 +4,73 @@
  * preset's fields, and what each empty field means (placeholdersOf). The
  * other direction is lib/flows/url-fields.ts.
  */
+import type { Protocol } from '../types';
 import { DEFAULTS, parseUrl, S7_CPU_PRESETS, type Endpoint } from '../url';
 import { hex4 } from '../values/text';
 import { SAFETY, SCHEMES, type UrlFields } from './url-field-table';
 
+type EndpointOf<P extends Protocol> = Extract<Endpoint, { protocol: P }>;
+const maxItemsField = (n: number | undefined) => (n === undefined ? '' : String(n));
+
+/**
+ * Each protocol's fields of its endpoint, one entry per protocol of the
+ * registry (a protocol without one does not compile): the dialog's own
+ * knowledge of which field shows which part of a URL.
+ */
+const FIELDS: { readonly [P in Protocol]: (e: EndpointOf<P>) => UrlFields } = {
+  s7: (e) => ({
+    protocol: 's7',
+    host: e.host,
+    port: String(e.port),
+    addressing: e.localTsap === undefined ? 'rack' : 'tsap',
+    rack: String(e.rack),
+    slot: String(e.slot),
+    ...(e.localTsap === undefined || e.remoteTsap === undefined
+      ? {}
+      : { localTsap: hex4(e.localTsap).toUpperCase(), remoteTsap: hex4(e.remoteTsap).toUpperCase() }),
+    connectionType: e.connectionType,
+    pduSize: String(e.pduSize),
+    maxItems: maxItemsField(e.maxItems),
+    control: !!e.control,
+  }),
+  s7plus: (e) => ({
+    protocol: 's7plus',
+    host: e.host,
+    port: String(e.port),
+    fingerprint: e.fingerprint ?? '',
+    ca: e.ca ?? '',
+    insecure: !!e.insecure,
+    tls: e.tls,
+    maxItems: maxItemsField(e.maxItems),
+  }),
+  fetchwrite: (e) => ({
+    protocol: 'fetchwrite',
+    host: e.host,
+    fetchPort: String(e.fetchPort),
+    writePort: String(e.writePort),
+    dbUnit: e.dbUnit,
+  }),
+  freeport: (e) => {
+    const line = { retries: String(e.retries), gap: String(e.interFrameGapMs) };
+    const t = e.transport;
+    if (t.kind === 'tcp') return { protocol: 'freeport+tcp', ...line, tcpHost: t.host, tcpPort: String(t.port) };
+    return {
+      protocol: 'freeport',
+      ...line,
+      serialPath: t.path,
+      baudRate: String(t.baudRate),
+      parity: t.parity,
+      dataBits: String(t.dataBits),
+      stopBits: String(t.stopBits),
+    };
+  },
+};
+
 /** The dialog's fields of an endpoint (the ones of its protocol, and the ones every protocol has). */
 export function fieldsOf(e: Endpoint): UrlFields {
   const common = { timeout: String(e.timeout), readOnly: !!e.readOnly, allow: (e.allow ?? []).join(',') };
-  const maxItems = (n: number | undefined) => (n === undefined ? '' : String(n));
-  switch (e.protocol) {
-    case 's7':
-      return {
-        protocol: 's7',
-        ...common,
-        host: e.host,
-        port: String(e.port),
-        addressing: e.localTsap === undefined ? 'rack' : 'tsap',
-        rack: String(e.rack),
-        slot: String(e.slot),
-        ...(e.localTsap === undefined || e.remoteTsap === undefined
-          ? {}
-          : { localTsap: hex4(e.localTsap).toUpperCase(), remoteTsap: hex4(e.remoteTsap).toUpperCase() }),
-        connectionType: e.connectionType,
-        pduSize: String(e.pduSize),
-        maxItems: maxItems(e.maxItems),
-        control: !!e.control,
-      };
-    case 's7plus':
-      return {
-        protocol: 's7plus',
-        ...common,
-        host: e.host,
-        port: String(e.port),
-        fingerprint: e.fingerprint ?? '',
-        ca: e.ca ?? '',
-        insecure: !!e.insecure,
-        tls: e.tls,
-        maxItems: maxItems(e.maxItems),
-      };
-    case 'fetchwrite':
-      return {
-        protocol: 'fetchwrite',
-        ...common,
-        host: e.host,
-        fetchPort: String(e.fetchPort),
-        writePort: String(e.writePort),
-        dbUnit: e.dbUnit,
-      };
-    case 'freeport': {
-      const line = { ...common, retries: String(e.retries), gap: String(e.interFrameGapMs) };
-      const t = e.transport;
-      if (t.kind === 'tcp') return { protocol: 'freeport+tcp', ...line, tcpHost: t.host, tcpPort: String(t.port) };
-      return {
-        protocol: 'freeport',
-        ...line,
-        serialPath: t.path,
-        baudRate: String(t.baudRate),
-        parity: t.parity,
-        dataBits: String(t.dataBits),
-        stopBits: String(t.stopBits),
-      };
-    }
-  }
+  const own = (FIELDS[e.protocol] as (e: Endpoint) => UrlFields)(e);
+  return { protocol: own.protocol!, ...common, ...own };
 }
 
 /** A URL's flag as the parser reads it: `true`, `1`, `yes` or nothing. */
@@ -111,13 +116,18 @@ export function looseFieldsOf(text: string): UrlFields | undefined {
   return fields;
 }
 
-/** The URLs that name a place and nothing else, whose parse shows what every other field of the scheme means when empty. */
-const BARE: Readonly<Record<string, string>> = {
-  s7: 's7://localhost',
-  s7plus: 's7plus://localhost',
-  fetchwrite: 'fetchwrite://localhost',
-  freeport: 'freeport://COM1',
-  'freeport+tcp': 'freeport+tcp://localhost:1',
+/**
+ * Per scheme the dialog offers: the URL that names a place and nothing else,
+ * whose parse shows what every other field means when empty; whether its
+ * port is part of the place (not a default to show); items per job as the
+ * driver assumes them when the URL says nothing.
+ */
+const BARE: Readonly<Record<string, { url: string; portIsPlace?: boolean; maxItems?: number }>> = {
+  s7: { url: 's7://localhost', maxItems: DEFAULTS.maxItems },
+  s7plus: { url: 's7plus://localhost', maxItems: DEFAULTS.s7plusMaxItems },
+  fetchwrite: { url: 'fetchwrite://localhost' },
+  freeport: { url: 'freeport://COM1' },
+  'freeport+tcp': { url: 'freeport+tcp://localhost:1', portIsPlace: true },
 };
 
 /**
@@ -127,16 +137,15 @@ const BARE: Readonly<Record<string, string>> = {
  * dialog does not offer.
  */
 export function placeholdersOf(protocol: string): UrlFields {
-  const bare = BARE[protocol];
+  const bare = Object.hasOwn(BARE, protocol) ? BARE[protocol] : undefined;
   if (!bare) return {};
   const { base } = SCHEMES[protocol]!;
-  const own = new Set([base.host, base.path, protocol === 'freeport+tcp' ? base.port : undefined]);
+  const own = new Set([base.host, base.path, bare.portIsPlace ? base.port : undefined]);
   const out: UrlFields = {};
-  for (const [name, value] of Object.entries(fieldsOf(parseUrl(bare)))) {
+  for (const [name, value] of Object.entries(fieldsOf(parseUrl(bare.url)))) {
     if (typeof value === 'string' && value !== '' && !own.has(name)) out[name] = value;
   }
-  if (protocol === 's7') out.maxItems = String(DEFAULTS.maxItems);
-  if (protocol === 's7plus') out.maxItems = String(DEFAULTS.s7plusMaxItems);
+  if (bare.maxItems !== undefined) out.maxItems = String(bare.maxItems);
   return out;
 }
 
