@@ -102,7 +102,7 @@ const EXPLORE_NO_SUCH_OBJECT = 0x8020ab001992fff4n;
  * (s7commplus (MIT) client.py, the comment of max_items_per_request; the
  * same for writes is assumed). The simulator answers every profile so.
  */
-export const TOO_MANY_ITEMS = 0xa027a6000054fffcn;
+const TOO_MANY_ITEMS = 0xa027a6000054fffcn;
 
 /** The answer to a Get- or SetMultiVariables of more items than the CPU serves: TOO_MANY_ITEMS, no item (an empty value list and error list for a read). */
 function tooMany(read: boolean): Buffer {
