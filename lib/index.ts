@@ -185,3 +185,5 @@ export type {
   AlarmValue,
   PlcAlarm,
 } from './alarms/model';
+// Classic alarms (issue #33, h-alm7): the --alarms file's parser.
+export { parseAlarmDefinitions } from './alarms/definitions';

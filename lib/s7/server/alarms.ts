@@ -209,6 +209,7 @@ export class AlarmEngine {
           localState: 0,
           ackGoing: block.ackGoing,
           ackComing: block.ackComing,
+          ...(kind.notify ? { notify: { going: on ? 0 : s.bit, coming: block.eventState, lastChanged: s.bit } } : {}),
           values,
         },
       ],
