@@ -25,6 +25,7 @@ import { S7_URLS, type S7Endpoint } from '../url';
 import { DEFAULT_MAX_ITEMS } from '../constants';
 import { openS7Session } from './handshake';
 import { PushHub } from './pushes';
+import { subscribeCyclic, type CyclicHost, type CyclicOptions, type S7CyclicSubscription } from './cyclic';
 import type { S7Session, WireCounters } from './session';
 import { compileRead, executeRead, tagError, type CollectedRead, type CompiledRead } from './read';
 import { writeJob } from './write';
@@ -177,6 +178,11 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
     const session = this.session;
     if (!session) throw new ConnectionError('NOT_CONNECTED', `not connected to ${this.name} (the link is ${this.state})`);
     return session;
+  }
+
+  /** Cyclic data of an S7-300/400 (lib/s7/client/cyclic.ts): the CPU sends `tags` every cycle, registered again after a reconnect. */
+  subscribe(tags: readonly string[], options: CyclicOptions = {}): Promise<S7CyclicSubscription> {
+    return subscribeCyclic(this as unknown as CyclicHost, () => this.session, tags, options);
   }
 
   // ---------------------------------------------------------------- system services
