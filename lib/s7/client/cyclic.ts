@@ -17,9 +17,11 @@
  * `closed`.
  */
 import { EventEmitter } from 'node:events';
+import { isDeepStrictEqual } from 'node:util';
 import { ConnectionError, PlcError, ProtocolError, TagErrors, tagError, toPlcError, type TagResult } from '../../errors';
 import type { PlcValue, SubscriptionNotice, Tag } from '../../types';
 import { tagDecoder } from '../../values';
+import { decodeShape, type SymbolShape } from '../../symbols/resolve';
 import {
   CYCLIC_ANSWER_HEAD,
   CYCLIC_ERROR_TEXT,
@@ -147,6 +149,9 @@ export function planCyclic(tags: readonly Tag[], pduSize: number, maxItems: numb
   return { jobs, errors };
 }
 
+const STRICT_NAME = (tag: string) =>
+  new PlcError('NOT_SUPPORTED', "strictSymbols checks this name's block on every connection, which reads do", { tag });
+
 export class S7CyclicSubscription extends EventEmitter {
   readonly tags: readonly string[];
   /** The period the CPU was asked for, ms. */
@@ -176,15 +181,23 @@ export class S7CyclicSubscription extends EventEmitter {
     this.subfunction = options.onChange ? CyclicSubfunction.ChangeDriven : CyclicSubfunction.Memory;
     const bad: Record<string, TagResult<PlcValue>> = {};
     this.parsed = [];
+    const symbols = symbolsOf(host);
     for (const address of tags) {
       try {
-        this.parsed.push(host.tag(address));
+        const tag = host.tag(address);
+        // A name whose block strictSymbols checks is gated by each read: it is polled.
+        if (symbols?.strict && symbols.use(tag)) bad[address] = { ok: false, error: STRICT_NAME(address) };
+        else this.parsed.push(tag);
       } catch (err) {
         bad[address] = { ok: false, error: toPlcError(err) };
       }
     }
     if (Object.keys(bad).length > 0) throw new TagErrors(bad);
-    this.decoders = this.parsed.map((tag) => tagDecoder(tag));
+    this.decoders = this.parsed.map((tag) => {
+      const shape = symbols?.use(tag)?.shape;
+      // A struct by name: its bytes into the object, as a read shapes it (lib/client/symbols.ts).
+      return shape ? (data: Buffer) => decodeShape(shape, data) as PlcValue : tagDecoder(tag);
+    });
     const unpush = host.pushes.listen((frame) => this.onPush(frame));
     const unlink = linkEvents(host, this);
     this.unlisten = () => {
@@ -213,7 +226,7 @@ export class S7CyclicSubscription extends EventEmitter {
     if (errors.size > 0) throw new TagErrors(Object.fromEntries([...errors].map(([t, e]) => [this.tags[t]!, { ok: false, error: e }])));
     this.session = session;
     this.live = new Map();
-    this.emit('active');
+    const first: [JobPlan, ReadResponseItem[]][] = [];
     for (const job of jobs) {
       const frame = encodeCyclicSubscribe({ subfunction: this.subfunction, ...this.interval, items: job.items });
       const answer = decodeUserdata(await session.exchange(frame, 'cyclic data registration'));
@@ -224,8 +237,16 @@ export class S7CyclicSubscription extends EventEmitter {
       if (p.errorCode) throw this.refusal(p.errorCode);
       if (this.closed || this.session !== session) return this.unsubscribe(session, p.sequence);
       this.live.set(p.sequence, job);
-      this.deliver(job, decodeCyclicValues(answer.data), true);
+      first.push([job, decodeCyclicValues(answer.data)]);
     }
+    // The first values once the caller of subscribe() has its listeners on (it awaited this).
+    setImmediate(() => {
+      if (this.closed || this.session !== session) return;
+      this.emit('active');
+      const changed: string[] = [];
+      for (const [job, items] of first) this.apply(job, items, changed, true);
+      this.emitData(changed, true);
+    });
   }
 
   /** Ends the jobs on the CPU (when the link is up) and stops listening. Always resolves. */
@@ -271,17 +292,18 @@ export class S7CyclicSubscription extends EventEmitter {
     const job = this.live.get(u.params.sequence);
     if (!job) return;
     try {
-      this.deliver(job, decodeCyclicValues(u.data), false);
+      const changed: string[] = [];
+      this.apply(job, decodeCyclicValues(u.data), changed, false);
+      this.emitData(changed, false);
     } catch (err) {
       this.fail(toPlcError(err));
     }
   }
 
-  /** One answer's or push's items to the tags' results; emits `data`. */
-  private deliver(job: JobPlan, items: ReadResponseItem[], initial: boolean): void {
+  /** One answer's or push's items into the tags' results; the tags that changed (all of them when `initial`) into `changed`. */
+  private apply(job: JobPlan, items: ReadResponseItem[], changed: string[], initial: boolean): void {
     if (items.length !== job.items.length)
       throw new ProtocolError(`cyclic data with ${items.length} items for a job of ${job.items.length}`);
-    const changed: string[] = [];
     items.forEach((it, i) => {
       const t = job.tags[i]!;
       const address = this.tags[t]!;
@@ -290,8 +312,10 @@ export class S7CyclicSubscription extends EventEmitter {
       if (initial || !before || !same(before, result)) changed.push(address);
       this.results.set(address, result);
     });
-    const results = Object.fromEntries(this.results);
-    this.emit('data', { results, changed, initial } satisfies SubscriptionNotice);
+  }
+
+  private emitData(changed: string[], initial: boolean): void {
+    this.emit('data', { results: Object.fromEntries(this.results), changed, initial } satisfies SubscriptionNotice);
   }
 
   private result(t: number, it: ReadResponseItem, length: number): TagResult<PlcValue> {
@@ -313,6 +337,17 @@ export class S7CyclicSubscription extends EventEmitter {
   private fail(err: PlcError): void {
     if (this.listenerCount('error') > 0) this.emit('error', err);
   }
+}
+
+/**
+ * What the client's symbols say of a tag resolved from a name (its struct
+ * shape), and whether the client checks names' blocks (strictSymbols).
+ * BaseClient keeps both to itself; its read() shapes and gates with them.
+ */
+function symbolsOf(host: CyclicHost): { strict: boolean; use(tag: Tag): { shape: SymbolShape<Tag> | undefined } | undefined } | undefined {
+  const h = host as unknown as { strictSymbols?: boolean; symbols?: { use(t: Tag): { shape: SymbolShape<Tag> | undefined } | undefined } };
+  const symbols = h.symbols;
+  return symbols && { strict: h.strictSymbols === true, use: (tag) => symbols.use(tag) };
 }
 
 /** A client's subscriptions: one listener per link event on the client, whatever their number. */
@@ -348,12 +383,6 @@ function linkEvents(host: CyclicHost, sub: S7CyclicSubscription): () => void {
 }
 
 function same(a: TagResult<PlcValue>, b: TagResult<PlcValue>): boolean {
-  if (a.ok !== b.ok) return false;
-  if (!a.ok || !b.ok) return !a.ok && !b.ok && a.error.message === b.error.message;
-  const x = a.value;
-  const y = b.value;
-  if (x instanceof Date && y instanceof Date) return x.getTime() === y.getTime();
-  if (Array.isArray(x) && Array.isArray(y))
-    return x.length === y.length && x.every((v, i) => same({ ok: true, value: v }, { ok: true, value: y[i]! }));
-  return x === y;
+  if (a.ok && b.ok) return isDeepStrictEqual(a.value, b.value);
+  return !a.ok && !b.ok && a.error.message === b.error.message;
 }
