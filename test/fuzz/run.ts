@@ -23,6 +23,7 @@ import { fuzz, type FuzzTarget } from './engine';
 import { s7plusTargets } from './s7plus-targets';
 import { symbolTargets } from './symbol-targets';
 import { extraTargets } from './targets';
+import { cyclicTargets } from './cyclic-targets';
 
 const inputs = Number(process.argv[2] ?? 1_000_000);
 
@@ -126,6 +127,7 @@ const targets: FuzzTarget[] = [
   ...extraTargets(),
   ...symbolTargets(),
   ...s7plusTargets(),
+  ...cyclicTargets(),
 ];
 
 const results = targets.map((t) => fuzz(t, inputs));
