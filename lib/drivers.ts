@@ -114,6 +114,8 @@ export const DRIVERS = Object.freeze({
     serve: serveS7,
     diagnose: S7_DOCTOR,
     alarms: S7_ALARMS,
+    // Cyclic data (userdata group 2) of an S7-300/400; other CPUs refuse it, and their tags are polled.
+    subscribe: (client, tags, options) => client.subscribe(tags, options),
   }),
   fetchwrite: entry({
     urls: FETCHWRITE_URLS,

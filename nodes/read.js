@@ -3,7 +3,7 @@ const { attach, settleWithin, liveClient, warnDuplicateNames } = require('./shar
 const { tagTable, tagsOfMessage, outcomes, tagFailure, ChangeFilter, PolledTable, PlcError, isLinkError, realsForPeople } = require('..');
 const { ReadQueue } = require('../dist/lib/flows/read-queue');
 const { ReadMessages, readOutput } = require('../dist/lib/flows/read-messages');
-const { ReadPush, canPush } = require('../dist/lib/flows/read-push');
+const { ReadPush, canPush, refusedForGood } = require('../dist/lib/flows/read-push');
 const { tagErrorsStatus } = require('./shared/status');
 
 /** Each address once, in table order (a table may name one address twice). */
@@ -19,7 +19,7 @@ function uniqueAddresses(list) {
  * common case) is sent from the client's values by address, any other from
  * per-tag outcomes; ReadMessages builds the messages of both.
  *
- * Mode "push" (s7plus:// only): no polling; the PLC reports changes of the
+ * Mode "push" (s7plus://, and s7:// on S7-300/400: cyclic data): no polling; the PLC reports changes of the
  * table (ReadPush, a subscription on the client), sent as the polled mode's
  * change messages; input messages still read at once.
  */
@@ -168,7 +168,12 @@ module.exports = function (RED) {
             if (closing) return;
             // A lost link with the connection's own link down is the connection's to report (Status and Catch), as when polling.
             if (isLinkError(err) && node.linkState !== 'connected') return;
-            node.status({ fill: 'yellow', shape: 'ring', text: RED._('plcwire-read.status.resubscribing') });
+            const refused = refusedForGood(err);
+            node.status(
+              refused
+                ? { fill: 'red', shape: 'ring', text: RED._('plcwire-read.status.noPush') }
+                : { fill: 'yellow', shape: 'ring', text: RED._('plcwire-read.status.resubscribing') },
+            );
             node.error(err, { topic, payload: {} });
           },
         })

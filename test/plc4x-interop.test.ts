@@ -22,7 +22,7 @@ const { plc4xBuilt, PLC4X_VERSION } = require(path.join(ROOT, 'test/support/inst
 };
 
 interface PeerLine {
-  op: 'read' | 'write';
+  op: 'read' | 'write' | 'cyclic' | 'event';
   tag: string;
   code: string;
   value?: string;
@@ -186,3 +186,43 @@ for (const [profile, query, what] of [
     });
   });
 }
+
+// Cyclic data (issue #33): PLC4X's CYC(<time base>:<factor>) subscriptions against the S7-300 simulator.
+describe(`interop: Apache PLC4X ${PLC4X_VERSION} cyclic subscriptions against the s7-300 simulator`, function () {
+  this.timeout(300_000);
+  let server: S7Server | undefined;
+
+  before(function () {
+    const missing = missingPeer();
+    if (missing) skipBecause(this, missing);
+  });
+
+  afterEach(async () => {
+    await server?.close();
+    server = undefined;
+  });
+
+  it('CYC(B01SEC:3) on DB1 INT: subscribed, an event every 300 ms, a change in the CPU shows in the next ones', async () => {
+    server = new S7Server({ port: 0, profile: 's7-300', layout: { dataBlocks: { 1: 64 } } });
+    const refused: S7RefusedEvent[] = [];
+    server.on('refused', (e: S7RefusedEvent) => refused.push(e));
+    await server.listen();
+    const db = server.memory.area('DB', 1)!;
+    db.writeInt16BE(4242, 0);
+    // The value changes once the CPU pushed twice (its reads of the job's items), so events carry both.
+    let pushes = 0;
+    server.memory.on('read', () => {
+      if (++pushes === 3) db.writeInt16BE(-77, 0);
+    });
+    const tag = 'CYC(B01SEC:3):%DB1.DBW0:INT';
+    // PLC4X offers subscriptions only on a connection whose controller type it was told (S7_300/S7_400).
+    const r = await plc4x(`s7://127.0.0.1:${server.port}?remote-slot=2&controller-type=S7_300`, [`c:3000:${tag}`]);
+    expect(refused, 'no frame refused').to.deep.equal([]);
+    expect(r.code, r.err.slice(-3000)).to.equal(0);
+    expect(r.lines[0]).to.deep.equal({ op: 'cyclic', tag, code: 'OK' });
+    const values = r.lines.filter((l) => l.op === 'event').map((l) => l.value);
+    expect(values.length, values.join(',')).to.be.greaterThan(3);
+    expect(values[0]).to.equal('4242');
+    expect(values.at(-1)).to.equal('-77');
+  });
+});

@@ -36,10 +36,11 @@ example:
   watch: `usage: plcwire watch <url> <address|symbol>... [--symbols file]... [--db NAME=N]... [--strict-symbols] [--interval ms] [--cycle ms] [--json]
 Polls until Ctrl-C (exit code 130) and prints a line per changed value, all values first; reconnects by itself.
 On s7plus:// the PLC reports the changes (a subscription on a session of its own, subscribed again after a
-reconnect); a tag that cannot be subscribed is polled, and stderr says which and why.
+reconnect), on s7:// to an S7-300/400 its cyclic data does (the cycle rounded to steps of 100 ms, 1 s or 10 s);
+a tag that cannot be subscribed is polled, and stderr says which and why.
 ${SYMBOL_OPTIONS}
   --interval ms      time between polls (default 1000)
-  --cycle ms         s7plus://: how often the PLC samples the subscribed tags (default 100)
+  --cycle ms         s7plus://, s7:// (S7-300/400): how often the PLC samples the subscribed tags (default 100)
   --json             one JSON object per line: { "time": ISO 8601, "values": { tag: value } }
 ${PASSWORD_OPTION}
 ${URL_NOTE}

@@ -1,5 +1,5 @@
 /**
- * `plcwire watch` on an s7plus:// URL: the PLC reports changes
+ * `plcwire watch` on an s7plus:// URL (or s7:// to an S7-300/400: its cyclic data): the PLC reports changes
  * (client.subscribe()), so a change shows within the subscription's cycle
  * whatever `--interval` says. Tags that cannot be subscribed (a name the PLC
  * does not have, an item the PLC does not report) are polled every
@@ -74,7 +74,9 @@ export function watchPushed(client: AnyClient, subscribe: Subscriber, addresses:
       s.on('lost', (err: PlcError) => o.report(`subscription lost: ${err.message}`));
       s.on('active', () => o.report(`subscribed again to ${tags.length} tag(s)`));
       s.on('error', (err: PlcError) => o.report(`subscription: ${err.message}`));
-      o.report(`subscribed to ${tags.length} tag(s): the PLC reports changes every ${o.cycle} ms`);
+      // The cycle the PLC was asked for: an S7-300/400's is rounded to its time base (lib/s7/client/cyclic.ts).
+      const cycle = (s as { cycle?: number }).cycle ?? o.cycle;
+      o.report(`subscribed to ${tags.length} tag(s): the PLC reports changes every ${cycle} ms`);
     } catch (err) {
       if (!(err instanceof TagErrors)) throw err;
       const failed = Object.keys(err.errors);

@@ -25,6 +25,7 @@ import { s7plusTargets } from './s7plus-targets';
 import { symbolTargets } from './symbol-targets';
 import { extraTargets } from './targets';
 import { alarmTargets } from './alarm-targets';
+import { cyclicTargets } from './cyclic-targets';
 
 const inputs = Number(process.argv[2] ?? 1_000_000);
 
@@ -130,6 +131,7 @@ const targets: FuzzTarget[] = [
   ...s7plusTargets(),
   ...s7plusAlarmTargets(),
   ...alarmTargets(),
+  ...cyclicTargets(),
 ];
 
 const results = targets.map((t) => fuzz(t, inputs));

@@ -3,8 +3,8 @@
  * real Node-RED runtime against the S7-1500 simulator over S7CommPlus: every
  * tag first, then each change written by another client as the polled
  * mode's change messages; subscribed again after the link was reset; a
- * redeploy leaves no connection; on a connection that is not s7plus:// the
- * node says so to Catch and Status instead of polling silently.
+ * redeploy leaves no connection. (s7:// to an S7-1500, which refuses cyclic
+ * data, is in read-push-s7.test.ts.)
  */
 import { expect } from 'chai';
 import { createClient } from '../../lib/connect';
@@ -139,17 +139,5 @@ describe('nodes: the read node when the PLC reports a change (s7plus://)', funct
     await helper.unload();
     await writer.close();
     await until(() => server.connectionCount === 0, 5000, `no connection left (have ${server.connectionCount})`);
-  });
-
-  it('on a connection that is not s7plus:// it says so to Catch and Status (NOT_SUPPORTED) and sends nothing', async () => {
-    const s7url = `s7://127.0.0.1:${server.port}?rack=0&slot=1`;
-    await helper.load(ALL_NODES, flow(s7url));
-    const caught = new Recorder(helper.getNode('caught'));
-    const statuses = new Recorder(helper.getNode('statuses'));
-    const err = await caught.next(() => true, 10000, 'the error');
-    expect(err.error.message).to.include('plcwire-read.errors.pushProtocol');
-    expect(err.error.source.id).to.equal('r1');
-    await statuses.next((m) => m.status.text === 'plcwire-read.status.noPush', 5000, 'the status');
-    expect(new Recorder(helper.getNode('out')).messages).to.have.length(0);
   });
 });

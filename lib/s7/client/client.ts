@@ -26,6 +26,7 @@ import { DEFAULT_MAX_ITEMS } from '../constants';
 import { openS7Session } from './handshake';
 import { PushHub } from './pushes';
 import { S7Alarms } from './alarms';
+import { subscribeCyclic, type CyclicHost, type CyclicOptions, type S7CyclicSubscription } from './cyclic';
 import type { S7Session, WireCounters } from './session';
 import { compileRead, executeRead, tagError, type CollectedRead, type CompiledRead } from './read';
 import { writeJob } from './write';
@@ -178,6 +179,11 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
     return session;
   }
 
+  /** Cyclic data of an S7-300/400 (lib/s7/client/cyclic.ts): the CPU sends `tags` every cycle, registered again after a reconnect. */
+  subscribe(tags: readonly string[], options: CyclicOptions = {}): Promise<S7CyclicSubscription> {
+    return subscribeCyclic(this as unknown as CyclicHost, () => this.session, tags, options);
+  }
+
   // ---------------------------------------------------------------- system services
 
   /**
@@ -190,12 +196,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
     return this.services.readSzl(id, index, options);
   }
 
-  /**
-   * Identity and state in one object: order code, firmware, module type,
-   * serial number, AS and module names, mode, protection, the negotiated
-   * PDU size and AmQ, and the clock. Lists the CPU does not offer leave
-   * their fields undefined.
-   */
+  /** Identity and state in one object: order code, firmware, module type, serial number, AS and module names, mode, protection, PDU size, AmQ, clock (a list the CPU lacks: undefined fields). */
   info(options?: RequestOptions): Promise<PlcInfo> {
     return this.services.info(options);
   }
@@ -224,11 +225,7 @@ export class S7Client extends BaseClient<S7Session, Tag, S7Prepared, S7ClientEve
     return this.services.cpuState(options);
   }
 
-  /**
-   * Puts the CPU in STOP. Refused with WRITE_NOT_ALLOWED before anything is
-   * sent unless the URL says `control=true` (and never on a read-only
-   * connection). A CPU already in STOP is not an error.
-   */
+  /** Puts the CPU in STOP; refused (WRITE_NOT_ALLOWED) before anything is sent unless the URL says `control=true`, never on a read-only connection. Already in STOP: no error. */
   stop(options?: RequestOptions): Promise<void> {
     return this.services.stop(options);
   }

@@ -15,6 +15,7 @@ import { DR_ADDRESS_UNKNOWN, DR_CONGESTION, MAX_FRAME, TPDU_SIZE_CODE, tpduBytes
 import { jobItemCount, s7Rosctr } from '../codec/pdu-decode';
 import { isControlJob } from '../codec/control';
 import type { DiagnosticEntry } from '../codec/diagnostics';
+import { CyclicService, isCyclicRequest } from './cyclic';
 import { CpuServices, newServiceSession, type ServiceSession, type SimulatorMode, type StopCause } from './services';
 import { checkTpkt, decodeCotp, decodeS7, encodeConnectionConfirm, encodeDisconnectRequest, encodeSetupAck } from '../codec';
 import { firstItems } from './items';
@@ -67,6 +68,7 @@ export class S7Server extends EventEmitter {
   private boundPort = 0;
   private counted = 0;
   private readonly plus: S7ServerOptions['s7plus'];
+  private cyclic: CyclicService | undefined;
   private readonly missingDb = (db: number): boolean => {
     const m = this.faults.missingDb;
     return typeof m === 'number' ? m === db : m !== undefined && m.includes(db);
@@ -385,6 +387,7 @@ export class S7Server extends EventEmitter {
     const pduRef = jobPduRef(frame);
     if (func === 0) {
       // System services: userdata (SZL, clock, blocks, password) and the control jobs (stop, start, upload).
+      if (isCyclicRequest(frame)) return (this.cyclic ??= new CyclicService(this.cpu.identity)).serve(frame, conn.socket, conn.ctx);
       if (s7Rosctr(frame) === Rosctr.UserData) return this.cpu.serveUserdata(frame, conn.services, conn.ctx.pduSize);
       if (isControlJob(frame)) return this.cpu.serveControl(frame, conn.services, conn.ctx.pduSize);
       // Any other job: "function not supported".

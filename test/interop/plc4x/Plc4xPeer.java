@@ -6,7 +6,9 @@
 // Driven by test/interop/plc4x-vs-server.test.js; built by
 // test/support/install-peers.js (javac against the jars in lib/).
 //
-// Usage: java -cp 'build:lib/*' Plc4xPeer <connection string> [w:<tag>=<value>]... [r:<tag>]...
+// Usage: java -cp 'build:lib/*' Plc4xPeer <connection string> [w:<tag>=<value>]... [r:<tag>]... [c:<ms>:<tag>]...
+// c:<ms>:<tag> subscribes a cyclic-data tag (CYC(<time base>:<factor>):<address>, S7-300/400) for <ms> ms
+// and prints {"op":"cyclic","tag":…,"code":…} for the subscription, then {"op":"event",…,"value":…} per push.
 // A value is converted after the tag's type (the text after its last ':').
 // Exit 0 when every request got an answer (each tag's code says whether it was
 // OK), 3 when the connection or a request failed (the message on stderr).
@@ -20,9 +22,12 @@ import org.apache.plc4x.java.DefaultPlcDriverManager;
 import org.apache.plc4x.java.api.PlcConnection;
 import org.apache.plc4x.java.api.messages.PlcReadRequest;
 import org.apache.plc4x.java.api.messages.PlcReadResponse;
+import org.apache.plc4x.java.api.messages.PlcSubscriptionRequest;
+import org.apache.plc4x.java.api.messages.PlcSubscriptionResponse;
 import org.apache.plc4x.java.api.messages.PlcWriteRequest;
 import org.apache.plc4x.java.api.messages.PlcWriteResponse;
 import org.apache.plc4x.java.api.value.PlcValue;
+import org.apache.plc4x.java.s7.events.S7Event;
 
 public final class Plc4xPeer {
   private static final long TIMEOUT_S = 10;
@@ -42,6 +47,10 @@ public final class Plc4xPeer {
   }
 
   private static void run(PlcConnection connection, String op) throws Exception {
+    if (op.startsWith("c:")) {
+      cyclic(connection, op.substring(2));
+      return;
+    }
     if (op.startsWith("r:")) {
       String tag = op.substring(2);
       PlcReadRequest request = connection.readRequestBuilder().addTagAddress("t", tag).build();
@@ -59,6 +68,23 @@ public final class Plc4xPeer {
     } else {
       throw new IllegalArgumentException("not r:<tag> or w:<tag>=<value>: " + op);
     }
+  }
+
+  /** A cyclic subscription (issue #33): "<ms>:<tag>"; every event's value of the tag, until <ms> ms have passed. */
+  private static void cyclic(PlcConnection connection, String spec) throws Exception {
+    int colon = spec.indexOf(':');
+    long ms = Long.parseLong(spec.substring(0, colon));
+    String tag = spec.substring(colon + 1);
+    PlcSubscriptionRequest request = connection.subscriptionRequestBuilder().addEventTagAddress("t", tag).build();
+    PlcSubscriptionResponse response = request.execute().get(TIMEOUT_S, TimeUnit.SECONDS);
+    String code = response.getResponseCode("t").name();
+    print("cyclic", tag, code, null);
+    if (!"OK".equals(code)) return;
+    // S7CyclicEvent answers getTagNames() with UnsupportedOperationException in 0.13.1: its map holds the values.
+    response
+        .getSubscriptionHandle("t")
+        .register(e -> print("event", tag, "OK", String.valueOf(((S7Event) e).getMap().get("t"))));
+    Thread.sleep(ms);
   }
 
   /** The value as text: an ISO form for times, the number or string for the rest. */
