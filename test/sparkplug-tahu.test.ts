@@ -6,7 +6,8 @@
  * makes a missing peer a failure instead.
  */
 import { expect } from 'chai';
-import { Mosquitto, missingMosquitto, sparkplugRequired } from './support/mosquitto';
+import { Mosquitto } from './support/mosquitto';
+import { missingMosquitto, sparkplugRequired } from './support/sparkplug-peers';
 import { skipBecause } from './support/skip';
 import { TahuHost, missingTahu } from './support/tahu';
 
@@ -39,7 +40,7 @@ describe('Sparkplug B: the Eclipse Tahu host (test/interop/tahu) and mosquitto',
     }
     await broker.start();
   });
-  after(() => broker.close());
+  after(() => broker.dispose());
 
   it('publishes its STATE online as Sparkplug 3.0 asks: retained, QoS 1, JSON with a timestamp', async () => {
     const host = new TahuHost(broker.url, 'HarnessHost');

@@ -2,35 +2,15 @@
  * A real mosquitto broker (the Debian package) for the Sparkplug B tests: one
  * process on 127.0.0.1 with a port of its own, which can be stopped and
  * started again on that port (a broker outage). Without mosquitto the tests
- * that need it skip and say why, except under PLCWIRE_REQUIRE_SPARKPLUG=1
- * (.ci/run), where a missing broker fails them.
+ * that need it skip and say why (test/support/sparkplug-peers.ts).
  */
-import { spawn, spawnSync, type ChildProcess } from 'node:child_process';
+import { spawn, type ChildProcess } from 'node:child_process';
+import { missingMosquitto, mosquittoPath } from './sparkplug-peers';
 import * as fs from 'node:fs';
 import * as net from 'node:net';
 import * as os from 'node:os';
 import * as path from 'node:path';
 import { freePort } from './net';
-
-/** mosquitto's path: on the PATH, or in /usr/sbin where Debian puts it (often not on a user's PATH). */
-export function mosquittoPath(): string | undefined {
-  for (const dir of [...(process.env.PATH ?? '').split(path.delimiter), '/usr/sbin', '/usr/local/sbin']) {
-    const file = path.join(dir, 'mosquitto');
-    if (dir && fs.existsSync(file)) return file;
-  }
-  return undefined;
-}
-
-/** Why mosquitto cannot run here, or undefined. */
-export function missingMosquitto(): string | undefined {
-  const bin = mosquittoPath();
-  if (!bin) return 'no mosquitto on the PATH or in /usr/sbin (Debian package mosquitto)';
-  const r = spawnSync(bin, ['-h'], { encoding: 'utf8', timeout: 10_000 });
-  return /mosquitto version/.test(`${r.stdout}${r.stderr}`) ? undefined : `${bin} -h does not answer as mosquitto`;
-}
-
-/** True when a missing peer must fail the test rather than skip it (.ci/run sets it). */
-export const sparkplugRequired = (): boolean => process.env.PLCWIRE_REQUIRE_SPARKPLUG === '1';
 
 export class Mosquitto {
   port = 0;
@@ -86,7 +66,7 @@ export class Mosquitto {
   }
 
   /** Stops the broker and removes its directory. */
-  async close(): Promise<void> {
+  async dispose(): Promise<void> {
     await this.stop();
     if (this.dir) fs.rmSync(this.dir, { recursive: true, force: true });
     this.dir = undefined;
