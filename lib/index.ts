@@ -185,3 +185,6 @@ export type {
   AlarmValue,
   PlcAlarm,
 } from './alarms/model';
+// Sparkplug B edge node (issue #34)
+export * as sparkplug from './sparkplug';
+export { SparkplugEdgeNode, type SparkplugEdgeNodeOptions, type SparkplugDeviceOptions } from './sparkplug';

@@ -1,0 +1,96 @@
+/**
+ * Store-and-forward (Sparkplug 3.0, section 5.17 "Historical data"): what a
+ * device reported while the edge node had no Sparkplug session (broker away,
+ * or primary host offline) is kept, in order, and sent after the next births
+ * as historical metrics (is_historical true, their own timestamps). Bounded in
+ * metrics and bytes: at the bound the oldest go first, and what was dropped
+ * is counted.
+ */
+import type { SparkplugMetric } from './model';
+
+export interface BufferOptions {
+  /** Most metric values kept (default 10000). */
+  count?: number;
+  /** Most bytes kept, as the values' encoded size estimates (default 10 MB). */
+  bytes?: number;
+}
+
+interface Entry {
+  device: string;
+  metric: SparkplugMetric;
+  bytes: number;
+}
+
+export class ForwardStore {
+  private readonly maxCount: number;
+  private readonly maxBytes: number;
+  private entries: Entry[] = [];
+  private head = 0;
+  private size = 0;
+  /** Metric values dropped at the bound since the start. */
+  dropped = 0;
+
+  constructor(options: BufferOptions = {}) {
+    this.maxCount = options.count ?? 10_000;
+    this.maxBytes = options.bytes ?? 10_000_000;
+  }
+
+  get count(): number {
+    return this.entries.length - this.head;
+  }
+
+  get bytes(): number {
+    return this.size;
+  }
+
+  /** Keeps a device's changed metrics; returns how many older ones it dropped to make room. */
+  add(device: string, metrics: readonly SparkplugMetric[]): number {
+    let dropped = 0;
+    if (this.maxCount === 0) {
+      this.dropped += metrics.length;
+      return metrics.length;
+    }
+    for (const metric of metrics) {
+      const bytes = estimateBytes(metric);
+      this.entries.push({ device, metric, bytes });
+      this.size += bytes;
+      while (this.count > this.maxCount || (this.size > this.maxBytes && this.count > 0)) {
+        this.size -= this.entries[this.head]!.bytes;
+        this.head++;
+        dropped++;
+      }
+    }
+    if (this.head > 1024 && this.head * 2 > this.entries.length) {
+      this.entries = this.entries.slice(this.head);
+      this.head = 0;
+    }
+    this.dropped += dropped;
+    return dropped;
+  }
+
+  /** Takes everything kept, oldest first, grouped into runs of one device each (so order across devices holds). */
+  drain(): { device: string; metrics: SparkplugMetric[] }[] {
+    const out: { device: string; metrics: SparkplugMetric[] }[] = [];
+    for (let i = this.head; i < this.entries.length; i++) {
+      const e = this.entries[i]!;
+      const last = out[out.length - 1];
+      const metric = { ...e.metric, isHistorical: true };
+      if (last && last.device === e.device) last.metrics.push(metric);
+      else out.push({ device: e.device, metrics: [metric] });
+    }
+    this.entries = [];
+    this.head = 0;
+    this.size = 0;
+    return out;
+  }
+}
+
+/** A metric's encoded size, roughly: tag bytes, alias, timestamp, datatype and its value. */
+function estimateBytes(m: SparkplugMetric): number {
+  const v = m.value;
+  let value = 9;
+  if (typeof v === 'string') value = Buffer.byteLength(v) + 2;
+  else if (v instanceof Uint8Array) value = v.length + 3;
+  else if (Array.isArray(v)) value = v.reduce<number>((n, x) => n + (typeof x === 'string' ? Buffer.byteLength(x) + 1 : 8), 3);
+  return 2 + 4 + 7 + 2 + value;
+}
