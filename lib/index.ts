@@ -188,3 +188,5 @@ export type {
 // Sparkplug B edge node (issue #34)
 export * as sparkplug from './sparkplug';
 export { SparkplugEdgeNode, type SparkplugEdgeNodeOptions, type SparkplugDeviceOptions } from './sparkplug';
+// Sparkplug B in Node-RED (issue #34): the edge-node config node's hub.
+export { SparkplugEdgeHub, type EdgeHubConfig, type HubDevice } from './flows/sparkplug-edge';
