@@ -37,7 +37,7 @@ export interface SparkplugCliOptions {
 }
 
 /** The default poll interval (ms) and store-and-forward bound (messages). */
-export const SPARKPLUG_DEFAULTS = Object.freeze({ interval: 1000, buffer: 10_000 });
+const SPARKPLUG_DEFAULTS = Object.freeze({ interval: 1000, buffer: 10_000 });
 
 /**
  * A Sparkplug id (group, edge node, device, host): UTF-8 text without the MQTT
