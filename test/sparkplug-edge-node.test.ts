@@ -12,8 +12,10 @@ import { SparkplugEdgeNode, type SparkplugEdgeNodeOptions } from '../lib/sparkpl
 import type { SparkplugMetric } from '../lib/sparkplug/model';
 import { encodePayload } from '../lib/sparkplug/payload';
 import { parseUrl, type S7Endpoint } from '../lib/url';
+import { flattenSymbol } from '../lib/sparkplug/types';
 import { haveMosquitto, Mosquitto } from './support/mosquitto';
 import { TestHost } from './support/sparkplug-host';
+import { compileClientSources } from './support/symbol-sources';
 import { until, waitFor } from './support/wait';
 
 const FAST = { backoff: { initialDelay: 20, maxDelay: 100, factor: 2, jitter: 0 } };
@@ -264,5 +266,30 @@ describe('Sparkplug edge node against mosquitto and the S7 simulator', function 
     expect(errors[0]!.message).to.match(/Count.*not writable/);
     expect(errors[1]!.message).to.match(/Int16.*Float/);
     expect(memory.read('DB', 1, 0, 8).equals(Buffer.alloc(8))).to.equal(true);
+  });
+
+  it('metrics from a symbol table: a DB flattened to its members, typed by their declarations (REAL → Float, Array of Real → FloatArray, STRING → String)', async () => {
+    const table = compileClientSources('Motor.udt', 'Step.udt', 'Valve.udt', 'Tank.db');
+    const named = new S7Client(parseUrl(`s7://127.0.0.1:${server.port}?timeout=1500`) as S7Endpoint, { ...FAST, symbols: table });
+    try {
+      await named.connect();
+      const tags = flattenSymbol(table, '"Tank"', 'Tank');
+      expect(Object.keys(tags)).to.include.members(['Tank/Level', 'Tank/Motor/Speed', 'Tank/Temps', 'Tank/Steps[1]/Temp']);
+      edge({ devices: [{ name: 'Tank', client: named, tags, symbols: table }] });
+      const dbirth = await host.nextOf('DBIRTH', 'Tank');
+      const types = Object.fromEntries(dbirth.payload!.metrics.map((m) => [m.name, m.datatype]));
+      expect(types).to.include({
+        'Tank/Level': DataType.Float,
+        'Tank/Count': DataType.Int16,
+        'Tank/Motor/Run': DataType.Boolean,
+        'Tank/Temps': DataType.FloatArray,
+        'Tank/Label': DataType.String,
+      });
+      expect(dbirth.payload!.metrics.find((m) => m.name === 'Tank/Temps')!.value).to.deep.equal([0, 0, 0]);
+    } finally {
+      await node?.stop();
+      node = undefined;
+      await named.close();
+    }
   });
 });

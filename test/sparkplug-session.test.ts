@@ -1,5 +1,7 @@
 import { expect } from 'chai';
 import { spawn, type ChildProcess } from 'node:child_process';
+import * as fs from 'node:fs';
+import * as os from 'node:os';
 import * as path from 'node:path';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
@@ -196,5 +198,38 @@ describe('Sparkplug edge node sessions: primary host, brokers, PLC links, store-
     expect(will.payload!.metrics[0]).to.include({ name: 'bdSeq', datatype: DataType.Int64 });
     expect(bdSeqOf(will)).to.equal(bdSeqOf(nbirth));
     expect(will.payload!.seq).to.equal(undefined);
+  });
+
+  it('store-and-forward on disk (buffer.dir): values kept by an edge node that stopped during the outage are forwarded by the next one', async () => {
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-spb-buffer-'));
+    try {
+      const b = await broker();
+      let h = await host(b);
+      await h.state('SCADA', true);
+      edge([b.url], { primaryHost: 'SCADA', buffer: { dir } });
+      await h.nextOf('DBIRTH');
+      await b.stop();
+      for (const level of [4, 5]) {
+        memory.write('DB', 1, 0, Buffer.from([0, level]));
+        await until(() => node!.stats.buffered >= level - 3, 5000, `value ${level} buffered`);
+      }
+      await node!.stop();
+      memory.write('DB', 1, 0, Buffer.from([0, 6]));
+      await b.start();
+      h = await host(b);
+      await h.state('SCADA', true);
+      edge([b.url], { primaryHost: 'SCADA', buffer: { dir } });
+      expect(node!.stats.buffered).to.equal(2);
+      const dbirth = await h.nextOf('DBIRTH', undefined, 10000);
+      expect(dbirth.payload!.metrics[0]!.value).to.equal(6);
+      const history = await h.nextOf('DDATA');
+      expect(history.payload!.metrics.map((m) => [m.value, m.isHistorical])).to.deep.equal([
+        [4, true],
+        [5, true],
+      ]);
+      expect(fs.readFileSync(path.join(dir, 'G.E.buffer.ndjson'), 'utf8')).to.equal('');
+    } finally {
+      fs.rmSync(dir, { recursive: true, force: true });
+    }
   });
 });

@@ -20,6 +20,7 @@ import { ndeathPayload, nbirthPayload, REBIRTH_METRIC } from './messages';
 import type { SparkplugMetric, SparkplugPayload } from './model';
 import type { EdgeNodeEvents, EdgeNodeState, SparkplugEdgeNodeOptions } from './options';
 import { decodePayload, encodePayload } from './payload';
+import { DevicePush } from './push';
 import { ForwardStore } from './store';
 import { checkId, parseTopic, stateTopic, topicOf, type MessageType } from './topics';
 
@@ -39,6 +40,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   /** Devices born in this session. */
   private readonly born = new Set<string>();
   private readonly unsubscribers: (() => void)[] = [];
+  private readonly pushes = new Map<SparkplugDevice, DevicePush>();
   private client: mqtt.MqttClient | undefined;
   private brokerIndex = 0;
   private bdSeq: number | undefined;
@@ -71,7 +73,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
       this.devices.push(device);
     }
     this.bdSeqStore = new BdSeqStore(options.stateDir, this.group, this.node);
-    this.store = new ForwardStore(options.buffer);
+    this.store = new ForwardStore(options.buffer, `${encodeURIComponent(this.group)}.${encodeURIComponent(this.node)}`);
   }
   /* eslint-enable @typescript-eslint/no-unsafe-declaration-merging */
 
@@ -88,6 +90,19 @@ export class SparkplugEdgeNode extends EventEmitterBase {
       const down = (error: PlcError): void => this.deviceDown(device, error);
       device.client.on('disconnected', down);
       this.unsubscribers.push(() => device.client.off('disconnected', down));
+      if (this.options.push === false) continue;
+      const push = new DevicePush(
+        device,
+        this.options.interval ?? 1000,
+        () => this.afterRead(device),
+        (e) => this.report(e),
+      );
+      if (!push.available) continue;
+      this.pushes.set(device, push);
+      const open = (): void => void push.open();
+      device.client.on('connected', open);
+      this.unsubscribers.push(() => device.client.off('connected', open));
+      open();
     }
     this.connect();
     this.schedulePoll(0);
@@ -101,6 +116,8 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     clearTimeout(this.reconnectTimer);
     for (const off of this.unsubscribers.splice(0)) off();
     await this.polling?.catch(() => undefined);
+    await Promise.all([...this.pushes.values()].map((p) => p.close()));
+    this.pushes.clear();
     const client = this.client;
     this.client = undefined;
     this.nodeBorn = false;
@@ -156,7 +173,9 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     try {
       await client.subscribeAsync(subscriptions);
     } catch (err) {
+      // No session without the command subscriptions: end it, the next CONNECT tries again.
       this.report(toPlcError(err, 'CONNECTION_LOST'));
+      client.end(true);
       return;
     }
     if (client !== this.client) return;
@@ -303,11 +322,17 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   }
 
   private async pollDevice(device: SparkplugDevice): Promise<void> {
+    if (this.pushes.get(device)?.active && this.born.has(device.name)) return;
     try {
       await device.poll();
     } catch (err) {
       return this.deviceDown(device, toPlcError(err));
     }
+    this.afterRead(device);
+  }
+
+  /** Births or reports a device after new values came in (a poll or a push). */
+  private afterRead(device: SparkplugDevice): void {
     if (this.stopped) return;
     if (device.client.state !== 'connected')
       return this.deviceDown(device, new PlcError('NOT_CONNECTED', `${device.name} is not connected`));

@@ -24,6 +24,8 @@ export interface SparkplugEdgeNodeOptions {
   buffer?: BufferOptions;
   /** Per device, per metric: a numeric change at or under it is not reported. */
   deadbands?: Readonly<Record<string, Readonly<Record<string, number>>>>;
+  /** false: poll every device, even those whose PLC can push its changes (S7CommPlus subscriptions); default true. */
+  push?: boolean;
   /** Delay before the next CONNECT after a session ended or failed, in ms (default 1000). */
   reconnectDelay?: number;
   /** MQTT client id (default `plcwire-<group>-<node>`). */

@@ -4,15 +4,24 @@
  * or primary host offline) is kept, in order, and sent after the next births
  * as historical metrics (is_historical true, their own timestamps). Bounded in
  * metrics and bytes: at the bound the oldest go first, and what was dropped
- * is counted.
+ * is counted. With `dir`, what is kept is also appended to a file there
+ * (one line per value: the device and the value as a Sparkplug payload in
+ * base64) and read back by the next store of the same edge node, so a
+ * restarted process still forwards it.
  */
+import * as fs from 'node:fs';
+import * as path from 'node:path';
+import { PlcError } from '../errors';
 import type { SparkplugMetric } from './model';
+import { decodePayload, encodePayload } from './payload';
 
 export interface BufferOptions {
   /** Most metric values kept (default 10000). */
   count?: number;
   /** Most bytes kept, as the values' encoded size estimates (default 10 MB). */
   bytes?: number;
+  /** A directory to keep them in across restarts of the edge node (else in memory only). */
+  dir?: string;
 }
 
 interface Entry {
@@ -30,9 +39,18 @@ export class ForwardStore {
   /** Metric values dropped at the bound since the start. */
   dropped = 0;
 
-  constructor(options: BufferOptions = {}) {
+  private readonly file: string | undefined;
+
+  /** `name` tells one edge node's file from another's in the same directory. */
+  constructor(options: BufferOptions = {}, name = 'buffer') {
     this.maxCount = options.count ?? 10_000;
     this.maxBytes = options.bytes ?? 10_000_000;
+    if (options.dir === undefined) return;
+    fs.mkdirSync(options.dir, { recursive: true });
+    this.file = path.join(options.dir, `${name}.buffer.ndjson`);
+    const kept = readFile(this.file);
+    fs.writeFileSync(this.file, '');
+    for (const { device, metric } of kept) this.add(device, [metric]);
   }
 
   get count(): number {
@@ -53,6 +71,7 @@ export class ForwardStore {
     for (const metric of metrics) {
       const bytes = estimateBytes(metric);
       this.entries.push({ device, metric, bytes });
+      if (this.file) fs.appendFileSync(this.file, lineOf(device, metric));
       this.size += bytes;
       while (this.count > this.maxCount || (this.size > this.maxBytes && this.count > 0)) {
         this.size -= this.entries[this.head]!.bytes;
@@ -63,6 +82,7 @@ export class ForwardStore {
     if (this.head > 1024 && this.head * 2 > this.entries.length) {
       this.entries = this.entries.slice(this.head);
       this.head = 0;
+      if (this.file) fs.writeFileSync(this.file, this.entries.map((e) => lineOf(e.device, e.metric)).join(''));
     }
     this.dropped += dropped;
     return dropped;
@@ -81,6 +101,7 @@ export class ForwardStore {
     this.entries = [];
     this.head = 0;
     this.size = 0;
+    if (this.file) fs.writeFileSync(this.file, '');
     return out;
   }
 }
@@ -93,4 +114,32 @@ function estimateBytes(m: SparkplugMetric): number {
   else if (v instanceof Uint8Array) value = v.length + 3;
   else if (Array.isArray(v)) value = v.reduce<number>((n, x) => n + (typeof x === 'string' ? Buffer.byteLength(x) + 1 : 8), 3);
   return 2 + 4 + 7 + 2 + value;
+}
+
+function lineOf(device: string, metric: SparkplugMetric): string {
+  return `${JSON.stringify({ device, payload: encodePayload({ metrics: [metric] }).toString('base64') })}\n`;
+}
+
+/** The values a file keeps, oldest first; a last line without its newline (a write cut short) is dropped, any other bad line is an error naming the file and line. */
+function readFile(file: string): { device: string; metric: SparkplugMetric }[] {
+  let text: string;
+  try {
+    text = fs.readFileSync(file, 'utf8');
+  } catch (err) {
+    if ((err as NodeJS.ErrnoException).code === 'ENOENT') return [];
+    throw err;
+  }
+  const out: { device: string; metric: SparkplugMetric }[] = [];
+  const lines = text.split('\n');
+  lines.pop(); // '' after the last newline, or the last line a crash cut short: dropped
+  lines.forEach((line, i) => {
+    if (line === '') return;
+    try {
+      const { device, payload } = JSON.parse(line) as { device: string; payload: string };
+      out.push({ device, metric: decodePayload(Buffer.from(payload, 'base64')).metrics[0]! });
+    } catch (err) {
+      throw new PlcError('INVALID_VALUE', `${file}:${i + 1}: not a stored Sparkplug value (${(err as Error).message})`, { cause: err });
+    }
+  });
+  return out;
 }

@@ -11,7 +11,8 @@
  */
 import { parseAddress } from '../address';
 import { PlcError, type TagResult } from '../errors';
-import type { SymbolEntry } from '../symbols/model';
+import type { SymbolEntry, SymbolTable } from '../symbols/model';
+import { wholeBlock } from '../symbols/resolve';
 import type { DataTypeName } from '../types';
 import { DataType, type DataTypeId } from './datatypes';
 import { Quality, type PropertySet } from './model';
@@ -97,14 +98,10 @@ export function datatypeOfEntry(entry: SymbolEntry): DataTypeId {
 
 /**
  * A symbol's elementary members (and arrays of elementary types) under it, each as a metric name and the symbol that reads it:
- * `"Tank".Motor.Speed` under prefix `Tank` is the metric `Tank/Motor/Speed`, the name Sparkplug hosts show as folders.
+ * `"Tank".Motor.Speed` under prefix `Tank` is the metric `Tank/Motor/Speed` (an element `Tank/Steps[0]/Temp`), the names Sparkplug hosts show as folders.
  */
-export function flattenSymbol(
-  table: { lookup(name: string): SymbolEntry | undefined },
-  symbol: string,
-  prefix: string,
-): Record<string, string> {
-  const entry = table.lookup(symbol);
+export function flattenSymbol(table: SymbolTable, symbol: string, prefix: string): Record<string, string> {
+  const entry = table.lookup(symbol) ?? wholeBlock(table, symbol);
   if (!entry) throw new PlcError('INVALID_ADDRESS', `no symbol ${symbol} in the symbol table`, { tag: symbol });
   const out: Record<string, string> = {};
   const walk = (e: SymbolEntry, name: string): void => {
@@ -114,7 +111,8 @@ export function flattenSymbol(
     }
     for (const child of e.children ?? []) {
       const c = table.lookup(child);
-      if (c) walk(c, `${name}/${lastPart(child, e.name)}`);
+      const part = lastPart(child, e.name);
+      if (c) walk(c, part.startsWith('[') ? `${name}${part}` : `${name}/${part}`);
     }
   };
   walk(entry, prefix);
