@@ -16,6 +16,7 @@ const { CLIENT_NAMES } = require('./lib/clients');
 const { plcwire, DIST } = require('./lib/peers');
 const { s7plusSection } = require('./s7plus');
 const { layerSection } = require('./nodered');
+const { sparkplugSection } = require('./sparkplug');
 
 const args = process.argv.slice(2);
 const opt = (name, dflt) => {
@@ -34,7 +35,7 @@ const tableNames = TABLES.map((t) => t.name).filter((n) => {
   const only = opt('tables');
   return !only || only.split(',').some((x) => n.startsWith(`${x} `));
 });
-const SECTIONS = ['comparison', 'latency', 'load', 's7plus', 'nodered'];
+const SECTIONS = ['comparison', 'latency', 'load', 's7plus', 'nodered', 'sparkplug'];
 const sections = opt('sections', SECTIONS.join(',')).split(',');
 for (const s of sections) if (!SECTIONS.includes(s)) throw new Error(`--sections: no section "${s}" (${SECTIONS.join(', ')})`);
 const SERVERS = [
@@ -312,6 +313,7 @@ async function main() {
   if (sections.includes('s7plus'))
     await s7plusSection({ durationMs: DURATION_MS, rounds: ROUNDS, countPolls: COUNT_POLLS, warmPolls: QUICK ? 100 : 500 });
   if (sections.includes('nodered')) await layerSection();
+  if (sections.includes('sparkplug')) await sparkplugSection(QUICK ? ['--quick'] : []);
   console.log(`\n(${((Date.now() - t0) / 1000).toFixed(0)} s)`);
 }
 

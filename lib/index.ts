@@ -190,3 +190,5 @@ export * as sparkplug from './sparkplug';
 export { SparkplugEdgeNode, type SparkplugEdgeNodeOptions, type SparkplugDeviceOptions } from './sparkplug';
 // Classic alarms (issue #33, h-alm7): the --alarms file's parser.
 export { parseAlarmDefinitions } from './alarms/definitions';
+// Sparkplug B in Node-RED (issue #34): the edge-node config node's hub.
+export { SparkplugEdgeHub, type EdgeHubConfig, type HubDevice } from './flows/sparkplug-edge';

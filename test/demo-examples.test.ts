@@ -145,13 +145,14 @@ describe('examples: each imported into the running `npm start` demo and deployed
         .replace('fetchPort=12000', `fetchPort=${ports.fetch}`)
         .replace('writePort=12001', `writePort=${ports.write}`)
         .replace(':14001', `:${ports.freeport}`);
-    const configs = new Set(['plcwire-connection', 'mqtt-broker']);
+    const configs = new Set(['plcwire-connection', 'mqtt-broker', 'plcwire-sparkplug-edge']);
     const plcwire = flow.filter((n) => n.type.startsWith('plcwire-') && !configs.has(n.type)).map((n) => n.id);
     const polls = flow.filter((n) => n.type === 'plcwire-read' && Number(n.interval) > 0).map((n) => n.id);
     const nodes: any[] = [{ id: tab, type: 'tab', label: f }];
     for (const n of flow) {
       if (n.type === 'plcwire-connection') nodes.push({ ...n, url: port(n.url) });
       else if (n.type === 'mqtt-broker') nodes.push({ ...n, port: String(ports.mqtt) });
+      else if (n.type === 'plcwire-sparkplug-edge') nodes.push({ ...n, brokers: `mqtt://127.0.0.1:${ports.mqtt}` });
       else if (polls.includes(n.id)) nodes.push({ ...n, z: tab, wires: [[...(n.wires?.[0] ?? []), `${n.id}.probe`]] });
       else nodes.push({ ...n, z: tab });
     }

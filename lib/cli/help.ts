@@ -150,6 +150,29 @@ Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reach
                      goes when it goes FALSE; s7-300/400 ALARM_S/SQ/8 and NOTIFY, s7-1200/1500 Program_Alarms
 example:
   plcwire serve s7 --port 10102 --profile s7-1200 --source Plant.db --db Plant=1`,
+  sparkplug: `usage: plcwire sparkplug --broker mqtt://host:1883 [--broker ...] --group G --node E --device NAME=<url> [--device ...]
+         [--symbols file --db NAME=N]... [--tags NAME:<tag>,...] [--writable NAME:<tag>,...] [--primary-host H]
+         [--interval ms] [--state-dir DIR] [--buffer N]
+Runs a Sparkplug B 3.0 edge node until Ctrl-C (exit code 130; NDEATH is sent before it disconnects): each PLC
+a device whose tags are its metrics, typed from the PLC's types, data by exception every interval.
+  --broker url       mqtt://, mqtts://, ws:// or wss://; repeat for a list: the next one when a broker fails or
+                     the primary host goes offline on it
+  --group G          the Sparkplug group id; --node E: the edge node id (no "/", "+" or "#")
+  --device NAME=url  a PLC as the Sparkplug device NAME (repeatable)
+  --tags NAME:t,t    the device's tags (symbols or addresses), each a metric of that name (repeatable); without
+                     it every tag of --symbols, or on s7plus:// every tag the PLC's browse lists
+  --writable NAME:t  tags of the device a host may write with DCMD (the URL's readOnly/allow still apply)
+${SYMBOL_OPTIONS}
+  --primary-host H   births wait for this host's STATE online; its offline moves to the next --broker
+  --interval ms      time between polls (default 1000)
+  --state-dir DIR    keep bdSeq in DIR between runs (Sparkplug hosts expect it to go on, not start at 0)
+  --buffer N         store-and-forward: most values kept while no session is up (default 10000; 0: none)
+${PASSWORD_OPTION}
+${URL_NOTE}
+example:
+  plcwire sparkplug --broker mqtt://127.0.0.1:1883 --group Plant --node Edge1 \\
+    --device Line1="s7://127.0.0.1:10102?rack=0&slot=1" --symbols Plant.db --db Plant=1 \\
+    --tags Line1:'"Plant".Level','"Plant".MotorRun' --writable Line1:'"Plant".MotorRun' --state-dir ./state`,
   demo: `usage: plcwire demo [options]
 Runs all three simulators with a running process (no Node-RED) until Ctrl-C and prints try: lines.
 options:

@@ -23,6 +23,7 @@ import { browse, browsedValueFromText, isPlcName, passwordOption } from './s7plu
 import { subscriberOf, watchPushed } from './watch-push';
 import { ack, alarms, ALARM_BOOL_FLAGS, ALARM_VALUE_FLAGS } from './alarms';
 import { blocks, clock, cpu, diag, doctor, info, szl } from './system';
+import { SPARKPLUG_FLAGS } from './sparkplug-args';
 import { textForPeople, toJson, valueFromText, type TypedTag } from './values';
 
 const USAGE = `usage:
@@ -44,6 +45,9 @@ const USAGE = `usage:
                    [--source Tank.db... --db Tank=1...] [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE] [--alarms F]
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
+  plcwire sparkplug --broker mqtt://host:1883 [--broker ...] --group G --node E --device NAME=<url> [--device ...]
+                   [--symbols file --db NAME=N]... [--tags NAME:<tag>,...] [--writable NAME:<tag>,...] [--primary-host H]
+                   [--interval ms] [--state-dir DIR] [--buffer N]   (a Sparkplug B edge node, each PLC a device)
   plcwire demo [--tls-dir DIR] [--port 10102] (the S7-1200's certificate kept between runs; demo --help: every port)
 options: --debug prints stack traces; --help (-h) prints this text, plcwire <command> --help that command's;
       --version the package's version.
@@ -56,7 +60,18 @@ password (s7plus:// only): PLCWIRE_PASSWORD or --password-file FILE (its first l
       freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
 exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
-const VALUE_FLAGS = ['timeout', 'interval', 'cycle', 'max', 'set', 'password-file', 'freeport-port', ...SERVE_FLAGS, ...SYMBOL_FLAGS];
+const VALUE_FLAGS = [
+  'timeout',
+  'interval',
+  'cycle',
+  'max',
+  'set',
+  'password-file',
+  'freeport-port',
+  ...SERVE_FLAGS,
+  ...SYMBOL_FLAGS,
+  ...SPARKPLUG_FLAGS,
+];
 const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'version', 'strict-symbols'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {
@@ -126,9 +141,11 @@ export async function main(argv: readonly string[], io: CliIo): Promise<number> 
         return await ack(rest, args, io);
       case 'demo':
         return await (await import('./demo')).runDemo(rest, args, io);
+      case 'sparkplug':
+        return await (await import('./sparkplug')).sparkplug(rest, args, io);
       default:
         throw new UsageError(
-          `unknown command "${command}" (read, write, watch, symbols, browse, info, szl, diag, clock, blocks, cpu, alarms, ack, doctor, serve, demo)`,
+          `unknown command "${command}" (read, write, watch, symbols, browse, info, szl, diag, clock, blocks, cpu, alarms, ack, doctor, serve, sparkplug, demo)`,
         );
     }
   } catch (err) {

@@ -16,7 +16,12 @@
 //            dependencies from Maven Central with mvn, into test/interop/plc4x/lib),
 //            and test/interop/plc4x/Plc4xPeer.java compiled with javac (Java 17),
 //            for test/plc4x-interop.test.ts
-// Usage: node test/support/install-peers.js interop [nr5] [awlsim] [s7commplus] [plc4x]
+//   tahu:    Eclipse Tahu TAHU_VERSION (tahu-core, the Sparkplug reference
+//            implementation) and the jars it needs, listed in
+//            test/interop/tahu/pom.xml because Tahu's parent POM is not on Maven
+//            Central, into test/interop/tahu/lib, and TahuHost.java compiled with
+//            javac: the independent Sparkplug B host of test/sparkplug-tahu.test.ts
+// Usage: node test/support/install-peers.js interop [nr5] [awlsim] [s7commplus] [plc4x] [tahu]
 // Already installed: does nothing (no network). A peer that cannot be installed
 // (no network, no python3) is not fatal: the rest still runs, and the tests that
 // need it fail or skip saying so.
@@ -32,6 +37,9 @@ const S7COMMPLUS_VERSION = '0.3.0';
 /** The Apache PLC4X whose S7 driver test/interop/plc4x/ drives (its pom.xml names the same). */
 const PLC4X_VERSION = '0.13.1';
 const PLC4X_DIR = 'test/interop/plc4x';
+/** The Eclipse Tahu whose decoder test/interop/tahu/TahuHost.java drives. */
+const TAHU_VERSION = '1.0.21';
+const TAHU_DIR = 'test/interop/tahu';
 
 const PYTHON_PEERS = {
   awlsim: {
@@ -62,7 +70,7 @@ const NPM_PEERS = {
   },
   nr5: { dir: 'test/nr5', has: ['node_modules/node/bin/node', 'node_modules/node-red/package.json'] },
 };
-const SETS = [...Object.keys(NPM_PEERS), ...Object.keys(PYTHON_PEERS), 'plc4x'];
+const SETS = [...Object.keys(NPM_PEERS), ...Object.keys(PYTHON_PEERS), 'plc4x', 'tahu'];
 
 function installNpmPeer(peer) {
   const cwd = path.join(ROOT, peer.dir);
@@ -131,8 +139,8 @@ function plc4xBuilt() {
   return fs.statSync(cls).mtimeMs >= fs.statSync(path.join(dir, 'Plc4xPeer.java')).mtimeMs;
 }
 
-/** Why the PLC4X peer cannot be built here (a missing tool), or undefined. */
-function plc4xMissingTool() {
+/** Why a Java peer cannot be built here (a missing tool), or undefined. */
+function javaMissingTool() {
   for (const [tool, args] of [
     ['java', ['-version']],
     ['javac', ['-version']],
@@ -152,7 +160,7 @@ function plc4xMissingTool() {
 function installPlc4x() {
   if (plc4xBuilt()) return;
   const skip = 'test/plc4x-interop.test.ts will skip';
-  const missing = plc4xMissingTool();
+  const missing = javaMissingTool();
   if (missing) {
     console.warn(`Apache PLC4X ${PLC4X_VERSION} peer not built: ${missing}; ${skip}.`);
     return;
@@ -180,13 +188,64 @@ function installPlc4x() {
   if (javac.status !== 0) console.warn(`Plc4xPeer.java did not compile (javac exited ${javac.status ?? javac.signal}); ${skip}.`);
 }
 
+/** The files a built Tahu host has: Tahu's jar and the compiled program, newer than its source. */
+function tahuBuilt() {
+  const dir = path.join(ROOT, TAHU_DIR);
+  const jar = path.join(dir, 'lib', `tahu-core-${TAHU_VERSION}.jar`);
+  const cls = path.join(dir, 'build', 'TahuHost.class');
+  if (!fs.existsSync(jar) || !fs.existsSync(cls)) return false;
+  return fs.statSync(cls).mtimeMs >= fs.statSync(path.join(dir, 'TahuHost.java')).mtimeMs;
+}
+
+/**
+ * Fetches Tahu's jars with mvn (tahu-core alone, `-Dtransitive=false`, since its
+ * parent POM is not on Maven Central; the jars it needs from our pom.xml) and
+ * compiles the host with javac, unless both are there. Not fatal here: without
+ * java, javac, mvn or Maven Central it warns that test/sparkplug-tahu.test.ts
+ * will skip and why (.ci/run makes the missing peer fatal).
+ */
+function installTahu() {
+  if (tahuBuilt()) return true;
+  const skip = 'test/sparkplug-tahu.test.ts will skip';
+  const missing = javaMissingTool();
+  if (missing) {
+    console.warn(`Eclipse Tahu ${TAHU_VERSION} host not built: ${missing}; ${skip}.`);
+    return false;
+  }
+  console.log(`Building the Eclipse Tahu ${TAHU_VERSION} host in ${TAHU_DIR}`);
+  const cwd = path.join(ROOT, TAHU_DIR);
+  const mvn = (args) => spawnSync('mvn', ['-q', '-B', '-Dstyle.color=never', ...args], { cwd, stdio: 'inherit', timeout: 900_000 });
+  const deps = mvn(['dependency:copy-dependencies', '-DoutputDirectory=lib', '-DincludeScope=runtime']);
+  const core =
+    deps.status === 0 &&
+    mvn(['dependency:copy', `-Dartifact=org.eclipse.tahu:tahu-core:${TAHU_VERSION}`, '-Dtransitive=false', '-DoutputDirectory=lib']);
+  if (deps.status !== 0 || !core || core.status !== 0) {
+    const r = deps.status !== 0 ? deps : core;
+    console.warn(`Eclipse Tahu ${TAHU_VERSION} jars not fetched (mvn exited ${r.status ?? r.signal}); ${skip}.`);
+    return false;
+  }
+  const javac = spawnSync('javac', ['-d', 'build', '-cp', `lib${path.sep}*`, 'TahuHost.java'], {
+    cwd,
+    stdio: 'inherit',
+    timeout: 300_000,
+  });
+  if (javac.status !== 0) {
+    console.warn(`TahuHost.java did not compile (javac exited ${javac.status ?? javac.signal}); ${skip}.`);
+    return false;
+  }
+  return true;
+}
+
 if (require.main === module) {
-  for (const name of process.argv.slice(2)) {
+  for (const name of process.argv.slice(2).filter((a) => a !== '--require')) {
     if (!SETS.includes(name)) throw new Error(`install-peers: unknown set "${name}" (${SETS.join(', ')})`);
     if (name === 'plc4x') installPlc4x();
-    else if (PYTHON_PEERS[name]) installPythonPeer(PYTHON_PEERS[name]);
+    else if (name === 'tahu') {
+      // --require (.ci/run): a host that cannot be built fails the run, never a silent skip.
+      if (!installTahu() && process.argv.includes('--require')) process.exitCode = 1;
+    } else if (PYTHON_PEERS[name]) installPythonPeer(PYTHON_PEERS[name]);
     else installNpmPeer(NPM_PEERS[name]);
   }
 }
 
-module.exports = { AWLSIM_VERSION, S7COMMPLUS_VERSION, PLC4X_VERSION, PLC4X_DIR, plc4xBuilt };
+module.exports = { AWLSIM_VERSION, S7COMMPLUS_VERSION, PLC4X_VERSION, PLC4X_DIR, plc4xBuilt, TAHU_VERSION, TAHU_DIR, tahuBuilt };

@@ -1,0 +1,120 @@
+/**
+ * The command line of `plcwire sparkplug`: brokers, the edge node's ids and
+ * its devices, checked before anything connects, each mistake a UsageError
+ * that names the option and the value (exit code 2).
+ *
+ * `--device NAME=<url>` names a Sparkplug device and its PLC; `--tags NAME:t1,t2`
+ * and `--writable NAME:t1,t2` give that device's tags (symbols or addresses,
+ * each one a metric of the same name) and those a host may write with DCMD.
+ * A device without --tags publishes every tag of the symbol table (--symbols
+ * files, compiled with their --db numbers) or, on s7plus://, of the PLC's
+ * own browse.
+ */
+import { parseUrl, type Endpoint } from '../url';
+import { intFlag, listFlag, stringFlag, UsageError, type ParsedArgs } from './args';
+
+export const SPARKPLUG_FLAGS = ['broker', 'group', 'node', 'device', 'tags', 'writable', 'primary-host', 'state-dir', 'buffer'];
+
+/** One --device with its --tags and --writable. */
+export interface SparkplugCliDevice {
+  name: string;
+  url: string;
+  endpoint: Endpoint;
+  /** The tags given with --tags, in order; undefined: every tag the symbols or the PLC's browse name. */
+  tags?: string[];
+  writable: string[];
+}
+
+export interface SparkplugCliOptions {
+  brokers: string[];
+  group: string;
+  node: string;
+  devices: SparkplugCliDevice[];
+  primaryHost?: string;
+  interval: number;
+  stateDir?: string;
+  buffer: number;
+}
+
+/** The default poll interval (ms) and store-and-forward bound (messages). */
+const SPARKPLUG_DEFAULTS = Object.freeze({ interval: 1000, buffer: 10_000 });
+
+/**
+ * A Sparkplug id (group, edge node, device, host): UTF-8 text without the MQTT
+ * separators and wildcards "/", "+", "#" (Sparkplug 3.0, section 4.1.1 "Topic Namespace Elements").
+ */
+function sparkplugId(flag: string, value: string | undefined): string {
+  if (value === undefined || value === '') throw new UsageError(`--${flag} needs a value`);
+  const bad = /[/+#]/.exec(value);
+  if (bad) throw new UsageError(`--${flag} ${JSON.stringify(value)}: a Sparkplug id cannot hold "${bad[0]}"`);
+  return value;
+}
+
+function brokerUrl(raw: string): string {
+  let url: URL;
+  try {
+    url = new URL(raw);
+  } catch {
+    throw new UsageError(`--broker ${JSON.stringify(raw)} is not a URL: give mqtt://host[:1883] or mqtts://host[:8883]`);
+  }
+  if (!['mqtt:', 'mqtts:', 'ws:', 'wss:'].includes(url.protocol))
+    throw new UsageError(`--broker ${JSON.stringify(raw)}: the scheme must be mqtt://, mqtts://, ws:// or wss://`);
+  return raw;
+}
+
+/** `NAME:t1,t2` of --tags/--writable: the device and its tags. */
+function deviceTags(flag: string, raw: string, devices: ReadonlyMap<string, SparkplugCliDevice>): [SparkplugCliDevice, string[]] {
+  const colon = raw.indexOf(':');
+  const example = `give DEVICE:tag,tag, e.g. --${flag} Line1:'"Tank".Level',MW4`;
+  if (colon <= 0) throw new UsageError(`--${flag} ${JSON.stringify(raw)}: ${example}`);
+  const name = raw.slice(0, colon);
+  const device = devices.get(name);
+  if (!device)
+    throw new UsageError(`--${flag} ${JSON.stringify(raw)}: no --device ${name}=<url> (devices: ${[...devices.keys()].join(', ')})`);
+  const tags = raw
+    .slice(colon + 1)
+    .split(',')
+    .map((t) => t.trim());
+  if (tags.some((t) => t === '')) throw new UsageError(`--${flag} ${JSON.stringify(raw)}: an empty tag; ${example}`);
+  return [device, tags];
+}
+
+export function sparkplugOptions(args: ParsedArgs): SparkplugCliOptions {
+  const brokers = listFlag(args, 'broker').map(brokerUrl);
+  if (brokers.length === 0) throw new UsageError('give at least one --broker mqtt://host:1883');
+  const group = sparkplugId('group', stringFlag(args, 'group'));
+  const node = sparkplugId('node', stringFlag(args, 'node'));
+  const devices = new Map<string, SparkplugCliDevice>();
+  for (const raw of listFlag(args, 'device')) {
+    const eq = raw.indexOf('=');
+    if (eq <= 0) throw new UsageError(`--device ${JSON.stringify(raw)}: give NAME=<plc url>, e.g. --device Line1=s7://192.168.0.1`);
+    const name = sparkplugId('device', raw.slice(0, eq));
+    if (devices.has(name)) throw new UsageError(`--device ${name} is given twice`);
+    const url = raw.slice(eq + 1);
+    devices.set(name, { name, url, endpoint: parseUrl(url), writable: [] });
+  }
+  if (devices.size === 0) throw new UsageError('give at least one --device NAME=<plc url>');
+  for (const raw of listFlag(args, 'tags')) {
+    const [device, tags] = deviceTags('tags', raw, devices);
+    device.tags = [...(device.tags ?? []), ...tags];
+  }
+  for (const raw of listFlag(args, 'writable')) {
+    const [device, tags] = deviceTags('writable', raw, devices);
+    for (const t of tags) {
+      if (device.tags && !device.tags.includes(t))
+        throw new UsageError(`--writable ${device.name}:${t}: "${t}" is not one of the device's --tags (${device.tags.join(', ')})`);
+    }
+    device.writable.push(...tags);
+  }
+  const primaryHost = args.flags.has('primary-host') ? sparkplugId('primary-host', stringFlag(args, 'primary-host')) : undefined;
+  return {
+    brokers,
+    group,
+    node,
+    devices: [...devices.values()],
+    primaryHost,
+    interval: intFlag(args, 'interval', SPARKPLUG_DEFAULTS.interval, 10, 3_600_000),
+    stateDir: stringFlag(args, 'state-dir'),
+    buffer: intFlag(args, 'buffer', SPARKPLUG_DEFAULTS.buffer, 0, 10_000_000),
+  };
+}
