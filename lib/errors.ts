@@ -186,6 +186,18 @@ export class TagErrors<T = unknown> extends PlcError {
   }
 }
 
+/**
+ * True when the PLC refused a subscription for what it is, not for a passing
+ * reason: NOT_SUPPORTED, or every tag NOT_SUPPORTED (an S7-1200/1500 asked
+ * for cyclic data over s7://). A caller then polls instead of subscribing
+ * again (the read node says push is not possible; a Sparkplug device is
+ * polled).
+ */
+export function refusedForGood(err: PlcError): boolean {
+  if (err.code === 'NOT_SUPPORTED') return true;
+  return err instanceof TagErrors && Object.values(err.errors).every((e) => e.code === 'NOT_SUPPORTED');
+}
+
 export type TagResult<T = unknown> = { ok: true; value: T } | { ok: false; error: PlcError };
 
 /**

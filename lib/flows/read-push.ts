@@ -14,17 +14,7 @@ import type { PlcClient, TagSubscription } from '../types';
 import type { TagRow } from '../tags/table';
 import { outcomes, type TagOutcome } from './outcome';
 
-/**
- * True when the PLC refused the subscription for what it is, not for a passing
- * reason: every tag NOT_SUPPORTED (an S7-1200/1500 asked for cyclic data over
- * s7://). The node then says the push mode is not possible instead of
- * "subscribing again".
- */
-export function refusedForGood(err: PlcError): boolean {
-  if (err.code === 'NOT_SUPPORTED') return true;
-  const errors = (err as { errors?: Record<string, PlcError> }).errors;
-  return err.code === 'TAG_ERRORS' && errors !== undefined && Object.values(errors).every((e) => e.code === 'NOT_SUPPORTED');
-}
+export { refusedForGood } from '../errors';
 
 /** True when `client` can have its PLC report changes: its driver offers the subscribe port (s7plus://, s7:// on S7-300/400). */
 export function canPush(client: PlcClient | undefined): client is PlcClient {
