@@ -93,7 +93,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
       if (this.options.push === false) continue;
       const push = new DevicePush(
         device,
-        this.options.interval ?? 1000,
+        this.options.pushCycle ?? Math.min(this.options.interval ?? 1000, 1000),
         () => this.afterRead(device),
         (e) => this.report(e),
       );

@@ -26,6 +26,12 @@ export interface SparkplugEdgeNodeOptions {
   deadbands?: Readonly<Record<string, Readonly<Record<string, number>>>>;
   /** false: poll every device, even those whose PLC can push its changes (S7CommPlus subscriptions); default true. */
   push?: boolean;
+  /**
+   * The sample time asked of a PLC that pushes (ms): how often it looks for
+   * changes to report. Default the poll interval, at most 1000 ms: a slow
+   * poll must not make report by exception slow.
+   */
+  pushCycle?: number;
   /** Delay before the next CONNECT after a session ended or failed, in ms (default 1000). */
   reconnectDelay?: number;
   /** MQTT client id (default `plcwire-<group>-<node>`). */

@@ -2,11 +2,11 @@
  * A device fed by its PLC's own pushes where the driver has a subscribe port
  * (lib/drivers.ts; S7CommPlus today): the PLC reports its tags' changes, so
  * the edge node's poll of that device stands down while the subscription is
- * active. Without the port, or while the subscription is not active, the
- * device is polled.
+ * active. Without the port, while the subscription is not active, or once
+ * the PLC refused it for good (refusedForGood), the device is polled.
  */
 import { driverOf } from '../drivers';
-import { toPlcError, type PlcError } from '../errors';
+import { refusedForGood, toPlcError, type PlcError } from '../errors';
 import type { PlcValue, SubscriptionNotice, TagSubscription } from '../types';
 import type { TagResult } from '../errors';
 import type { SparkplugDevice } from './device';
@@ -15,6 +15,8 @@ export class DevicePush {
   private subscription: TagSubscription | undefined;
   private opening = false;
   private closed = false;
+  /** The PLC refused the subscription for what it is (an S7-1200/1500 asked for cyclic data over s7://): polled for good. */
+  private refused = false;
   /** True while the PLC pushes this device's values (the poll skips it). */
   active = false;
 
@@ -25,15 +27,15 @@ export class DevicePush {
     private readonly onError: (error: PlcError) => void,
   ) {}
 
-  /** Whether the device's driver can push at all. */
+  /** Whether the device's driver can push at all (and its PLC has not refused it). */
   get available(): boolean {
-    return driverOf(this.device.client).subscribe !== undefined;
+    return !this.refused && driverOf(this.device.client).subscribe !== undefined;
   }
 
   /** Subscribes once the client is connected (again, after a failed attempt); a no-op without the port or once open. */
   async open(): Promise<void> {
     const subscribe = driverOf(this.device.client).subscribe;
-    if (!subscribe || this.subscription || this.opening || this.closed || this.device.client.state !== 'connected') return;
+    if (!subscribe || this.refused || this.subscription || this.opening || this.closed || this.device.client.state !== 'connected') return;
     this.opening = true;
     try {
       const sub = await subscribe(
@@ -53,7 +55,10 @@ export class DevicePush {
       sub.on('lost', () => (this.active = false));
       sub.on('error', (err) => this.onError(err));
     } catch (err) {
-      this.onError(toPlcError(err));
+      const e = toPlcError(err);
+      // A CPU without the service is polled, as a driver without the port is: not an error of the device.
+      if (refusedForGood(e)) this.refused = true;
+      else this.onError(e);
     } finally {
       this.opening = false;
     }
