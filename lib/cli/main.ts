@@ -60,18 +60,8 @@ password (s7plus:// only): PLCWIRE_PASSWORD or --password-file FILE (its first l
       freeport:///dev/ttyUSB0?baud=9600  freeport+tcp://host:4001
 exit codes: 0 ok, 1 tag error, 2 usage/bad input, 3 connection, 4 write or control refused, 130 interrupted`;
 
-const VALUE_FLAGS = [
-  'timeout',
-  'interval',
-  'cycle',
-  'max',
-  'set',
-  'password-file',
-  'freeport-port',
-  ...SERVE_FLAGS,
-  ...SYMBOL_FLAGS,
-  ...SPARKPLUG_FLAGS,
-];
+const OWN_VALUE_FLAGS = ['timeout', 'interval', 'cycle', 'max', 'set', 'password-file', 'freeport-port'];
+const VALUE_FLAGS = [...OWN_VALUE_FLAGS, ...SERVE_FLAGS, ...SYMBOL_FLAGS, ...SPARKPLUG_FLAGS];
 const BOOL_FLAGS = ['json', 'csv', 'yes', 'debug', 'help', 'version', 'strict-symbols'];
 
 export async function main(argv: readonly string[], io: CliIo): Promise<number> {

@@ -139,11 +139,7 @@ export class S7Server extends EventEmitter {
     return this.cpu.diagnostics;
   }
 
-  /**
-   * Protection level 1 (none), 2 (writes, stop/start and setting the clock
-   * need the password) or 3 (reads of data and upload too). A connection
-   * that gave the password with the security function works at level 1.
-   */
+  /** Protection level 1 (none), 2 (writes, stop/start, clock need the password), 3 (reads and upload too); a connection that gave the password works at level 1. */
   setProtection(level: 1 | 2 | 3, password?: string): void {
     this.cpu.setProtection(level, password);
   }
