@@ -57,7 +57,7 @@ describe(`interop: Apache PLC4X ${PLC4X_VERSION} alarms and messages against the
     server = undefined;
   });
 
-  it('subscribes MODE/SYS/USR/ALM; receives a STOP/RUN diagnostic entry, an ALARM_SQ coming and going, and its query is answered', async () => {
+  it('subscribes MODE/SYS/USR/ALM; receives STOP and RUN (MODE) and the STOP entry (SYS), an ALARM_SQ coming and going, and its query is answered', async () => {
     server = new S7Server({
       port: 0,
       profile: 's7-300',
@@ -86,7 +86,7 @@ describe(`interop: Apache PLC4X ${PLC4X_VERSION} alarms and messages against the
     });
     peer.stderr.on('data', (d: Buffer) => (err += d.toString('utf8')));
     const exited = new Promise<number | null>((resolve) => peer.on('close', resolve));
-    const see = (what: string, f: (l: PeerLine) => boolean) => until(() => lines.some(f), 120_000, `${what}; stderr: ${err.slice(-2000)}`);
+    const see = (what: string, f: (l: PeerLine) => boolean) => until(() => lines.some(f), 60_000, `${what}; stderr: ${err.slice(-2000)}`);
 
     await see('the four subscriptions', () => lines.filter((l) => l.op === 'subscribe').length === 4);
     expect(
@@ -101,9 +101,12 @@ describe(`interop: Apache PLC4X ${PLC4X_VERSION} alarms and messages against the
       ['USR', 'OK'],
     ]);
 
-    // STOP by command: the diagnostic buffer's entry 0x4304 reaches the SYS subscription.
+    // STOP by command: the mode-transition indication (mode 0) reaches MODE, the diagnostic buffer's entry 0x4304 SYS.
     server.stop();
+    await see('the STOP indication (MODE)', (l) => l.op === 'event' && l.tag === 'MODE' && fields(l.value).CURRENT_MODE === '0');
     await see('the STOP entry (SYS)', (l) => l.op === 'event' && l.tag === 'SYS' && fields(l.value).EVENT_ID === String(0x4304));
+    server.start();
+    await see('the RUN indication (MODE)', (l) => l.op === 'event' && l.tag === 'MODE' && fields(l.value).CURRENT_MODE === '2');
 
     server.memory.writeBit('M', 0, 10, 0, true);
     const isAlarm = (state: string) => (l: PeerLine) =>
