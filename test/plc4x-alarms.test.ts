@@ -125,4 +125,31 @@ describe(`interop: Apache PLC4X ${PLC4X_VERSION} alarms and messages against the
     expect(await exited, err.slice(-3000)).to.equal(0);
     expect(refused, 'no frame refused').to.deep.equal([]);
   });
+
+  // PLC4X 0.13.1's ACK tag cannot be built: its pattern (S7SubscriptionTag, `^ACK:` then `16#` and 8 hex digits, comma
+  // separated) admits no ';', and its parser splits each id on ';' and reads element [1]: every accepted tag throws
+  // ArrayIndexOutOfBoundsException before a frame is sent, every tag with ';' is refused as invalid. Broken in PLC4X.
+  it('its acknowledgement (ACK:16#<id>) fails inside PLC4X before a frame goes out: a PLC4X 0.13.1 bug', async () => {
+    server = new S7Server({ port: 0, profile: 's7-300' });
+    await server.listen();
+    const url = `s7://127.0.0.1:${server.port}?remote-slot=2&controller-type=S7_300`;
+    for (const [tag, error] of [
+      ['ACK:16#00000101', 'ArrayIndexOutOfBoundsException'],
+      ['ACK:16#00000101;1', 'PlcInvalidTagException'],
+    ] as const) {
+      const peer = spawn(
+        'java',
+        ['-Dorg.slf4j.simpleLogger.defaultLogLevel=off', '-cp', `build${path.delimiter}lib/*`, 'Plc4xPeer', url, `s:${tag}`],
+        {
+          cwd: DIR,
+        },
+      );
+      child = peer;
+      let err = '';
+      peer.stderr.on('data', (d: Buffer) => (err += d.toString('utf8')));
+      const code = await new Promise<number | null>((resolve) => peer.on('close', resolve));
+      expect(code, err).to.equal(3);
+      expect(err, tag).to.contain(error);
+    }
+  });
 });
