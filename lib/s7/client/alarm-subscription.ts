@@ -17,6 +17,7 @@ import {
   decodeAlarmIndication,
 } from '../codec/alarms';
 import { describeEvent } from '../codec/event-texts';
+import { decodeModeTransition } from '../codec/mode-transition';
 import { decodeUserdata } from '../codec/userdata';
 import { UserdataGroup, UserdataType } from '../constants';
 import { decodeDateAndTime } from '../../values/time';
@@ -150,6 +151,11 @@ export class S7AlarmSubscription extends EventEmitter implements AlarmSubscripti
   /** A pushed PDU: decoded, turned into events in the order the CPU sent them. */
   private readonly onPush = (frame: Buffer): void => {
     if (this.closed) return;
+    const mode = decodeModeTransition(frame);
+    if (mode !== undefined) {
+      if (this.options.mode) this.emit('event', { type: 'mode', to: MODE_NAMES[mode] ?? `mode 0x${mode.toString(16)}`, at: new Date() });
+      return;
+    }
     const u = decodeUserdata(frame);
     const { group, subfunction, type } = u.params;
     if (type !== UserdataType.Push) return;

@@ -11,6 +11,7 @@ import type { FrameReader } from '../../link/framer';
 import { decodeS7, s7AnswerRef, type S7Message } from '../codec';
 import { cotpTpduType, disconnectReason } from '../../iso/cotp';
 import { setPduRef } from '../codec/pdu-decode';
+import { decodeModeTransition } from '../codec/mode-transition';
 import { isUserdataPush } from '../codec/userdata';
 import { CotpType } from '../../iso/constants';
 
@@ -138,7 +139,7 @@ export class S7Session {
           ),
         );
       }
-      if (isUserdataPush(frame)) {
+      if (isUserdataPush(frame) || decodeModeTransition(frame) !== undefined) {
         this.push(frame);
         continue;
       }

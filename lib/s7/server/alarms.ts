@@ -29,7 +29,6 @@ import {
   AlarmSubfunction,
   AlarmSyntax,
   AlarmType,
-  MODE_TRANSITION_GROUP,
   MessageEvents,
   decodeAckRequest,
   decodeMessageServiceRequest,
@@ -40,6 +39,7 @@ import {
   type AckObject,
   type AssociatedValue,
 } from '../codec/alarms';
+import { encodeModeTransition } from '../codec/mode-transition';
 import { decodeQueryRequest, encodeQueryAnswer, type QueryEntry } from '../codec/alarm-query';
 import type { DiagnosticEntry } from '../codec/diagnostics';
 import { encodeUserdata, encodeUserdataResponse, type UserdataAnswer, type UserdataPdu } from '../codec/userdata';
@@ -248,9 +248,10 @@ export class AlarmEngine {
     }
   }
 
-  /** A mode transition, pushed to connections registered for MODE (its subfunction is the new mode: 0 STOP, 2 RUN). */
+  /** A mode-transition indication (lib/s7/codec/mode-transition.ts: 0 STOP, 2 RUN), pushed to connections registered for MODE. */
   mode(mode: 'RUN' | 'STOP'): void {
-    this.pushTo((r) => (r.events & MessageEvents.MODE) !== 0, MODE_TRANSITION_GROUP, mode === 'RUN' ? 0x02 : 0x00, undefined);
+    const frame = encodeModeTransition(mode === 'RUN' ? 0x02 : 0x00);
+    for (const [peer, r] of this.registered) if (!peer.destroyed && (r.events & MessageEvents.MODE) !== 0) peer.write(frame);
   }
 
   /** A diagnostic buffer entry, pushed to connections registered for SYS as a diagnostic message. */

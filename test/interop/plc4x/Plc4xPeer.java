@@ -9,6 +9,10 @@
 // Usage: java -cp 'build:lib/*' Plc4xPeer <connection string> [w:<tag>=<value>]... [r:<tag>]... [c:<ms>:<tag>]...
 // c:<ms>:<tag> subscribes a cyclic-data tag (CYC(<time base>:<factor>):<address>, S7-300/400) for <ms> ms
 // and prints {"op":"cyclic","tag":…,"code":…} for the subscription, then {"op":"event",…,"value":…} per push.
+// s:<tag>[,<tag>]... sends one subscription request with those event tags (MODE, SYS, USR, ALM, QUERY:ALARM_S,
+// ACK:16#<event id>; S7-300/400, issue #33), prints {"op":"subscribe","tag":<name>,"code":…} per name in the answer,
+// then {"op":"event","tag":<tag>,"code":"OK","value":<the event's map>} per event of a MODE/SYS/USR/ALM handle.
+// An argument "-" reads further operations from stdin, one a line, each answered by {"op":"done","tag":<op>}, until EOF.
 // A value is converted after the tag's type (the text after its last ':').
 // Exit 0 when every request got an answer (each tag's code says whether it was
 // OK), 3 when the connection or a request failed (the message on stderr).
@@ -17,6 +21,10 @@ import java.time.Duration;
 import java.time.LocalDate;
 import java.time.LocalDateTime;
 import java.time.LocalTime;
+import java.io.BufferedReader;
+import java.io.InputStreamReader;
+import java.nio.charset.StandardCharsets;
+import java.util.TreeMap;
 import java.util.concurrent.TimeUnit;
 import org.apache.plc4x.java.DefaultPlcDriverManager;
 import org.apache.plc4x.java.api.PlcConnection;
@@ -38,7 +46,18 @@ public final class Plc4xPeer {
       System.exit(2);
     }
     try (PlcConnection connection = new DefaultPlcDriverManager().getConnection(args[0])) {
-      for (int i = 1; i < args.length; i++) run(connection, args[i]);
+      for (int i = 1; i < args.length; i++) {
+        if ("-".equals(args[i])) {
+          BufferedReader in = new BufferedReader(new InputStreamReader(System.in, StandardCharsets.UTF_8));
+          for (String line = in.readLine(); line != null; line = in.readLine()) {
+            if (line.isEmpty()) continue;
+            run(connection, line);
+            print("done", line, "OK", null);
+          }
+        } else {
+          run(connection, args[i]);
+        }
+      }
     } catch (Exception e) {
       System.err.println(e.getClass().getSimpleName() + ": " + e.getMessage());
       System.exit(3);
@@ -49,6 +68,10 @@ public final class Plc4xPeer {
   private static void run(PlcConnection connection, String op) throws Exception {
     if (op.startsWith("c:")) {
       cyclic(connection, op.substring(2));
+      return;
+    }
+    if (op.startsWith("s:")) {
+      events(connection, op.substring(2).split(","));
       return;
     }
     if (op.startsWith("r:")) {
@@ -85,6 +108,19 @@ public final class Plc4xPeer {
         .getSubscriptionHandle("t")
         .register(e -> print("event", tag, "OK", String.valueOf(((S7Event) e).getMap().get("t"))));
     Thread.sleep(ms);
+  }
+
+  /** One subscription request of event tags (issue #33): the answer's code per name, then each event of the handles. */
+  private static void events(PlcConnection connection, String[] tags) throws Exception {
+    PlcSubscriptionRequest.Builder builder = connection.subscriptionRequestBuilder();
+    for (String tag : tags) builder.addEventTagAddress(tag, tag);
+    PlcSubscriptionResponse response = builder.build().execute().get(TIMEOUT_S, TimeUnit.SECONDS);
+    for (String name : response.getTagNames()) {
+      String code = response.getResponseCode(name).name();
+      print("subscribe", name, code, null);
+      if (!"OK".equals(code) || !name.matches("MODE|SYS|USR|ALM")) continue;
+      response.getSubscriptionHandle(name).register(e -> print("event", name, "OK", String.valueOf(new TreeMap<>(((S7Event) e).getMap()))));
+    }
   }
 
   /** The value as text: an ISO form for times, the number or string for the rest. */
@@ -135,7 +171,7 @@ public final class Plc4xPeer {
     }
   }
 
-  private static void print(String op, String tag, String code, String value) {
+  private static synchronized void print(String op, String tag, String code, String value) {
     StringBuilder b = new StringBuilder();
     b.append("{\"op\":\"").append(op).append("\",\"tag\":").append(quote(tag)).append(",\"code\":\"").append(code).append('"');
     if (value != null) b.append(",\"value\":").append(quote(value));
