@@ -8,8 +8,13 @@
  * bin/plcwire.js (npx adds nothing but its own start-up, which took over a
  * minute here under load), and a `fingerprint=` the one the block's simulator
  * printed, as a user copies it. What a block says is checked:
- * - a command ending in `&` is a simulator: it runs until the block ends, then
- *   stops on Ctrl-C with exit 0;
+ * - a command ending in `&` runs until the block ends, then stops on Ctrl-C
+ *   (the last started first) with exit 0, or the `(exit N)` shown under it; a
+ *   simulator (`plcwire serve`, `plcwire demo`) is ready when it printed
+ *   `Ctrl-C stops.`, any other (`plcwire sparkplug`, a broker) when it printed
+ *   the lines shown under it, which it must show; `mosquitto` is the broker's
+ *   binary (test/support/mosquitto.ts), and a block that starts one is skipped
+ *   with the reason where it is not installed;
  * - in ```sh, the `# ` lines after a command are what it prints (stdout or
  *   stderr, each in order, `…` standing for any text, times and fingerprints
  *   as any, `#   ` with more spaces continuing the line above); a remark in
@@ -37,11 +42,11 @@ import { FetchWriteServer } from '../lib/fetchwrite/server';
 import { FreeportBus } from '../lib/freeport/bus';
 import { S7Server } from '../lib/s7/server';
 import { PLANT_SOURCE, TANK_SOURCE } from '../lib/plant/source';
+import { haveMosquitto, MOSQUITTO } from './support/mosquitto';
 import { freePort } from './support/net';
 import { openPtyPair, ptyUnavailable } from './support/pty';
 import { startPlusSimulator } from './support/s7plus-sim';
 import { skipBecause } from './support/skip';
-import { waitFor } from './support/wait';
 
 const ROOT = path.resolve(__dirname, '../..');
 const BIN = path.join(ROOT, 'bin/plcwire.js');
@@ -349,6 +354,38 @@ function checkOutput(step: Step, run: { out: string; err: string }, where: strin
   }
 }
 
+/** A simulator: ready when it printed `Ctrl-C stops.` (other background commands: when they printed their shown lines). */
+const SIMULATOR = /\bplcwire (?:serve|demo)\b/;
+
+/** Whether every line shown (already ported) is in what a background command printed so far, in order. */
+function printed(expected: string[], run: Running): boolean {
+  try {
+    checkOutput({ command: '', background: true, expected, exit: 0 }, { out: run.out(), err: run.err() }, '');
+    return true;
+  } catch {
+    return false;
+  }
+}
+
+/** Resolves once `ready()` holds after some output of the command; cancel() removes its listeners either way. */
+function untilReady(run: Running, ready: () => boolean): { done: Promise<void>; cancel: () => void } {
+  let cancel = (): void => undefined;
+  const done = new Promise<void>((resolve) => {
+    const check = (): void => {
+      if (!ready()) return;
+      cancel();
+      resolve();
+    };
+    cancel = () => {
+      run.child.stdout!.off('data', check);
+      run.child.stderr!.off('data', check);
+    };
+    run.child.stdout!.on('data', check);
+    run.child.stderr!.on('data', check);
+  });
+  return { done, cancel };
+}
+
 async function runBlock(block: Block): Promise<void> {
   const deadline = Date.now() + BLOCK_MS;
   const ports = new Map<string, string>();
@@ -361,7 +398,9 @@ async function runBlock(block: Block): Promise<void> {
   try {
     for (const step of stepsOf(block)) {
       const where = `README.md:${block.line}: ${step.command}`;
-      let command = moved(step.command).replace(/\bnpx plcwire\b/g, `"${process.execPath}" "${BIN}"`);
+      let command = moved(step.command)
+        .replace(/\bnpx plcwire\b/g, `"${process.execPath}" "${BIN}"`)
+        .replace(/^mosquitto\b/, `"${MOSQUITTO}"`);
       if (fingerprint) command = command.replace(/fingerprint=(?:[0-9A-Fa-f:]+|…)/g, `fingerprint=${fingerprint}`);
       for (const file of namedFiles(step.command)) expect(fs.existsSync(path.join(ROOT, file)), `${where}: ${file} exists`).to.equal(true);
       const expected = step.expected.map(moved);
@@ -369,9 +408,19 @@ async function runBlock(block: Block): Promise<void> {
       const run = shell(step.background ? `exec ${command}` : command, ROOT);
       if (step.background) {
         background.push({ step, run });
-        const started = waitFor(run.child.stdout!, 'data', BLOCK_MS, () => /^Ctrl-C stops\.$/m.test(run.out()));
+        const simulator = SIMULATOR.test(step.command);
+        expect(
+          simulator || expected.length > 0,
+          `${where}: a background command that is not a simulator shows what it prints when ready`,
+        ).to.equal(true);
+        const ready = () => (simulator ? /^Ctrl-C stops\.$/m.test(run.out()) : printed(expected, run));
+        const started = untilReady(run, ready);
         const died = run.exit.then((code) => Promise.reject(new Error(`${where}: exited (${code}) at start: ${run.err()}`)));
-        await beforeDeadline(Promise.race([started, died]), deadline, where);
+        try {
+          await beforeDeadline(Promise.race([started.done, died]), deadline, where);
+        } finally {
+          started.cancel();
+        }
         fingerprint = /certificate SHA-256 ([0-9A-F]{64})/.exec(run.out())?.[1] ?? fingerprint;
         checkOutput({ ...step, expected }, { out: run.out(), err: run.err() }, where);
         continue;
@@ -381,19 +430,21 @@ async function runBlock(block: Block): Promise<void> {
       checkOutput({ ...step, expected }, { out: run.out(), err: run.err() }, where);
     }
   } finally {
-    for (const { run } of background) if (run.child.exitCode === null) run.child.kill('SIGINT');
+    // The last started first: an edge node sends its NDEATH before the broker it is on stops.
+    const stopped: { step: Step; run: Running; code: number | string }[] = [];
+    for (const { step, run } of [...background].reverse()) {
+      if (run.child.exitCode === null && run.child.signalCode === null) run.child.kill('SIGINT');
+      const code = await beforeDeadline(run.exit, Date.now() + 10_000, `${step.command} stops on Ctrl-C`).catch((err: Error) => {
+        run.child.kill('SIGKILL');
+        return err.message;
+      });
+      stopped.push({ step, run, code });
+    }
     for (const entry of fs.readdirSync(ROOT)) if (!before.has(entry)) fs.rmSync(path.join(ROOT, entry), { recursive: true, force: true });
-    const stopped = await Promise.all(
-      background.map(async ({ step, run }) => {
-        const code = await beforeDeadline(run.exit, Date.now() + 10_000, `${step.command} stops on Ctrl-C`).catch((err: Error) => {
-          run.child.kill('SIGKILL');
-          return err.message;
-        });
-        return { step, run, code };
-      }),
-    );
     failures.push(
-      ...stopped.filter((s) => s.code !== 0).map((s) => `README.md:${block.line}: ${s.step.command} on Ctrl-C: ${s.code}\n${s.run.err()}`),
+      ...stopped
+        .filter((s) => s.code !== s.step.exit)
+        .map((s) => `README.md:${block.line}: ${s.step.command} on Ctrl-C: ${s.code}, not ${s.step.exit}\n${s.run.err()}`),
     );
   }
   expect(failures).to.deep.equal([]);
@@ -413,7 +464,9 @@ describe('README.md as a test', function () {
 
   for (const block of shellBlocks.filter((b) => notRunnable(b) === undefined)) {
     const first = stepsOf(block)[0]!.command;
-    it(`README.md:${block.line}: ${first} … runs as written`, async () => {
+    it(`README.md:${block.line}: ${first} … runs as written`, async function () {
+      if (/^mosquitto\b/m.test(block.text) && !haveMosquitto())
+        skipBecause(this, `a block that starts a broker: mosquitto is not at ${MOSQUITTO} (apt install mosquitto, or set MOSQUITTO)`);
       await runBlock(block);
     });
   }

@@ -8,6 +8,7 @@ import { S7Server } from '../lib/s7/server';
 import { PlcMemory } from '../lib/sim/memory';
 import { SparkplugEdgeNode, type SparkplugEdgeNodeOptions } from '../lib/sparkplug';
 import { DataType } from '../lib/sparkplug/datatypes';
+import { encodePayload } from '../lib/sparkplug/payload';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { haveMosquitto, Mosquitto } from './support/mosquitto';
 import { TestHost } from './support/sparkplug-host';
@@ -143,6 +144,54 @@ describe('Sparkplug edge node sessions: primary host, brokers, PLC links, store-
     const again = await h.nextOf('DBIRTH', 'PLC1', 10000);
     expect(again.payload!.seq).to.equal((ddeath.payload!.seq! + 1) % 256);
     expect(again.payload!.metrics[0]).to.include({ name: 'Level', datatype: DataType.Int16, value: 77 });
+  });
+
+  it('tck-id-payloads-sequence-num-always-included tck-id-payloads-sequence-num-zero-nbirth tck-id-payloads-sequence-num-incrementing: seq +1 on every message, 255 then 0, across NBIRTH, DBIRTH, DDATA and DDEATH; an NBIRTH is always 0', async function () {
+    this.timeout(90_000); // about 260 messages, each one poll and one broker round trip
+    const b = await broker();
+    const h = await host(b);
+    edge([b.url], { interval: 10 });
+    await h.nextOf('DBIRTH', 'PLC1');
+    // One change per DDATA, written when the previous one arrived, up to seq 254.
+    let last = 1;
+    for (let value = 1; last !== 254; value++) {
+      expect(value, 'DDATA before seq 254').to.be.below(300);
+      memory.write('DB', 1, 0, Buffer.from([value >> 8, value & 0xff]));
+      last = (await h.nextOf('DDATA', 'PLC1')).payload!.seq!;
+    }
+    // The PLC lost (DDEATH 255) and back (DBIRTH 0), a change (DDATA 1), then a rebirth: NBIRTH 0, not 2.
+    const port = server.port;
+    await server.close();
+    expect((await h.nextOf('DDEATH', 'PLC1')).payload!.seq).to.equal(255);
+    server = new S7Server({ port, profile: 's7-1500', memory });
+    await server.listen();
+    expect((await h.nextOf('DBIRTH', 'PLC1', 10_000)).payload!.seq).to.equal(0);
+    memory.write('DB', 1, 0, Buffer.from([0x7f, 0x00]));
+    expect((await h.nextOf('DDATA', 'PLC1')).payload!.seq).to.equal(1);
+    const rebirth = encodePayload({
+      timestamp: Date.now(),
+      metrics: [{ name: 'Node Control/Rebirth', datatype: DataType.Boolean, value: true }],
+    });
+    await h.client.publishAsync('spBv1.0/G/NCMD/E', rebirth, { qos: 0 });
+    expect((await h.nextOf('NBIRTH')).payload!.seq).to.equal(0);
+    expect((await h.nextOf('DBIRTH', 'PLC1')).payload!.seq).to.equal(1);
+
+    // What the edge node sent, as the host got it (NDEATH has no seq; none came): an NBIRTH 0, every other one +1 mod 256.
+    const stream = h.messages.filter((m) => ['NBIRTH', 'DBIRTH', 'NDATA', 'DDATA', 'DDEATH'].includes(m.parsed.type));
+    expect(h.messages.filter((m) => m.parsed.type === 'NDEATH')).to.deep.equal([]);
+    expect(stream.map((m) => m.parsed.type)).to.include.members(['NBIRTH', 'DBIRTH', 'DDATA', 'DDEATH']);
+    let previous: number | undefined;
+    for (const [k, m] of stream.entries()) {
+      const seq = m.payload!.seq;
+      const where = `message ${k}, ${m.topic}`;
+      expect(seq, where).to.be.a('number');
+      if (m.parsed.type === 'NBIRTH') expect(seq, where).to.equal(0);
+      else expect(seq, where).to.equal((previous! + 1) % 256);
+      previous = seq;
+    }
+    const wraps = stream.filter((m, k) => k > 0 && m.payload!.seq === 0 && m.parsed.type !== 'NBIRTH');
+    expect(wraps.map((m) => m.parsed.type)).to.deep.equal(['DBIRTH']);
+    expect(stream.filter((m) => m.payload!.seq === 255).map((m) => m.parsed.type)).to.deep.equal(['DDEATH']);
   });
 
   it('store-and-forward: changes while the broker is down are sent after the new births as historical metrics, in order', async () => {
