@@ -9,6 +9,7 @@
  */
 import type { BindingInterface } from '@serialport/bindings-interface';
 import type { AlarmPort } from './alarms/model';
+import { S7_ALARMS } from './s7/alarm-port';
 import type { ClientOptions } from './client/options';
 import type { DiagnosePort } from './doctor-steps';
 import { PlcError } from './errors';
@@ -112,6 +113,7 @@ export const DRIVERS = Object.freeze({
     password: false,
     serve: serveS7,
     diagnose: S7_DOCTOR,
+    alarms: S7_ALARMS,
   }),
   fetchwrite: entry({
     urls: FETCHWRITE_URLS,

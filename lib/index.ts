@@ -188,3 +188,5 @@ export type {
 // Sparkplug B edge node (issue #34)
 export * as sparkplug from './sparkplug';
 export { SparkplugEdgeNode, type SparkplugEdgeNodeOptions, type SparkplugDeviceOptions } from './sparkplug';
+// Classic alarms (issue #33, h-alm7): the --alarms file's parser.
+export { parseAlarmDefinitions } from './alarms/definitions';

@@ -132,7 +132,7 @@ examples:
   plcwire doctor "s7plus://192.168.0.1" '"Recipe".Step'`,
   serve: `usage: plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo]
                    [--layout file.json] [--max-items N] [--source Tank.db... --db Tank=1...]
-                   [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE]
+                   [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE] [--alarms alarms.json]
        plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
        plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
 Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reaches it.
@@ -145,6 +145,8 @@ Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reach
                      it reads only
   --tls-dir DIR      s7-1200/1500: keep the certificate in DIR (cert.pem, key.pem with mode 0600), made on the first
                      start and the same after, so a pinned fingerprint= still holds; else made anew at every start
+  --alarms file      the program's alarms (JSON, docs/alarms.md): each comes when its trigger bit goes TRUE and
+                     goes when it goes FALSE; s7-300/400 ALARM_S/SQ/8 and NOTIFY, s7-1200/1500 Program_Alarms
 example:
   plcwire serve s7 --port 10102 --profile s7-1200 --source Plant.db --db Plant=1`,
   demo: `usage: plcwire demo [options]

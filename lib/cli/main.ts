@@ -41,7 +41,7 @@ const USAGE = `usage:
   plcwire ack   <url> <alarm id> [--yes] [--json]        (an operator's write: readOnly and allow= refuse it)
   plcwire doctor <url> [address|symbol...] [--symbols file]... [--db NAME=N]... [--strict-symbols] [--json] [--timeout ms]
   plcwire serve s7 [--port 102] [--host 127.0.0.1] [--profile s7-1500|s7-1200|s7-300|s7-400|s7-200|logo] [--layout file.json] [--max-items N]
-                   [--source Tank.db... --db Tank=1...] [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE]
+                   [--source Tank.db... --db Tank=1...] [--tls-cert cert.pem --tls-key key.pem] [--password-file FILE] [--alarms F]
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
   plcwire demo [--tls-dir DIR] [--port 10102] (the S7-1200's certificate kept between runs; demo --help: every port)

@@ -24,6 +24,7 @@ export const SERVE_FLAGS = [
   'tls-key',
   'tls-dir',
   'password-file',
+  'alarms',
 ];
 
 export async function serve(rest: string[], args: ParsedArgs, io: CliIo): Promise<number> {

@@ -10,6 +10,7 @@ import { servedBlocks, type Served, type ServeFlags } from '../sim/serve';
 import { S7Server, refusalLine, type S7Profile, type S7RefusedEvent } from '../s7/server';
 import { servePlus } from '../s7plus/server/serve';
 import { reloadOnChange } from './reload';
+import { parseAlarmDefinitions } from '../alarms/definitions';
 
 const PROFILES: readonly S7Profile[] = ['s7-300', 's7-400', 's7-1200', 's7-1500', 's7-200', 'logo'];
 
@@ -40,7 +41,10 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
   // Without --layout the profile's own memory (DB1 only for s7-200 and logo).
   const layout = loadLayout(flags, flags.string('layout'));
   // An S7-1200/1500 serves S7CommPlus on the same port, its blocks (optimized ones too) from --source.
-  const s7plus = PLUS_PROFILES.has(profile) ? await servePlus(flags) : refusePlusFlags(flags, profile);
+  // --alarms: the program's alarm blocks; an S7-300/400 raises them over S7comm, an S7-1200/1500 as Program_Alarms over S7CommPlus.
+  const alarmsFile = flags.string('alarms');
+  const alarms = alarmsFile === undefined ? undefined : parseAlarmDefinitions(flags.readFile(alarmsFile).toString('utf8'), alarmsFile);
+  const s7plus = PLUS_PROFILES.has(profile) ? await servePlus(flags, alarms) : refusePlusFlags(flags, profile);
   // --source: the data blocks of DB sources, at their declared lengths with their start values. With S7CommPlus they
   // are its program's (optimized ones too, laid out for the simulator's storage), which S7Server takes itself when
   // the program has data blocks; without --source the profile's (or --layout's) data blocks stay (issue #31).
@@ -55,11 +59,16 @@ export async function serveS7(flags: ServeFlags): Promise<Served> {
     ...(symbols ? { symbols } : {}),
     ...(maxItems !== undefined ? { maxItems } : {}),
     ...(s7plus ? { s7plus } : {}),
+    ...(alarms && !s7plus ? { alarms } : {}),
   });
   // No connection is closed without a line saying which frame and why.
   server.on('refused', (e: S7RefusedEvent) => say(refusalLine(e)));
   const port = await flags.listen(() => server.listen(), 'port');
   say(`S7 simulator (${profile}) listening on ${host}:${port}${maxItems !== undefined ? `, at most ${maxItems} items per job` : ''}`);
+  if (alarms)
+    say(
+      `${alarms.length} alarm${alarms.length === 1 ? '' : 's'} from ${alarmsFile}: ${s7plus ? 'Program_Alarms over s7plus://' : 'ALARM_S/SQ/8, NOTIFY over s7://'}`,
+    );
   const url = `s7://${hostPart(host)}:${port}?${REACH[profile].query}`;
   // What PUT/GET serves is told from the sources' own table, in which an optimized block has no length.
   const shown = s7plus ? flags.source() : symbols;

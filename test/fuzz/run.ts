@@ -24,6 +24,7 @@ import { s7plusAlarmTargets } from './s7plus-alarm-targets';
 import { s7plusTargets } from './s7plus-targets';
 import { symbolTargets } from './symbol-targets';
 import { extraTargets } from './targets';
+import { alarmTargets } from './alarm-targets';
 
 const inputs = Number(process.argv[2] ?? 1_000_000);
 
@@ -128,6 +129,7 @@ const targets: FuzzTarget[] = [
   ...symbolTargets(),
   ...s7plusTargets(),
   ...s7plusAlarmTargets(),
+  ...alarmTargets(),
 ];
 
 const results = targets.map((t) => fuzz(t, inputs));

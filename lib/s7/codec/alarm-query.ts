@@ -6,9 +6,9 @@
  * s7.mspec for the request, Wireshark's s7comm field names for the answer):
  *
  *   request:  00 01 12 08 1A 00 query-type(01 by alarm type) 34 alarm-type[4]
- *   answer:   00 n FF 09 length[2] dataset*
+ *   answer:   00 n FF 09 length[2] dataset*, or 00 00 0A 00 00 00 when no alarm is active
  *   dataset:  length 00 00 alarm-type event-id[4] 00 event-state ack-going ack-coming
- *             coming-time[8] coming-value going-time[8] going-value (value: FF ts length[2, bytes] data)
+ *             coming-time[8] coming-value going-time[8] going-value (each value as an indication's)
  */
 import { ProtocolError } from '../../errors';
 import { decodeDateAndTime, encodeDateAndTime } from '../../values/time';
@@ -58,11 +58,13 @@ export function encodeQueryAnswer(entries: readonly QueryEntry[]): Buffer {
     b[11] = e.ackComing;
     let o = DATASET_HEAD;
     if (e.coming) encodeDateAndTime(e.coming.time, b, o);
-    o = writeValue(b, o + 8, cv, true);
+    o = writeValue(b, o + 8, cv, false);
     if (e.going) encodeDateAndTime(e.going.time, b, o);
-    writeValue(b, o + 8, gv, true);
+    writeValue(b, o + 8, gv, false);
     return b;
   });
+  // No alarm: return code 0x0A (no data), as Wireshark's dissector reads an answer without datasets.
+  if (entries.length === 0) return Buffer.of(0x00, 0x00, 0x0a, 0x00, 0x00, 0x00);
   const body = Buffer.concat(sets);
   const head = Buffer.of(0x00, Math.min(entries.length, 0xff), 0xff, 0x09, 0, 0);
   head.writeUInt16BE(Math.min(body.length, 0xffff), 4);
@@ -94,12 +96,12 @@ export function decodeQueryAnswer(d: Buffer): QueryEntry[] {
     };
     let p = o + DATASET_HEAD;
     const ct = stamp(set, p);
-    const [cv, afterComing] = readValue(set, p + 8, true, what);
+    const [cv, afterComing] = readValue(set, p + 8, false, what);
     if (ct) e.coming = { time: ct, value: cv };
     p = afterComing;
     if (p + 8 > end) throw new ProtocolError(`${what}: dataset at byte ${o} has no going time`);
     const gt = stamp(set, p);
-    const [gv, afterGoing] = readValue(set, p + 8, true, what);
+    const [gv, afterGoing] = readValue(set, p + 8, false, what);
     if (gt) e.going = { time: gt, value: gv };
     if (afterGoing !== end) throw new ProtocolError(`${what}: dataset at byte ${o} announces ${end - afterGoing} bytes more than it holds`);
     out.push(e);

@@ -12,7 +12,8 @@
  *   message service (0x02) request:  events(MODE 01 | SYS 02 | USR 04 | ALM 80) 00 username[8] [alarm type 00]
  *   message service answer:          result 00 [alarm type 00 00]
  *   indications (05 06 11 12 16):    time[8 BCD] function 00 objects{n}
- *       object: 12 length syntax(16 | 1C) values{n} event-id[4] event-state local-state ack-going ack-coming value*
+ *       object: 12 length syntax(16 | 1C) values{n} event-id[4] event-state local-state ack-going ack-coming
+ *               [NOTIFY_IND 1C only: event-going event-coming event-last-changed 00] value*
  *       value:  return-code transport-size length[2] data (length in bits for 03 04 05, else bytes)
  *   ack (0x0b) request:              function 09 objects{n}: 12 08 syntax 19 values 01 event-id[4] ack-going ack-coming
  *   ack answer:                      function 09 n result*(FF ok)
@@ -165,6 +166,8 @@ interface AlarmObject {
   /** One bit per signal: acknowledged going / coming. */
   ackGoing: number;
   ackComing: number;
+  /** NOTIFY_IND objects only: the signals going, coming, and the one(s) that changed last. */
+  notify?: { going: number; coming: number; lastChanged: number };
   values: AssociatedValue[];
 }
 
@@ -175,17 +178,24 @@ export interface AlarmIndication {
 }
 
 const OBJECT_HEAD = 12;
+/** A NOTIFY_IND object's head: 4 more bytes (event going, event coming, event last changed, reserved; Wireshark's field names). */
+const NOTIFY_HEAD = 16;
+
+function headOf(syntaxId: number): number {
+  return syntaxId === AlarmSyntax.NOTIFY_IND ? NOTIFY_HEAD : OBJECT_HEAD;
+}
 
 /** The data of an ALARM_S / ALARM_SQ / ALARM_8 / NOTIFY / NOTIFY_8 indication. */
 export function encodeAlarmIndication(ind: AlarmIndication): Buffer {
-  const size = 10 + ind.objects.reduce((n, ob) => n + OBJECT_HEAD + valueBytes(ob.values), 0);
+  const size = 10 + ind.objects.reduce((n, ob) => n + headOf(ob.syntaxId) + valueBytes(ob.values), 0);
   const b = Buffer.alloc(size);
   encodeDateAndTime(ind.time, b, 0);
   b[9] = ind.objects.length;
   let o = 10;
   for (const ob of ind.objects) {
     b[o] = 0x12;
-    b[o + 1] = OBJECT_HEAD - 2 + valueBytes(ob.values);
+    const head = headOf(ob.syntaxId);
+    b[o + 1] = head - 2 + valueBytes(ob.values);
     b[o + 2] = ob.syntaxId;
     b[o + 3] = ob.values.length;
     b.writeUInt32BE(ob.eventId >>> 0, o + 4);
@@ -193,7 +203,12 @@ export function encodeAlarmIndication(ind: AlarmIndication): Buffer {
     b[o + 9] = ob.localState;
     b[o + 10] = ob.ackGoing;
     b[o + 11] = ob.ackComing;
-    o += OBJECT_HEAD;
+    if (head === NOTIFY_HEAD) {
+      b[o + 12] = ob.notify?.going ?? 0;
+      b[o + 13] = ob.notify?.coming ?? 0;
+      b[o + 14] = ob.notify?.lastChanged ?? 0;
+    }
+    o += head;
     for (const v of ob.values) o = writeValue(b, o, v, false);
   }
   return b;
@@ -212,6 +227,8 @@ export function decodeAlarmIndication(d: Buffer): AlarmIndication {
     const end = o + 2 + d[o + 1]!;
     if (end > d.length) throw new ProtocolError(`${what}: object ${i + 1} announces ${d[o + 1]} bytes past the end`);
     const count = d[o + 3]!;
+    const head = headOf(d[o + 2]!);
+    if (o + head > end) throw new ProtocolError(`${what}: object ${i + 1} of ${d[o + 1]} bytes is shorter than its head`);
     const ob: AlarmObject = {
       syntaxId: d[o + 2]!,
       eventId: d.readUInt32BE(o + 4),
@@ -221,7 +238,8 @@ export function decodeAlarmIndication(d: Buffer): AlarmIndication {
       ackComing: d[o + 11]!,
       values: [],
     };
-    o += OBJECT_HEAD;
+    if (head === NOTIFY_HEAD) ob.notify = { going: d[o + 12]!, coming: d[o + 13]!, lastChanged: d[o + 14]! };
+    o += head;
     for (let k = 0; k < count; k++) {
       const [v, next] = readValue(d.subarray(0, end), o, false, what);
       ob.values.push(v);

@@ -109,6 +109,8 @@ interface Block {
 export class AlarmEngine {
   private readonly registered = new Map<AlarmPeer, Registration>();
   private readonly blocks = new Map<number, Block>();
+  /** The signals by the byte of their trigger bit (`area:db:byte`), so a write looks at its own bytes only. */
+  private readonly byByte = new Map<string, { block: Block; signal: Signal }[]>();
 
   /** False on a CPU without the classic message services (those without block functions: S7-1200/1500, S7-200, LOGO!). */
   readonly served: boolean;
@@ -152,6 +154,8 @@ export class AlarmEngine {
       block.signals.push({ def, bit, trigger, values: (def.values ?? []).map((v, i) => tag(v, `value ${i + 1}`)) });
       if (def.needsAck) block.ackMask |= bit;
       this.blocks.set(def.id, block);
+      const k = `${trigger.area}:${trigger.dbNumber}:${trigger.byteOffset}`;
+      this.byByte.set(k, [...(this.byByte.get(k) ?? []), { block, signal: block.signals.at(-1)! }]);
     }
     for (const block of this.blocks.values()) for (const s of block.signals) if (this.bitOf(s.trigger)) block.eventState |= s.bit;
     if (this.blocks.size > 0) memory.on('write', this.onWrite);
@@ -174,13 +178,10 @@ export class AlarmEngine {
   }
 
   private readonly onWrite = (w: MemoryAccess): void => {
-    for (const block of this.blocks.values()) {
-      for (const s of block.signals) {
-        const t = s.trigger;
-        if (t.area !== w.area || t.dbNumber !== w.dbNumber || t.byteOffset < w.offset || t.byteOffset >= w.offset + w.length) continue;
-        const on = this.bitOf(t);
-        if (on === ((block.eventState & s.bit) !== 0)) continue;
-        this.change(block, s, on);
+    for (let byte = w.offset; byte < w.offset + w.length; byte++) {
+      for (const { block, signal } of this.byByte.get(`${w.area}:${w.dbNumber}:${byte}`) ?? []) {
+        const on = this.bitOf(signal.trigger);
+        if (on !== ((block.eventState & signal.bit) !== 0)) this.change(block, signal, on);
       }
     }
   };
@@ -209,6 +210,7 @@ export class AlarmEngine {
           localState: 0,
           ackGoing: block.ackGoing,
           ackComing: block.ackComing,
+          ...(kind.notify ? { notify: { going: on ? 0 : s.bit, coming: block.eventState, lastChanged: s.bit } } : {}),
           values,
         },
       ],

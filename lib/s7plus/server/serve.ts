@@ -9,7 +9,8 @@ import type { ServeFlags } from '../../sim/serve';
 import { ValueError } from '../../errors';
 import { generateCertificate } from '../transport/cert';
 import { certificateInDirectory } from '../transport/cert-dir';
-import { S7PlusService } from './index';
+import { S7PlusService, type S7PlusOptions } from './index';
+import type { AlarmDefinition } from '../../alarms/model';
 
 const SIMULATOR_CERTIFICATE = Object.freeze({ commonName: 'plcwire simulator' });
 
@@ -25,7 +26,7 @@ async function keptCertificate(flags: ServeFlags, dir: string): Promise<{ cert: 
 }
 
 /** The S7CommPlus service `plcwire serve s7` adds to an S7-1200/1500 (lib/cpu/serve.ts), from the command line's flags. */
-export async function servePlus(flags: ServeFlags): Promise<S7PlusService> {
+export async function servePlus(flags: ServeFlags, alarms?: readonly AlarmDefinition[]): Promise<S7PlusService> {
   const certFile = flags.string('tls-cert');
   const keyFile = flags.string('tls-key');
   const passwordFile = flags.string('password-file');
@@ -45,12 +46,15 @@ export async function servePlus(flags: ServeFlags): Promise<S7PlusService> {
   if (password === '') throw flags.usage(`--password-file ${passwordFile}: the file's first line is empty; it holds the CPU's password`);
   const files = flags.sourceFiles();
   try {
-    return new S7PlusService({
+    // The alarm definitions (--alarms) go to the service as `alarms` (its Program_Alarms: issue #33).
+    const options: S7PlusOptions & { alarms?: readonly AlarmDefinition[] } = {
       sources: files?.sources ?? [],
       ...(files ? { db: files.db } : {}),
       tls,
       ...(password === undefined ? {} : { password }),
-    });
+      ...(alarms ? { alarms } : {}),
+    };
+    return new S7PlusService(options);
   } catch (err) {
     if (err instanceof Error && /certificate|key|PEM|asn1/i.test(err.message) && certFile !== undefined) {
       throw flags.usage(`--tls-cert ${certFile} / --tls-key ${keyFile}: not a certificate and its key in PEM (${err.message})`);
