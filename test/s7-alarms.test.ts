@@ -130,6 +130,17 @@ describe('S7 classic alarms (userdata group 4) against the S7-300/400 simulator'
     expect(events.filter((e) => e.type === 'mode').map((e) => (e.type === 'mode' ? e.to : ''))).to.deep.equal(['STOP', 'RUN']);
   });
 
+  it('closing one of two subscriptions of a client leaves the other registered', async () => {
+    const { server, client } = await start();
+    const first = await client.subscribeAlarms({}, () => undefined);
+    const events: AlarmEvent[] = [];
+    const second = await client.subscribeAlarms({}, (e) => events.push(e));
+    open.unshift(second);
+    await first.close();
+    server.memory.writeBit('M', 0, 10, 0, true);
+    await until(() => events.length === 1, 3000, 'the coming event after the other subscription closed');
+  });
+
   it('a read-only connection and one outside its allow-list refuse acknowledge before a byte goes out', async () => {
     const { client, server } = await start('s7-300', '&readOnly=true');
     let requests = 0;

@@ -26,7 +26,8 @@ import { ACK_KINDS, alarmKey, alarmValue, type AlarmClient } from './alarm-value
 export interface AlarmService {
   readonly kinds: Map<number, AlarmKind>;
   readonly connected: boolean;
-  register(events: number, signal?: AbortSignal): Promise<void>;
+  /** Registers with the CPU for what every live subscription wants (`events` this one's; undefined: it closed). */
+  registerFor(sub: object, events: number | undefined, signal?: AbortSignal): Promise<void>;
   list(options?: RequestOptions): Promise<PlcAlarm[]>;
 }
 
@@ -83,7 +84,7 @@ export class S7AlarmSubscription extends EventEmitter implements AlarmSubscripti
     this.unlisten = this.client.pushes.listen(this.onPush);
     this.client.on('connected', this.onConnected);
     this.client.on('disconnected', this.onLost);
-    await this.service.register(this.events, this.options.signal);
+    await this.service.registerFor(this, this.events, this.options.signal);
     this.setActive(await this.service.list(this.options));
     this.emit('active');
   }
@@ -96,7 +97,7 @@ export class S7AlarmSubscription extends EventEmitter implements AlarmSubscripti
   private readonly onConnected = (): void => {
     if (this.closed) return;
     void (async () => {
-      await this.service.register(this.events, this.options.signal);
+      await this.service.registerFor(this, this.events, this.options.signal);
       const now = await this.service.list(this.options);
       if (this.closed) return;
       const at = new Date();
@@ -255,6 +256,6 @@ export class S7AlarmSubscription extends EventEmitter implements AlarmSubscripti
     this.client.off('connected', this.onConnected);
     this.client.off('disconnected', this.onLost);
     // Best effort: the CPU forgets a closed connection's registrations anyway.
-    if (this.service.connected) await this.service.register(0).catch(() => undefined);
+    if (this.service.connected) await this.service.registerFor(this, undefined).catch(() => undefined);
   }
 }

@@ -149,8 +149,19 @@ export class S7Alarms extends ServiceTransport {
     throw new PlcError('PLC_ERROR', `${this.host.name} ${what}: the CPU answered 0x${r.toString(16).padStart(2, '0')}`, { plcCode: r });
   }
 
+  /** What each live subscription registered for: the CPU is registered for all of it, and off when none is left. */
+  private readonly wanted = new Map<object, number>();
+
+  async registerFor(sub: object, events: number | undefined, signal?: AbortSignal): Promise<void> {
+    if (events === undefined) this.wanted.delete(sub);
+    else this.wanted.set(sub, events);
+    let all = 0;
+    for (const e of this.wanted.values()) all |= e;
+    await this.register(all, signal);
+  }
+
   /** Registers for (or, with 0 and the aborts, off) the CPU's pushes: ALM with both families, MODE and SYS as asked. */
-  async register(events: number, signal?: AbortSignal): Promise<void> {
+  private async register(events: number, signal?: AbortSignal): Promise<void> {
     const on = events !== 0;
     const families = on
       ? [AlarmRegistration.ALARM_S_INITIATE, AlarmRegistration.ALARM_INITIATE]
