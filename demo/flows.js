@@ -35,6 +35,7 @@ const { PITCH, STALE, LIVE } = require('./flow-nodes');
 const { intro, dashboard, connections, s7Panel, linkPanel, errorsAndStyle } = require('./panels');
 const { cpuPanel } = require('./cpu-panel');
 const { plusConnection, plusPanel } = require('./plus-panel');
+const { alarmPanel, classicConnection } = require('./alarm-panel');
 
 /** The demo plant's DB1 source as a connection node keeps it (the file's text: its BOM and CRLFs are TIA's, not the source's). */
 const PLANT_SOURCE = Object.freeze({
@@ -55,9 +56,10 @@ const TOPS = Object.freeze({
   fp: 140 + 29 * PITCH,
   plus: 140 + 34 * PITCH,
   errors: 140 + 41 * PITCH,
+  alarms: 140 + 43 * PITCH,
 });
 
-/** @param {{ s7: string, s7plus: string, fetchwrite: string, freeport: string }} urls */
+/** @param {{ s7: string, s7plus: string, fetchwrite: string, freeport: string, s7classic: string }} urls */
 function demoFlow(urls) {
   const symbols = () => ({ symbolSources: [{ ...PLANT_SOURCE }], dbNumbers: PLANT_DB_NUMBERS.map((d) => ({ ...d })) });
   return [
@@ -96,6 +98,9 @@ function demoFlow(urls) {
     // S7CommPlus: the S7-1200's optimized DB "Tank" by name, browsed from the PLC (no source file), over TLS.
     ...plusPanel(TOPS.plus),
     ...errorsAndStyle(TOPS.errors),
+    // Alarms (issue #33): the tank's high level from the S7-300 and the S7-1200, acknowledged from the list.
+    classicConnection(urls.s7classic),
+    ...alarmPanel(TOPS.alarms),
   ];
 }
 
@@ -110,6 +115,7 @@ const DEMO_URLS = Object.freeze({
   s7plus: 's7plus://127.0.0.1:10102',
   fetchwrite: 'fetchwrite://127.0.0.1?fetchPort=12000&writePort=12001',
   freeport: 'freeport+tcp://127.0.0.1:14001',
+  s7classic: 's7://127.0.0.1:10103?rack=0&slot=2',
 });
 
 module.exports = { demoFlow, DEMO_URLS, PLANT_SOURCE, PLANT_DB_NUMBERS, STALE, LIVE };

@@ -369,14 +369,16 @@ describe('plcwire CLI', function () {
         expect(lines.some((l) => l.includes('"Plant".Level') && l.includes('--symbols'))).to.equal(true);
         // The S7CommPlus lines: pinned by the printed fingerprint, never insecure, no source file.
         const plus = lines.filter((l) => l.includes('s7plus://'));
-        expect(plus.map((l) => l.split(' ')[0])).to.deep.equal(['browse', 'watch', 'write']);
+        expect(plus.map((l) => l.split(' ')[0])).to.deep.equal(['browse', 'watch', 'write', 'alarms']);
+        // The tank's high level on both generations (issue #33): the classic S7-300's alarms and the S7-1200's.
+        expect(lines.filter((l) => l.startsWith('alarms ')).map((l) => l.split('://')[0])).to.deep.equal(['alarms "s7', 'alarms "s7plus']);
         for (const l of plus)
           expect(l)
             .to.match(/\?fingerprint=[0-9A-F]{64}"/)
             .and.not.match(/insecure|--symbols/);
         for (const line of lines) {
-          // As a user pastes it into a shell; `watch` runs until Ctrl-C, so the same arguments are read once.
-          const command = line.replace(/^watch /, 'read ');
+          // As a user pastes it into a shell; `watch` and `alarms --watch` run until Ctrl-C, so they are read once.
+          const command = line.replace(/^watch /, 'read ').replace(/ --watch$/, '');
           const child = spawn('sh', ['-c', `"${process.execPath}" "${BIN}" ${command}`], { stdio: ['ignore', 'pipe', 'pipe'] });
           children.push(child);
           let out = '';
@@ -390,6 +392,8 @@ describe('plcwire CLI', function () {
             expect(out, command)
               .to.match(/^"Tank"\.Setpoint\s+REAL\b/m)
               .and.match(/^"Tank"\.Levels\[4\]\s/m);
+          // The active alarms now: the high level's line (ALARM_SQ 257, Program_Alarm 1) while it is active, else none.
+          else if (command.startsWith('alarms ')) expect(out + err, command).to.match(/^(257|1) .* (coming|going) |no active alarms/m);
           else expect(out, command).to.match(/ = /);
         }
       } finally {

@@ -125,9 +125,10 @@ describe('examples: each imported into the running `npm start` demo and deployed
     for (const f of files) {
       const flow = JSON.parse(fs.readFileSync(path.join(EXAMPLES, f), 'utf8'));
       for (const conn of flow.filter((n: any) => n.type === 'plcwire-connection')) {
-        const scheme = conn.url.split(':')[0];
-        const theirs = demoConns.find((n) => n.url.split(':')[0] === scheme);
-        expect(theirs, `${f}: the demo has a ${scheme} connection`).to.not.equal(undefined);
+        // The same PLC: scheme, host and port (the demo has two s7:// CPUs, the S7-1200 and the S7-300).
+        const plc = conn.url.split('?')[0];
+        const theirs = demoConns.find((n) => n.url.split('?')[0] === plc);
+        expect(theirs, `${f}: the demo has a connection to ${plc}`).to.not.equal(undefined);
         expect(shared(conn), `${f}: ${conn.id}`).to.deep.equal(shared(theirs));
       }
     }
@@ -144,15 +145,18 @@ describe('examples: each imported into the running `npm start` demo and deployed
         .replace(':10102', `:${ports.s7}`)
         .replace('fetchPort=12000', `fetchPort=${ports.fetch}`)
         .replace('writePort=12001', `writePort=${ports.write}`)
-        .replace(':14001', `:${ports.freeport}`);
+        .replace(':14001', `:${ports.freeport}`)
+        .replace(':10103', `:${demo.plant.ports.s7classic}`);
     const configs = new Set(['plcwire-connection', 'mqtt-broker', 'plcwire-sparkplug-edge']);
     const plcwire = flow.filter((n) => n.type.startsWith('plcwire-') && !configs.has(n.type)).map((n) => n.id);
     const polls = flow.filter((n) => n.type === 'plcwire-read' && Number(n.interval) > 0).map((n) => n.id);
+    const alarms = flow.filter((n) => n.type === 'plcwire-alarms').map((n) => n.id);
     const nodes: any[] = [{ id: tab, type: 'tab', label: f }];
     for (const n of flow) {
       if (n.type === 'plcwire-connection') nodes.push({ ...n, url: port(n.url) });
       else if (n.type === 'mqtt-broker') nodes.push({ ...n, port: String(ports.mqtt) });
       else if (n.type === 'plcwire-sparkplug-edge') nodes.push({ ...n, brokers: `mqtt://127.0.0.1:${ports.mqtt}` });
+      else if (alarms.includes(n.id)) nodes.push({ ...n, z: tab, wires: [[...(n.wires?.[0] ?? []), `${n.id}.probe`]] });
       else if (polls.includes(n.id)) nodes.push({ ...n, z: tab, wires: [[...(n.wires?.[0] ?? []), `${n.id}.probe`]] });
       else nodes.push({ ...n, z: tab });
     }
@@ -167,6 +171,18 @@ describe('examples: each imported into the running `npm start` demo and deployed
         outputs: 0,
         wires: [],
       });
+    // Behind every alarms node: its events' topics, in order (alarm/257/coming, …).
+    for (const [k, id] of alarms.entries())
+      nodes.push({
+        id: `${id}.probe`,
+        type: 'function',
+        z: tab,
+        x: 900,
+        y: 400 + 40 * k,
+        func: `const all = global.get('plcwireAlarmTopics') || {};\n(all[${JSON.stringify(id)}] = all[${JSON.stringify(id)}] || []).push(msg.topic);\nglobal.set('plcwireAlarmTopics', all);\nreturn null;`,
+        outputs: 0,
+        wires: [],
+      });
     return { nodes, plcwire, polls };
   }
 
@@ -174,7 +190,8 @@ describe('examples: each imported into the running `npm start` demo and deployed
   async function globalContext(key: string): Promise<any> {
     const res = await api(demo.editor, 'GET', `context/global/${key}`);
     const stored = res?.memory ?? res;
-    if (!stored || stored.msg === undefined) return undefined;
+    // Nothing stored yet: no msg, or the sidebar's text "(undefined)".
+    if (!stored || stored.msg === undefined || stored.msg === '(undefined)') return undefined;
     return JSON.parse(stored.msg);
   }
 
@@ -256,7 +273,33 @@ describe('examples: each imported into the running `npm start` demo and deployed
     await eventually(async () => expect(demo.plant.tank.snapshot().setpoint).to.equal(42.5), 15_000, 'the setpoint back at 42.5');
   }
 
-  const up = (s: any) => s.fill === 'green' || (s.fill === 'yellow' && s.shape === 'dot');
+  /**
+   * The S7-300 alarms example (issue #33): the plant's program raises the tank's high level, the alarms node sends it
+   * as it comes, and the example's inject acknowledges it in the CPU (the node sends the acknowledged event).
+   */
+  async function classicAlarms(): Promise<void> {
+    const topics = async (): Promise<string[]> => ((await globalContext('plcwireAlarmTopics')) ?? {})['almex.alarms'] ?? [];
+    const flag = () => (demo.plant.memory.area('M')[10] & 1) !== 0;
+    // A fresh coming: the level well below the limit (the program clears the flag), then above it.
+    demo.plant.memory.area('DB', 1).writeFloatBE(50, 0);
+    await eventually(async () => expect(flag(), 'M10.0 cleared').to.equal(false), 10_000, 'the high-level flag cleared');
+    const before = (await topics()).length;
+    demo.plant.memory.area('DB', 1).writeFloatBE(89, 0);
+    await eventually(async () => expect((await topics()).slice(before)).to.include('alarm/257/coming'), 15_000, 'the ALARM_SQ coming');
+    await api(demo.editor, 'POST', 'inject/almex.inject.ack');
+    await eventually(
+      async () => expect((await topics()).slice(before)).to.include('alarm/257/acknowledged'),
+      15_000,
+      'the acknowledgement',
+    );
+  }
+
+  /**
+   * A node whose link is up: green, or a yellow dot; an alarms node's counts are up in every colour (a red dot
+   * "1/1 unacked" is an alarm waiting for an operator, not a link down).
+   */
+  const up = (s: any) => s.fill === 'green' || (s.fill === 'yellow' && s.shape === 'dot') || unacked(s);
+  const unacked = (s: any) => s.fill === 'red' && s.shape === 'dot' && /^\d+\/\d+ unacked$/.test(s.text ?? '');
 
   for (const [i, f] of files.entries()) {
     it(`"${f}": deploys beside the demo; every plcwire node's link is up, every poll delivers values`, async () => {
@@ -278,7 +321,7 @@ describe('examples: each imported into the running `npm start` demo and deployed
         'every plcwire node up',
       );
       for (const id of plcwire) {
-        const red = statuses[id]!.filter((s) => s.fill === 'red' && s.shape === 'dot');
+        const red = statuses[id]!.filter((s) => s.fill === 'red' && s.shape === 'dot' && !unacked(s));
         expect(red, `${f}: ${id} never showed bad connection or settings conflict`).to.deep.equal([]);
       }
       await eventually(
@@ -292,6 +335,7 @@ describe('examples: each imported into the running `npm start` demo and deployed
       );
       if (f === MQTT_EXAMPLE) await mqttGateway();
       if (f === S7PLUS_EXAMPLE) await optimizedByName();
+      if (f === 'S7-300 alarms - events, acknowledge.json') await classicAlarms();
       if (f === 'S7 PLC control.json') {
         await api(demo.editor, 'POST', 'inject/ctlex.inject.state');
         await eventually(

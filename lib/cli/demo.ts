@@ -43,6 +43,7 @@ export async function runDemo(rest: readonly string[], args: ParsedArgs, io: Cli
   say(`  S7CommPlus  ${plant.urls.s7plus}  (TLS; the optimized DB "Tank" by name)`);
   say(`              the certificate is kept in ${tlsDir}: the same fingerprint at every run`);
   say(`  FETCH/WRITE ${plant.urls.fetchwrite}`);
+  say(`  S7-300      ${plant.urls.s7classic}  (classic CPU, same program: the tank's high level is an ALARM_SQ)`);
   say(`  freeport    ${plant.urls.freeport}  (stations ${DEMO_STATIONS.level}: level REAL, ${DEMO_STATIONS.parts}: parts DINT)`);
   say('try:');
   say(`  npx plcwire watch "${plant.urls.s7}" ${DEMO_TAGS.level} ${DEMO_TAGS.speed} ${DEMO_TAGS.parts}`);
@@ -55,6 +56,9 @@ export async function runDemo(rest: readonly string[], args: ParsedArgs, io: Cli
   say(`  npx plcwire browse "${plant.urls.s7plus}"`);
   say(`  npx plcwire watch "${plant.urls.s7plus}" '${TANK_SYMBOLS.phase}' '${TANK_SYMBOLS.speed}' '${TANK_SYMBOLS.levels}'`);
   say(`  npx plcwire write "${plant.urls.s7plus}" '${TANK_SYMBOLS.setpoint}=45'`);
+  // The tank's high level (85 %) as an alarm on both generations (issue #33).
+  say(`  npx plcwire alarms "${plant.urls.s7classic}" --watch`);
+  say(`  npx plcwire alarms "${plant.urls.s7plus}" --watch`);
   say('Ctrl-C stops.');
   await untilInterrupted(io);
   await plant.close();

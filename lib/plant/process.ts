@@ -33,6 +33,7 @@
  * operator's setpoint (THERMAL's limits are those of its start value, 42.5 °C).
  */
 import type { PlcMemory } from '../sim/memory';
+import { DEMO_HIGH_LEVEL } from './alarms';
 import type { TankBlock } from './tank';
 
 /** The CPU the program runs on: S7Server#cpu (or anything with its RUN/STOP mode). */
@@ -147,6 +148,7 @@ export class DemoProcess {
     if (level <= 10) this.filling = true;
     level = Math.min(100, Math.max(0, level));
     db.writeFloatBE(level, 0);
+    this.highLevel(level);
 
     const run = (db[4]! & RUN) !== 0;
     let speed = db.readInt16BE(6);
@@ -175,6 +177,19 @@ export class DemoProcess {
       shiftLevels: this.ticks % Math.max(1, Math.round(1 / dt)) === 0,
     });
     return this.snapshot();
+  }
+
+  /**
+   * The tank's high level (lib/plant/alarms.ts): the flag the alarm blocks watch, set at or above `above` and cleared
+   * below `clearBelow`; written through the memory (its 'write' event is what the alarm engines hear), on a change only.
+   */
+  private highLevel(level: number): void {
+    const { byte, bit, above, clearBelow } = DEMO_HIGH_LEVEL;
+    const m = this.memory.area('M');
+    if (!m || m.length <= byte) return;
+    const high = (m[byte]! & (1 << bit)) !== 0;
+    if (!high && level >= above) this.memory.writeBit('M', 0, byte, bit, true);
+    else if (high && level < clearBelow) this.memory.writeBit('M', 0, byte, bit, false);
   }
 
   /** The thermostat's limits: around the operator's setpoint in "Tank" when there is one (and it is a number), else THERMAL's. */

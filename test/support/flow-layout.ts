@@ -46,6 +46,7 @@ const SHOWS_STATUS = new Set([
   'plcwire-write',
   'plcwire-heartbeat',
   'plcwire-control',
+  'plcwire-alarms',
   'ui-switch',
   'ui-slider',
   'trigger',
