@@ -109,7 +109,7 @@ describe('install-peers: awlsim for the layout comparison', function () {
     dirs.push(dir);
     const r = install(dir, ['awlsin'], process.env, closedPort);
     expect(r.status).to.not.equal(0);
-    expect(r.stderr).to.include('install-peers: unknown set "awlsin" (interop, nr5, awlsim, s7commplus, plc4x)');
+    expect(r.stderr).to.include('install-peers: unknown set "awlsin" (interop, nr5, awlsim, s7commplus, plc4x, tahu)');
   });
 
   it('is what npm test runs before the suite, with .ci/run using the same installer', () => {
