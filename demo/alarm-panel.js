@@ -106,7 +106,13 @@ function alarmPanel(top) {
     n.change(`alm.${plc}.tag`, PLCS[plc].name, [{ t: 'set', p: 'plc', pt: 'msg', to: plc, tot: 'str' }], X.route, y, ['alm.list']);
   return [
     n.group('ui.g.alarms', 'Alarms', 6, 6),
-    { ...n.inject('alm.start', 'active list', '', row(0), ['alm.s7classic', 'alm.s7plus']), topic: 'list', onceDelay: '3' },
+    // The topic goes in props too: an inject sends only the properties its props name.
+    {
+      ...n.inject('alm.start', 'active list', '', row(0), ['alm.s7classic', 'alm.s7plus']),
+      props: [{ p: 'payload' }, { p: 'topic', vt: 'str' }],
+      topic: 'list',
+      onceDelay: '3',
+    },
     alarms('s7classic', row(1)),
     tag('s7classic', row(1)),
     alarms('s7plus', row(2.5)),

@@ -95,6 +95,8 @@ describe('browser: the demo dashboard alarm list (issue #33)', function () {
       .and.match(/coming/)
       .and.match(/unacknowledged/);
     expect(await fitsWidth(page), 'at 412 px').to.deep.equal([]);
+    // Nothing was refused before anyone clicked: the start's "list" request reached both alarms nodes as one.
+    expect(await page.locator('.plcwire-alarms-note').count(), 'a refusal note before any click').to.equal(0);
   });
 
   it("at 412 px the classic alarm's Acknowledge button is on screen; a click acknowledges it in the S7-300", async () => {
