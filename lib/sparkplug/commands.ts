@@ -18,6 +18,8 @@ export interface CommandWrite {
   metric: string;
   address: string;
   value: unknown;
+  /** `Alarms/Acknowledge`: the value is the id of the alarm to acknowledge, not a tag's value. */
+  acknowledge?: true;
 }
 
 /** The write a DCMD metric asks for, or the typed error that refuses it. */
@@ -50,7 +52,7 @@ function checkCommand(device: SparkplugDevice, m: SparkplugMetric): CommandWrite
   } catch (err) {
     return err as PlcError;
   }
-  return { metric: def.name, address: def.address, value: m.value };
+  return { metric: def.name, address: def.address, value: m.value, ...(def.acknowledge ? { acknowledge: true as const } : {}) };
 }
 
 /** Checks a DCMD's metrics and writes those that pass in one request: what was written, and every refusal or failure. */
@@ -60,23 +62,45 @@ export async function executeCommand(
 ): Promise<{ done: CommandWrite[]; errors: PlcError[] }> {
   const errors: PlcError[] = [];
   const writes: CommandWrite[] = [];
+  const acks: CommandWrite[] = [];
   for (const m of payload.metrics) {
     const checked = checkCommand(device, m);
     if (checked instanceof PlcError) errors.push(checked);
-    else writes.push(checked);
+    else (checked.acknowledge ? acks : writes).push(checked);
   }
-  if (writes.length === 0) return { done: [], errors };
+  const acked = await acknowledge(device, acks, errors);
+  if (writes.length === 0) return { done: acked, errors };
   let results: Record<string, TagResult<void>>;
   try {
     results = await device.client.writeDetailed(Object.fromEntries(writes.map((w) => [w.address, w.value])));
   } catch (err) {
-    return { done: [], errors: [...errors, toPlcError(err, 'PLC_ERROR')] };
+    return { done: acked, errors: [...errors, toPlcError(err, 'PLC_ERROR')] };
   }
-  const done: CommandWrite[] = [];
+  const done: CommandWrite[] = [...acked];
   for (const w of writes) {
     const r = results[w.address];
     if (r && !r.ok) errors.push(r.error);
     else done.push(w);
   }
   return { done, errors };
+}
+
+/** Acknowledges each alarm a DCMD names, in order, through the device's alarms port (whose client applies the ack guard). */
+async function acknowledge(device: SparkplugDevice, acks: readonly CommandWrite[], errors: PlcError[]): Promise<CommandWrite[]> {
+  const done: CommandWrite[] = [];
+  for (const a of acks) {
+    try {
+      await device.alarms!.acknowledge(Number(a.value));
+      done.push(a);
+    } catch (err) {
+      const e = toPlcError(err, 'PLC_ERROR');
+      errors.push(
+        new PlcError(e.code, `DCMD for device ${device.name}: ${a.metric} ${String(a.value)}: ${e.message}`, {
+          cause: e,
+          tag: e.tag ?? `${device.name}/${a.metric}`,
+        }),
+      );
+    }
+  }
+  return done;
 }

@@ -9,6 +9,7 @@
 import { PlcError, type TagResult } from '../errors';
 import type { SymbolTable } from '../symbols/model';
 import type { PlcClient, PlcValue, PreparedRead } from '../types';
+import { ALARM_METRICS, DeviceAlarms, type SparkplugAlarmOptions } from './alarms';
 import { DataType, type DataTypeId } from './datatypes';
 import type { SparkplugMetric } from './model';
 import { datatypeOfAddress, datatypeOfEntry, qualityOf } from './types';
@@ -21,8 +22,16 @@ export interface SparkplugDeviceOptions {
   client: PlcClient;
   /** Metric name → the tag that feeds it: an address (`DB1.DBD4:REAL`) or a symbol the client's symbol table knows. */
   tags: Readonly<Record<string, string>>;
-  /** Metric names a host may write with DCMD (each still passes the client's read-only/allow-list guard). */
+  /**
+   * Metric names a host may write with DCMD (each still passes the client's read-only/allow-list guard);
+   * `Alarms/Acknowledge` lets a host acknowledge the PLC's alarms (with `alarms`).
+   */
   writable?: readonly string[];
+  /**
+   * The PLC's alarms as the device's `Alarms/…` metrics (lib/sparkplug/alarms.ts), fed by its pushes:
+   * true, or what to receive beside the alarms. Its driver must have an alarms port.
+   */
+  alarms?: boolean | SparkplugAlarmOptions;
   /** The symbol table the client reads names with, so metrics named by symbol get their datatypes from it. */
   symbols?: SymbolTable;
   /** Datatype of a metric whose tag is a name without a symbol table here (else taken from the first value read). */
@@ -38,6 +47,14 @@ export interface MetricDefinition {
   datatype: DataTypeId | undefined;
   readonly writable: boolean;
   readonly deadband: number;
+  /** `Alarms/Acknowledge`: a DCMD acknowledges the alarm whose id it sends (no tag). */
+  readonly acknowledge?: true;
+}
+
+/** What a device tells its edge node between polls: its alarms changed, or its alarm service failed. */
+export interface DeviceHooks {
+  alarmsChanged(): void;
+  error(error: PlcError): void;
 }
 
 interface Sample {
@@ -57,13 +74,22 @@ export class SparkplugDevice {
   /** The values last read. */
   private readonly current = new Map<string, Sample>();
   private readonly prepared: PreparedRead;
+  /** The PLC's alarms as metrics, when the options ask for them. */
+  readonly alarms: DeviceAlarms | undefined;
+  private readonly last: number;
 
   /** `firstAlias`: aliases are unique across the edge node, so each device starts where the one before ended. */
-  constructor(options: SparkplugDeviceOptions, firstAlias: number, deadbands: Readonly<Record<string, number>> = {}) {
+  constructor(
+    options: SparkplugDeviceOptions,
+    firstAlias: number,
+    deadbands: Readonly<Record<string, number>> = {},
+    hooks: DeviceHooks = { alarmsChanged: () => undefined, error: () => undefined },
+  ) {
     this.name = options.name;
     this.client = options.client;
     const writable = new Set(options.writable ?? []);
     for (const w of writable) {
+      if (w === ALARM_METRICS.acknowledge && options.alarms) continue;
       if (!(w in options.tags))
         throw new PlcError('INVALID_VALUE', `device ${options.name}: writable metric "${w}" is not one of its tags`, { tag: w });
     }
@@ -86,12 +112,42 @@ export class SparkplugDevice {
       this.byAlias.set(def.alias, def);
       return def;
     });
+    this.last = firstAlias + names.length;
+    if (options.alarms) {
+      this.alarms = new DeviceAlarms(
+        this.name,
+        this.client,
+        options.alarms === true ? {} : options.alarms,
+        this.last,
+        () => hooks.alarmsChanged(),
+        (e) => hooks.error(e),
+      );
+      for (const a of this.alarms.metrics) {
+        const def: MetricDefinition = {
+          name: a.name,
+          alias: a.alias,
+          address: '',
+          datatype: a.datatype,
+          writable: a.name === ALARM_METRICS.acknowledge && writable.has(a.name),
+          deadband: 0,
+          ...(a.name === ALARM_METRICS.acknowledge ? { acknowledge: true as const } : {}),
+        };
+        this.byName.set(a.name, def);
+        this.byAlias.set(a.alias, def);
+      }
+      this.last += this.alarms.metrics.length;
+    }
     this.prepared = this.client.prepare(this.metrics.map((m) => m.address));
   }
 
   /** The next alias after this device's. */
   get endAlias(): number {
-    return this.metrics[this.metrics.length - 1]!.alias + 1;
+    return this.last;
+  }
+
+  /** Whether a host may write any of its metrics (the edge node then subscribes its DCMD topic). */
+  get commandable(): boolean {
+    return [...this.byName.values()].some((m) => m.writable);
   }
 
   metric(ref: { name?: string; alias?: number | bigint }): MetricDefinition | undefined {
@@ -117,16 +173,17 @@ export class SparkplugDevice {
 
   /** Whether every metric has a value (or a bad quality) to be born with. */
   get complete(): boolean {
-    return this.metrics.every((m) => this.current.has(m.name) && m.datatype !== undefined);
+    return this.metrics.every((m) => this.current.has(m.name) && m.datatype !== undefined) && (this.alarms?.settled ?? true);
   }
 
   /** The DBIRTH's metrics: every one, by name and alias, with its datatype, timestamp and current value. */
   birth(): SparkplugMetric[] {
-    return this.metrics.map((m) => {
+    const tags = this.metrics.map((m) => {
       const s = this.current.get(m.name)!;
       this.reported.set(m.name, s);
       return { ...metricOf(m, s), name: m.name };
     });
+    return this.alarms ? [...tags, ...this.alarms.birth()] : tags;
   }
 
   /** The metrics that changed since the last report (beyond their deadband), by alias; marks them reported. */
@@ -140,6 +197,7 @@ export class SparkplugDevice {
       this.reported.set(m.name, s);
       out.push(metricOf(m, s));
     }
+    if (this.alarms) out.push(...this.alarms.changes());
     return out;
   }
 
@@ -153,8 +211,10 @@ export class SparkplugDevice {
     this.reported.clear();
   }
 
-  close(): void {
+  /** Ends the read and the alarm subscription (the client stays open: it is the caller's). */
+  async close(): Promise<void> {
     this.prepared.close();
+    await this.alarms?.close();
   }
 }
 

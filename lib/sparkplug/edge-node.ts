@@ -68,7 +68,10 @@ export class SparkplugEdgeNode extends EventEmitterBase {
       checkId('device', d.name);
       if (names.has(d.name)) throw new PlcError('INVALID_VALUE', `two devices are named "${d.name}"`);
       names.add(d.name);
-      const device = new SparkplugDevice(d, alias, options.deadbands?.[d.name]);
+      const device: SparkplugDevice = new SparkplugDevice(d, alias, options.deadbands?.[d.name], {
+        alarmsChanged: () => this.afterRead(device),
+        error: (e) => this.report(e, device.name),
+      });
       alias = device.endAlias;
       this.devices.push(device);
     }
@@ -90,12 +93,19 @@ export class SparkplugEdgeNode extends EventEmitterBase {
       const down = (error: PlcError): void => this.deviceDown(device, error);
       device.client.on('disconnected', down);
       this.unsubscribers.push(() => device.client.off('disconnected', down));
+      const alarms = device.alarms;
+      if (alarms) {
+        const open = (): void => alarms.open();
+        device.client.on('connected', open);
+        this.unsubscribers.push(() => device.client.off('connected', open));
+        open();
+      }
       if (this.options.push === false) continue;
       const push = new DevicePush(
         device,
         this.options.pushCycle ?? Math.min(this.options.interval ?? 1000, 1000),
         () => this.afterRead(device),
-        (e) => this.report(e),
+        (e) => this.report(e, device.name),
       );
       if (!push.available) continue;
       this.pushes.set(device, push);
@@ -131,7 +141,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
       await client.endAsync().catch(() => undefined);
       client.removeAllListeners();
     }
-    for (const device of this.devices) device.close();
+    await Promise.all(this.devices.map((d) => d.close()));
     this.setState('stopped');
   }
 
@@ -167,7 +177,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   private async sessionStarted(client: mqtt.MqttClient): Promise<void> {
     const subscriptions: Record<string, { qos: 1 }> = { [topicOf('NCMD', this.group, this.node)]: { qos: 1 } };
     for (const device of this.devices) {
-      if (device.metrics.some((m) => m.writable)) subscriptions[topicOf('DCMD', this.group, this.node, device.name)] = { qos: 1 };
+      if (device.commandable) subscriptions[topicOf('DCMD', this.group, this.node, device.name)] = { qos: 1 };
     }
     if (this.options.primaryHost !== undefined) subscriptions[stateTopic(this.options.primaryHost)] = { qos: 1 };
     try {
@@ -248,7 +258,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     const device = this.devices.find((d) => d.name === name);
     if (!device) return this.report(new PlcError('INVALID_ADDRESS', `DCMD for unknown device ${name}`));
     const { done, errors } = await executeCommand(device, payload);
-    for (const error of errors) this.report(error);
+    for (const error of errors) this.report(error, name);
     for (const d of done) this.emit('command', { device: name, metric: d.metric, value: d.value });
     if (done.length > 0) this.schedulePoll(0);
   }
@@ -274,10 +284,14 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     if (!this.nodeBorn || this.born.has(device.name) || !device.complete || device.client.state !== 'connected') return;
     this.publish('DBIRTH', device.name, { timestamp: Date.now(), seq: this.nextSeq(), metrics: device.birth() });
     this.born.add(device.name);
+    // Alarm events the PLC reported before this birth (while the device was down), in order, as historical data.
+    const late = device.changes();
+    if (late.length > 0) this.publish('DDATA', device.name, { timestamp: Date.now(), seq: this.nextSeq(), metrics: late });
   }
 
   private deviceDown(device: SparkplugDevice, _error: PlcError): void {
     if (!this.born.delete(device.name)) return;
+    device.alarms?.died();
     this.publish('DDEATH', device.name, { timestamp: Date.now(), seq: this.nextSeq(), metrics: [] });
   }
 
@@ -322,6 +336,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   }
 
   private async pollDevice(device: SparkplugDevice): Promise<void> {
+    device.alarms?.open(); // again, after a subscription attempt that failed on a connected link
     if (this.pushes.get(device)?.active && this.born.has(device.name)) return;
     try {
       await device.poll();
@@ -361,7 +376,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     this.emit('status', { state, ...(broker !== undefined ? { broker } : {}), ...(this.bdSeq !== undefined ? { bdSeq: this.bdSeq } : {}) });
   }
 
-  private report(error: PlcError): void {
-    if (this.listenerCount('error') > 0) this.emit('error', error);
+  private report(error: PlcError, device?: string): void {
+    if (this.listenerCount('error') > 0) this.emit('error', error, ...(device !== undefined ? [device] : []));
   }
 }

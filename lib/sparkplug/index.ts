@@ -18,6 +18,7 @@ export { parseHostState, type HostState } from './host-state';
 export { PLC_DATATYPES, datatypeOfPlcType, datatypeOfAddress, datatypeOfEntry, flattenSymbol, qualityOf } from './types';
 export { REBIRTH_METRIC, BDSEQ_METRIC } from './messages';
 export type { SparkplugDeviceOptions, MetricDefinition } from './device';
+export { ALARM_METRICS, ALARM_COLUMNS, type SparkplugAlarmOptions } from './alarms';
 export type { BufferOptions } from './store';
 export { SparkplugEdgeNode } from './edge-node';
 export type { SparkplugEdgeNodeOptions, EdgeNodeEvents, EdgeNodeState, EdgeNodeStatus, PublishedMessage, CommandDone } from './options';

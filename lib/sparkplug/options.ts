@@ -66,8 +66,11 @@ export interface CommandDone {
 
 export interface EdgeNodeEvents {
   status: [status: EdgeNodeStatus];
-  /** Only emitted when someone listens: refused commands, failed writes, a broker's errors, dropped buffered data. */
-  error: [error: PlcError];
+  /**
+   * Only emitted when someone listens: refused commands, failed writes, a broker's errors, dropped buffered
+   * data, a PLC's alarm service failing. `device`: the device it concerns, if one.
+   */
+  error: [error: PlcError, device?: string];
   publish: [message: PublishedMessage];
   command: [done: CommandDone];
   /** Buffered values dropped at the store-and-forward bound (the running total in `stats.dropped`). */
