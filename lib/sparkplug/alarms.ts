@@ -256,7 +256,7 @@ export class DeviceAlarms {
 }
 
 /** The active alarms as the `Alarms/Active` DataSet (columns ALARM_COLUMNS). */
-export function tableOf(alarms: readonly PlcAlarm[], language?: string): DataSet {
+function tableOf(alarms: readonly PlcAlarm[], language?: string): DataSet {
   return {
     kind: 'DataSet',
     columns: ALARM_COLUMNS.map(([c]) => c),
