@@ -140,6 +140,18 @@ describe('Sparkplug B payload codec', () => {
       expect(decodePayload(Buffer.from('1205200150ff01', 'hex')).metrics[0]!.value).to.equal(-1);
     });
 
+    it('a UInt32 in long_value, as Eclipse Tahu 1.0.21 encodes one (a DCMD it sends), is read; beyond 32 bits it is a PROTOCOL_ERROR', () => {
+      // Metric { name "x", datatype 7 (UInt32), long_value 257 }: the field Tahu's Java encoder fills for a Long.
+      expect(decodePayload(Buffer.from('12080a01782007588102', 'hex')).metrics[0]).to.deep.include({ name: 'x', value: 257 });
+      expect(() => decodePayload(Buffer.from('120b0a017820075880808080' + '10', 'hex')))
+        .to.throw(PlcError, /metric x: long_value 4294967296 .*UInt32/)
+        .with.property('code', 'PROTOCOL_ERROR');
+      // What we send stays in int_value, as section 6.4.16 gives it.
+      expect(encodePayload({ metrics: [{ name: 'x', datatype: DataType.UInt32, value: 257 }] }).toString('hex')).to.equal(
+        '12080a01782007508102',
+      );
+    });
+
     it('a value that does not fit its datatype is an INVALID_VALUE naming the metric', () => {
       expect(() => encodePayload({ metrics: [{ name: 'Speed', datatype: DataType.Int16, value: 40000 }] }))
         .to.throw(PlcError, /Speed.*40000.*Int16/)

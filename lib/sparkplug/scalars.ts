@@ -59,7 +59,21 @@ export function scalarValue(type: number, fields: ScalarFields, what: string): S
   const spec = INTEGER_TYPES[type];
   if (spec) {
     if (spec.bits === 64) return fromLong(need(fields, 'long_value', type, what), spec.signed);
-    return fromUint32(need(fields, 'int_value', type, what), type);
+    if (has(fields, 'int_value') || !has(fields, 'long_value')) return fromUint32(need(fields, 'int_value', type, what), type);
+    // Eclipse Tahu 1.0.21's Java encoder writes a UInt32 (its Long) into long_value, not the int_value of
+    // section 6.4.16: taken as well, when it is in the datatype's range.
+    const wide = fromLong(fields.long_value, spec.signed);
+    try {
+      return checkInteger(wide, type, what) as number;
+    } catch (err) {
+      throw new PlcError(
+        'PROTOCOL_ERROR',
+        `Sparkplug payload: ${what}: long_value ${wide} ${(err as Error).message.replace(/^.*?: /, '')}`,
+        {
+          tag: what,
+        },
+      );
+    }
   }
   switch (type) {
     case DataType.Float:
@@ -77,6 +91,11 @@ export function scalarValue(type: number, fields: ScalarFields, what: string): S
     default:
       throw new PlcError('PROTOCOL_ERROR', `Sparkplug payload: ${what}: ${dataTypeName(type)} is not a scalar datatype`, { tag: what });
   }
+}
+
+/** Whether the payload holds `field` (protobufjs keeps absent fields' defaults on the prototype, not on the message). */
+function has(fields: ScalarFields, field: keyof ScalarFields): boolean {
+  return Object.prototype.hasOwnProperty.call(fields, field) && fields[field] !== undefined && fields[field] !== null;
 }
 
 /** A field the payload holds (protobufjs keeps absent fields' defaults on the prototype, not on the message). */
