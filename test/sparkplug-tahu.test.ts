@@ -6,7 +6,9 @@
  * makes a missing peer a failure instead.
  */
 import { expect } from 'chai';
+import type { AlarmDefinition } from '../lib/alarms/model';
 import { createClient, type AnyClient } from '../lib/connect';
+import type { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
 import { SparkplugEdgeNode } from '../lib/sparkplug/edge-node';
 import { Mosquitto } from './support/mosquitto';
@@ -219,6 +221,8 @@ describe('Sparkplug B: our edge node as Eclipse Tahu 1.0.21 decodes it (test/int
       ['DB1.DBD4:DINT', 'Int32', '-123456789', -123456789],
       ['DB1.DBB8:LINT', 'Int64', '-9007199254740999', -9007199254740999n],
       ['DB1.DBB16:ULINT', 'UInt64', '18446744073709551000', 18446744073709551000n],
+      // Tahu puts a UInt32 in long_value, not int_value (lib/sparkplug/scalars.ts takes both).
+      ['DB1.DBD28:UDINT', 'UInt32', '4000000001', 4_000_000_001],
       ['DB1.DBD32:REAL', 'Float', '0.5', 0.5],
       ['DB1.DBB36:LREAL', 'Double', '-2.75', -2.75],
       ['DB1.DBX44.0', 'Boolean', 'false', false],
@@ -238,7 +242,8 @@ describe('Sparkplug B: our edge node as Eclipse Tahu 1.0.21 decodes it (test/int
       expect(read, tag).to.deep.equal(value);
       const shown = metricsOf(ddata)[tag]!.value;
       expect(shown, `${tag} in DDATA`).to.deep.equal(
-        typeof value === 'bigint' ? value.toString() : value instanceof Date ? value.getTime() : value,
+        // Tahu holds Int64, UInt32 and UInt64 as Long/BigInteger: the harness prints them as decimal strings.
+        typeof value === 'bigint' || type === 'UInt32' ? String(value) : value instanceof Date ? value.getTime() : value,
       );
     }
   });
@@ -291,5 +296,101 @@ describe('Sparkplug B: our edge node as Eclipse Tahu 1.0.21 decodes it (test/int
     expect(ndeath.bdSeq).to.equal(bdSeq);
     const errors = host.lines.filter((l) => l.error);
     expect(errors, 'nothing Tahu could not decode').to.deep.equal([]);
+  });
+});
+
+/** The PLC's alarms as Tahu decodes them (lib/sparkplug/alarms.ts): the DataSet table, the event, an acknowledgement by DCMD. */
+describe('Sparkplug B: a PLC’s alarms as Eclipse Tahu 1.0.21 decodes them', function () {
+  this.timeout(180_000);
+  const broker = new Mosquitto();
+  const HIGH: AlarmDefinition = {
+    id: 0x101,
+    kind: 'ALARM_SQ',
+    texts: { 'en-US': 'Tank level high' },
+    needsAck: true,
+    trigger: 'DB1.DBX0.0',
+    values: ['DB1.DBW2:INT'],
+  };
+  const plc = new S7Server({ port: 0, profile: 's7-400', alarms: [HIGH], layout: { dbs: { 1: 16 } } });
+  let host: TahuHost;
+  let client: AnyClient;
+  let edge: SparkplugEdgeNode;
+
+  before(async function () {
+    const missing = missingMosquitto() ?? missingTahu();
+    if (missing) {
+      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
+      skipBecause(this, missing);
+    }
+    await broker.start();
+    const port = await plc.listen();
+    client = createClient(`s7://127.0.0.1:${port}?slot=2&allow=ALARMS`);
+    client.on('error', () => undefined);
+    await client.connect();
+    host = new TahuHost(broker.url, 'TahuAlarms');
+    await host.ready();
+    edge = new SparkplugEdgeNode({
+      brokers: [broker.url],
+      group: 'Plant',
+      node: 'Edge2',
+      primaryHost: 'TahuAlarms',
+      interval: 100,
+      devices: [{ name: 'Tank', client, tags: { Level: 'DB1.DBW2:INT' }, alarms: true, writable: ['Alarms/Acknowledge'] }],
+    });
+    edge.on('error', (e) => errors.push(e.message));
+    edge.start();
+  });
+  after(async () => {
+    await edge?.stop();
+    await client?.close();
+    await host?.close();
+    await plc.close();
+    await broker.dispose();
+  });
+
+  const errors: string[] = [];
+  const metricsOf = (l: TahuLine): Record<string, TahuMetric> => Object.fromEntries(l.metrics!.map((m) => [m.name!, m]));
+
+  it('Tahu decodes the alarm metrics of the DBIRTH, an alarm’s DDATA (event and table), and its DCMD acknowledges the alarm in the CPU', async () => {
+    const dbirth = await host.waitFor((l) => l.type === 'DBIRTH' && l.device === 'Tank', 60_000);
+    expect(dbirth.error, dbirth.error).to.equal(undefined);
+    const birth = metricsOf(dbirth);
+    expect(birth['Alarms/Active']).to.deep.include({
+      datatype: 'DataSet',
+      value: {
+        columns: ['Id', 'Kind', 'Signal', 'State', 'Acknowledged', 'Priority', 'Time', 'Text'],
+        types: ['UInt32', 'String', 'UInt8', 'String', 'Boolean', 'Int32', 'DateTime', 'String'],
+        rows: [],
+      },
+    });
+    expect(birth['Alarms/Active Count']).to.include({ datatype: 'Int32', value: 0 });
+    expect(birth['Alarms/Event']).to.include({ datatype: 'String', is_null: true });
+    expect(birth['Alarms/Acknowledge']).to.include({ datatype: 'UInt32', value: '0' });
+
+    const from = host.lines.length;
+    plc.memory.writeBit('DB', 1, 0, 0, true);
+    const came = await host.waitFor((l) => l.type === 'DDATA' && l.metrics!.some((m) => m.name === 'Alarms/Event'), 20_000, from);
+    expect(came.error, came.error).to.equal(undefined);
+    const data = metricsOf(came);
+    expect(JSON.parse(data['Alarms/Event']!.value as string)).to.deep.include({ type: 'alarm', change: 'coming' });
+    const table = data['Alarms/Active']!.value as { rows: unknown[][] };
+    expect(table.rows).to.have.length(1);
+    expect(table.rows[0]!.slice(0, 6)).to.deep.equal(['257', 'ALARM_SQ', 0, 'coming', false, 0]);
+    expect(data['Alarms/Unacknowledged Count']).to.include({ value: 1 });
+
+    const before = host.lines.length;
+    await host.command('dcmd Plant Edge2 Tank Alarms/Acknowledge UInt32 257');
+    const acked = await host
+      .waitFor(
+        (l) => l.type === 'DDATA' && l.metrics!.some((m) => m.name === 'Alarms/Unacknowledged Count' && m.value === 0),
+        20_000,
+        before,
+      )
+      .catch((e: Error) => {
+        throw new Error(`${e.message}; the edge node's errors: ${errors.join('; ')}`);
+      });
+    expect(acked.error, acked.error).to.equal(undefined);
+    expect((await (client as S7Client).alarms()).find((a) => a.id === 0x101)).to.include({ acknowledged: true });
+    expect(host.lines.filter((l) => l.error)).to.deep.equal([]);
   });
 });

@@ -29,6 +29,8 @@ import org.eclipse.paho.client.mqttv3.MqttMessage;
 import org.eclipse.paho.client.mqttv3.persist.MemoryPersistence;
 import org.eclipse.tahu.message.SparkplugBPayloadDecoder;
 import org.eclipse.tahu.message.SparkplugBPayloadEncoder;
+import org.eclipse.tahu.message.model.DataSet;
+import org.eclipse.tahu.message.model.DataSetDataType;
 import org.eclipse.tahu.message.model.Metric;
 import org.eclipse.tahu.message.model.MetricDataType;
 import org.eclipse.tahu.message.model.SparkplugBPayload;
@@ -222,6 +224,20 @@ public final class TahuHost {
 
   private static String json(Object v) {
     if (v == null) return "null";
+    if (v instanceof DataSet) {
+      // A DataSet as Tahu decoded it: its column names, the types it read, and each row's cells.
+      DataSet d = (DataSet) v;
+      StringBuilder b = new StringBuilder("{\"columns\":[");
+      String sep = "";
+      for (String c : d.getColumnNames()) { b.append(sep).append(quote(c)); sep = ","; }
+      b.append("],\"types\":[");
+      sep = "";
+      for (DataSetDataType t : d.getTypes()) { b.append(sep).append(quote(String.valueOf(t))); sep = ","; }
+      b.append("],\"rows\":[");
+      sep = "";
+      for (List<Object> row : d.getRowsAsLists()) { b.append(sep).append(json(row.toArray())); sep = ","; }
+      return b.append("]}").toString();
+    }
     if (v instanceof Long || v instanceof BigInteger) return quote(v.toString());
     if (v instanceof Number || v instanceof Boolean) return v.toString();
     if (v instanceof Date) return Long.toString(((Date) v).getTime());
