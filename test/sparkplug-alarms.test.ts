@@ -286,6 +286,56 @@ describe('Sparkplug: a PLC’s alarms as metrics of its device (issue #34)', fun
       .with.property('code', 'NOT_SUPPORTED');
   });
 
+  it('store-and-forward: an alarm that came and went while the broker was down is sent after the new births as historical events, in order', async () => {
+    const own = new Mosquitto();
+    await own.start();
+    try {
+      const { server, client } = await s7400();
+      node = new SparkplugEdgeNode({
+        brokers: [own.url],
+        group: 'Plant',
+        node: 'Buffered',
+        interval: 100,
+        reconnectDelay: 100,
+        devices: [{ name: 'Tank', client, tags: { Level: 'DB1.DBW2:INT' }, alarms: true }],
+      });
+      node.on('error', () => undefined);
+      let h = new TestHost(own.url);
+      await h.connect();
+      node.start();
+      const birth = await h.nextOf('DBIRTH', 'Tank', 10000);
+      const eventAlias = Number(byName(birth, ALARM_METRICS.event)!.alias);
+      await h.close();
+      await own.stop();
+      await until(() => node!.stats.state === 'connecting', 10000, 'the session lost');
+      server.memory.writeBit('DB', 1, 0, 1, true); // the NOTIFY comes
+      server.memory.writeBit('DB', 1, 0, 1, false); // and goes
+      await until(() => node!.stats.buffered >= 2, 10000, 'both events kept');
+      await own.start();
+      h = new TestHost(own.url);
+      await h.connect();
+      try {
+        await h.nextOf('NBIRTH', undefined, 20000);
+        await h.nextOf('DBIRTH', 'Tank', 10000);
+        const history = await h.next((m) => m.parsed.type === 'DDATA' && valuesOf(m, eventAlias).length > 0, 10000, 'the kept events');
+        const events = valuesOf(history, eventAlias);
+        expect(
+          events.map((e) => [JSON.parse(e.value as string).change, JSON.parse(e.value as string).alarm.id, e.isHistorical]),
+        ).to.deep.equal([
+          ['coming', 0x102, true],
+          ['going', 0x102, true],
+        ]);
+        expect(events[0]!.timestamp!).to.be.at.most(events[1]!.timestamp!);
+      } finally {
+        await h.close();
+      }
+    } finally {
+      await node?.stop();
+      node = undefined;
+      await own.dispose();
+    }
+  });
+
   describe('S7-1500 over s7plus://: Program_Alarm with its texts', () => {
     let sim: PlusSimulator;
     const TANK: AlarmDefinition = {
