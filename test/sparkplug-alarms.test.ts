@@ -357,7 +357,11 @@ describe('Sparkplug: a PLC’s alarms as metrics of its device (issue #34)', fun
       const client = createClient(sim.url, FAST);
       open.push(client);
       await client.connect();
-      edge({ name: 'Line', client, tags: { Count: '"Tank".Count' }, alarms: { languages: ['de-DE'] } });
+      const errors: [PlcError, string | undefined][] = [];
+      edge(
+        { name: 'Line', client, tags: { Count: '"Tank".Count' }, alarms: { languages: ['de-DE'] }, writable: [ALARM_METRICS.acknowledge] },
+        errors,
+      );
       const birth = await host.nextOf('DBIRTH', 'Line', 20000);
       const tableAlias = Number(byName(birth, ALARM_METRICS.active)!.alias);
       await client.write({ '"Tank".Count': 42, '"Tank".Alarm': true });
@@ -370,6 +374,15 @@ describe('Sparkplug: a PLC’s alarms as metrics of its device (issue #34)', fun
       expect([row[0], row[1], row[3], row[4], row[5], row[7]]).to.deep.equal([7, 'Program_Alarm', 'coming', false, 5, 'Tankpegel 42 hoch']);
       const event = JSON.parse(valuesOf(data, tableAlias + 3)[0]!.value as string);
       expect(event.alarm.texts['de-DE'].text).to.equal('Tankpegel 42 hoch');
+      // A Program_Alarm cannot be acknowledged over S7CommPlus (no public layout): the DCMD is an error saying so.
+      await host.client.publishAsync(
+        'spBv1.0/Plant/DCMD/Alarms/Line',
+        encodePayload({ timestamp: Date.now(), metrics: [{ name: ALARM_METRICS.acknowledge, datatype: DataType.UInt32, value: 7 }] }),
+      );
+      await until(() => errors.length > 0, 10000, 'the refusal');
+      expect(errors[0]![1]).to.equal('Line');
+      expect(errors[0]![0].code).to.equal('NOT_SUPPORTED');
+      expect(errors[0]![0].message).to.match(/docs\/alarms\.md/);
       await client.write({ '"Tank".Alarm': false });
     });
   });
