@@ -13,22 +13,24 @@
 import { EventEmitter } from 'node:events';
 import type { AlarmEvent, AlarmSubscribeOptions, AlarmSubscription, PlcAlarm } from '../../alarms/model';
 import { PlcError, toPlcError } from '../../errors';
-import type { BackoffOptions } from '../../link/backoff';
-import { LinkSupervisor } from '../../link/supervisor';
+import type { LinkSupervisor } from '../../link/supervisor';
 import { lcidOf, toPlcAlarm } from '../codec/alarm-texts';
 import { alarmExploreBody, alarmSubscriptionObject, decodeAlarmNotification, readDai, type AlarmNotification } from '../codec/alarms';
 import { decodeExploreResponse, encodeExploreRequest, type ExploreRequest, type ExploreResponse } from '../codec/explore';
 import { FunctionCode, Ids, ProtocolVersion, serviceResultCode } from '../constants';
-import { creditTell, subscriptionCreateAsk, subscriptionDeleteAsk } from './asks';
+import { subscriptionCreateAsk, subscriptionDeleteAsk } from './asks';
+import {
+  CREDIT_LIMIT,
+  GOODBYE_MS,
+  creditRunningOut,
+  grantCredit,
+  pushedSessionSupervisor,
+  type PushedSessionWiring,
+} from './pushed-session';
 import type { Ask, S7PlusSession } from './session';
 
-/** Credits granted at creation, and added when this few remain (push.ts, s7commplus's values). */
-const CREDIT_LIMIT = 10;
-const CREDIT_STEP = 5;
-const TICKS = 255;
 /** Notifications kept while the subscription's CreateObject answer is awaited. */
 const MAX_EARLY = 10_000;
-const GOODBYE_MS = 2000;
 
 /** The Explore of the active alarms (alarm.py build_alarm_explore_request). */
 function alarmExploreAsk(): Ask<ExploreRequest, ExploreResponse> {
@@ -72,16 +74,7 @@ export async function activeAlarms(session: S7PlusSession, languages: readonly n
   return (await activeDais(session, languages, signal)).map((k) => k.alarm);
 }
 
-export interface AlarmWiring {
-  name: string;
-  timeout: number;
-  backoff?: BackoffOptions;
-  random?: () => number;
-  open(
-    signal: AbortSignal,
-    hooks: { lost(session: S7PlusSession, err: PlcError): void; notify(data: Buffer): void },
-  ): Promise<S7PlusSession>;
-}
+export type AlarmWiring = PushedSessionWiring;
 
 /** The alarms known active, by id, with the sequence counter of their last change. */
 type Known = Map<number, { alarm: PlcAlarm; sequence: number }>;
@@ -104,18 +97,7 @@ export class S7PlusAlarmSubscription extends EventEmitter implements AlarmSubscr
   ) {
     super();
     this.languages = languageIds(options.languages);
-    this.supervisor = new LinkSupervisor<S7PlusSession>({
-      name: `${wiring.name} (alarms)`,
-      connectTimeout: wiring.timeout,
-      open: (signal) =>
-        wiring.open(signal, {
-          lost: (session, err) => this.supervisor.lost(session, err),
-          notify: (data) => this.route(data),
-        }),
-      events: this,
-      ...(wiring.backoff ? { backoff: wiring.backoff } : {}),
-      ...(wiring.random ? { random: wiring.random } : {}),
-    });
+    this.supervisor = pushedSessionSupervisor(wiring, 'alarms', this, (data) => this.route(data));
     this.on('connected', () => void this.sync());
     this.on('disconnected', (err: PlcError) => this.gone(err));
     // The supervisor emits 'error' for what it cannot recover from; an application without a listener must not crash.
@@ -228,8 +210,7 @@ export class S7PlusAlarmSubscription extends EventEmitter implements AlarmSubscr
       const dai = readDai(o);
       this.apply(toPlcAlarm(dai, this.languages), dai.sequenceCounter);
     }
-    const left = (live.credit - n.creditTick + TICKS) % TICKS;
-    if (left <= CREDIT_STEP) this.grant(live);
+    if (creditRunningOut(live.credit, n.creditTick)) this.grant(live);
   }
 
   /** One alarm change: the known list updated, the event sent (once: a change the active list already showed is not sent again). */
@@ -261,9 +242,7 @@ export class S7PlusAlarmSubscription extends EventEmitter implements AlarmSubscr
 
   private grant(live: { session: S7PlusSession; id: number; credit: number }): void {
     if (!live.session.alive) return;
-    live.credit = (live.credit + CREDIT_STEP) % TICKS || CREDIT_STEP;
-    const credit = { subscriptionId: live.id, creditLimit: live.credit, v1: live.session.version === ProtocolVersion.V1 };
-    live.session.tell(creditTell(credit)).catch(() => {});
+    live.credit = grantCredit(live.session, live.id, live.credit);
   }
 
   private gone(err: PlcError): void {

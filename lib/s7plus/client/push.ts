@@ -16,41 +16,30 @@
  */
 import { EventEmitter } from 'node:events';
 import { ConnectionError, PlcError, toPlcError } from '../../errors';
-import { LinkSupervisor } from '../../link/supervisor';
-import type { BackoffOptions } from '../../link/backoff';
+import type { LinkSupervisor } from '../../link/supervisor';
 import type { SymbolTable } from '../../symbols/model';
 import type { Tag } from '../../types';
 import { type Notification, decodeNotification, subscriptionObject } from '../codec/subscription';
 import { ProtocolVersion } from '../constants';
-import { creditTell, subscriptionCreateAsk, subscriptionDeleteAsk } from './asks';
+import { subscriptionCreateAsk, subscriptionDeleteAsk } from './asks';
 import { isNamed } from './names';
+import {
+  CREDIT_LIMIT,
+  GOODBYE_MS,
+  creditRunningOut,
+  grantCredit,
+  pushedSessionSupervisor,
+  type PushedSessionWiring,
+} from './pushed-session';
 import type { S7PlusSession } from './session';
 import { S7PlusSubscription, type Plan, type SubscribeOptions, type SubscriptionChange } from './subscription';
 
-/** Credits granted at creation: what real S7-1500 CPUs accepted (s7commplus client.py create_subscription, credit_limit=10). */
-const CREDIT_LIMIT = 10;
-/** Credits added each time; renewed once this few remain, so a round trip never leaves the PLC without (subscription.py credit_step=5). */
-const CREDIT_STEP = 5;
-/** The credit tick counts modulo 255 (subscription.py SubscriptionRegistry.route). */
-const TICKS = 255;
 /** s7commplus names its first subscription object's relation 0x7FFFC001 and counts up (client.py). */
 const FIRST_RELATION_ID = 0x7fffc001;
 /** Notifications of an unknown subscription id kept for when its CreateObject answer has been read. */
 const MAX_ORPHANS = 16;
-/** The DeleteObject at the end waits this long at most. */
-const GOODBYE_MS = 2000;
-
 /** What the client gives its push link. */
-export interface PushWiring {
-  name: string;
-  timeout: number;
-  backoff?: BackoffOptions;
-  random?: () => number;
-  /** Opens a session the way the client opens its own, with these hooks for loss and notifications. */
-  open(
-    signal: AbortSignal,
-    hooks: { lost(session: S7PlusSession, err: PlcError): void; notify(data: Buffer): void },
-  ): Promise<S7PlusSession>;
+export interface PushWiring extends PushedSessionWiring {
   /** The PLC's names as a table, browsed on `session` (reads only). */
   browse(session: S7PlusSession): Promise<SymbolTable>;
   parse(address: string): Tag;
@@ -83,18 +72,7 @@ export class PushLink extends EventEmitter {
 
   constructor(private readonly wiring: PushWiring) {
     super();
-    this.supervisor = new LinkSupervisor<S7PlusSession>({
-      name: `${wiring.name} (subscriptions)`,
-      connectTimeout: wiring.timeout,
-      open: (signal) =>
-        wiring.open(signal, {
-          lost: (session, err) => this.supervisor.lost(session, err),
-          notify: (data) => this.route(data),
-        }),
-      events: this,
-      ...(wiring.backoff ? { backoff: wiring.backoff } : {}),
-      ...(wiring.random ? { random: wiring.random } : {}),
-    });
+    this.supervisor = pushedSessionSupervisor(wiring, 'subscriptions', this, (data) => this.route(data));
     this.on('connected', () => this.createAll());
     this.on('disconnected', (err: PlcError) => this.sessionGone(err));
     this.on('reconnecting', ({ error }: { error: PlcError }) => this.failFirst(error));
@@ -254,19 +232,13 @@ export class PushLink extends EventEmitter {
         throw err;
       });
     }
-    const left = (live.credit - n.creditTick + TICKS) % TICKS;
-    if (left <= CREDIT_STEP) this.grant(live);
+    if (creditRunningOut(live.credit, n.creditTick)) this.grant(live);
   }
 
   private grant(live: Live): void {
     const session = this.supervisor.session;
     if (!session?.alive) return;
-    live.credit = (live.credit + CREDIT_STEP) % TICKS || CREDIT_STEP;
-    const credit = { subscriptionId: live.id, creditLimit: live.credit, v1: session.version === ProtocolVersion.V1 };
-    session
-      .tell(creditTell(credit))
-      // Only a lost link fails it; the supervisor handles that.
-      .catch(() => {});
+    live.credit = grantCredit(session, live.id, live.credit);
   }
 
   private sessionGone(err: PlcError): void {
