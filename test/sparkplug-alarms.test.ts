@@ -396,3 +396,47 @@ async function eventually(condition: () => Promise<boolean>, what: string, ms = 
     await new Promise((r) => setTimeout(r, 50));
   }
 }
+
+describe('Sparkplug alarms: a subscription that fails on a link that stays up (lib/sparkplug/alarms.ts)', () => {
+  it('is tried again at most every 10 s from the poll, at once on a reconnect, and its error is told once, not at every try', async () => {
+    const { DeviceAlarms } = await import('../lib/sparkplug/alarms');
+    let attempts = 0;
+    // The S7 driver's alarms port calls client.subscribeAlarms: a client whose CPU does not answer the registration in time.
+    const client = {
+      protocol: 's7',
+      state: 'connected',
+      subscribeAlarms: () => {
+        attempts++;
+        return Promise.reject(new PlcError('TIMEOUT', 'no answer to the alarm registration within 2000 ms'));
+      },
+    } as unknown as PlcClient;
+    const errors: PlcError[] = [];
+    let changes = 0;
+    const alarms = new DeviceAlarms(
+      'Tank',
+      client,
+      {},
+      10,
+      () => changes++,
+      (e) => errors.push(e),
+    );
+    alarms.open();
+    await until(() => alarms.settled, 2000, 'the first attempt ended');
+    for (let i = 0; i < 5; i++) alarms.open(true); // the poll, within RETRY_MS: no new attempt
+    await new Promise((r) => setImmediate(r));
+    expect(attempts).to.equal(1);
+    alarms.open(); // the link came back: at once
+    await until(() => attempts === 2 && changes >= 2, 2000, 'the second attempt');
+    expect(errors.map((e) => [e.code, e.message])).to.deep.equal([
+      ['TIMEOUT', 'device Tank: alarms: no answer to the alarm registration within 2000 ms'],
+    ]);
+    // Born meanwhile with the alarm metrics BAD.
+    expect(
+      alarms
+        .birth()
+        .slice(0, 3)
+        .every((m) => m.isNull && m.properties?.['Quality']?.value === 0),
+    ).to.equal(true);
+    await alarms.close();
+  });
+});

@@ -71,6 +71,9 @@ export interface AlarmMetric {
 
 type Link = 'waiting' | 'up' | 'down' | 'refused';
 
+/** How long after a failed subscription attempt (on a link that stayed up) the next one waits. */
+const RETRY_MS = 10_000;
+
 interface Pending {
   value: string;
   timestamp: number;
@@ -92,6 +95,9 @@ export class DeviceAlarms {
   /** What the last report (birth or data) sent of the table and the counts, as a key. */
   private reported: string | undefined;
   private born = false;
+  /** A retry after a failed attempt waits until then; the failure's message, told once. */
+  private notBefore = 0;
+  private lastError: string | undefined;
 
   constructor(
     private readonly device: string,
@@ -124,9 +130,14 @@ export class DeviceAlarms {
     return this.tried;
   }
 
-  /** Subscribes when the client is connected and no subscription is held (the client itself renews one after a reconnect). */
-  open(): void {
+  /**
+   * Subscribes when the client is connected and no subscription is held (the client itself renews one after
+   * a reconnect). `retry`: an attempt after one that failed on a link that stayed up, at most every
+   * RETRY_MS, its error told only when it differs from the last one's.
+   */
+  open(retry = false): void {
     if (this.sub || this.opening || this.closed || this.link === 'refused' || this.client.state !== 'connected') return;
+    if (retry && Date.now() < this.notBefore) return;
     this.opening = true;
     const { mode, diagnostics, languages } = this.options;
     this.port
@@ -139,6 +150,7 @@ export class DeviceAlarms {
         if (this.closed) return void (await sub.close().catch(() => undefined));
         this.sub = sub;
         this.link = 'up';
+        this.lastError = undefined;
         sub.on('active', () => {
           this.link = 'up';
           this.onChange();
@@ -152,6 +164,9 @@ export class DeviceAlarms {
       .catch((err: unknown) => {
         const e = toPlcError(err);
         if (refusedForGood(e)) this.link = 'refused';
+        this.notBefore = Date.now() + RETRY_MS;
+        if (e.message === this.lastError) return;
+        this.lastError = e.message;
         this.onError(this.named(e));
       })
       .finally(() => {

@@ -336,7 +336,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   }
 
   private async pollDevice(device: SparkplugDevice): Promise<void> {
-    device.alarms?.open(); // again, after a subscription attempt that failed on a connected link
+    device.alarms?.open(true); // again, after a subscription attempt that failed on a link that stayed up
     if (this.pushes.get(device)?.active && this.born.has(device.name)) return;
     try {
       await device.poll();
