@@ -11,6 +11,7 @@ import { DataType } from '../lib/sparkplug/datatypes';
 import { encodePayload } from '../lib/sparkplug/payload';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { haveMosquitto, Mosquitto } from './support/mosquitto';
+import { BlackholeProxy } from './support/net';
 import { TestHost } from './support/sparkplug-host';
 import { until } from './support/wait';
 
@@ -220,6 +221,41 @@ describe('Sparkplug edge node sessions: primary host, brokers, PLC links, store-
     const stamps = history.payload!.metrics.map((m) => m.timestamp!);
     expect(stamps).to.deep.equal([...stamps].sort((x, y) => x - y));
     expect(node!.stats.buffered).to.equal(0);
+  });
+
+  it('a path to the broker that dies without a close (a cable pulled): the data sent into it is sent again as historical after the new births, nothing lost', async () => {
+    const b = await broker();
+    const proxy = new BlackholeProxy(b.port);
+    const port = await proxy.listen();
+    try {
+      const h = await host(b);
+      const n = edge([`mqtt://127.0.0.1:${port}`], { mqtt: { keepalive: 1 } });
+      await h.nextOf('DBIRTH', 'PLC1');
+      const sent: number[] = [];
+      n.on('publish', (m) => m.type === 'DDATA' && sent.push(...m.payload.metrics.map((x) => x.value as number)));
+      proxy.cut();
+      for (const level of [1, 2, 3]) {
+        memory.write('DB', 1, 0, Buffer.from([0, level]));
+        await until(() => sent.includes(level), 5000, `value ${level} published into the dead path`);
+      }
+      await until(() => n.stats.state === 'connecting', 10000, 'the keepalive timeout');
+      proxy.heal();
+      await h.nextOf('NBIRTH', undefined, 20000);
+      await h.nextOf('DBIRTH', 'PLC1');
+      const history = await h.nextOf('DDATA', 'PLC1');
+      expect(history.payload!.metrics.map((m) => [m.value, m.isHistorical])).to.deep.equal([
+        [1, true],
+        [2, true],
+        [3, true],
+      ]);
+      // The host saw none of them before: they went into the dead path.
+      const live = h.messages.filter((m) => m.parsed.type === 'DDATA' && m !== history).flatMap((m) => m.payload!.metrics);
+      expect(live.filter((m) => !m.isHistorical).map((m) => m.value)).to.deep.equal([]);
+    } finally {
+      await node?.stop();
+      node = undefined;
+      await proxy.close();
+    }
   });
 
   it('tck-id-message-flow-edge-node-birth-publish-will-message tck-id-message-flow-edge-node-birth-publish-will-message-qos tck-id-message-flow-edge-node-birth-publish-will-message-will-retained tck-id-topics-nbirth-bdseq-matching: a killed edge process leaves its Will, an NDEATH with the NBIRTH bdSeq', async () => {

@@ -22,6 +22,7 @@ import type { EdgeNodeEvents, EdgeNodeState, SparkplugEdgeNodeOptions } from './
 import { decodePayload, encodePayload } from './payload';
 import { DevicePush } from './push';
 import { ForwardStore } from './store';
+import { UnconfirmedData } from './unconfirmed';
 import { checkId, parseTopic, stateTopic, topicOf, type MessageType } from './topics';
 
 // EdgeNodeEvents' listener methods (lib/client/events.ts), merged into the class, as BaseClient does.
@@ -36,6 +37,8 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   private readonly devices: SparkplugDevice[] = [];
   private readonly bdSeqStore: BdSeqStore;
   private readonly store: ForwardStore;
+  /** DDATA the broker has not confirmed (by a PINGRESP) yet: stored again when a session ends without our DISCONNECT. */
+  private readonly unconfirmed: UnconfirmedData;
   private readonly host = new HostStateTracker();
   /** Devices born in this session. */
   private readonly born = new Set<string>();
@@ -77,6 +80,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     }
     this.bdSeqStore = new BdSeqStore(options.stateDir, this.group, this.node);
     this.store = new ForwardStore(options.buffer, `${encodeURIComponent(this.group)}.${encodeURIComponent(this.node)}`);
+    this.unconfirmed = new UnconfirmedData(options.buffer?.count ?? 10_000);
   }
   /* eslint-enable @typescript-eslint/no-unsafe-declaration-merging */
 
@@ -132,15 +136,21 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     this.client = undefined;
     this.nodeBorn = false;
     this.born.clear();
+    // The NDEATH's PUBACK confirms every data message before it; without it they are kept (on disk, with buffer.dir).
+    let confirmed = false;
     if (client) {
       if (client.connected && this.bdSeq !== undefined) {
-        await client
+        confirmed = await client
           .publishAsync(topicOf('NDEATH', this.group, this.node), encodePayload(ndeathPayload(this.bdSeq)), { qos: 1, retain: false })
-          .catch(() => undefined);
+          .then(
+            () => true,
+            () => false,
+          );
       }
       await client.endAsync().catch(() => undefined);
       client.removeAllListeners();
     }
+    for (const run of this.unconfirmed.take()) if (!confirmed) this.store.add(run.device, run.metrics);
     await Promise.all(this.devices.map((d) => d.close()));
     this.setState('stopped');
   }
@@ -161,6 +171,8 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     this.setState('connecting', url);
     const client = mqtt.connect(url, {
       connectTimeout: 5000,
+      // A PINGRESP confirms the QoS 0 data sent before it (unconfirmed.ts): every 10 s, and a dead path is seen in 15 s.
+      keepalive: 10,
       ...this.options.mqtt,
       clientId: this.options.clientId ?? `plcwire-${this.group}-${this.node}`,
       clean: true,
@@ -170,6 +182,8 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     this.client = client;
     client.on('connect', () => void this.sessionStarted(client));
     client.on('message', (topic, payload) => this.received(client, topic, payload));
+    client.on('packetsend', (p) => p.cmd === 'pingreq' && this.unconfirmed.pingSent());
+    client.on('packetreceive', (p) => p.cmd === 'pingresp' && this.unconfirmed.pingAnswered());
     client.on('error', (err) => this.report(toPlcError(err, 'CONNECT_FAILED')));
     client.on('close', () => this.sessionEnded(client));
   }
@@ -198,6 +212,8 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     client.removeAllListeners();
     client.on('error', () => undefined);
     this.client = undefined;
+    // Ended without our DISCONNECT: what the broker did not confirm is sent again after the next births.
+    for (const run of this.unconfirmed.take()) this.buffer(run.device, run.metrics);
     this.nodeBorn = false;
     this.born.clear();
     this.host.unknown();
@@ -210,6 +226,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   /** Leaves this broker for the next (the primary host is offline on it): NDEATH, then DISCONNECT (tck-id-message-flow-edge-node-birth-publish-phid-offline). */
   private leave(client: mqtt.MqttClient): void {
     if (this.nodeBorn && this.bdSeq !== undefined) this.publish('NDEATH', undefined, ndeathPayload(this.bdSeq), 1);
+    this.unconfirmed.take(); // the DISCONNECT goes after them on the same stream: the broker reads them all
     this.nodeBorn = false;
     this.born.clear();
     client.end(false, () => undefined);
@@ -314,6 +331,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     if (!client) return;
     const topic = topicOf(type, this.group, this.node, device);
     client.publish(topic, encodePayload(payload), { qos, retain: false });
+    if (type === 'DDATA') this.unconfirmed.data(device!, payload.metrics);
     this.emit('publish', { topic, type, ...(device !== undefined ? { device } : {}), payload });
   }
 

@@ -84,3 +84,48 @@ export class RequestCountingProxy {
     upstream.on('data', (chunk: Buffer) => client.write(chunk));
   }
 }
+
+/**
+ * A TCP proxy on 127.0.0.1 whose path can die without a close, as a pulled cable or a lost host does:
+ * cut() drops every byte both ways and leaves the sockets open (neither end sees a FIN or RST); heal()
+ * forwards again. A side that gives up closes its socket, and the proxy closes the other.
+ */
+export class BlackholeProxy {
+  private readonly server: net.Server;
+  private readonly sockets = new Set<net.Socket>();
+  private open = true;
+
+  constructor(private readonly target: number) {
+    this.server = net.createServer((client) => {
+      const upstream = net.connect(this.target, '127.0.0.1');
+      for (const [from, to] of [
+        [client, upstream],
+        [upstream, client],
+      ] as const) {
+        this.sockets.add(from);
+        from.on('error', () => undefined);
+        from.on('data', (chunk: Buffer) => this.open && to.write(chunk));
+        from.on('close', () => (this.sockets.delete(from), to.destroy()));
+      }
+    });
+  }
+
+  async listen(): Promise<number> {
+    this.server.listen(0, '127.0.0.1');
+    await new Promise((r) => this.server.once('listening', r));
+    return (this.server.address() as net.AddressInfo).port;
+  }
+
+  cut(): void {
+    this.open = false;
+  }
+
+  heal(): void {
+    this.open = true;
+  }
+
+  async close(): Promise<void> {
+    for (const s of this.sockets) s.destroy();
+    await new Promise((r) => this.server.close(r));
+  }
+}
