@@ -286,6 +286,41 @@ describe('Sparkplug: a PLC’s alarms as metrics of its device (issue #34)', fun
       .with.property('code', 'NOT_SUPPORTED');
   });
 
+  it('a burst of 1,000 alarms within a second: every event reaches the host once, in the CPU’s order, and the table ends with all 1,000', async () => {
+    const N = 1000;
+    const burst: AlarmDefinition[] = Array.from({ length: N }, (_, i) => ({
+      id: 0x10000 + i,
+      kind: 'ALARM_S' as const,
+      texts: {},
+      needsAck: false,
+      trigger: `DB2.DBX${i >> 3}.${i & 7}`,
+    }));
+    const server = new S7Server({ port: 0, profile: 's7-400', alarms: burst, layout: { dbs: { 1: 16, 2: N / 8 } } });
+    await server.listen();
+    open.push(server);
+    const client = createClient(`s7://127.0.0.1:${server.port}?slot=2&timeout=5000`, FAST) as S7Client;
+    open.push(client);
+    await client.connect();
+    edge({ name: 'Burst', client, tags: { Level: 'DB1.DBW2:INT' }, alarms: true });
+    const birth = await host.nextOf('DBIRTH', 'Burst', 10000);
+    const eventAlias = Number(byName(birth, ALARM_METRICS.event)!.alias);
+    const countAlias = Number(byName(birth, ALARM_METRICS.activeCount)!.alias);
+    const t0 = Date.now();
+    for (let i = 0; i < N; i++) server.memory.writeBit('DB', 2, i >> 3, i & 7, true);
+    const events = (): SparkplugMetric[] =>
+      host.messages.filter((m) => m.parsed.type === 'DDATA' && m.parsed.device === 'Burst').flatMap((m) => valuesOf(m, eventAlias));
+    await until(() => events().length >= N, 30000, `${N} events at the host`);
+    const ms = Date.now() - t0;
+    const messages = host.messages.filter((m) => m.parsed.type === 'DDATA' && m.parsed.device === 'Burst').length;
+    console.log(`      ${N} alarms raised, all ${N} events at the host after ${ms} ms, in ${messages} DDATA`);
+    expect(events().map((e) => JSON.parse(e.value as string).alarm.id - 0x10000)).to.deep.equal(Array.from({ length: N }, (_, i) => i));
+    await until(
+      () => host.messages.some((m) => m.parsed.type === 'DDATA' && valuesOf(m, countAlias).some((c) => c.value === N)),
+      10000,
+      `Active Count ${N}`,
+    );
+  });
+
   it('store-and-forward: an alarm that came and went while the broker was down is sent after the new births as historical events, in order', async () => {
     const own = new Mosquitto();
     await own.start();

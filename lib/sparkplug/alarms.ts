@@ -98,6 +98,7 @@ export class DeviceAlarms {
   /** A retry after a failed attempt waits until then; the failure's message, told once. */
   private notBefore = 0;
   private lastError: string | undefined;
+  private pendingReport: NodeJS.Immediate | undefined;
 
   constructor(
     private readonly device: string,
@@ -153,11 +154,11 @@ export class DeviceAlarms {
         this.lastError = undefined;
         sub.on('active', () => {
           this.link = 'up';
-          this.onChange();
+          this.changed();
         });
         sub.on('lost', () => {
           this.link = 'down';
-          this.onChange();
+          this.changed();
         });
         sub.on('error', (err: PlcError) => this.onError(this.named(err)));
       })
@@ -172,7 +173,7 @@ export class DeviceAlarms {
       .finally(() => {
         this.opening = false;
         this.tried = true;
-        this.onChange();
+        this.changed();
       });
   }
 
@@ -186,7 +187,19 @@ export class DeviceAlarms {
     if (e.type === 'diagnostic' && !this.options.diagnostics) return;
     const at = e.at instanceof Date && !Number.isNaN(e.at.getTime()) ? e.at.getTime() : Date.now();
     this.pending.push({ value: JSON.stringify(plainEvent(e), bigintAsNumber), timestamp: at, late: !this.born });
-    this.onChange();
+    this.changed();
+  }
+
+  /**
+   * Tells the edge node once per turn of the event loop: the events of one burst (one frame of the CPU's, or
+   * several read at once) go in one DDATA with the table as they left it, not one DDATA and table each.
+   */
+  private changed(): void {
+    if (this.pendingReport || this.closed) return;
+    this.pendingReport = setImmediate(() => {
+      this.pendingReport = undefined;
+      this.onChange();
+    });
   }
 
   /** Acknowledges alarm `id` at the PLC (its client checks the connection's guard first). */
@@ -264,6 +277,7 @@ export class DeviceAlarms {
 
   async close(): Promise<void> {
     this.closed = true;
+    if (this.pendingReport) clearImmediate(this.pendingReport);
     const sub = this.sub;
     this.sub = undefined;
     await sub?.close().catch(() => undefined);
