@@ -167,6 +167,10 @@ describe('Sparkplug B payload codec', () => {
       expect(() => decodePayload(Buffer.from('12050a0161200c', 'hex')))
         .to.throw(PlcError, /metric a.*string_value/)
         .with.property('code', 'PROTOCOL_ERROR');
+      // An Int32Array without its bytes_value (found by npm run fuzz: it was a TypeError).
+      expect(() => decodePayload(Buffer.from('12050a01782018', 'hex')))
+        .to.throw(PlcError, /metric x: a Int32Array without its bytes_value/)
+        .with.property('code', 'PROTOCOL_ERROR');
     });
   });
 

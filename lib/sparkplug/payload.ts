@@ -117,7 +117,13 @@ function decodeValue(type: number | undefined, m: Message, what: string): Metric
   if (type === undefined) return undefined;
   if (!isDataType(type)) throw new PlcError('PROTOCOL_ERROR', `Sparkplug payload: metric ${what}: unknown datatype ${type}`, { tag: what });
   if (isScalarType(type)) return type === DataType.Unknown ? undefined : scalarValue(type, m as ScalarFields, `metric ${what}`);
-  if (ARRAY_ELEMENT[type] !== undefined) return unpackArray(type, (m['bytes_value'] as Uint8Array) ?? new Uint8Array(0), what);
+  if (ARRAY_ELEMENT[type] !== undefined) {
+    if (!has(m, 'bytes_value'))
+      throw new PlcError('PROTOCOL_ERROR', `Sparkplug payload: metric ${what}: a ${dataTypeName(type)} without its bytes_value`, {
+        tag: what,
+      });
+    return unpackArray(type, m['bytes_value'] as Uint8Array, what);
+  }
   switch (type) {
     case DataType.Bytes:
     case DataType.File:

@@ -26,6 +26,7 @@ import { symbolTargets } from './symbol-targets';
 import { extraTargets } from './targets';
 import { alarmTargets } from './alarm-targets';
 import { cyclicTargets } from './cyclic-targets';
+import { sparkplugTargets } from './sparkplug-targets';
 
 const inputs = Number(process.argv[2] ?? 1_000_000);
 
@@ -132,6 +133,7 @@ const targets: FuzzTarget[] = [
   ...s7plusAlarmTargets(),
   ...alarmTargets(),
   ...cyclicTargets(),
+  ...sparkplugTargets(),
 ];
 
 const results = targets.map((t) => fuzz(t, inputs));
