@@ -150,6 +150,23 @@ describe('S7 classic alarms (userdata group 4) against the S7-300/400 simulator'
     expect(requests).to.equal(0);
   });
 
+  it('an allow-list naming ALARM257 (and an address) connects, acknowledges alarm 257 only, and still guards writes by its address', async () => {
+    // Before the fix, the write guard read ALARM257 as an address and the connect itself failed.
+    const { client, server } = await start('s7-300', '&allow=ALARM257,DB1.DBW2');
+    server.memory.writeBit('M', 0, 10, 0, true);
+    let requests = 0;
+    server.on('request', () => requests++);
+    const other = await client.acknowledge(0x200).catch((e: unknown) => e);
+    expect(other).to.be.instanceOf(PlcError).with.property('code', 'WRITE_NOT_ALLOWED');
+    expect(requests).to.equal(0);
+    await client.acknowledge(0x101);
+    expect((await client.alarms()).find((a) => a.id === 0x101)).to.include({ acknowledged: true });
+    await client.write({ 'DB1.DBW2:INT': 5 });
+    const write = await client.write({ 'DB1.DBW4:INT': 5 }).catch((e: unknown) => e);
+    expect((write as Error).message).to.match(/DB1\.DBW4.*not in the connection's write allow-list \(ALARM257, DB1\.DBW2\)/);
+    expect(server.memory.read('DB', 1, 4, 2).readInt16BE(0)).to.equal(0);
+  });
+
   for (const profile of ['s7-1500', 's7-1200', 's7-200', 'logo'] as const) {
     it(`an ${profile} refuses the classic alarm services as its CPU does, the error pointing at s7plus://`, async () => {
       const { client } = await start(profile);

@@ -15,14 +15,24 @@ export function ackRefusal(id: number, readOnly: boolean | undefined, allow: rea
   }
   if (!allow || allow.length === 0) return undefined;
   for (const entry of allow) {
-    const e = entry.trim().toUpperCase();
-    if (e === 'ALARMS') return undefined;
-    const m = /^ALARM(?:16#([0-9A-F]+)|(\d+))$/.exec(e);
-    if (m && (m[1] !== undefined ? parseInt(m[1], 16) : Number(m[2])) === id) return undefined;
+    const allowed = alarmEntry(entry);
+    if (allowed === 'all' || allowed === id) return undefined;
   }
   return new PlcError(
     'WRITE_NOT_ALLOWED',
     `acknowledge of ${name} refused: the connection's write allow-list (${allow.join(', ')}) names neither ALARMS nor ALARM${id}`,
     { tag: `ALARM${id}` },
   );
+}
+
+/**
+ * What an allow-list entry says of alarms: `'all'` (ALARMS), one alarm id
+ * (ALARM<id>), or undefined when it names an address or an area — which the
+ * write guard (lib/client/write-guard.ts) then reads as one.
+ */
+export function alarmEntry(entry: string): 'all' | number | undefined {
+  const e = entry.trim().toUpperCase();
+  if (e === 'ALARMS') return 'all';
+  const m = /^ALARM(?:16#([0-9A-F]+)|(\d+))$/.exec(e);
+  return m ? (m[1] !== undefined ? parseInt(m[1], 16) : Number(m[2])) : undefined;
 }

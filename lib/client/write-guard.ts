@@ -1,4 +1,5 @@
 /** The write safety of a client: a read-only connection, and the write allow-list. */
+import { alarmEntry } from '../alarms/ack-guard';
 import { PlcError } from '../errors';
 import type { DriverTag, TagSyntax } from '../link/driver';
 
@@ -47,6 +48,7 @@ export class WriteGuard<T extends DriverTag> {
     const tags: T[] = [];
     const syntax = this.syntax();
     for (const entry of entries) {
+      if (alarmEntry(entry) !== undefined) continue; // ALARMS, ALARM<id>: acknowledgements (lib/alarms/ack-guard.ts), not writes
       const area = syntax.allowArea(entry.trim().toUpperCase().replace(/^%/, ''));
       if (area !== undefined) areas.add(area);
       else tags.push(this.tag(entry));
