@@ -185,7 +185,8 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
    * --buffer-dir across a restart: a first run keeps a change on disk while the broker is away and ends; a second
    * run with the same directory forwards it as historical DDATA after its births. `brokerFirst`: the broker is back
    * before the second run starts (its session may come before the PLC's first read); else it comes back once the
-   * second run has its PLC.
+   * second run has its PLC, and the second run waits for a primary host's STATE, which this test publishes once it
+   * listens (so it hears the births however slow the broker's start).
    */
   async function bufferAcrossRestart(brokerFirst: boolean): Promise<void> {
     const bufferDir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-spb-buffer-'));
@@ -214,15 +215,21 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
       // A new process with the same directory, and the broker back: births, then what the first run kept.
       if (brokerFirst) await broker.start();
       const secondAt = Date.now();
-      const second = edge('--buffer-dir', bufferDir);
+      const second = edge('--buffer-dir', bufferDir, ...(brokerFirst ? [] : ['--primary-host', 'Historian']));
       if (!brokerFirst) {
-        // Its PLC is up, and an attempt to reach the broker has just failed: the next comes a reconnect delay (1 s) later,
-        // time for the broker and the listener to be there before its births.
+        // Its PLC is up and read while the broker is away; then the broker, this host, and its STATE online.
         await second.errMatches(/Line1: connected to [^\n]*\n(?:.*\n)*plcwire: connecting to /);
         await broker.start();
       }
       listener = new SparkplugListener(broker.url);
       await listener.ready();
+      if (!brokerFirst) {
+        await second.errMatches(/waiting for the primary host Historian/);
+        await listener.publish('spBv1.0/STATE/Historian', JSON.stringify({ online: true, timestamp: Date.now() }), {
+          qos: 1,
+          retain: true,
+        });
+      }
       const dbirth = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Line1', 30_000);
       const historical = await listener.waitFor(
         (m) => m.type === 'DDATA' && m.device === 'Line1' && m.payload!.metrics.some((x) => x.isHistorical === true),
@@ -233,11 +240,13 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
       const value = historical.payload!.metrics.find((x) => x.alias === alias && x.value === 4321)!;
       expect(value, 'the kept change, by the alias of its birth').to.not.equal(undefined);
       expect(value.isHistorical).to.equal(true);
-      expect(Number(value.timestamp)).to.be.within(changedAt, secondAt);
+      // Its own time, from the first run: the poll that read it (stamped when the poll started, so up to a poll before the change).
+      expect(Number(value.timestamp)).to.be.within(changedAt - 1000, secondAt);
       // Forwarded once: the file is emptied, a third run would send nothing again.
       expect(fs.readFileSync(kept, 'utf8')).to.equal('');
       second.child.kill('SIGINT');
       expect(await second.exit).to.equal(EXIT.INTERRUPTED);
+      await listener.publish('spBv1.0/STATE/Historian', '', { qos: 1, retain: true });
     } finally {
       fs.rmSync(bufferDir, { recursive: true, force: true });
     }
