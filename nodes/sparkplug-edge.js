@@ -3,7 +3,8 @@ const { SparkplugEdgeHub } = require('..');
 
 /**
  * plcwire-sparkplug-edge (config node): one Sparkplug B edge node (brokers,
- * group, node id, primary host, state directory, store-and-forward bound).
+ * group, node id, primary host, state directory, store-and-forward bound
+ * and the directory it keeps its values in).
  * The plcwire-sparkplug-device nodes add their PLCs to it; the edge node
  * starts once the flows have started and sends NDEATH when they stop.
  * The logic is lib/flows/sparkplug-edge.ts.
@@ -21,6 +22,7 @@ module.exports = function (RED) {
         primaryHost: config.primaryHost,
         stateDir: config.stateDir,
         buffer: config.buffer,
+        bufferDir: config.bufferDir,
         interval: config.interval,
         username: creds.username,
         password: creds.password,

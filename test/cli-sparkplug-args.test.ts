@@ -1,7 +1,11 @@
 /** `plcwire sparkplug`'s command line: what it takes and the usage error each mistake gets (lib/cli/sparkplug-args.ts). */
 import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as os from 'node:os';
+import * as path from 'node:path';
 import { parseArgs, UsageError } from '../lib/cli/args';
 import { SPARKPLUG_FLAGS, sparkplugOptions } from '../lib/cli/sparkplug-args';
+import { skipBecause } from './support/skip';
 
 const parse = (...argv: string[]) => sparkplugOptions(parseArgs(argv, [...SPARKPLUG_FLAGS, 'interval', 'symbols', 'db'], []));
 const BASE = ['--broker', 'mqtt://127.0.0.1:1883', '--group', 'Plant', '--node', 'Edge1', '--device', 'Line1=s7://127.0.0.1:10102'];
@@ -62,6 +66,73 @@ describe('plcwire sparkplug: the command line', () => {
     usage([...BASE, '--tags', 'Line1:MW4', '--writable', 'Line1:MW6'], /--writable Line1:MW6: "MW6" is not one of the device's --tags/);
     usage([...BASE, '--interval', '5'], /--interval must be between 10 and 3600000/);
     usage([...BASE, '--primary-host', 'A+B'], /--primary-host "A\+B"/);
+  });
+
+  it("--alarms NAME publishes that device's alarms; --writable NAME:Alarms/Acknowledge stays whole and lets a host acknowledge", () => {
+    const o = parse(
+      ...BASE,
+      '--device',
+      'Line2=s7plus://127.0.0.1:10103?insecure=true',
+      '--device',
+      'Line3=s7://127.0.0.1:10104',
+      '--tags',
+      'Line1:MW4',
+      '--alarms',
+      'Line1',
+      '--alarms',
+      'Line2',
+      '--writable',
+      'Line1:MW4,Alarms/Acknowledge',
+      '--writable',
+      'Line2:Alarms/Acknowledge',
+    );
+    expect(o.devices.map((d) => [d.name, d.alarms, d.writable])).to.deep.equal([
+      ['Line1', true, ['MW4', 'Alarms/Acknowledge']],
+      ['Line2', true, ['Alarms/Acknowledge']],
+      ['Line3', false, []],
+    ]);
+    expect(o.devices[0]!.tags).to.deep.equal(['MW4']);
+  });
+
+  it('refuses --alarms for an unknown device, or one whose protocol reports no alarms, and an acknowledge without --alarms', () => {
+    usage([...BASE, '--alarms', 'Line9'], /^--alarms "Line9": no --device Line9=<url> \(devices: Line1\)$/);
+    usage(
+      [...BASE, '--device', 'CP=fetchwrite://127.0.0.1?fetchPort=2000&writePort=2001', '--alarms', 'CP'],
+      /^--alarms CP: its PLC is reached over fetchwrite:\/\/, which reports no alarms \(s7:\/\/ or s7plus:\/\/ do\)$/,
+    );
+    usage(
+      [...BASE, '--device', 'S200=freeport+tcp://127.0.0.1:4001', '--alarms', 'S200'],
+      /^--alarms S200: .*freeport:\/\/, which reports no alarms/,
+    );
+    usage(
+      [...BASE, '--writable', 'Line1:Alarms/Acknowledge'],
+      /^--writable Line1:Alarms\/Acknowledge: the device publishes no alarms; give --alarms Line1 as well$/,
+    );
+  });
+
+  describe('--buffer-dir', () => {
+    let dir = '';
+    before(() => (dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-spb-args-'))));
+    after(() => fs.rmSync(dir, { recursive: true, force: true }));
+
+    it('takes a directory this process may write', () => {
+      expect(parse(...BASE, '--buffer-dir', dir).bufferDir).to.equal(dir);
+      expect(parse(...BASE).bufferDir).to.equal(undefined);
+    });
+
+    it('refuses a missing directory and a file', () => {
+      usage([...BASE, '--buffer-dir', path.join(dir, 'nope')], /^--buffer-dir ".*nope": no such directory$/);
+      const file = path.join(dir, 'file');
+      fs.writeFileSync(file, '');
+      usage([...BASE, '--buffer-dir', file], /^--buffer-dir ".*file": not a directory$/);
+    });
+
+    it('refuses a directory this process may not write', function () {
+      if (process.getuid?.() === 0) skipBecause(this, 'running as root, which writes to any directory whatever its mode');
+      const locked = path.join(dir, 'locked');
+      fs.mkdirSync(locked, { mode: 0o500 });
+      usage([...BASE, '--buffer-dir', locked], /^--buffer-dir ".*locked": this process may not write there$/);
+    });
   });
 
   it('refuses a PLC URL it cannot read with the URL error', () => {

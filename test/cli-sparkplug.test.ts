@@ -11,22 +11,50 @@ import { once } from 'node:events';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
+import type { AlarmDefinition } from '../lib/alarms/model';
 import { EXIT } from '../lib/cli/io';
+import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
 import { DataType } from '../lib/sparkplug/datatypes';
+import type { DataSet } from '../lib/sparkplug/model';
+import { parseUrl, type S7Endpoint } from '../lib/url';
 import { Mosquitto } from './support/mosquitto';
 import { missingMosquitto, sparkplugRequired } from './support/sparkplug-peers';
 import { skipBecause } from './support/skip';
-import { SparkplugListener } from './support/sparkplug-listener';
+import { SparkplugListener, type HeardMessage } from './support/sparkplug-listener';
+import { until } from './support/wait';
 
 const BIN = path.resolve(__dirname, '../../bin/plcwire.js');
 
-function run(args: string[]): { child: ChildProcess; err: () => string; exit: Promise<number | null> } {
+interface Run {
+  child: ChildProcess;
+  err: () => string;
+  /** Resolves when stderr matches `re`, rejects after `ms` with what stderr said. */
+  errMatches: (re: RegExp, ms?: number) => Promise<void>;
+  exit: Promise<number | null>;
+}
+
+function run(args: string[]): Run {
   const child = spawn(process.execPath, [BIN, ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
   let err = '';
   child.stdout!.resume();
   child.stderr!.on('data', (d: Buffer) => (err += d.toString()));
-  return { child, err: () => err, exit: once(child, 'exit').then(([code]) => code as number | null) };
+  const errMatches = (re: RegExp, ms = 20_000): Promise<void> =>
+    new Promise((resolve, reject) => {
+      const check = (): void => {
+        if (!re.test(err)) return;
+        clearTimeout(timer);
+        child.stderr!.off('data', check);
+        resolve();
+      };
+      const timer = setTimeout(() => {
+        child.stderr!.off('data', check);
+        reject(new Error(`stderr did not match ${re} within ${ms} ms:\n${err}`));
+      }, ms);
+      child.stderr!.on('data', check);
+      check();
+    });
+  return { child, err: () => err, errMatches, exit: once(child, 'exit').then(([code]) => code as number | null) };
 }
 
 describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', function () {
@@ -153,6 +181,226 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
     await listener.publish('spBv1.0/STATE/SCADA', '', { qos: 1, retain: true });
   });
 
+  /**
+   * --buffer-dir across a restart: a first run keeps a change on disk while the broker is away and ends; a second
+   * run with the same directory forwards it as historical DDATA after its births. `brokerFirst`: the broker is back
+   * before the second run starts (its session may come before the PLC's first read); else it comes back once the
+   * second run has its PLC, and the second run waits for a primary host's STATE, which this test publishes once it
+   * listens (so it hears the births however slow the broker's start).
+   */
+  async function bufferAcrossRestart(brokerFirst: boolean): Promise<void> {
+    const bufferDir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-spb-buffer-'));
+    const kept = path.join(bufferDir, 'Plant.Edge1.buffer.ndjson');
+    try {
+      const db = server.memory.area('DB', 1)!;
+      db.writeInt16BE(100, 0);
+      listener = new SparkplugListener(broker.url);
+      await listener.ready();
+      const first = edge('--buffer-dir', bufferDir);
+      const birth = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Line1', 30_000);
+      const alias = birth.payload!.metrics.find((m) => m.name === 'DB1.DBW0:INT')!.alias;
+      await listener.close();
+      listener = undefined;
+
+      // The broker goes away; the edge node sees its session end, and keeps the change it reads meanwhile on disk.
+      await broker.stop();
+      await first.errMatches(/online on [^\n]*\n(?:.*\n)*plcwire: connecting to /);
+      const changedAt = Date.now();
+      db.writeInt16BE(4321, 0);
+      await until(() => fs.existsSync(kept) && fs.readFileSync(kept, 'utf8').split('\n').length > 1, 20_000, 'the change kept on disk');
+      first.child.kill('SIGINT');
+      expect(await first.exit).to.equal(EXIT.INTERRUPTED);
+      expect(fs.readFileSync(kept, 'utf8'), 'still kept after the process ended').to.match(/"device":"Line1"/);
+
+      // A new process with the same directory, and the broker back: births, then what the first run kept.
+      if (brokerFirst) await broker.start();
+      const secondAt = Date.now();
+      const second = edge('--buffer-dir', bufferDir, ...(brokerFirst ? [] : ['--primary-host', 'Historian']));
+      if (!brokerFirst) {
+        // Its PLC is up and read while the broker is away; then the broker, this host, and its STATE online.
+        await second.errMatches(/Line1: connected to [^\n]*\n(?:.*\n)*plcwire: connecting to /);
+        await broker.start();
+      }
+      listener = new SparkplugListener(broker.url);
+      await listener.ready();
+      if (!brokerFirst) {
+        await second.errMatches(/waiting for the primary host Historian/);
+        await listener.publish('spBv1.0/STATE/Historian', JSON.stringify({ online: true, timestamp: Date.now() }), {
+          qos: 1,
+          retain: true,
+        });
+      }
+      const dbirth = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Line1', 30_000);
+      const historical = await listener.waitFor(
+        (m) => m.type === 'DDATA' && m.device === 'Line1' && m.payload!.metrics.some((x) => x.isHistorical === true),
+        20_000,
+        listener.heard.indexOf(dbirth),
+        'a historical DDATA after the DBIRTH',
+      );
+      const value = historical.payload!.metrics.find((x) => x.alias === alias && x.value === 4321)!;
+      expect(value, 'the kept change, by the alias of its birth').to.not.equal(undefined);
+      expect(value.isHistorical).to.equal(true);
+      // Its own time, from the first run: the poll that read it (stamped when the poll started, so up to a poll before the change).
+      expect(Number(value.timestamp)).to.be.within(changedAt - 1000, secondAt);
+      // Forwarded once: the file is emptied, a third run would send nothing again.
+      expect(fs.readFileSync(kept, 'utf8')).to.equal('');
+      second.child.kill('SIGINT');
+      expect(await second.exit).to.equal(EXIT.INTERRUPTED);
+      await listener.publish('spBv1.0/STATE/Historian', '', { qos: 1, retain: true });
+    } finally {
+      fs.rmSync(bufferDir, { recursive: true, force: true });
+    }
+  }
+
+  it('--buffer-dir: a value one run kept while the broker was away, the next run forwards as historical after its births', async () => {
+    await bufferAcrossRestart(false);
+  });
+
+  it('--buffer-dir: the same when the broker is back before the next run has read its PLC', async function () {
+    skipBecause(
+      this,
+      'lib/sparkplug/edge-node.ts forwards kept values only at NBIRTH: a device born later in the session (its first read after the NBIRTH) keeps them until the next session',
+    );
+    await bufferAcrossRestart(true);
+  });
+
+  describe('--alarms: an S7-300 simulator raising an ALARM_SQ', () => {
+    const TANK_HIGH: AlarmDefinition = {
+      id: 257,
+      kind: 'ALARM_SQ',
+      texts: { 'en-US': 'Tank high' },
+      needsAck: true,
+      trigger: 'M10.0',
+      values: ['MW20:INT'],
+    };
+    const classic = new S7Server({ port: 0, profile: 's7-300', alarms: [TANK_HIGH] });
+    let url = '';
+    let operator: S7Client | undefined;
+    before(async () => {
+      url = `s7://127.0.0.1:${await classic.listen()}?rack=0&slot=2`;
+      operator = new S7Client(parseUrl(`${url}&timeout=3000`) as S7Endpoint);
+      await operator.connect();
+    });
+    after(async () => {
+      await operator?.close();
+      await classic.close();
+    });
+
+    const aliases = (birth: HeardMessage) => new Map(birth.payload!.metrics.map((m) => [m.alias, m.name]));
+    /** The message's metrics by name (DDATA carries aliases: the birth names them). */
+    const named = (m: HeardMessage, names: Map<number | bigint | undefined, string | undefined>) =>
+      Object.fromEntries(m.payload!.metrics.map((x) => [x.name ?? names.get(x.alias), x]));
+
+    it('births the five Alarms metrics, reports a coming alarm as Event and Active, acknowledges by DCMD where allowed and not read-only', async () => {
+      listener = new SparkplugListener(broker.url);
+      await listener.ready();
+      const r = run([
+        'sparkplug',
+        '--broker',
+        broker.url,
+        '--group',
+        'Plant',
+        '--node',
+        'Alarms1',
+        '--device',
+        `Line1=${url}&allow=ALARMS`,
+        '--device',
+        `Line2=${url}&readOnly=true`,
+        '--tags',
+        'Line1:MW20:INT',
+        '--tags',
+        'Line2:MW20:INT',
+        '--alarms',
+        'Line1',
+        '--alarms',
+        'Line2',
+        '--writable',
+        'Line1:Alarms/Acknowledge',
+        '--writable',
+        'Line2:Alarms/Acknowledge',
+        '--interval',
+        '50',
+      ]);
+      children.push(r.child);
+      const births = {
+        Line1: await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Line1', 30_000),
+        Line2: await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Line2', 30_000),
+      };
+      const born = named(births.Line1, new Map());
+      expect(Object.keys(born)).to.include.members([
+        'Alarms/Active',
+        'Alarms/Active Count',
+        'Alarms/Unacknowledged Count',
+        'Alarms/Event',
+        'Alarms/Acknowledge',
+      ]);
+      expect(born['Alarms/Active']).to.include({ datatype: DataType.DataSet });
+      expect((born['Alarms/Active']!.value as DataSet).rows).to.deep.equal([]);
+      expect(born['Alarms/Active Count']).to.include({ datatype: DataType.Int32, value: 0 });
+      expect(born['Alarms/Acknowledge']).to.include({ datatype: DataType.UInt32 });
+
+      // The trigger bit goes TRUE: the CPU pushes the coming ALARM_SQ.
+      const from = listener.heard.length;
+      classic.memory.write('M', 0, 20, Buffer.of(0x00, 0x58));
+      classic.memory.writeBit('M', 0, 10, 0, true);
+      const line1 = aliases(births.Line1);
+      const coming = await listener.waitFor(
+        (m) => m.type === 'DDATA' && m.device === 'Line1' && named(m, line1)['Alarms/Event'] !== undefined,
+        20_000,
+        from,
+        'a DDATA with Alarms/Event',
+      );
+      const data = named(coming, line1);
+      const event = JSON.parse(data['Alarms/Event']!.value as string);
+      expect(event).to.deep.include({ type: 'alarm', change: 'coming' });
+      expect(event.alarm).to.include({ id: 257, kind: 'ALARM_SQ', state: 'coming', needsAck: true, acknowledged: false });
+      expect(event.alarm.values).to.deep.equal([{ type: 'INT', value: 88 }]);
+      const table = data['Alarms/Active']!.value as DataSet;
+      expect(table.rows).to.have.length(1);
+      const row = Object.fromEntries(table.columns.map((c, i) => [c, table.rows[0]![i]]));
+      expect(row).to.include({ Id: 257, Kind: 'ALARM_SQ', State: 'coming', Acknowledged: false });
+      expect(data['Alarms/Unacknowledged Count']).to.include({ value: 1 });
+
+      // Acknowledged through the read-only connection: refused before the PLC, one line, the alarm still waits.
+      await listener.publish('spBv1.0/Plant/DCMD/Alarms1/Line2', {
+        timestamp: Date.now(),
+        metrics: [{ name: 'Alarms/Acknowledge', datatype: DataType.UInt32, value: 257 }],
+      });
+      await r.errMatches(/Line2: Alarms\/Acknowledge 257: .*read-only/);
+      expect(
+        r
+          .err()
+          .split('\n')
+          .filter((l) => /Alarms\/Acknowledge 257/.test(l)),
+      ).to.have.length(1);
+      expect((await operator!.alarms()).map((a) => [a.id, a.acknowledged])).to.deep.equal([[257, false]]);
+
+      // Through the connection whose allow-list names ALARMS: the CPU acknowledges it, the next DDATA says so.
+      const beforeAck = listener.heard.length;
+      await listener.publish('spBv1.0/Plant/DCMD/Alarms1/Line1', {
+        timestamp: Date.now(),
+        metrics: [{ name: 'Alarms/Acknowledge', datatype: DataType.UInt32, value: 257 }],
+      });
+      const acked = await listener.waitFor(
+        (m) => {
+          if (m.type !== 'DDATA' || m.device !== 'Line1') return false;
+          const t = named(m, line1)['Alarms/Active']?.value as DataSet | undefined;
+          return t?.rows[0]?.[t.columns.indexOf('Acknowledged')] === true;
+        },
+        20_000,
+        beforeAck,
+        'a DDATA whose Alarms/Active shows Acknowledged true',
+      );
+      expect(named(acked, line1)['Alarms/Unacknowledged Count']).to.include({ value: 0 });
+      expect((await operator!.alarms()).map((a) => [a.id, a.acknowledged])).to.deep.equal([[257, true]]);
+      await r.errMatches(/Line1: DCMD acknowledged alarm 257/);
+
+      classic.memory.writeBit('M', 0, 10, 0, false);
+      r.child.kill('SIGINT');
+      expect(await r.exit).to.equal(EXIT.INTERRUPTED);
+    });
+  });
+
   it('refuses a bad command line with exit code 2 and one line, before anything connects', async () => {
     const r = run(['sparkplug', '--broker', broker.url, '--group', 'Plant', '--node', 'Edge/1', '--device', `Line1=${plc}`]);
     children.push(r.child);
@@ -162,6 +410,28 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
     children.push(t.child);
     expect(await t.exit).to.equal(EXIT.USAGE);
     expect(t.err()).to.match(/--device Line1: give its tags with --tags Line1:<tag>/);
+    // A device whose protocol has no alarms, a buffer directory that is not there: one line each, no connection made.
+    const before = server.connectionCount;
+    const cp = run(
+      [...['sparkplug', '--broker', broker.url, '--group', 'Plant', '--node', 'E'], ...['--device', `Line1=${plc}`]]
+        .concat(['--device', 'CP=fetchwrite://127.0.0.1?fetchPort=1&writePort=2', '--tags', 'Line1:MW0', '--tags', 'CP:DB1,INT0'])
+        .concat(['--alarms', 'CP']),
+    );
+    children.push(cp.child);
+    expect(await cp.exit).to.equal(EXIT.USAGE);
+    expect(cp.err()).to.equal(
+      'plcwire: --alarms CP: its PLC is reached over fetchwrite://, which reports no alarms (s7:// or s7plus:// do) (plcwire --help)\n',
+    );
+    const dir = run(
+      ['sparkplug', '--broker', broker.url, '--group', 'Plant', '--node', 'E', '--device', `Line1=${plc}`, '--tags', 'Line1:MW0'].concat([
+        '--buffer-dir',
+        path.join(stateDir, 'no-such-dir'),
+      ]),
+    );
+    children.push(dir.child);
+    expect(await dir.exit).to.equal(EXIT.USAGE);
+    expect(dir.err()).to.match(/^plcwire: --buffer-dir ".*no-such-dir": no such directory \(plcwire --help\)\n$/);
+    expect(server.connectionCount).to.equal(before);
   });
 
   it('prints its help', async () => {
@@ -171,5 +441,8 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
     expect(await r.exit).to.equal(EXIT.OK);
     expect(out).to.match(/^usage: plcwire sparkplug --broker/);
     expect(out).to.match(/--writable NAME:t/);
+    expect(out).to.match(/--alarms NAME +the device's PLC's alarms as its metrics Alarms\/Active/);
+    expect(out).to.match(/NAME:Alarms\/Acknowledge lets a host acknowledge/);
+    expect(out).to.match(/--buffer-dir DIR +keep them on disk in DIR too/);
   });
 });

@@ -11,14 +11,18 @@
  * on the runtime's comms socket. The MQTT gateway example gets a broker
  * (aedes, as Mosquitto would be on 127.0.0.1:1883): a subscriber receives
  * the plant's values from it, and a guarded write through it starts and stops
- * the plant's motor. Only the ports change: the test's plant listens on free
+ * the plant's motor. In the Sparkplug example a host sees the S7-300's alarms:
+ * the tank's high level as Alarms/Event, and its DCMD acknowledgement. Only the ports change: the test's plant listens on free
  * ports instead of 10102, 12000/12001 and 14001, the broker instead of 1883.
  */
 import { expect } from 'chai';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
+import { DataType } from '../lib/sparkplug/datatypes';
+import type { DataSet } from '../lib/sparkplug/model';
 import { TestBroker } from './support/mqtt-broker';
 import { freePort } from './support/net';
+import { SparkplugListener, type HeardMessage } from './support/sparkplug-listener';
 
 const ROOT = path.resolve(__dirname, '../..');
 /** Node-RED's own WebSocket library (the editor's comms use it), from Node-RED's dependencies. */
@@ -295,6 +299,59 @@ describe('examples: each imported into the running `npm start` demo and deployed
   }
 
   /**
+   * The Sparkplug example (issue #34): the S7-300 device publishes its PLC's alarms, the S7-1200's (PUT/GET) does not; a
+   * host sees the tank's high level come as Alarms/Event and a row of Alarms/Active, and acknowledges it with DCMD.
+   */
+  async function sparkplugAlarms(): Promise<void> {
+    const listener = new SparkplugListener(broker.url);
+    try {
+      await listener.ready();
+      // The births went out before this host subscribed: it asks for them again, as a host does.
+      await listener.publish('spBv1.0/Plant/NCMD/Edge1', {
+        timestamp: Date.now(),
+        metrics: [{ name: 'Node Control/Rebirth', datatype: DataType.Boolean, value: true }],
+      });
+      const birth = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'S7-300', 20_000, 0, "the S7-300's DBIRTH");
+      const tank = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Tank', 20_000, 0, "the Tank's DBIRTH");
+      expect(birth.payload!.metrics.map((m) => m.name)).to.include.members([
+        'Level',
+        'Alarms/Active',
+        'Alarms/Event',
+        'Alarms/Acknowledge',
+      ]);
+      expect(tank.payload!.metrics.filter((m) => m.name?.startsWith('Alarms/'))).to.deep.equal([]);
+      const names = new Map(birth.payload!.metrics.map((m) => [m.alias, m.name]));
+      const named = (m: HeardMessage) => m.payload!.metrics.map((x) => ({ ...x, name: x.name ?? names.get(x.alias) }));
+
+      // A fresh coming, as classicAlarms makes one: the level well below the limit, then above it.
+      const flag = () => (demo.plant.memory.area('M')[10] & 1) !== 0;
+      demo.plant.memory.area('DB', 1).writeFloatBE(50, 0);
+      await eventually(async () => expect(flag(), 'M10.0 cleared').to.equal(false), 10_000, 'the high-level flag cleared');
+      const from = listener.heard.length;
+      demo.plant.memory.area('DB', 1).writeFloatBE(89, 0);
+      const coming = (m: HeardMessage) =>
+        m.type === 'DDATA' &&
+        m.device === 'S7-300' &&
+        named(m).some((x) => x.name === 'Alarms/Event' && /"change":"coming"/.test(String(x.value)) && /"id":257\b/.test(String(x.value)));
+      await listener.waitFor(coming, 20_000, from, 'DDATA Alarms/Event: alarm 257 coming');
+
+      const beforeAck = listener.heard.length;
+      await listener.publish('spBv1.0/Plant/DCMD/Edge1/S7-300', {
+        timestamp: Date.now(),
+        metrics: [{ name: 'Alarms/Acknowledge', datatype: DataType.UInt32, value: 257 }],
+      });
+      const acknowledged = (m: HeardMessage) => {
+        if (m.type !== 'DDATA' || m.device !== 'S7-300') return false;
+        const t = named(m).find((x) => x.name === 'Alarms/Active')?.value as DataSet | undefined;
+        return !!t?.rows.some((r) => r[t.columns.indexOf('Id')] === 257 && r[t.columns.indexOf('Acknowledged')] === true);
+      };
+      await listener.waitFor(acknowledged, 20_000, beforeAck, 'DDATA Alarms/Active: alarm 257 acknowledged');
+    } finally {
+      await listener.close();
+    }
+  }
+
+  /**
    * A node whose link is up: green, or a yellow dot; an alarms node's counts are up in every colour (a red dot
    * "1/1 unacked" is an alarm waiting for an operator, not a link down).
    */
@@ -336,6 +393,7 @@ describe('examples: each imported into the running `npm start` demo and deployed
       if (f === MQTT_EXAMPLE) await mqttGateway();
       if (f === S7PLUS_EXAMPLE) await optimizedByName();
       if (f === 'S7-300 alarms - events, acknowledge.json') await classicAlarms();
+      if (f === 'Sparkplug B - each PLC a device.json') await sparkplugAlarms();
       if (f === 'S7 PLC control.json') {
         await api(demo.editor, 'POST', 'inject/ctlex.inject.state');
         await eventually(

@@ -136,6 +136,26 @@ describe('editor in Chromium: the S7CommPlus dialogs, whole at 1024x700 and 1600
         deadband: 0,
         tags: [{ name: 'count', address: 'DB1.DBW4:INT' }],
       },
+      // A Sparkplug device without its alarms (issue #34); its edge node's broker is never reached, which the dialogs don't need.
+      {
+        id: 'spb-edge',
+        type: 'plcwire-sparkplug-edge',
+        brokers: 'mqtt://127.0.0.1:1',
+        group: 'Plant',
+        nodeId: 'Edge1',
+        interval: 1000,
+        buffer: 10000,
+      },
+      {
+        id: 'spb-device',
+        type: 'plcwire-sparkplug-device',
+        ...at(200),
+        edge: 'spb-edge',
+        connection: 'classic',
+        device: 'Press',
+        tags: [{ name: 'count', address: 'DB1.DBW4:INT' }],
+        writable: '',
+      },
     ]);
     browser = await launchChromium();
   });
@@ -239,6 +259,72 @@ describe('editor in Chromium: the S7CommPlus dialogs, whole at 1024x700 and 1600
         await opened('read-classic');
         expect(await cutOff(page, [...parts, '#node-input-interval', '#node-input-output']), `${locale} s7://`).to.deep.equal([]);
         await closed(page, '#node-dialog-cancel');
+        expect(errors.map((e) => e.message)).to.deep.equal([]);
+      } finally {
+        await context.close();
+      }
+    }
+  });
+
+  it('the sparkplug device dialog: its two alarm boxes whole in each language, "hosts may acknowledge" only with "publish the PLC\'s alarms", both saved; the edge node\'s buffer directory with its placeholder', async () => {
+    const catalog = (locale: string, file: string) =>
+      JSON.parse(fs.readFileSync(path.join(ROOT, `nodes/locales/${locale}/${file}.json`), 'utf8'))[`plcwire-${file}`];
+    for (const [locale, dir] of [
+      ['en-US', 'en-US'],
+      ['de-DE', 'de'],
+      ['zh-CN', 'zh-CN'],
+    ] as const) {
+      const { context, page, errors } = await openEditor(browser, red, locale, 'spb-device');
+      try {
+        await page.setViewportSize({ width: 1024, height: 700 });
+        const opened = async () => {
+          await page.evaluate(() => (globalThis as any).RED.editor.edit((globalThis as any).RED.nodes.node('spb-device')));
+          await page.waitForSelector('#node-input-alarms', { state: 'visible', timeout: 10_000 });
+          await trayInPlace(page);
+        };
+        const saved = () =>
+          page.evaluate(() => {
+            const n = (globalThis as any).RED.nodes.node('spb-device');
+            return { alarms: n.alarms, acknowledge: n.acknowledge, valid: n.valid };
+          });
+        await opened();
+        const labels = catalog(dir, 'sparkplug-device').label;
+        expect(await page.textContent('label[for="node-input-alarms"][data-i18n$="publishAlarms"]'), locale).to.equal(labels.publishAlarms);
+        expect(await page.textContent('label[for="node-input-acknowledge"]'), locale).to.equal(labels.acknowledge);
+        expect([await page.isChecked('#node-input-alarms'), await page.isDisabled('#node-input-acknowledge')]).to.deep.equal([false, true]);
+        await page.check('#node-input-alarms');
+        expect(await page.isDisabled('#node-input-acknowledge')).to.equal(false);
+        await page.check('#node-input-acknowledge');
+        await shot(page, `sparkplug-device-${locale}`);
+        expect(
+          await cutOff(page, [
+            '#node-input-alarms',
+            '#node-input-acknowledge',
+            'label[for="node-input-alarms"]',
+            'label[for="node-input-acknowledge"]',
+          ]),
+          locale,
+        ).to.deep.equal([]);
+        await closed(page, '#node-dialog-ok');
+        expect(await saved()).to.deep.equal({ alarms: true, acknowledge: true, valid: true });
+        // Unpublished alarms cannot be acknowledged: the second box clears and locks with the first.
+        await opened();
+        await page.uncheck('#node-input-alarms');
+        expect([await page.isChecked('#node-input-acknowledge'), await page.isDisabled('#node-input-acknowledge')]).to.deep.equal([
+          false,
+          true,
+        ]);
+        await closed(page, '#node-dialog-ok');
+        expect(await saved()).to.deep.equal({ alarms: false, acknowledge: false, valid: true });
+
+        await page.evaluate(() => (globalThis as any).RED.editor.editConfig('', 'plcwire-sparkplug-edge', 'spb-edge'));
+        await page.waitForSelector('#node-config-input-bufferDir', { state: 'visible', timeout: 10_000 });
+        await trayInPlace(page);
+        const edge = catalog(dir, 'sparkplug-edge');
+        expect(await page.textContent('label[for="node-config-input-bufferDir"]'), locale).to.contain(edge.label.bufferDir);
+        expect(await page.getAttribute('#node-config-input-bufferDir', 'placeholder'), locale).to.equal(edge.placeholder.bufferDir);
+        expect(await cutOff(page, ['#node-config-input-bufferDir', 'label[for="node-config-input-bufferDir"]']), locale).to.deep.equal([]);
+        await page.click('#node-config-dialog-cancel');
         expect(errors.map((e) => e.message)).to.deep.equal([]);
       } finally {
         await context.close();

@@ -151,8 +151,8 @@ Runs a simulated PLC until Ctrl-C and prints a try: line with the URL that reach
 example:
   plcwire serve s7 --port 10102 --profile s7-1200 --source Plant.db --db Plant=1`,
   sparkplug: `usage: plcwire sparkplug --broker mqtt://host:1883 [--broker ...] --group G --node E --device NAME=<url> [--device ...]
-         [--symbols file --db NAME=N]... [--tags NAME:<tag>,...] [--writable NAME:<tag>,...] [--primary-host H]
-         [--interval ms] [--state-dir DIR] [--buffer N]
+         [--symbols file --db NAME=N]... [--tags NAME:<tag>,...] [--writable NAME:<tag>,...] [--alarms NAME]...
+         [--primary-host H] [--interval ms] [--state-dir DIR] [--buffer N] [--buffer-dir DIR]
 Runs a Sparkplug B 3.0 edge node until Ctrl-C (exit code 130; NDEATH is sent before it disconnects): each PLC
 a device whose tags are its metrics, typed from the PLC's types, data by exception every interval.
   --broker url       mqtt://, mqtts://, ws:// or wss://; repeat for a list: the next one when a broker fails or
@@ -161,12 +161,17 @@ a device whose tags are its metrics, typed from the PLC's types, data by excepti
   --device NAME=url  a PLC as the Sparkplug device NAME (repeatable)
   --tags NAME:t,t    the device's tags (symbols or addresses), each a metric of that name (repeatable); without
                      it every tag of --symbols, or on s7plus:// every tag the PLC's browse lists
-  --writable NAME:t  tags of the device a host may write with DCMD (the URL's readOnly/allow still apply)
+  --writable NAME:t  tags of the device a host may write with DCMD (the URL's readOnly/allow still apply);
+                     NAME:Alarms/Acknowledge lets a host acknowledge the PLC's alarms (allow=ALARMS or ALARM<id>)
+  --alarms NAME      the device's PLC's alarms as its metrics Alarms/Active (a DataSet, a row each), Alarms/Active
+                     Count, Alarms/Unacknowledged Count, Alarms/Event (each event as JSON) and Alarms/Acknowledge
+                     (repeatable; s7:// S7-300/400, s7plus:// S7-1200/1500)
 ${SYMBOL_OPTIONS}
   --primary-host H   births wait for this host's STATE online; its offline moves to the next --broker
   --interval ms      time between polls (default 1000)
   --state-dir DIR    keep bdSeq in DIR between runs (Sparkplug hosts expect it to go on, not start at 0)
   --buffer N         store-and-forward: most values kept while no session is up (default 10000; 0: none)
+  --buffer-dir DIR   keep them on disk in DIR too, so a restarted edge node forwards what an earlier one kept
 ${PASSWORD_OPTION}
 ${URL_NOTE}
 example:

@@ -46,8 +46,8 @@ const USAGE = `usage:
   plcwire serve fetchwrite [--fetch-port 2000] [--write-port 2001] [--port N] [--host 127.0.0.1] [--source file... --db NAME=N...]
   plcwire serve freeport (--path <device> [--baud 9600] | --tcp <port> [--host 127.0.0.1]) [--stations 5,6]
   plcwire sparkplug --broker mqtt://host:1883 [--broker ...] --group G --node E --device NAME=<url> [--device ...]
-                   [--symbols file --db NAME=N]... [--tags NAME:<tag>,...] [--writable NAME:<tag>,...] [--primary-host H]
-                   [--interval ms] [--state-dir DIR] [--buffer N]   (a Sparkplug B edge node, each PLC a device)
+                   [--symbols file --db NAME=N]... [--tags NAME:<tag>,...] [--writable NAME:<tag>,...] [--alarms NAME]...
+                   [--primary-host H] [--interval ms] [--state-dir DIR] [--buffer N] [--buffer-dir DIR]   (a Sparkplug B edge node, each PLC a device)
   plcwire demo [--tls-dir DIR] [--port 10102] (the S7-1200's certificate kept between runs; demo --help: every port)
 options: --debug prints stack traces; --help (-h) prints this text, plcwire <command> --help that command's;
       --version the package's version.

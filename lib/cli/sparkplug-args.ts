@@ -8,12 +8,29 @@
  * each one a metric of the same name) and those a host may write with DCMD.
  * A device without --tags publishes every tag of the symbol table (--symbols
  * files, compiled with their --db numbers) or, on s7plus://, of the PLC's
- * own browse.
+ * own browse. `--alarms NAME` adds the PLC's alarms as the device's
+ * `Alarms/…` metrics (lib/sparkplug/alarms.ts), and `--writable
+ * NAME:Alarms/Acknowledge` lets a host acknowledge them.
  */
+import * as fs from 'node:fs';
+import { driverOf, schemesOffering } from '../drivers';
+import { ALARM_METRICS } from '../sparkplug/alarms';
 import { parseUrl, type Endpoint } from '../url';
 import { intFlag, listFlag, stringFlag, UsageError, type ParsedArgs } from './args';
 
-export const SPARKPLUG_FLAGS = ['broker', 'group', 'node', 'device', 'tags', 'writable', 'primary-host', 'state-dir', 'buffer'];
+export const SPARKPLUG_FLAGS = [
+  'broker',
+  'group',
+  'node',
+  'device',
+  'tags',
+  'writable',
+  'alarms',
+  'primary-host',
+  'state-dir',
+  'buffer',
+  'buffer-dir',
+];
 
 /** One --device with its --tags and --writable. */
 export interface SparkplugCliDevice {
@@ -23,6 +40,8 @@ export interface SparkplugCliDevice {
   /** The tags given with --tags, in order; undefined: every tag the symbols or the PLC's browse name. */
   tags?: string[];
   writable: string[];
+  /** --alarms NAME: the PLC's alarms as the device's `Alarms/…` metrics. */
+  alarms: boolean;
 }
 
 export interface SparkplugCliOptions {
@@ -34,6 +53,8 @@ export interface SparkplugCliOptions {
   interval: number;
   stateDir?: string;
   buffer: number;
+  /** --buffer-dir: store-and-forward also kept on disk there, so a restarted edge node forwards it. */
+  bufferDir?: string;
 }
 
 /** The default poll interval (ms) and store-and-forward bound (messages). */
@@ -62,15 +83,20 @@ function brokerUrl(raw: string): string {
   return raw;
 }
 
+/** The --device a NAME of --tags, --writable or --alarms names. */
+function deviceNamed(flag: string, raw: string, name: string, devices: ReadonlyMap<string, SparkplugCliDevice>): SparkplugCliDevice {
+  const device = devices.get(name);
+  if (!device)
+    throw new UsageError(`--${flag} ${JSON.stringify(raw)}: no --device ${name}=<url> (devices: ${[...devices.keys()].join(', ')})`);
+  return device;
+}
+
 /** `NAME:t1,t2` of --tags/--writable: the device and its tags. */
 function deviceTags(flag: string, raw: string, devices: ReadonlyMap<string, SparkplugCliDevice>): [SparkplugCliDevice, string[]] {
   const colon = raw.indexOf(':');
   const example = `give DEVICE:tag,tag, e.g. --${flag} Line1:'"Tank".Level',MW4`;
   if (colon <= 0) throw new UsageError(`--${flag} ${JSON.stringify(raw)}: ${example}`);
-  const name = raw.slice(0, colon);
-  const device = devices.get(name);
-  if (!device)
-    throw new UsageError(`--${flag} ${JSON.stringify(raw)}: no --device ${name}=<url> (devices: ${[...devices.keys()].join(', ')})`);
+  const device = deviceNamed(flag, raw, raw.slice(0, colon), devices);
   const tags = raw
     .slice(colon + 1)
     .split(',')
@@ -91,16 +117,29 @@ export function sparkplugOptions(args: ParsedArgs): SparkplugCliOptions {
     const name = sparkplugId('device', raw.slice(0, eq));
     if (devices.has(name)) throw new UsageError(`--device ${name} is given twice`);
     const url = raw.slice(eq + 1);
-    devices.set(name, { name, url, endpoint: parseUrl(url), writable: [] });
+    devices.set(name, { name, url, endpoint: parseUrl(url), writable: [], alarms: false });
   }
   if (devices.size === 0) throw new UsageError('give at least one --device NAME=<plc url>');
   for (const raw of listFlag(args, 'tags')) {
     const [device, tags] = deviceTags('tags', raw, devices);
     device.tags = [...(device.tags ?? []), ...tags];
   }
+  for (const raw of listFlag(args, 'alarms')) {
+    const device = deviceNamed('alarms', raw, raw, devices);
+    if (!driverOf(device.endpoint).alarms)
+      throw new UsageError(
+        `--alarms ${raw}: its PLC is reached over ${device.endpoint.protocol}://, which reports no alarms (${schemesOffering('alarms')} do)`,
+      );
+    device.alarms = true;
+  }
   for (const raw of listFlag(args, 'writable')) {
     const [device, tags] = deviceTags('writable', raw, devices);
     for (const t of tags) {
+      if (t === ALARM_METRICS.acknowledge) {
+        if (!device.alarms)
+          throw new UsageError(`--writable ${device.name}:${t}: the device publishes no alarms; give --alarms ${device.name} as well`);
+        continue;
+      }
       if (device.tags && !device.tags.includes(t))
         throw new UsageError(`--writable ${device.name}:${t}: "${t}" is not one of the device's --tags (${device.tags.join(', ')})`);
     }
@@ -116,5 +155,26 @@ export function sparkplugOptions(args: ParsedArgs): SparkplugCliOptions {
     interval: intFlag(args, 'interval', SPARKPLUG_DEFAULTS.interval, 10, 3_600_000),
     stateDir: stringFlag(args, 'state-dir'),
     buffer: intFlag(args, 'buffer', SPARKPLUG_DEFAULTS.buffer, 0, 10_000_000),
+    ...bufferDir(args),
   };
+}
+
+/** --buffer-dir DIR: an existing directory this process may write (checked now, not at the first outage). */
+function bufferDir(args: ParsedArgs): { bufferDir?: string } {
+  if (!args.flags.has('buffer-dir')) return {};
+  const dir = stringFlag(args, 'buffer-dir');
+  if (!dir) throw new UsageError('--buffer-dir needs a directory');
+  let stat: fs.Stats;
+  try {
+    stat = fs.statSync(dir);
+  } catch {
+    throw new UsageError(`--buffer-dir ${JSON.stringify(dir)}: no such directory`);
+  }
+  if (!stat.isDirectory()) throw new UsageError(`--buffer-dir ${JSON.stringify(dir)}: not a directory`);
+  try {
+    fs.accessSync(dir, fs.constants.W_OK | fs.constants.X_OK);
+  } catch {
+    throw new UsageError(`--buffer-dir ${JSON.stringify(dir)}: this process may not write there`);
+  }
+  return { bufferDir: dir };
 }

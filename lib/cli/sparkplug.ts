@@ -4,11 +4,13 @@
  * metrics; the command runs until Ctrl-C or SIGTERM, then publishes NDEATH,
  * disconnects and closes every PLC (exit code 130). What happens goes to
  * stderr, one line each: the session (broker, bdSeq), waiting for the primary
- * host, a PLC lost and back, a refused or done write, dropped buffered data.
+ * host, a PLC lost and back, a refused or done write or acknowledgement, its
+ * alarm service failing, dropped buffered data.
  */
 import { createClient, type AnyClient } from '../connect';
 import { driverOf } from '../drivers';
 import type { PlcError } from '../errors';
+import { ALARM_METRICS } from '../sparkplug/alarms';
 import { SparkplugEdgeNode } from '../sparkplug/edge-node';
 import type { EdgeNodeStatus } from '../sparkplug/options';
 import type { SparkplugDeviceOptions } from '../sparkplug/device';
@@ -74,6 +76,7 @@ export async function sparkplug(rest: string[], args: ParsedArgs, io: CliIo): Pr
         client,
         tags: Object.fromEntries(tags.map((t) => [t, t])),
         writable: d.writable,
+        ...(d.alarms ? { alarms: true } : {}),
         ...(byAddress && table ? { symbols: table } : {}),
       });
       client.on('connected', () => report(`${d.name}: connected to ${endpointName(d.endpoint)}`));
@@ -86,7 +89,7 @@ export async function sparkplug(rest: string[], args: ParsedArgs, io: CliIo): Pr
       node: options.node,
       devices,
       interval: options.interval,
-      buffer: { count: options.buffer },
+      buffer: { count: options.buffer, ...(options.bufferDir !== undefined ? { dir: options.bufferDir } : {}) },
       ...(options.primaryHost !== undefined ? { primaryHost: options.primaryHost } : {}),
       ...(options.stateDir !== undefined ? { stateDir: options.stateDir } : {}),
     });
@@ -94,7 +97,9 @@ export async function sparkplug(rest: string[], args: ParsedArgs, io: CliIo): Pr
     node.on('error', (err: PlcError) => report(err.message));
     node.on('command', (c: { device: string; metric: string; value: unknown }) =>
       report(
-        `${c.device}: DCMD wrote ${c.metric} = ${JSON.stringify(c.value, (_k, v: unknown) => (typeof v === 'bigint' ? v.toString() : v))}`,
+        c.metric === ALARM_METRICS.acknowledge
+          ? `${c.device}: DCMD acknowledged alarm ${String(c.value)}`
+          : `${c.device}: DCMD wrote ${c.metric} = ${JSON.stringify(c.value, (_k, v: unknown) => (typeof v === 'bigint' ? v.toString() : v))}`,
       ),
     );
     for (const c of clients) c.start();

@@ -8,9 +8,11 @@
  * later. What it does reaches the nodes as status and errors.
  */
 import { EventEmitter } from 'node:events';
+import { driverOf, schemesOffering } from '../drivers';
 import { PlcError } from '../errors';
 import type { PlcClient } from '../types';
 import type { SymbolTable } from '../symbols/model';
+import { ALARM_METRICS } from '../sparkplug/alarms';
 import { SparkplugEdgeNode } from '../sparkplug/edge-node';
 import type { EdgeNodeStatus } from '../sparkplug/options';
 import type { SparkplugDeviceOptions } from '../sparkplug/device';
@@ -26,6 +28,8 @@ export interface EdgeHubConfig {
   stateDir?: string;
   /** Store-and-forward bound: most values kept (text from the editor; default 10000). */
   buffer?: string | number;
+  /** A directory where store-and-forward keeps its values too, so a restarted edge node forwards them. */
+  bufferDir?: string;
   interval?: string | number;
   username?: string;
   password?: string;
@@ -42,6 +46,10 @@ export interface HubDevice {
   symbols?: SymbolTable;
   /** A numeric change at or under it is not reported (every metric of the device). */
   deadband?: number;
+  /** The PLC's alarms as the device's `Alarms/…` metrics (its connection's protocol must report alarms). */
+  alarms?: boolean;
+  /** A host may acknowledge them with DCMD `Alarms/Acknowledge` (with `alarms`). */
+  acknowledge?: boolean;
 }
 
 /** The list of a text field: one item a line or comma-separated, blanks dropped. */
@@ -65,16 +73,31 @@ function wholeNumber(field: string, raw: unknown, fallback: number, min: number)
 function deviceOptions(device: HubDevice): SparkplugDeviceOptions {
   const rows = tagTable(device.tags);
   if (rows.length === 0) throw new PlcError('INVALID_VALUE', `Sparkplug device ${device.name} has no tags`);
+  if (device.alarms && !driverOf(device.client).alarms) {
+    throw new PlcError(
+      'NOT_SUPPORTED',
+      `Sparkplug device ${device.name}: its connection (${device.client.protocol}://) reports no alarms (${schemesOffering('alarms')} do)`,
+    );
+  }
+  if (device.acknowledge && !device.alarms)
+    throw new PlcError(
+      'INVALID_VALUE',
+      `Sparkplug device ${device.name}: hosts can acknowledge alarms only when the device publishes them`,
+    );
   return {
     name: device.name,
     client: device.client,
     tags: Object.fromEntries(rows.map((r) => [r.name, r.address])),
-    writable: listOf(device.writable),
+    writable: [...listOf(device.writable), ...(device.acknowledge ? [ALARM_METRICS.acknowledge] : [])],
+    ...(device.alarms ? { alarms: true } : {}),
     ...(device.symbols ? { symbols: device.symbols } : {}),
   };
 }
 
-/** Events: `status` (EdgeNodeStatus), `error` (PlcError), `publish` (PublishedMessage), `command` (CommandDone), as the edge node's. */
+/**
+ * Events: `status` (EdgeNodeStatus), `error` (PlcError, and the device it concerns if one), `publish`
+ * (PublishedMessage), `command` (CommandDone), as the edge node's.
+ */
 export class SparkplugEdgeHub extends EventEmitter {
   private readonly devices = new Map<string, HubDevice>();
   private node: SparkplugEdgeNode | undefined;
@@ -150,7 +173,10 @@ export class SparkplugEdgeHub extends EventEmitter {
       node: String(c.node ?? '').trim(),
       devices: [...this.devices.values()].map(deviceOptions),
       interval: wholeNumber('the poll interval', c.interval, 1000, 10),
-      buffer: { count: wholeNumber('the store-and-forward bound', c.buffer, 10_000, 0) },
+      buffer: {
+        count: wholeNumber('the store-and-forward bound', c.buffer, 10_000, 0),
+        ...(c.bufferDir?.trim() ? { dir: c.bufferDir.trim() } : {}),
+      },
       deadbands: Object.fromEntries(
         [...this.devices.values()]
           .filter((d) => (d.deadband ?? 0) > 0)
@@ -164,7 +190,7 @@ export class SparkplugEdgeHub extends EventEmitter {
       this.status = s;
       this.emit('status', s);
     });
-    node.on('error', (e) => this.listenerCount('error') > 0 && this.emit('error', e));
+    node.on('error', (e, device) => this.listenerCount('error') > 0 && this.emit('error', e, ...(device !== undefined ? [device] : [])));
     node.on('publish', (m) => this.emit('publish', m));
     node.on('command', (d) => this.emit('command', d));
     return node;

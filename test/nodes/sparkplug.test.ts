@@ -3,16 +3,24 @@
  * against a real mosquitto and our S7 simulator: the device's births, its
  * status, a change as DDATA, a permitted DCMD write sent on as a message, a
  * refused one on the Catch node (the PLC untouched), and NDEATH when the flow
- * stops. Without mosquitto the suite skips and says why (fails in .ci/run).
+ * stops. With an S7-300 simulator raising an ALARM_SQ: the Alarms metrics of
+ * a device whose box is set (and none for the other), an alarm as DDATA, a
+ * host's acknowledgement, and each device's errors on its own Catch only.
+ * Without mosquitto the suite skips and says why (fails in .ci/run).
  */
 import { expect } from 'chai';
+import * as fs from 'node:fs';
+import * as os from 'node:os';
 import * as path from 'node:path';
+import type { AlarmDefinition } from '../../lib/alarms/model';
+import { S7Server } from '../../lib/s7/server';
 import { DataType } from '../../lib/sparkplug/datatypes';
+import type { DataSet } from '../../lib/sparkplug/model';
 import { Mosquitto } from '../support/mosquitto';
 import { missingMosquitto, sparkplugRequired } from '../support/sparkplug-peers';
 import { skipBecause } from '../support/skip';
-import { SparkplugListener } from '../support/sparkplug-listener';
-import { s7Sim } from './sims';
+import { SparkplugListener, type HeardMessage } from '../support/sparkplug-listener';
+import { fetchWriteSim, s7Sim } from './sims';
 import { helper, nodes, Recorder, ROOT, until, type Sim } from './support';
 
 const edgeNode = require(path.join(ROOT, 'nodes/sparkplug-edge.js'));
@@ -117,5 +125,156 @@ describe('nodes: Sparkplug B edge node and device, mosquitto and the S7 simulato
     await helper.unload();
     const ndeath = await listener.waitFor((m) => m.type === 'NDEATH', 10_000, beforeStop);
     expect(ndeath.payload!.metrics.map((m) => m.name)).to.deep.equal(['bdSeq']);
+  });
+  describe("the PLC's alarms: an S7-300 simulator raising an ALARM_SQ", () => {
+    const TANK_HIGH: AlarmDefinition = { id: 257, kind: 'ALARM_SQ', texts: { 'en-US': 'Tank high' }, needsAck: true, trigger: 'M10.0' };
+    const classic = new S7Server({ port: 0, profile: 's7-300', alarms: [TANK_HIGH] });
+    let url = '';
+    before(async () => {
+      url = `s7://127.0.0.1:${await classic.listen()}?rack=0&slot=2&timeout=1000`;
+    });
+    afterEach(() => classic.memory.writeBit('M', 0, 10, 0, false));
+    after(() => classic.close());
+
+    /** Two devices of one PLC: "Press 1" publishes its alarms (hosts may acknowledge), "Press" does not. */
+    const alarmFlow = (edge: object = {}) => {
+      const at = { z: 'tab' };
+      const tags = [{ name: 'Level', address: 'MW20:INT' }];
+      return [
+        { id: 'tab', type: 'tab', label: 'sparkplug alarms' },
+        { id: 'conn', type: 'plcwire-connection', url },
+        { id: 'edge', type: 'plcwire-sparkplug-edge', brokers: broker.url, group: 'Plant', nodeId: 'AlarmEdge', interval: 50, ...edge },
+        {
+          id: 'devA',
+          type: 'plcwire-sparkplug-device',
+          ...at,
+          edge: 'edge',
+          connection: 'conn',
+          device: 'Press 1',
+          tags,
+          writable: '',
+          alarms: true,
+          acknowledge: true,
+          wires: [['outA']],
+        },
+        {
+          id: 'devB',
+          type: 'plcwire-sparkplug-device',
+          ...at,
+          edge: 'edge',
+          connection: 'conn',
+          device: 'Press',
+          tags: [...tags, { name: 'Setpoint', address: 'MW22:INT' }],
+          writable: 'Setpoint',
+          alarms: false,
+          wires: [[]],
+        },
+        { id: 'outA', type: 'helper', ...at },
+        // One Catch for both (the test helper loads a core node's module once per node of its type): who raised is msg.error.source.
+        { id: 'catcher', type: 'catch', ...at, scope: null, uncaught: false, wires: [['caught']] },
+        { id: 'caught', type: 'helper', ...at },
+      ];
+    };
+    const ALARM_NAMES = ['Alarms/Active', 'Alarms/Active Count', 'Alarms/Unacknowledged Count', 'Alarms/Event', 'Alarms/Acknowledge'];
+    /** A message's metrics by name (DDATA carries aliases: the birth names them). */
+    const named = (m: HeardMessage, birth: HeardMessage) => {
+      const names = new Map(birth.payload!.metrics.map((x) => [x.alias, x.name]));
+      return Object.fromEntries(m.payload!.metrics.map((x) => [x.name ?? names.get(x.alias), x]));
+    };
+
+    it('births the Alarms metrics where the box is set and not elsewhere, sends an alarm as DDATA Alarms/Event, and a host acknowledges it', async () => {
+      await helper.load([nodes.connection, edgeNode, deviceNode, nodes.catch], alarmFlow());
+      const out = new Recorder(helper.getNode('outA'));
+      const birthA = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Press 1', 30_000);
+      const birthB = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Press', 30_000);
+      expect(birthA.payload!.metrics.map((m) => m.name)).to.include.members(['Level', ...ALARM_NAMES]);
+      expect(birthB.payload!.metrics.map((m) => m.name)).to.deep.equal(['Level', 'Setpoint']);
+
+      const from = listener.heard.length;
+      classic.memory.writeBit('M', 0, 10, 0, true);
+      const coming = await listener.waitFor(
+        (m) => m.type === 'DDATA' && m.device === 'Press 1' && named(m, birthA)['Alarms/Event'] !== undefined,
+        15_000,
+        from,
+        'DDATA Alarms/Event',
+      );
+      const event = JSON.parse(named(coming, birthA)['Alarms/Event']!.value as string);
+      expect(event).to.deep.include({ type: 'alarm', change: 'coming' });
+      expect(event.alarm).to.include({ id: 257, acknowledged: false });
+
+      // "hosts may acknowledge alarms": Alarms/Acknowledge is writable; the connection has no allow-list.
+      const beforeAck = listener.heard.length;
+      await listener.publish('spBv1.0/Plant/DCMD/AlarmEdge/Press 1', {
+        timestamp: Date.now(),
+        metrics: [{ name: 'Alarms/Acknowledge', datatype: DataType.UInt32, value: 257 }],
+      });
+      const done = await out.next(() => true, 10_000, 'the acknowledgement done');
+      expect(done.payload).to.deep.equal({ device: 'Press 1', metric: 'Alarms/Acknowledge', value: 257 });
+      await listener.waitFor(
+        (m) => {
+          if (m.type !== 'DDATA' || m.device !== 'Press 1') return false;
+          const t = named(m, birthA)['Alarms/Active']?.value as DataSet | undefined;
+          return t?.rows[0]?.[t.columns.indexOf('Acknowledged')] === true;
+        },
+        15_000,
+        beforeAck,
+        'DDATA Alarms/Active acknowledged',
+      );
+    });
+
+    it('the edge node keeps store-and-forward in its buffer directory', async () => {
+      const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-nr-buffer-'));
+      try {
+        await helper.load([nodes.connection, edgeNode, deviceNode, nodes.catch], alarmFlow({ bufferDir: dir }));
+        await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Press 1', 30_000);
+        expect(fs.readdirSync(dir)).to.deep.equal(['Plant.AlarmEdge.buffer.ndjson']);
+      } finally {
+        await helper.unload();
+        fs.rmSync(dir, { recursive: true, force: true });
+      }
+    });
+
+    it('the alarms box on a connection whose protocol has no alarms is one error on Catch naming the device, once the flows started', async () => {
+      const cp = await fetchWriteSim();
+      try {
+        const flow = alarmFlow().filter((n: any) => n.id !== 'devB');
+        const conn = flow.find((n: any) => n.id === 'conn') as { url: string };
+        conn.url = cp.url;
+        const devA = flow.find((n: any) => n.id === 'devA') as { tags: unknown };
+        devA.tags = [{ name: 'Level', address: cp.addr(0) }];
+        await helper.load([nodes.connection, edgeNode, deviceNode, nodes.catch], flow);
+        const caught = new Recorder(helper.getNode('caught'));
+        const msg = await caught.next(() => true, 10_000, 'the refusal on Catch');
+        expect(msg.error.message).to.match(
+          /^(PlcError: )?Sparkplug device Press 1: its connection \(fetchwrite:\/\/\) reports no alarms \(s7:\/\/ or s7plus:\/\/ do\)$/,
+        );
+        expect(msg.error.source.id).to.equal('devA');
+        expect(caught.messages).to.have.length(1);
+      } finally {
+        await helper.unload();
+        await cp.close();
+      }
+    });
+
+    it("each device's errors are raised by its own node only, by the device the edge node names (not by words in the message)", async () => {
+      await helper.load([nodes.connection, edgeNode, deviceNode, nodes.catch], alarmFlow());
+      const caught = new Recorder(helper.getNode('caught'));
+      await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Press 1', 30_000);
+      await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Press', 30_000);
+      // A refused write to "Press 1", then one to "Press": the edge node takes them in order.
+      for (const device of ['Press 1', 'Press'])
+        await listener.publish(`spBv1.0/Plant/DCMD/AlarmEdge/${device}`, {
+          timestamp: Date.now(),
+          metrics: [{ name: 'Level', datatype: DataType.Int16, value: 1 }],
+        });
+      await until(() => caught.messages.length >= 2, 10_000, 'both refusals caught');
+      // Before the fix, a regex took "Press" out of "device Press 1: …": A's error was raised by B's node, and not by A's.
+      expect(
+        caught.messages.map((m) => [m.error.source.id, /device Press 1:/.test(m.error.message) ? 'Press 1' : 'Press']),
+      ).to.have.deep.members([
+        ['devA', 'Press 1'],
+        ['devB', 'Press'],
+      ]);
+    });
   });
 });
