@@ -256,11 +256,8 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
     await bufferAcrossRestart(false);
   });
 
-  it('--buffer-dir: the same when the broker is back before the next run has read its PLC', async function () {
-    skipBecause(
-      this,
-      'lib/sparkplug/edge-node.ts forwards kept values only at NBIRTH: a device born later in the session (its first read after the NBIRTH) keeps them until the next session',
-    );
+  it('--buffer-dir: the same when the broker is back before the next run has read its PLC', async () => {
+    // Before the fix, a device born after the NBIRTH (its first read later) kept its values until the next session.
     await bufferAcrossRestart(true);
   });
 

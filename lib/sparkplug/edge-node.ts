@@ -291,19 +291,22 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     this.nodeBorn = true;
     for (const device of this.devices) {
       device.forgetReported();
-      this.deviceBirth(device);
+      this.deviceBirth(device, false);
     }
     this.setState('online', this.options.brokers[this.brokerIndex]);
-    this.forward();
+    // Every DBIRTH before any DDATA (tck-id-payloads-dbirth-order); then what the born devices kept, in order.
+    this.forward((d) => this.born.has(d));
+    for (const device of this.devices) if (this.born.has(device.name)) this.lateAlarms(device);
   }
 
-  private deviceBirth(device: SparkplugDevice): void {
+  /** A DBIRTH, and with `data` what the device kept (forward()). A device not ready is born later, from afterRead. */
+  private deviceBirth(device: SparkplugDevice, data = true): void {
     if (!this.nodeBorn || this.born.has(device.name) || !device.complete || device.client.state !== 'connected') return;
     this.publish('DBIRTH', device.name, { timestamp: Date.now(), seq: this.nextSeq(), metrics: device.birth() });
     this.born.add(device.name);
-    // Alarm events the PLC reported before this birth (while the device was down), in order, as historical data.
-    const late = device.changes();
-    if (late.length > 0) this.publish('DDATA', device.name, { timestamp: Date.now(), seq: this.nextSeq(), metrics: late });
+    if (!data) return;
+    this.forward((d) => d === device.name);
+    this.lateAlarms(device);
   }
 
   private deviceDown(device: SparkplugDevice, _error: PlcError): void {
@@ -312,13 +315,16 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     this.publish('DDEATH', device.name, { timestamp: Date.now(), seq: this.nextSeq(), metrics: [] });
   }
 
-  /** Sends what was stored while there was no session, as historical DDATA after the births, oldest first. */
-  private forward(): void {
-    for (const run of this.store.drain()) {
-      if (this.born.has(run.device))
-        this.publish('DDATA', run.device, { timestamp: Date.now(), seq: this.nextSeq(), metrics: run.metrics });
-      else this.store.add(run.device, run.metrics);
-    }
+  /** After the DBIRTHs: what the devices `which` accepts kept while there was no session, as historical DDATA, oldest first. */
+  private forward(which: (device: string) => boolean): void {
+    for (const run of this.store.take(which))
+      this.publish('DDATA', run.device, { timestamp: Date.now(), seq: this.nextSeq(), metrics: run.metrics });
+  }
+
+  /** After a device's birth and what it kept: the alarm events its PLC reported before the birth (the device down), in order. */
+  private lateAlarms(device: SparkplugDevice): void {
+    const late = device.changes();
+    if (late.length > 0) this.publish('DDATA', device.name, { timestamp: Date.now(), seq: this.nextSeq(), metrics: late });
   }
 
   private nextSeq(): number {

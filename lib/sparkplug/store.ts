@@ -88,20 +88,29 @@ export class ForwardStore {
     return dropped;
   }
 
-  /** Takes everything kept, oldest first, grouped into runs of one device each (so order across devices holds). */
-  drain(): { device: string; metrics: SparkplugMetric[] }[] {
+  /**
+   * Takes what is kept of the devices `which` accepts, oldest first, grouped into runs of one device each
+   * (so order across devices holds); the other devices' values stay, in their order, for a later take.
+   */
+  take(which: (device: string) => boolean): { device: string; metrics: SparkplugMetric[] }[] {
     const out: { device: string; metrics: SparkplugMetric[] }[] = [];
+    const kept: Entry[] = [];
     for (let i = this.head; i < this.entries.length; i++) {
       const e = this.entries[i]!;
+      if (!which(e.device)) {
+        kept.push(e);
+        continue;
+      }
       const last = out[out.length - 1];
       const metric = { ...e.metric, isHistorical: true };
       if (last && last.device === e.device) last.metrics.push(metric);
       else out.push({ device: e.device, metrics: [metric] });
     }
-    this.entries = [];
+    if (out.length === 0) return out;
+    this.entries = kept;
     this.head = 0;
-    this.size = 0;
-    if (this.file) fs.writeFileSync(this.file, '');
+    this.size = kept.reduce((n, e) => n + e.bytes, 0);
+    if (this.file) fs.writeFileSync(this.file, kept.map((e) => lineOf(e.device, e.metric)).join(''));
     return out;
   }
 }
