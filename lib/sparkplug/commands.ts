@@ -9,6 +9,7 @@
 import { PlcError, toPlcError, ValueError, type TagResult } from '../errors';
 import { ARRAY_ELEMENT, dataTypeName } from './datatypes';
 import type { SparkplugDevice } from './device';
+import { REBIRTH_METRIC } from './messages';
 import type { SparkplugMetric, SparkplugPayload } from './model';
 import { packArray } from './arrays';
 import { isScalarType, scalarFields } from './scalars';
@@ -103,4 +104,21 @@ async function acknowledge(device: SparkplugDevice, acks: readonly CommandWrite[
     }
   }
   return done;
+}
+
+/** An NCMD: whether it asks for a rebirth (`Node Control/Rebirth` true, section 5.6), and every metric it sends that this edge node does not take. */
+export function checkNodeCommand(payload: SparkplugPayload): { rebirth: boolean; errors: PlcError[] } {
+  let rebirth = false;
+  const errors: PlcError[] = [];
+  for (const m of payload.metrics) {
+    if (m.name === REBIRTH_METRIC && m.value === true) rebirth = true;
+    else
+      errors.push(
+        new PlcError(
+          'NOT_SUPPORTED',
+          `NCMD metric ${m.name ?? `alias ${m.alias}`} is not one this edge node takes (only ${REBIRTH_METRIC})`,
+        ),
+      );
+  }
+  return { rebirth, errors };
 }

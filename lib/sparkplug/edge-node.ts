@@ -13,10 +13,10 @@ import * as mqtt from 'mqtt';
 import { PlcError, toPlcError } from '../errors';
 import { EventEmitterBase, type TypedEvents } from '../client/events';
 import { BdSeqStore } from './bdseq';
-import { executeCommand } from './commands';
+import { checkNodeCommand, executeCommand } from './commands';
 import { SparkplugDevice } from './device';
 import { HostStateTracker, parseHostState } from './host-state';
-import { ndeathPayload, nbirthPayload, REBIRTH_METRIC } from './messages';
+import { ndeathPayload, nbirthPayload } from './messages';
 import type { SparkplugMetric, SparkplugPayload } from './model';
 import type { EdgeNodeEvents, EdgeNodeState, SparkplugEdgeNodeOptions } from './options';
 import { decodePayload, encodePayload } from './payload';
@@ -259,16 +259,9 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   }
 
   private nodeCommand(payload: SparkplugPayload): void {
-    for (const m of payload.metrics) {
-      if (m.name === REBIRTH_METRIC && m.value === true) this.rebirth();
-      else
-        this.report(
-          new PlcError(
-            'NOT_SUPPORTED',
-            `NCMD metric ${m.name ?? `alias ${m.alias}`} is not one this edge node takes (only ${REBIRTH_METRIC})`,
-          ),
-        );
-    }
+    const { rebirth, errors } = checkNodeCommand(payload);
+    for (const e of errors) this.report(e);
+    if (rebirth) this.rebirth();
   }
 
   private async deviceCommand(name: string, payload: SparkplugPayload): Promise<void> {
