@@ -299,8 +299,9 @@ describe('examples: each imported into the running `npm start` demo and deployed
   }
 
   /**
-   * The Sparkplug example (issue #34): the S7-300 device publishes its PLC's alarms, the S7-1200's (PUT/GET) does not; a
-   * host sees the tank's high level come as Alarms/Event and a row of Alarms/Active, and acknowledges it with DCMD.
+   * The Sparkplug example (issue #34): every PLC of the demo is a device with typed, named metrics; a host writes the
+   * permitted tag (the plant's motor) with DCMD; the S7-300 device publishes its PLC's alarms, the S7-1200's (PUT/GET)
+   * does not; a host sees the tank's high level come as Alarms/Event and a row of Alarms/Active, and acknowledges it.
    */
   async function sparkplugAlarms(): Promise<void> {
     const listener = new SparkplugListener(broker.url);
@@ -320,6 +321,43 @@ describe('examples: each imported into the running `npm start` demo and deployed
         'Alarms/Acknowledge',
       ]);
       expect(tank.payload!.metrics.filter((m) => m.name?.startsWith('Alarms/'))).to.deep.equal([]);
+      // Every PLC of the demo is a device, its metrics named and typed from the PLC (the Done of issue #34).
+      const typed = (m: HeardMessage) =>
+        Object.fromEntries(m.payload!.metrics.filter((x) => !x.name?.startsWith('Alarms/')).map((x) => [x.name, x.datatype]));
+      expect(typed(tank)).to.deep.equal({
+        Level: DataType.Float,
+        Temperature: DataType.Float,
+        MotorRun: DataType.Boolean,
+        Parts: DataType.Int32,
+      });
+      expect(typed(birth)).to.deep.equal({ Level: DataType.Float, Temperature: DataType.Float, MotorRunning: DataType.Boolean });
+      const cp = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'CP', 20_000, 0, "the CP's DBIRTH");
+      expect(typed(cp)).to.deep.equal({ Level: DataType.Float, Speed: DataType.Int16, MotorRunning: DataType.Boolean });
+      const stations = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Stations', 20_000, 0, "the Stations' DBIRTH");
+      expect(typed(stations)).to.deep.equal({ Level: DataType.Float, Parts: DataType.Int32 });
+      for (const b of [tank, birth, cp, stations]) {
+        expect(
+          b.payload!.metrics.every((m) => typeof m.timestamp === 'number' && m.alias !== undefined),
+          b.device,
+        ).to.equal(true);
+        expect(b.payload!.metrics.find((m) => m.name === 'Level')!.value, `${b.device}: the plant's level`).to.be.within(0, 100);
+      }
+
+      // The host writes the permitted tag: the plant's motor starts, and the next DDATA says so; then it stops it again.
+      const tankNames = new Map(tank.payload!.metrics.map((m) => [m.alias, m.name]));
+      const motorIs = (on: boolean) => (m: HeardMessage) =>
+        m.type === 'DDATA' &&
+        m.device === 'Tank' &&
+        m.payload!.metrics.some((x) => tankNames.get(x.alias) === 'MotorRun' && x.value === on);
+      for (const on of [true, false]) {
+        const from = listener.heard.length;
+        await listener.publish('spBv1.0/Plant/DCMD/Edge1/Tank', {
+          timestamp: Date.now(),
+          metrics: [{ name: 'MotorRun', datatype: DataType.Boolean, value: on }],
+        });
+        await listener.waitFor(motorIs(on), 20_000, from, `DDATA MotorRun ${on}`);
+        expect(demo.plant.memory.area('DB', 1)[4]! & 1, '"Plant".MotorRun in the PLC').to.equal(on ? 1 : 0);
+      }
       const names = new Map(birth.payload!.metrics.map((m) => [m.alias, m.name]));
       const named = (m: HeardMessage) => m.payload!.metrics.map((x) => ({ ...x, name: x.name ?? names.get(x.alias) }));
 

@@ -8,11 +8,11 @@
  */
 import { PlcError, type TagResult } from '../errors';
 import type { SymbolTable } from '../symbols/model';
-import type { PlcClient, PlcValue, PreparedRead } from '../types';
+import type { DataTypeName, PlcClient, PlcValue, PreparedRead } from '../types';
 import { ALARM_METRICS, DeviceAlarms, type SparkplugAlarmOptions } from './alarms';
 import { DataType, type DataTypeId } from './datatypes';
 import type { SparkplugMetric } from './model';
-import { datatypeOfAddress, datatypeOfEntry, qualityOf } from './types';
+import { datatypeOfAddress, datatypeOfEntry, datatypeOfPlcType, qualityOf } from './types';
 
 /** A device as the edge node's options give it. */
 export interface SparkplugDeviceOptions {
@@ -250,6 +250,15 @@ function datatypeFor(name: string, address: string, options: SparkplugDeviceOpti
   if (given !== undefined) return given;
   const entry = options.symbols?.lookup(address);
   if (entry) return datatypeOfEntry(entry);
+  // The client's own address syntax (freeport's ST5,REAL0 is not an S7 address). Every client has the public
+  // tag() of lib/client/base.ts, which PlcClient does not declare.
+  const client = options.client as PlcClient & { tag?(address: string): { type?: DataTypeName; isArray?: boolean } };
+  try {
+    const tag = client.tag?.(address);
+    if (tag?.type !== undefined) return datatypeOfPlcType(tag.type, tag.isArray === true);
+  } catch {
+    // not an address of its syntax: a name, below
+  }
   try {
     return datatypeOfAddress(address);
   } catch {

@@ -215,19 +215,22 @@ describe('nodes: examples', function () {
         [tab, ...wired],
       );
       for (const n of wired.filter((x: any) => x.type.startsWith('plcwire-'))) expect(helper.getNode(n.id), n.id).to.be.ok;
-      const conn = flow.find((n: any) => n.type === 'plcwire-connection');
-      const addresses = flow
-        .flatMap((n: any) => [...(n.tags ?? []).map((t: any) => t.address), n.writeAddress, n.watchAddress])
-        .filter(Boolean);
-      const sources = { symbolSources: conn.symbolSources, dbNumbers: conn.dbNumbers };
-      const res = await helper
-        .request()
-        .post('/plcwire/validate')
-        .send({ url: conn.url, addresses, ...sources })
-        .expect(200);
-      expect(res.body.url.ok, res.body.url.message).to.equal(true);
-      if (conn.symbolSources) expect(res.body.symbols, JSON.stringify(res.body.symbols)).to.deep.equal({ ok: true });
-      for (const a of addresses) expect(res.body.results[a].ok, `${a}: ${res.body.results[a].message}`).to.equal(true);
+      // Each connection with the addresses of the nodes that use it (an example may reach several PLCs).
+      for (const conn of flow.filter((n: any) => n.type === 'plcwire-connection')) {
+        const addresses = flow
+          .filter((n: any) => n.connection === conn.id)
+          .flatMap((n: any) => [...(n.tags ?? []).map((t: any) => t.address), n.writeAddress, n.watchAddress])
+          .filter(Boolean);
+        const sources = { symbolSources: conn.symbolSources, dbNumbers: conn.dbNumbers };
+        const res = await helper
+          .request()
+          .post('/plcwire/validate')
+          .send({ url: conn.url, addresses, ...sources })
+          .expect(200);
+        expect(res.body.url.ok, res.body.url.message).to.equal(true);
+        if (conn.symbolSources) expect(res.body.symbols, JSON.stringify(res.body.symbols)).to.deep.equal({ ok: true });
+        for (const a of addresses) expect(res.body.results[a].ok, `${conn.id} ${a}: ${res.body.results[a].message}`).to.equal(true);
+      }
     });
   }
 });
