@@ -13,6 +13,7 @@ import * as mqtt from 'mqtt';
 import { PlcError, toPlcError } from '../errors';
 import { EventEmitterBase, type TypedEvents } from '../client/events';
 import { BdSeqStore } from './bdseq';
+import { brokerError, brokerName, checkBrokers } from './brokers';
 import { checkNodeCommand, executeCommand } from './commands';
 import { SparkplugDevice } from './device';
 import { HostStateTracker, parseHostState } from './host-state';
@@ -57,8 +58,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
 
   constructor(options: SparkplugEdgeNodeOptions) {
     super();
-    if (!Array.isArray(options.brokers) || options.brokers.length === 0)
-      throw new PlcError('INVALID_VALUE', 'a Sparkplug edge node needs at least one broker URL');
+    checkBrokers(options.brokers);
     this.group = checkId('group', options.group);
     this.node = checkId('edge node', options.node);
     if (options.primaryHost !== undefined) checkId('primary host', options.primaryHost);
@@ -184,7 +184,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     client.on('message', (topic, payload) => this.received(client, topic, payload));
     client.on('packetsend', (p) => p.cmd === 'pingreq' && this.unconfirmed.pingSent());
     client.on('packetreceive', (p) => p.cmd === 'pingresp' && this.unconfirmed.pingAnswered());
-    client.on('error', (err) => this.report(toPlcError(err, 'CONNECT_FAILED')));
+    client.on('error', (err) => this.report(brokerError(url, err)));
     client.on('close', () => this.sessionEnded(client));
   }
 
@@ -390,7 +390,8 @@ export class SparkplugEdgeNode extends EventEmitterBase {
 
   private setState(state: EdgeNodeState, broker?: string): void {
     this.state = state;
-    this.emit('status', { state, ...(broker !== undefined ? { broker } : {}), ...(this.bdSeq !== undefined ? { bdSeq: this.bdSeq } : {}) });
+    const shown = broker !== undefined ? { broker: brokerName(broker) } : {};
+    this.emit('status', { state, ...shown, ...(this.bdSeq !== undefined ? { bdSeq: this.bdSeq } : {}) });
   }
 
   private report(error: PlcError, device?: string): void {

@@ -8,6 +8,7 @@
  * sessions and retained messages, as a broker without `persistence true` does.
  */
 import { spawn, type ChildProcess } from 'node:child_process';
+import * as crypto from 'node:crypto';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
@@ -20,24 +21,59 @@ export function haveMosquitto(): boolean {
   return fs.existsSync(MOSQUITTO);
 }
 
+/** What a broker asks of its clients: TLS with this certificate and key (PEM), and a user and password. */
+export interface MosquittoOptions {
+  tls?: { cert: string; key: string };
+  users?: Readonly<Record<string, string>>;
+}
+
+/**
+ * A password file line as mosquitto 2 reads it (`$7$`: PBKDF2-SHA512, its iterations, base64 salt and hash;
+ * the format mosquitto_passwd writes, see mosquitto's password_file documentation).
+ */
+function passwordLine(user: string, password: string): string {
+  const salt = crypto.randomBytes(12);
+  const hash = crypto.pbkdf2Sync(password, salt, 101, 64, 'sha512');
+  return `${user}:$7$101$${salt.toString('base64')}$${hash.toString('base64')}`;
+}
+
 export class Mosquitto {
   port = 0;
   log = '';
   private child: ChildProcess | undefined;
   private dir: string | undefined;
 
+  constructor(private readonly options: MosquittoOptions = {}) {}
+
   get url(): string {
-    return `mqtt://127.0.0.1:${this.port}`;
+    return `${this.options.tls ? 'mqtts' : 'mqtt'}://127.0.0.1:${this.port}`;
   }
 
   async start(deadline = 10_000): Promise<void> {
     if (this.port === 0) this.port = await freePort();
     this.dir ??= fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-mosquitto-'));
     const config = path.join(this.dir, 'mosquitto.conf');
-    fs.writeFileSync(
-      config,
-      [`listener ${this.port} 127.0.0.1`, 'allow_anonymous true', 'persistence false', 'log_dest stderr', 'log_type all', ''].join('\n'),
-    );
+    const lines = [`listener ${this.port} 127.0.0.1`, 'persistence false', 'log_dest stderr', 'log_type all'];
+    // Started as root, mosquitto drops to the user "mosquitto", which cannot read this 0700 directory's files.
+    if (process.getuid?.() === 0) lines.push('user root');
+    const { tls, users } = this.options;
+    if (tls) {
+      fs.writeFileSync(path.join(this.dir, 'server.pem'), tls.cert);
+      fs.writeFileSync(path.join(this.dir, 'server.key'), tls.key, { mode: 0o600 });
+      lines.push(`certfile ${path.join(this.dir, 'server.pem')}`, `keyfile ${path.join(this.dir, 'server.key')}`);
+    }
+    if (users) {
+      const file = path.join(this.dir, 'passwords');
+      fs.writeFileSync(
+        file,
+        Object.entries(users)
+          .map(([u, p]) => `${passwordLine(u, p)}\n`)
+          .join(''),
+        { mode: 0o600 },
+      );
+      lines.push('allow_anonymous false', `password_file ${file}`);
+    } else lines.push('allow_anonymous true');
+    fs.writeFileSync(config, [...lines, ''].join('\n'));
     const child = spawn(MOSQUITTO, ['-c', config], { stdio: ['ignore', 'pipe', 'pipe'] });
     this.child = child;
     this.log = '';
