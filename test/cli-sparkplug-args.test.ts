@@ -22,7 +22,7 @@ describe('plcwire sparkplug: the command line', () => {
     const o = parse(
       ...BASE,
       '--broker',
-      'mqtts://backup:8883',
+      'mqtt://backup:1883',
       '--device',
       'Line2=s7plus://127.0.0.1:10103?insecure=true',
       '--tags',
@@ -34,7 +34,8 @@ describe('plcwire sparkplug: the command line', () => {
       '--primary-host',
       'SCADA',
     );
-    expect(o.brokers).to.deep.equal(['mqtt://127.0.0.1:1883', 'mqtts://backup:8883']);
+    expect(o.brokers).to.deep.equal(['mqtt://127.0.0.1:1883', 'mqtt://backup:1883']);
+    expect(o.mqtt).to.deep.equal({});
     expect(o).to.include({ group: 'Plant', node: 'Edge1', primaryHost: 'SCADA', interval: 1000, buffer: 10_000 });
     expect(o.devices.map((d) => d.name)).to.deep.equal(['Line1', 'Line2']);
     expect(o.devices[0]).to.include({ url: 's7://127.0.0.1:10102' });
@@ -47,6 +48,71 @@ describe('plcwire sparkplug: the command line', () => {
   it('takes --interval, --buffer and --state-dir', () => {
     const o = parse(...BASE, '--interval', '100', '--buffer', '0', '--state-dir', '/var/lib/plcwire');
     expect(o).to.include({ interval: 100, buffer: 0, stateDir: '/var/lib/plcwire' });
+  });
+
+  describe("the broker's login and TLS", () => {
+    const TLS = ['--broker', 'mqtts://broker.plant:8883', '--group', 'Plant', '--node', 'Edge1', '--device', 'Line1=s7://127.0.0.1:10102'];
+    let dir: string;
+    before(() => (dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-mqtt-'))));
+    after(() => fs.rmSync(dir, { recursive: true, force: true }));
+    const file = (name: string, text: string) => {
+      const f = path.join(dir, name);
+      fs.writeFileSync(f, text);
+      return f;
+    };
+    const PEM = '-----BEGIN CERTIFICATE-----\nMIIB\n-----END CERTIFICATE-----\n';
+
+    it('takes --mqtt-user with the first line of --mqtt-password-file, or PLCWIRE_MQTT_PASSWORD, and --mqtt-ca/--mqtt-cert/--mqtt-key as PEM', () => {
+      const o = parse(
+        ...TLS,
+        '--mqtt-user',
+        'edge1',
+        '--mqtt-password-file',
+        file('pw', 'Secret-1\nignored\n'),
+        '--mqtt-ca',
+        file('ca.pem', PEM),
+        '--mqtt-cert',
+        file('c.pem', PEM),
+        '--mqtt-key',
+        file('k.pem', '-----BEGIN PRIVATE KEY-----\nx\n-----END PRIVATE KEY-----\n'),
+      );
+      expect(o.mqtt).to.include({ username: 'edge1', password: 'Secret-1' });
+      expect(String(o.mqtt.ca)).to.equal(PEM);
+      expect(String(o.mqtt.cert)).to.equal(PEM);
+      const env = process.env['PLCWIRE_MQTT_PASSWORD'];
+      process.env['PLCWIRE_MQTT_PASSWORD'] = 'From-Env';
+      try {
+        expect(parse(...TLS, '--mqtt-user', 'edge1').mqtt).to.deep.equal({ username: 'edge1', password: 'From-Env' });
+      } finally {
+        if (env === undefined) delete process.env['PLCWIRE_MQTT_PASSWORD'];
+        else process.env['PLCWIRE_MQTT_PASSWORD'] = env;
+      }
+    });
+
+    it('refuses a user or password in the broker URL without repeating the password, and every other mistake by name', () => {
+      const err = (() => {
+        try {
+          parse('--broker', 'mqtts://edge1:Top-Secret@broker.plant:8883', ...TLS.slice(2));
+        } catch (e) {
+          return e as Error;
+        }
+        return undefined;
+      })();
+      expect(err).to.be.instanceOf(UsageError);
+      expect(err!.message)
+        .to.match(/"mqtts:\/\/edge1:\*\*\*@broker\.plant:8883": no user or password in the URL/)
+        .and.not.include('Top-Secret');
+      usage([...BASE, '--broker', 'mqtts://b:8883'], /mix mqtts:\/\/ \(wss:\/\/\) and mqtt:\/\/.*fall back to plain text/);
+      usage([...BASE, '--mqtt-ca', file('ca2.pem', PEM)], /--mqtt-ca, --mqtt-cert and --mqtt-key are for mqtts:\/\//);
+      usage([...TLS, '--mqtt-cert', file('c2.pem', PEM)], /--mqtt-cert and --mqtt-key go together/);
+      usage([...TLS, '--mqtt-ca', file('not.pem', 'hello')], /--mqtt-ca .*not\.pem: not a PEM file/);
+      usage([...TLS, '--mqtt-ca', path.join(dir, 'missing.pem')], /--mqtt-ca: .*missing\.pem/);
+      usage([...TLS, '--mqtt-password-file', file('pw2', 'Secret-2\n')], /gives a password but no --mqtt-user/);
+      usage(
+        [...TLS, '--mqtt-user', 'u', '--mqtt-password-file', file('empty', '\n')],
+        /--mqtt-password-file .*empty: its first line is empty/,
+      );
+    });
   });
 
   it('refuses each mistake with a usage error that names the option and the value', () => {

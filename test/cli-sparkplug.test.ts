@@ -15,6 +15,7 @@ import type { AlarmDefinition } from '../lib/alarms/model';
 import { EXIT } from '../lib/cli/io';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
+import { generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import { DataType } from '../lib/sparkplug/datatypes';
 import type { DataSet } from '../lib/sparkplug/model';
 import { parseUrl, type S7Endpoint } from '../lib/url';
@@ -34,8 +35,8 @@ interface Run {
   exit: Promise<number | null>;
 }
 
-function run(args: string[]): Run {
-  const child = spawn(process.execPath, [BIN, ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
+function run(args: string[], env: NodeJS.ProcessEnv = process.env): Run {
+  const child = spawn(process.execPath, [BIN, ...args], { stdio: ['ignore', 'pipe', 'pipe'], env });
   let err = '';
   child.stdout!.resume();
   child.stderr!.on('data', (d: Buffer) => (err += d.toString()));
@@ -441,5 +442,100 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
     expect(out).to.match(/--alarms NAME +the device's PLC's alarms as its metrics Alarms\/Active/);
     expect(out).to.match(/NAME:Alarms\/Acknowledge lets a host acknowledge/);
     expect(out).to.match(/--buffer-dir DIR +keep them on disk in DIR too/);
+    expect(out).to.match(/--mqtt-user U +the broker's user; its password is the first line of --mqtt-password-file F/);
+    expect(out).to.match(/--mqtt-ca F +mqtts:\/\/ \(wss:\/\/\): the CA \(PEM\)/);
+  });
+});
+
+describe('plcwire sparkplug: a TLS broker with a login (mosquitto with a TLS listener and a password file)', function () {
+  this.timeout(90_000);
+  const SECRET = 'Edge-Secret-77';
+  let ca: GeneratedCertificate;
+  let broker: Mosquitto;
+  const server = new S7Server({ port: 0, profile: 's7-1500' });
+  let plc = '';
+  let dir = '';
+  const children: ChildProcess[] = [];
+  let listener: SparkplugListener | undefined;
+
+  before(async function () {
+    const missing = missingMosquitto();
+    if (missing) {
+      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
+      skipBecause(this, missing);
+    }
+    ca = await generateCertificate({ commonName: 'plant CA', ca: true, keyType: 'ec' });
+    const leaf = await generateCertificate({ commonName: 'broker', hosts: ['127.0.0.1'], issuer: ca, keyType: 'ec' });
+    broker = new Mosquitto({ tls: { cert: leaf.cert, key: leaf.key }, users: { edge1: SECRET, scada: 'host-pw' } });
+    await broker.start();
+    plc = `s7://127.0.0.1:${await server.listen()}?rack=0&slot=1`;
+    dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-spb-tls-'));
+    fs.writeFileSync(path.join(dir, 'ca.pem'), ca.cert);
+    const other = await generateCertificate({ commonName: 'another CA', ca: true, keyType: 'ec' });
+    fs.writeFileSync(path.join(dir, 'other-ca.pem'), other.cert);
+  });
+  afterEach(async () => {
+    for (const c of children.splice(0)) if (c.exitCode === null && c.signalCode === null) c.kill('SIGKILL');
+    await listener?.close();
+    listener = undefined;
+  });
+  after(async () => {
+    await server.close();
+    await broker?.dispose();
+    if (dir) fs.rmSync(dir, { recursive: true, force: true });
+  });
+
+  const edge = (caFile: string) => {
+    const r = run(
+      ['sparkplug', '--broker', broker.url, '--mqtt-ca', caFile, '--mqtt-user', 'edge1', '--group', 'Plant', '--node', 'Tls1'].concat([
+        '--device',
+        `Line1=${plc}`,
+        '--tags',
+        'Line1:DB1.DBW0:INT',
+        '--interval',
+        '100',
+      ]),
+      { ...process.env, PLCWIRE_MQTT_PASSWORD: SECRET },
+    );
+    children.push(r.child);
+    return r;
+  };
+
+  it('reaches it with --mqtt-ca, --mqtt-user and PLCWIRE_MQTT_PASSWORD: births a host hears; the password is on no line it prints', async () => {
+    listener = new SparkplugListener(broker.url, 'spBv1.0/#', { ca: ca.cert, username: 'scada', password: 'host-pw' });
+    await listener.ready();
+    const r = edge(path.join(dir, 'ca.pem'));
+    await r.errMatches(/online on mqtts:\/\/127\.0\.0\.1:\d+ \(bdSeq \d+\): births sent/);
+    const dbirth = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Line1', 20_000);
+    expect(dbirth.payload!.metrics.map((m) => m.name)).to.deep.equal(['DB1.DBW0:INT']);
+    r.child.kill('SIGINT');
+    expect(await r.exit).to.equal(EXIT.INTERRUPTED);
+    expect(r.err()).to.not.include(SECRET);
+  });
+
+  it('a CA that did not sign the broker: "its TLS certificate was refused", never online, nothing published', async () => {
+    listener = new SparkplugListener(broker.url, 'spBv1.0/#', { ca: ca.cert, username: 'scada', password: 'host-pw' });
+    await listener.ready();
+    const r = edge(path.join(dir, 'other-ca.pem'));
+    await r.errMatches(/plcwire: broker mqtts:\/\/127\.0\.0\.1:\d+: its TLS certificate was refused \(.*\); nothing was sent/);
+    r.child.kill('SIGINT');
+    expect(await r.exit).to.equal(EXIT.INTERRUPTED);
+    expect(r.err()).to.not.match(/online on/);
+    expect(listener.heard.filter((m) => m.topic.includes('/Tls1'))).to.deep.equal([]);
+  });
+
+  it('a password in the broker URL is exit 2 and one line that does not repeat it', async () => {
+    const r = run(
+      ['sparkplug', '--broker', broker.url.replace('mqtts://', `mqtts://edge1:${SECRET}@`), '--group', 'G', '--node', 'E'].concat([
+        '--device',
+        `L=${plc}`,
+        '--tags',
+        'L:MW0',
+      ]),
+    );
+    children.push(r.child);
+    expect(await r.exit).to.equal(EXIT.USAGE);
+    expect(r.err()).to.match(/^plcwire: --broker "mqtts:\/\/edge1:\*\*\*@127\.0\.0\.1:\d+": no user or password in the URL .*\n$/);
+    expect(r.err()).to.not.include(SECRET);
   });
 });

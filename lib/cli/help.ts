@@ -153,6 +153,7 @@ example:
   sparkplug: `usage: plcwire sparkplug --broker mqtt://host:1883 [--broker ...] --group G --node E --device NAME=<url> [--device ...]
          [--symbols file --db NAME=N]... [--tags NAME:<tag>,...] [--writable NAME:<tag>,...] [--alarms NAME]...
          [--primary-host H] [--interval ms] [--state-dir DIR] [--buffer N] [--buffer-dir DIR]
+         [--mqtt-user U [--mqtt-password-file F]] [--mqtt-ca ca.pem] [--mqtt-cert cert.pem --mqtt-key key.pem]
 Runs a Sparkplug B 3.0 edge node until Ctrl-C (exit code 130; NDEATH is sent before it disconnects): each PLC
 a device whose tags are its metrics, typed from the PLC's types, data by exception every interval.
   --broker url       mqtt://, mqtts://, ws:// or wss://; repeat for a list: the next one when a broker fails or
@@ -172,6 +173,11 @@ ${SYMBOL_OPTIONS}
   --state-dir DIR    keep bdSeq in DIR between runs (Sparkplug hosts expect it to go on, not start at 0)
   --buffer N         store-and-forward: most values kept while no session is up (default 10000; 0: none)
   --buffer-dir DIR   keep them on disk in DIR too, so a restarted edge node forwards what an earlier one kept
+  --mqtt-user U      the broker's user; its password is the first line of --mqtt-password-file F, else
+                     PLCWIRE_MQTT_PASSWORD (never in the URL or a flag)
+  --mqtt-ca F        mqtts:// (wss://): the CA (PEM) that signed the broker's certificate, else the system's;
+                     a certificate it did not sign is refused and nothing is sent
+  --mqtt-cert F      with --mqtt-key F: a client certificate (PEM) for brokers that ask for one
 ${PASSWORD_OPTION}
 ${URL_NOTE}
 example:

@@ -44,21 +44,22 @@ export function passwordOption(
       throw new UsageError(`--password-file is for ${schemesOffering('password')} URLs; ${endpoint.protocol}:// has no password`);
     return {};
   }
-  if (file !== undefined) return { password: passwordFromFile(file) };
+  if (file !== undefined) return { password: secretFromFile('password-file', file) };
   const fromEnv = env[PASSWORD_ENV];
   return fromEnv === undefined || fromEnv === '' ? {} : { password: fromEnv };
 }
 
-function passwordFromFile(file: string): string {
+/** A password kept in `file` (its first line, the line end trimmed) of option --`name`; errors name the file, never its content. */
+export function secretFromFile(name: string, file: string): string {
   let text: string;
   try {
     text = readInputFile(file).toString('utf8');
   } catch (err) {
     // Why (no such file, no permission) and the file's name; nothing of its content.
-    throw new UsageError(`--password-file: ${(err as Error).message}`);
+    throw new UsageError(`--${name}: ${(err as Error).message}`);
   }
   const first = text.replace(/^\uFEFF/, '').split(/\r?\n/, 1)[0] ?? '';
-  if (first === '') throw new UsageError(`--password-file ${file}: its first line is empty (the password is the first line)`);
+  if (first === '') throw new UsageError(`--${name} ${file}: its first line is empty (the password is the first line)`);
   return first;
 }
 

@@ -16,7 +16,9 @@ import * as fs from 'node:fs';
 import { driverOf, schemesOffering } from '../drivers';
 import { ALARM_METRICS } from '../sparkplug/alarms';
 import { parseUrl, type Endpoint } from '../url';
+import type * as mqtt from 'mqtt';
 import { intFlag, listFlag, stringFlag, UsageError, type ParsedArgs } from './args';
+import { brokerUrl, MQTT_FLAGS, mqttOptions } from './sparkplug-mqtt';
 
 export const SPARKPLUG_FLAGS = [
   'broker',
@@ -30,6 +32,7 @@ export const SPARKPLUG_FLAGS = [
   'state-dir',
   'buffer',
   'buffer-dir',
+  ...MQTT_FLAGS,
 ];
 
 /** One --device with its --tags and --writable. */
@@ -46,6 +49,8 @@ export interface SparkplugCliDevice {
 
 export interface SparkplugCliOptions {
   brokers: string[];
+  /** The broker login and TLS (lib/cli/sparkplug-mqtt.ts). */
+  mqtt: mqtt.IClientOptions;
   group: string;
   node: string;
   devices: SparkplugCliDevice[];
@@ -69,18 +74,6 @@ function sparkplugId(flag: string, value: string | undefined): string {
   const bad = /[/+#]/.exec(value);
   if (bad) throw new UsageError(`--${flag} ${JSON.stringify(value)}: a Sparkplug id cannot hold "${bad[0]}"`);
   return value;
-}
-
-function brokerUrl(raw: string): string {
-  let url: URL;
-  try {
-    url = new URL(raw);
-  } catch {
-    throw new UsageError(`--broker ${JSON.stringify(raw)} is not a URL: give mqtt://host[:1883] or mqtts://host[:8883]`);
-  }
-  if (!['mqtt:', 'mqtts:', 'ws:', 'wss:'].includes(url.protocol))
-    throw new UsageError(`--broker ${JSON.stringify(raw)}: the scheme must be mqtt://, mqtts://, ws:// or wss://`);
-  return raw;
 }
 
 /** The --device a NAME of --tags, --writable or --alarms names. */
@@ -148,6 +141,7 @@ export function sparkplugOptions(args: ParsedArgs): SparkplugCliOptions {
   const primaryHost = args.flags.has('primary-host') ? sparkplugId('primary-host', stringFlag(args, 'primary-host')) : undefined;
   return {
     brokers,
+    mqtt: mqttOptions(args, brokers),
     group,
     node,
     devices: [...devices.values()],

@@ -92,6 +92,7 @@ export async function sparkplug(rest: string[], args: ParsedArgs, io: CliIo): Pr
       buffer: { count: options.buffer, ...(options.bufferDir !== undefined ? { dir: options.bufferDir } : {}) },
       ...(options.primaryHost !== undefined ? { primaryHost: options.primaryHost } : {}),
       ...(options.stateDir !== undefined ? { stateDir: options.stateDir } : {}),
+      mqtt: options.mqtt,
     });
     node.on('status', (s: EdgeNodeStatus) => report(describe(s, options.primaryHost)));
     node.on('error', (err: PlcError) => report(err.message));

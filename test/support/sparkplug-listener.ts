@@ -27,8 +27,9 @@ export class SparkplugListener {
   private readonly waiters = new Set<() => void>();
   private readonly subscribed: Promise<void>;
 
-  constructor(url: string, topic = 'spBv1.0/#') {
-    this.client = mqtt.connect(url, { reconnectPeriod: 200, connectTimeout: 5000 });
+  /** `options`: further MQTT.js options (a TLS broker's ca, a user and password). */
+  constructor(url: string, topic = 'spBv1.0/#', options: Record<string, unknown> = {}) {
+    this.client = mqtt.connect(url, { reconnectPeriod: 200, connectTimeout: 5000, ...options });
     this.client.on('error', () => undefined);
     this.subscribed = new Promise((resolve) => this.client.on('connect', () => this.client.subscribe(topic, { qos: 1 }, () => resolve())));
     this.client.on('message', (t: string, bytes: Buffer, packet: { retain: boolean }) => {
