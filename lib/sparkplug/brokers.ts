@@ -91,3 +91,28 @@ export function brokerError(url: string, err: unknown): PlcError {
   }
   return new PlcError('CONNECT_FAILED', `broker ${name}: ${message}`, { cause: err });
 }
+
+/**
+ * A broker's connection errors as they are told: the first of an outage, and then only one that says something
+ * else (a broker that keeps refusing the certificate is one error, not one per reconnect); a session that
+ * starts ends the outage.
+ */
+export class BrokerErrors {
+  private last: string | undefined;
+
+  constructor(private readonly tell: (error: PlcError) => void) {}
+
+  /** Tells the typed error of `err`, unless it repeats the one told last. */
+  take(url: string, err: unknown): void {
+    const e = brokerError(url, err);
+    const key = `${e.code} ${e.message}`;
+    if (key === this.last) return;
+    this.last = key;
+    this.tell(e);
+  }
+
+  /** A session started: the next error is told again. */
+  reset(): void {
+    this.last = undefined;
+  }
+}

@@ -13,7 +13,7 @@ import * as mqtt from 'mqtt';
 import { PlcError, toPlcError } from '../errors';
 import { EventEmitterBase, type TypedEvents } from '../client/events';
 import { BdSeqStore } from './bdseq';
-import { brokerError, brokerName, checkBrokers } from './brokers';
+import { BrokerErrors, brokerName, checkBrokers } from './brokers';
 import { checkNodeCommand, executeCommand } from './commands';
 import { SparkplugDevice } from './device';
 import { HostStateTracker, parseHostState } from './host-state';
@@ -41,6 +41,7 @@ export class SparkplugEdgeNode extends EventEmitterBase {
   /** DDATA the broker has not confirmed (by a PINGRESP) yet: stored again when a session ends without our DISCONNECT. */
   private readonly unconfirmed: UnconfirmedData;
   private readonly host = new HostStateTracker();
+  private readonly brokerErrors = new BrokerErrors((e) => this.report(e));
   /** Devices born in this session. */
   private readonly born = new Set<string>();
   private readonly unsubscribers: (() => void)[] = [];
@@ -184,11 +185,12 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     client.on('message', (topic, payload) => this.received(client, topic, payload));
     client.on('packetsend', (p) => p.cmd === 'pingreq' && this.unconfirmed.pingSent());
     client.on('packetreceive', (p) => p.cmd === 'pingresp' && this.unconfirmed.pingAnswered());
-    client.on('error', (err) => this.report(brokerError(url, err)));
+    client.on('error', (err) => this.brokerErrors.take(url, err));
     client.on('close', () => this.sessionEnded(client));
   }
 
   private async sessionStarted(client: mqtt.MqttClient): Promise<void> {
+    this.brokerErrors.reset();
     const subscriptions: Record<string, { qos: 1 }> = { [topicOf('NCMD', this.group, this.node)]: { qos: 1 } };
     for (const device of this.devices) {
       if (device.commandable) subscriptions[topicOf('DCMD', this.group, this.node, device.name)] = { qos: 1 };
@@ -254,11 +256,8 @@ export class SparkplugEdgeNode extends EventEmitterBase {
     } catch (err) {
       return this.report(toPlcError(err, 'PROTOCOL_ERROR'));
     }
-    if (parsed.type === 'NCMD') this.nodeCommand(payload);
-    else if (parsed.type === 'DCMD') void this.deviceCommand(parsed.device!, payload);
-  }
-
-  private nodeCommand(payload: SparkplugPayload): void {
+    if (parsed.type === 'DCMD') return void this.deviceCommand(parsed.device!, payload);
+    if (parsed.type !== 'NCMD') return;
     const { rebirth, errors } = checkNodeCommand(payload);
     for (const e of errors) this.report(e);
     if (rebirth) this.rebirth();
