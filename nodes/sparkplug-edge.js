@@ -14,6 +14,10 @@ module.exports = function (RED) {
     RED.nodes.createNode(this, config);
     const node = this;
     const creds = node.credentials || {};
+    // The CA, client certificate and key of Node-RED's tls-config node, for mqtts:// and wss:// brokers.
+    const tlsNode = config.tls ? RED.nodes.getNode(config.tls) : null;
+    const tls = {};
+    if (tlsNode) tlsNode.addTLSOptions(tls);
     try {
       node.hub = new SparkplugEdgeHub({
         brokers: config.brokers,
@@ -26,6 +30,7 @@ module.exports = function (RED) {
         interval: config.interval,
         username: creds.username,
         password: creds.password,
+        ...(tlsNode ? { tls } : {}),
       });
     } catch (err) {
       node.problem = err;

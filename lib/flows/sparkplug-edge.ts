@@ -8,6 +8,7 @@
  * later. What it does reaches the nodes as status and errors.
  */
 import { EventEmitter } from 'node:events';
+import type * as mqtt from 'mqtt';
 import { driverOf, schemesOffering } from '../drivers';
 import { PlcError } from '../errors';
 import type { PlcClient } from '../types';
@@ -33,6 +34,8 @@ export interface EdgeHubConfig {
   interval?: string | number;
   username?: string;
   password?: string;
+  /** What Node-RED's tls-config node gives (addTLSOptions): the CA, a client certificate and key, whether to verify the broker. */
+  tls?: Pick<mqtt.IClientOptions, 'ca' | 'cert' | 'key' | 'servername' | 'rejectUnauthorized' | 'ALPNProtocols'> & { passphrase?: string };
 }
 
 /** One device node's PLC. */
@@ -184,7 +187,7 @@ export class SparkplugEdgeHub extends EventEmitter {
       ),
       ...(c.primaryHost?.trim() ? { primaryHost: c.primaryHost.trim() } : {}),
       ...(c.stateDir?.trim() ? { stateDir: c.stateDir.trim() } : {}),
-      ...(c.username ? { mqtt: { username: c.username, ...(c.password ? { password: c.password } : {}) } } : {}),
+      mqtt: { ...c.tls, ...(c.username ? { username: c.username, ...(c.password ? { password: c.password } : {}) } : {}) },
     });
     node.on('status', (s) => {
       this.status = s;

@@ -21,7 +21,8 @@ import { missingMosquitto, sparkplugRequired } from '../support/sparkplug-peers'
 import { skipBecause } from '../support/skip';
 import { SparkplugListener, type HeardMessage } from '../support/sparkplug-listener';
 import { fetchWriteSim, s7Sim } from './sims';
-import { helper, nodes, Recorder, ROOT, until, type Sim } from './support';
+import { generateCertificate, type GeneratedCertificate } from '../../lib/s7plus/transport/cert';
+import { CORE_NODES, helper, nodes, Recorder, ROOT, until, type Sim } from './support';
 
 const edgeNode = require(path.join(ROOT, 'nodes/sparkplug-edge.js'));
 const deviceNode = require(path.join(ROOT, 'nodes/sparkplug-device.js'));
@@ -276,5 +277,83 @@ describe('nodes: Sparkplug B edge node and device, mosquitto and the S7 simulato
         ['devB', 'Press'],
       ]);
     });
+  });
+});
+
+describe("nodes: the Sparkplug edge node on a TLS broker with a login (Node-RED's tls-config node, mosquitto)", function () {
+  this.timeout(60_000);
+  const SECRET = 'Red-Edge-Secret';
+  const tlsNode = require(path.join(CORE_NODES, 'core/network/05-tls.js'));
+  let ca: GeneratedCertificate;
+  let broker: Mosquitto;
+  let sim: Sim;
+  let dir = '';
+  let listener: SparkplugListener | undefined;
+
+  before(async function () {
+    const missing = missingMosquitto();
+    if (missing) {
+      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
+      skipBecause(this, missing);
+    }
+    ca = await generateCertificate({ commonName: 'plant CA', ca: true, keyType: 'ec' });
+    const leaf = await generateCertificate({ commonName: 'broker', hosts: ['127.0.0.1'], issuer: ca, keyType: 'ec' });
+    broker = new Mosquitto({ tls: { cert: leaf.cert, key: leaf.key }, users: { edge: SECRET, scada: 'host-pw' } });
+    await broker.start();
+    sim = await s7Sim();
+    dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-red-tls-'));
+    fs.writeFileSync(path.join(dir, 'ca.pem'), ca.cert);
+  });
+  beforeEach(() => helper.startServer());
+  afterEach(async () => {
+    await helper.unload();
+    await helper.stopServer();
+    await listener?.close();
+    listener = undefined;
+  });
+  after(async () => {
+    await sim?.close();
+    await broker?.dispose();
+    if (dir) fs.rmSync(dir, { recursive: true, force: true });
+  });
+
+  const flow = (caFile: string) => [
+    { id: 'tab', type: 'tab', label: 'tls' },
+    { id: 'tlscfg', type: 'tls-config', name: 'plant CA', cert: '', key: '', ca: caFile, verifyservercert: true },
+    { id: 'conn', type: 'plcwire-connection', url: sim.url },
+    { id: 'edge', type: 'plcwire-sparkplug-edge', brokers: broker.url, group: 'Plant', nodeId: 'TlsEdge', interval: 50, tls: 'tlscfg' },
+    {
+      id: 'dev',
+      type: 'plcwire-sparkplug-device',
+      z: 'tab',
+      edge: 'edge',
+      connection: 'conn',
+      device: 'Line1',
+      tags: [{ name: 'Level', address: sim.addr(0) }],
+    },
+    { id: 'catcher', type: 'catch', z: 'tab', scope: null, uncaught: false, wires: [['caught']] },
+    { id: 'caught', type: 'helper', z: 'tab' },
+  ];
+  const credentials = { edge: { username: 'edge', password: SECRET } };
+
+  it('births through TLS with the CA of a tls-config node and the user and password of its credentials', async () => {
+    listener = new SparkplugListener(broker.url, 'spBv1.0/#', { ca: ca.cert, username: 'scada', password: 'host-pw' });
+    await listener.ready();
+    await helper.load([nodes.connection, edgeNode, deviceNode, nodes.catch, tlsNode], flow(path.join(dir, 'ca.pem')), credentials);
+    const dbirth = await listener.waitFor((m) => m.type === 'DBIRTH' && m.device === 'Line1', 30_000);
+    expect(dbirth.payload!.metrics.map((m) => m.name)).to.deep.equal(['Level']);
+  });
+
+  it('a CA that did not sign the broker: the device node reports CERTIFICATE_UNTRUSTED on Catch and nothing is published', async () => {
+    const other = await generateCertificate({ commonName: 'another CA', ca: true, keyType: 'ec' });
+    fs.writeFileSync(path.join(dir, 'other.pem'), other.cert);
+    listener = new SparkplugListener(broker.url, 'spBv1.0/#', { ca: ca.cert, username: 'scada', password: 'host-pw' });
+    await listener.ready();
+    await helper.load([nodes.connection, edgeNode, deviceNode, nodes.catch, tlsNode], flow(path.join(dir, 'other.pem')), credentials);
+    const caught = new Recorder(helper.getNode('caught'));
+    const msg = await caught.next(() => true, 20_000, 'the refusal on Catch');
+    expect(msg.error.message).to.match(/its TLS certificate was refused .*nothing was sent/);
+    expect(JSON.stringify(msg)).to.not.include(SECRET);
+    expect(listener.heard.filter((m) => m.topic.includes('/TlsEdge'))).to.deep.equal([]);
   });
 });

@@ -10,7 +10,9 @@ export const ROOT = path.resolve(__dirname, '../../..');
 const NODES_DIR = path.join(ROOT, 'nodes') + path.sep;
 const LIB_DIR = path.join(ROOT, 'dist', 'lib') + path.sep;
 export const RED_PATH = require.resolve(process.env.PLCWIRE_NODE_RED || 'node-red');
-const CORE = path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(RED_PATH)] }));
+/** Node-RED's core nodes (catch, status, tls-config) of the Node-RED this run uses. */
+export const CORE_NODES = path.dirname(require.resolve('@node-red/nodes/package.json', { paths: [path.dirname(RED_PATH)] }));
+const CORE = CORE_NODES;
 
 export const helper: any = require('node-red-node-test-helper');
 helper.init(RED_PATH);
