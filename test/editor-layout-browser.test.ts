@@ -324,6 +324,10 @@ describe('editor in Chromium: the S7CommPlus dialogs, whole at 1024x700 and 1600
         expect(await page.textContent('label[for="node-config-input-bufferDir"]'), locale).to.contain(edge.label.bufferDir);
         expect(await page.getAttribute('#node-config-input-bufferDir', 'placeholder'), locale).to.equal(edge.placeholder.bufferDir);
         expect(await cutOff(page, ['#node-config-input-bufferDir', 'label[for="node-config-input-bufferDir"]']), locale).to.deep.equal([]);
+        // TLS: Node-RED's tls-config node, chosen (or added) from a select the editor draws for the config node type.
+        expect(await page.textContent('label[for="node-config-input-tls"]'), locale).to.contain(edge.label.tls);
+        expect(await page.isVisible('#node-config-input-tls'), `${locale}: the tls-config select`).to.equal(true);
+        expect(await cutOff(page, ['#node-config-input-tls', 'label[for="node-config-input-tls"]']), locale).to.deep.equal([]);
         await page.click('#node-config-dialog-cancel');
         expect(errors.map((e) => e.message)).to.deep.equal([]);
       } finally {
