@@ -67,7 +67,7 @@ const UNTRUSTED = new Set([
  * nothing was sent), ACCESS_DENIED (the broker refused the user or password: MQTT 3.1.1 CONNACK 4 and 5, MQTT 5
  * 0x86 and 0x87), else CONNECT_FAILED; each names the broker without its password.
  */
-export function brokerError(url: string, err: unknown): PlcError {
+function brokerError(url: string, err: unknown): PlcError {
   if (err instanceof PlcError) return err;
   const e = err as { code?: unknown; message?: unknown };
   const message = String(e?.message ?? err);
