@@ -324,6 +324,14 @@ describe('editor in Chromium: the S7CommPlus dialogs, whole at 1024x700 and 1600
         expect(await page.textContent('label[for="node-config-input-bufferDir"]'), locale).to.contain(edge.label.bufferDir);
         expect(await page.getAttribute('#node-config-input-bufferDir', 'placeholder'), locale).to.equal(edge.placeholder.bufferDir);
         expect(await cutOff(page, ['#node-config-input-bufferDir', 'label[for="node-config-input-bufferDir"]']), locale).to.deep.equal([]);
+        // The default poll interval (1000 ms) is a valid value of its field (with step 100 from min 10 the browser marked it red).
+        expect(await page.inputValue('#node-config-input-interval'), locale).to.equal('1000');
+        expect(
+          await page.$eval('#node-config-input-interval', (el) => el.matches(':invalid')),
+          `${locale}: 1000 ms shown as invalid`,
+        ).to.equal(false);
+        // The Name row says so (its key was another catalog's, and the label showed only its icon).
+        expect((await page.textContent('label[for="node-config-input-name"]'))?.trim(), locale).to.equal(edge.label.name);
         // TLS: Node-RED's tls-config node, chosen (or added) from a select the editor draws for the config node type.
         expect(await page.textContent('label[for="node-config-input-tls"]'), locale).to.contain(edge.label.tls);
         expect(await page.isVisible('#node-config-input-tls'), `${locale}: the tls-config select`).to.equal(true);
