@@ -15,13 +15,12 @@ import type { AlarmDefinition } from '../lib/alarms/model';
 import { EXIT } from '../lib/cli/io';
 import { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
-import { generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
+import type { GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import { DataType } from '../lib/sparkplug/datatypes';
 import type { DataSet } from '../lib/sparkplug/model';
 import { parseUrl, type S7Endpoint } from '../lib/url';
-import { Mosquitto } from './support/mosquitto';
-import { missingMosquitto, sparkplugRequired } from './support/sparkplug-peers';
-import { skipBecause } from './support/skip';
+import { Mosquitto, testCa, tlsMosquitto } from './support/mosquitto';
+import { requirePeers } from './support/sparkplug-peers';
 import { SparkplugListener, type HeardMessage } from './support/sparkplug-listener';
 import { until } from './support/wait';
 
@@ -68,11 +67,7 @@ describe('plcwire sparkplug: the real binary, mosquitto and the S7 simulator', f
   let listener: SparkplugListener | undefined;
 
   before(async function () {
-    const missing = missingMosquitto();
-    if (missing) {
-      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
-      skipBecause(this, missing);
-    }
+    requirePeers(this);
     await broker.start();
     plc = `s7://127.0.0.1:${await server.listen()}?rack=0&slot=1`;
     stateDir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-spb-cli-'));
@@ -459,19 +454,14 @@ describe('plcwire sparkplug: a TLS broker with a login (mosquitto with a TLS lis
   let listener: SparkplugListener | undefined;
 
   before(async function () {
-    const missing = missingMosquitto();
-    if (missing) {
-      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
-      skipBecause(this, missing);
-    }
-    ca = await generateCertificate({ commonName: 'plant CA', ca: true, keyType: 'ec' });
-    const leaf = await generateCertificate({ commonName: 'broker', hosts: ['127.0.0.1'], issuer: ca, keyType: 'ec' });
-    broker = new Mosquitto({ tls: { cert: leaf.cert, key: leaf.key }, users: { edge1: SECRET, scada: 'host-pw' } });
+    requirePeers(this);
+    ca = await testCa('plant CA');
+    broker = await tlsMosquitto(ca, { edge1: SECRET, scada: 'host-pw' });
     await broker.start();
     plc = `s7://127.0.0.1:${await server.listen()}?rack=0&slot=1`;
     dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-spb-tls-'));
     fs.writeFileSync(path.join(dir, 'ca.pem'), ca.cert);
-    const other = await generateCertificate({ commonName: 'another CA', ca: true, keyType: 'ec' });
+    const other = await testCa('another CA');
     fs.writeFileSync(path.join(dir, 'other-ca.pem'), other.cert);
   });
   afterEach(async () => {

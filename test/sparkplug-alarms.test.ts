@@ -18,7 +18,8 @@ import type { DataSet, SparkplugMetric } from '../lib/sparkplug/model';
 import { encodePayload } from '../lib/sparkplug/payload';
 import type { PlcClient } from '../lib/types';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
-import { haveMosquitto, Mosquitto } from './support/mosquitto';
+import { Mosquitto } from './support/mosquitto';
+import { requirePeers } from './support/sparkplug-peers';
 import { startPlusSimulator, type PlusSimulator } from './support/s7plus-sim';
 import { TestHost, type Received } from './support/sparkplug-host';
 import { until, waitFor } from './support/wait';
@@ -48,7 +49,7 @@ describe('Sparkplug: a PLC’s alarms as metrics of its device (issue #34)', fun
   let node: SparkplugEdgeNode | undefined;
 
   before(async function () {
-    if (!haveMosquitto()) this.skip();
+    requirePeers(this);
     await broker.start();
   });
   after(() => broker.dispose());

@@ -10,11 +10,12 @@ import * as mqtt from 'mqtt';
 import { PlcError } from '../lib/errors';
 import { S7Server } from '../lib/s7/server';
 import { createClient } from '../lib/connect';
-import { generateCertificate, type GeneratedCertificate } from '../lib/s7plus/transport/cert';
+import type { GeneratedCertificate } from '../lib/s7plus/transport/cert';
 import { brokerName, checkBrokers } from '../lib/sparkplug/brokers';
 import { SparkplugEdgeNode, type SparkplugEdgeNodeOptions } from '../lib/sparkplug';
 import type { EdgeNodeStatus } from '../lib/sparkplug/options';
-import { haveMosquitto, Mosquitto } from './support/mosquitto';
+import { Mosquitto, testCa, tlsMosquitto } from './support/mosquitto';
+import { requirePeers } from './support/sparkplug-peers';
 import { until } from './support/wait';
 
 const SECRET = 's3cret-Pa55';
@@ -59,11 +60,10 @@ describe('Sparkplug brokers: URLs, TLS and a user and password (issue #34)', fun
     let node: SparkplugEdgeNode | undefined;
 
     before(async function () {
-      if (!haveMosquitto()) this.skip();
-      ca = await generateCertificate({ commonName: 'plant CA', ca: true, keyType: 'ec' });
-      otherCa = await generateCertificate({ commonName: 'another CA', ca: true, keyType: 'ec' });
-      const leaf = await generateCertificate({ commonName: 'broker', hosts: ['localhost', '127.0.0.1'], issuer: ca, keyType: 'ec' });
-      broker = new Mosquitto({ tls: { cert: leaf.cert, key: leaf.key }, users: { edge: SECRET, scada: 'host-pw' } });
+      requirePeers(this);
+      ca = await testCa('plant CA');
+      otherCa = await testCa('another CA');
+      broker = await tlsMosquitto(ca, { edge: SECRET, scada: 'host-pw' }, ['localhost', '127.0.0.1']);
       await broker.start();
       server = new S7Server({ port: 0, profile: 's7-1500', layout: { dbs: { 1: 16 } } });
       await server.listen();
@@ -143,8 +143,7 @@ describe('Sparkplug brokers: URLs, TLS and a user and password (issue #34)', fun
     });
 
     it('the right CA, but a certificate made for another name (broker.plant, reached as 127.0.0.1) is refused too', async () => {
-      const leaf = await generateCertificate({ commonName: 'broker', hosts: ['broker.plant'], issuer: ca, keyType: 'ec' });
-      const other = new Mosquitto({ tls: { cert: leaf.cert, key: leaf.key }, users: { edge: SECRET } });
+      const other = await tlsMosquitto(ca, { edge: SECRET }, ['broker.plant']);
       await other.start();
       try {
         const events = { status: [] as EdgeNodeStatus[], errors: [] as PlcError[] };

@@ -13,7 +13,8 @@ import type { SparkplugMetric } from '../lib/sparkplug/model';
 import { encodePayload } from '../lib/sparkplug/payload';
 import { parseUrl, type S7Endpoint } from '../lib/url';
 import { flattenSymbol } from '../lib/sparkplug/types';
-import { haveMosquitto, Mosquitto } from './support/mosquitto';
+import { Mosquitto } from './support/mosquitto';
+import { requirePeers } from './support/sparkplug-peers';
 import { TestHost } from './support/sparkplug-host';
 import { compileClientSources } from './support/symbol-sources';
 import { until, waitFor } from './support/wait';
@@ -31,7 +32,7 @@ describe('Sparkplug edge node against mosquitto and the S7 simulator', function 
   let stateDir: string;
 
   before(function () {
-    if (!haveMosquitto()) this.skip();
+    requirePeers(this);
   });
 
   beforeEach(async () => {

@@ -6,7 +6,8 @@ import { S7PlusService } from '../lib/s7plus/server';
 import { generateCertificate } from '../lib/s7plus/transport/cert';
 import { SparkplugEdgeNode } from '../lib/sparkplug';
 import { DB_NUMBERS, SOURCES } from './fixtures/s7plus';
-import { haveMosquitto, Mosquitto } from './support/mosquitto';
+import { Mosquitto } from './support/mosquitto';
+import { requirePeers } from './support/sparkplug-peers';
 import { TestHost } from './support/sparkplug-host';
 
 describe('Sparkplug edge node fed by the PLC pushes (S7CommPlus subscription)', function () {
@@ -19,7 +20,7 @@ describe('Sparkplug edge node fed by the PLC pushes (S7CommPlus subscription)', 
   let node: SparkplugEdgeNode | undefined;
 
   before(function () {
-    if (!haveMosquitto()) this.skip();
+    requirePeers(this);
   });
 
   beforeEach(async () => {

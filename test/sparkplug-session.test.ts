@@ -10,7 +10,8 @@ import { SparkplugEdgeNode, type SparkplugEdgeNodeOptions } from '../lib/sparkpl
 import { DataType } from '../lib/sparkplug/datatypes';
 import { encodePayload } from '../lib/sparkplug/payload';
 import { parseUrl, type S7Endpoint } from '../lib/url';
-import { haveMosquitto, Mosquitto } from './support/mosquitto';
+import { Mosquitto } from './support/mosquitto';
+import { requirePeers } from './support/sparkplug-peers';
 import { BlackholeProxy } from './support/net';
 import { TestHost } from './support/sparkplug-host';
 import { until } from './support/wait';
@@ -30,7 +31,7 @@ describe('Sparkplug edge node sessions: primary host, brokers, PLC links, store-
   let child: ChildProcess | undefined;
 
   before(function () {
-    if (!haveMosquitto()) this.skip();
+    requirePeers(this);
   });
 
   beforeEach(async () => {

@@ -12,8 +12,7 @@ import type { S7Client } from '../lib/s7/client';
 import { S7Server } from '../lib/s7/server';
 import { SparkplugEdgeNode } from '../lib/sparkplug/edge-node';
 import { Mosquitto } from './support/mosquitto';
-import { missingMosquitto, sparkplugRequired } from './support/sparkplug-peers';
-import { skipBecause } from './support/skip';
+import { missingMosquitto, requirePeers } from './support/sparkplug-peers';
 import { TahuHost, missingTahu, type TahuLine, type TahuMetric } from './support/tahu';
 import { waitFor } from './support/wait';
 
@@ -39,11 +38,7 @@ describe('Sparkplug B: the Eclipse Tahu host (test/interop/tahu) and mosquitto',
   const broker = new Mosquitto();
 
   before(async function () {
-    const missing = missingMosquitto() ?? missingTahu();
-    if (missing) {
-      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
-      skipBecause(this, missing);
-    }
+    requirePeers(this, missingMosquitto() ?? missingTahu());
     await broker.start();
   });
   after(() => broker.dispose());
@@ -143,11 +138,7 @@ describe('Sparkplug B: our edge node as Eclipse Tahu 1.0.21 decodes it (test/int
   const metricsOf = (l: TahuLine): Record<string, TahuMetric> => Object.fromEntries(l.metrics!.map((m) => [m.name!, m]));
 
   before(async function () {
-    const missing = missingMosquitto() ?? missingTahu();
-    if (missing) {
-      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
-      skipBecause(this, missing);
-    }
+    requirePeers(this, missingMosquitto() ?? missingTahu());
     await broker.start();
     const port = await plc.listen();
     client = createClient(`s7://127.0.0.1:${port}?rack=0&slot=1`);
@@ -317,11 +308,7 @@ describe('Sparkplug B: a PLC’s alarms as Eclipse Tahu 1.0.21 decodes them', fu
   let edge: SparkplugEdgeNode;
 
   before(async function () {
-    const missing = missingMosquitto() ?? missingTahu();
-    if (missing) {
-      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
-      skipBecause(this, missing);
-    }
+    requirePeers(this, missingMosquitto() ?? missingTahu());
     await broker.start();
     const port = await plc.listen();
     client = createClient(`s7://127.0.0.1:${port}?slot=2&allow=ALARMS`);

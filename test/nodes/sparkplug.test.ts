@@ -16,12 +16,11 @@ import type { AlarmDefinition } from '../../lib/alarms/model';
 import { S7Server } from '../../lib/s7/server';
 import { DataType } from '../../lib/sparkplug/datatypes';
 import type { DataSet } from '../../lib/sparkplug/model';
-import { Mosquitto } from '../support/mosquitto';
-import { missingMosquitto, sparkplugRequired } from '../support/sparkplug-peers';
-import { skipBecause } from '../support/skip';
+import { Mosquitto, testCa, tlsMosquitto } from '../support/mosquitto';
+import { requirePeers } from '../support/sparkplug-peers';
 import { SparkplugListener, type HeardMessage } from '../support/sparkplug-listener';
 import { fetchWriteSim, s7Sim } from './sims';
-import { generateCertificate, type GeneratedCertificate } from '../../lib/s7plus/transport/cert';
+import type { GeneratedCertificate } from '../../lib/s7plus/transport/cert';
 import { CORE_NODES, helper, nodes, Recorder, ROOT, until, type Sim } from './support';
 
 const edgeNode = require(path.join(ROOT, 'nodes/sparkplug-edge.js'));
@@ -35,11 +34,7 @@ describe('nodes: Sparkplug B edge node and device, mosquitto and the S7 simulato
   let listener: SparkplugListener;
 
   before(async function () {
-    const missing = missingMosquitto();
-    if (missing) {
-      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
-      skipBecause(this, missing);
-    }
+    requirePeers(this);
     await broker.start();
     sim = await s7Sim();
   });
@@ -291,14 +286,9 @@ describe("nodes: the Sparkplug edge node on a TLS broker with a login (Node-RED'
   let listener: SparkplugListener | undefined;
 
   before(async function () {
-    const missing = missingMosquitto();
-    if (missing) {
-      if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
-      skipBecause(this, missing);
-    }
-    ca = await generateCertificate({ commonName: 'plant CA', ca: true, keyType: 'ec' });
-    const leaf = await generateCertificate({ commonName: 'broker', hosts: ['127.0.0.1'], issuer: ca, keyType: 'ec' });
-    broker = new Mosquitto({ tls: { cert: leaf.cert, key: leaf.key }, users: { edge: SECRET, scada: 'host-pw' } });
+    requirePeers(this);
+    ca = await testCa('plant CA');
+    broker = await tlsMosquitto(ca, { edge: SECRET, scada: 'host-pw' });
     await broker.start();
     sim = await s7Sim();
     dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plcwire-red-tls-'));
@@ -345,7 +335,7 @@ describe("nodes: the Sparkplug edge node on a TLS broker with a login (Node-RED'
   });
 
   it('a CA that did not sign the broker: the device node reports CERTIFICATE_UNTRUSTED on Catch and nothing is published', async () => {
-    const other = await generateCertificate({ commonName: 'another CA', ca: true, keyType: 'ec' });
+    const other = await testCa('another CA');
     fs.writeFileSync(path.join(dir, 'other.pem'), other.cert);
     listener = new SparkplugListener(broker.url, 'spBv1.0/#', { ca: ca.cert, username: 'scada', password: 'host-pw' });
     await listener.ready();

@@ -12,6 +12,7 @@ import * as crypto from 'node:crypto';
 import * as fs from 'node:fs';
 import * as os from 'node:os';
 import * as path from 'node:path';
+import { generateCertificate, type GeneratedCertificate } from '../../lib/s7plus/transport/cert';
 import { freePort } from './net';
 
 export const MOSQUITTO = process.env['MOSQUITTO'] ?? '/usr/sbin/mosquitto';
@@ -127,4 +128,19 @@ export class Mosquitto {
     if (this.dir) fs.rmSync(this.dir, { recursive: true, force: true });
     this.dir = undefined;
   }
+}
+
+/** A CA of its own, for the TLS tests (EC: quick to make). */
+export function testCa(commonName: string): Promise<GeneratedCertificate> {
+  return generateCertificate({ commonName, ca: true, keyType: 'ec' });
+}
+
+/** A broker (not started) with a TLS listener whose certificate `ca` signed for `hosts`, and these users. */
+export async function tlsMosquitto(
+  ca: GeneratedCertificate,
+  users: Readonly<Record<string, string>>,
+  hosts: readonly string[] = ['127.0.0.1'],
+): Promise<Mosquitto> {
+  const leaf = await generateCertificate({ commonName: 'broker', hosts: [...hosts], issuer: ca, keyType: 'ec' });
+  return new Mosquitto({ tls: { cert: leaf.cert, key: leaf.key }, users });
 }

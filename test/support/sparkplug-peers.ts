@@ -7,6 +7,7 @@
 import { spawnSync } from 'node:child_process';
 import * as fs from 'node:fs';
 import * as path from 'node:path';
+import { skipBecause } from './skip';
 
 /** mosquitto's path: on the PATH, or in /usr/sbin where Debian puts it (often not on a user's PATH). */
 export function mosquittoPath(): string | undefined {
@@ -27,3 +28,13 @@ export function missingMosquitto(): string | undefined {
 
 /** True when a missing peer must fail the test rather than skip it (.ci/run sets it). */
 export const sparkplugRequired = (): boolean => process.env.PLCWIRE_REQUIRE_SPARKPLUG === '1';
+
+/**
+ * In a before hook: skips the suite and says why when `missing` names a peer that is not here, or fails it
+ * under PLCWIRE_REQUIRE_SPARKPLUG=1. `missing` defaults to mosquitto's check.
+ */
+export function requirePeers(ctx: Mocha.Context, missing: string | undefined = missingMosquitto()): void {
+  if (!missing) return;
+  if (sparkplugRequired()) throw new Error(`PLCWIRE_REQUIRE_SPARKPLUG=1 but ${missing}`);
+  skipBecause(ctx, missing);
+}
